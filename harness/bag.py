@@ -1,0 +1,59 @@
+"""Reading recorded bags back: topic table for ``srr inspect``, with clear errors."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from rosbags.rosbag2 import Reader
+from rosbags.rosbag2.errors import ReaderError
+
+from harness.errors import BagError
+
+__all__ = ["BagInfo", "BagTopic", "inspect_bag"]
+
+
+@dataclass(frozen=True)
+class BagTopic:
+    name: str
+    msgtype: str
+    count: int
+    durability: str
+
+
+@dataclass(frozen=True)
+class BagInfo:
+    path: Path
+    storage: str
+    message_count: int
+    start_ns: int
+    end_ns: int
+    topics: tuple[BagTopic, ...]
+
+
+def inspect_bag(path: str | Path) -> BagInfo:
+    """Open a rosbag2 directory (or a run directory holding ``bag/``) and list its topics,
+    counting messages by reading every record (so truncation is noticed)."""
+    p = Path(path)
+    if (p / "bag" / "metadata.yaml").exists():
+        p = p / "bag"
+    if not p.exists():
+        raise BagError(f"{path}: no such bag directory")
+    if not (p / "metadata.yaml").exists():
+        raise BagError(f"{path}: metadata.yaml: missing (not a rosbag2 directory)")
+    try:
+        with Reader(p) as reader:
+            counts: dict[str, int] = {}
+            for conn, _, _ in reader.messages():
+                counts[conn.topic] = counts.get(conn.topic, 0) + 1
+            topics = []
+            for conn in reader.connections:
+                qos = getattr(conn.ext, "offered_qos_profiles", []) or []
+                durability = qos[0].durability.name.lower() if qos else "volatile"
+                topics.append(BagTopic(conn.topic, conn.msgtype, counts.get(conn.topic, 0),
+                                       durability))
+            return BagInfo(p, str(reader.metadata["storage_identifier"]),
+                           sum(counts.values()), reader.start_time, reader.end_time,
+                           tuple(sorted(topics, key=lambda t: t.name)))
+    except (ReaderError, OSError, KeyError, ValueError, EOFError) as err:
+        raise BagError(f"{path}: cannot read bag: {err}") from err

@@ -1,0 +1,149 @@
+"""In-process publish/subscribe bus ordered by simulation time.
+
+Publishing never calls subscribers directly: messages queue in publication order and
+:meth:`Bus.spin` delivers them, so the tick loop decides when callbacks run and the order is
+the same on every run. Taps (the recorder) see every message at publish time. Topics are
+typed: advertising or subscribing with a different type than the topic already has is an
+error, as in ROS 2. Transient-local topics keep their last ``depth`` messages for late
+subscribers (``/tf_static``).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from harness.errors import SrrError
+
+__all__ = ["Bus", "BusError", "Envelope", "Publisher", "Qos", "TopicInfo"]
+
+
+class BusError(SrrError):
+    """A topic was used with two different message types."""
+
+
+@dataclass(frozen=True)
+class Qos:
+    durability: Literal["volatile", "transient_local"] = "volatile"
+    reliability: Literal["reliable", "best_effort"] = "reliable"
+    depth: int = 10
+
+
+TRANSIENT_LOCAL = Qos(durability="transient_local", depth=1)
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """One published message: where, what, when (simulation ns) and its sequence number."""
+
+    topic: str
+    msgtype: str
+    stamp_ns: int
+    seq: int
+    msg: Any
+
+
+@dataclass
+class TopicInfo:
+    msgtype: str
+    qos: Qos
+    published: int = 0
+    latched: deque[Envelope] = field(default_factory=deque)
+
+
+Callback = Callable[[Any], None]
+Tap = Callable[[Envelope], None]
+
+
+class Publisher:
+    """A handle bound to one topic and type; ``publish(msg)`` stamps it with bus time."""
+
+    def __init__(self, bus: Bus, topic: str, msgtype: str) -> None:
+        self._bus = bus
+        self.topic = topic
+        self.msgtype = msgtype
+
+    def publish(self, msg: Any) -> None:
+        self._bus.publish(self.topic, self.msgtype, msg)
+
+
+class Bus:
+    """Typed topics, FIFO delivery on :meth:`spin`, taps for recording."""
+
+    def __init__(self, now_ns: Callable[[], int]) -> None:
+        self._now_ns = now_ns
+        self._topics: dict[str, TopicInfo] = {}
+        self._subs: dict[str, list[Callback]] = {}
+        self._queue: deque[Envelope | _Redelivery] = deque()
+        self._taps: list[Tap] = []
+        self._seq = 0
+
+    # -- topology -----------------------------------------------------------------------------
+    def _declare(self, topic: str, msgtype: str, qos: Qos | None) -> TopicInfo:
+        info = self._topics.get(topic)
+        if info is None:
+            info = TopicInfo(msgtype=msgtype, qos=qos or Qos())
+            self._topics[topic] = info
+        elif info.msgtype != msgtype:
+            raise BusError(f"topic {topic} carries {info.msgtype}, not {msgtype}")
+        elif qos is not None and qos != info.qos:
+            if info.published == 0:
+                info.qos = qos
+        return info
+
+    def advertise(self, topic: str, msgtype: str, qos: Qos | None = None) -> Publisher:
+        self._declare(topic, msgtype, qos)
+        return Publisher(self, topic, msgtype)
+
+    def subscribe(self, topic: str, msgtype: str, callback: Callback) -> None:
+        info = self._declare(topic, msgtype, None)
+        self._subs.setdefault(topic, []).append(callback)
+        if info.qos.durability == "transient_local":
+            for env in info.latched:
+                self._queue.append(_Redelivery(env, callback))
+
+    def add_tap(self, tap: Tap) -> None:
+        self._taps.append(tap)
+
+    # -- traffic ------------------------------------------------------------------------------
+    def publish(self, topic: str, msgtype: str, msg: Any) -> None:
+        info = self._declare(topic, msgtype, None)
+        env = Envelope(topic, msgtype, self._now_ns(), self._seq, msg)
+        self._seq += 1
+        info.published += 1
+        if info.qos.durability == "transient_local":
+            info.latched.append(env)
+            while len(info.latched) > max(info.qos.depth, 1):
+                info.latched.popleft()
+        for tap in self._taps:
+            tap(env)
+        self._queue.append(env)
+
+    def spin(self) -> int:
+        """Deliver queued messages in publication order (including ones published meanwhile)."""
+        delivered = 0
+        while self._queue:
+            env = self._queue.popleft()
+            if isinstance(env, _Redelivery):
+                env.callback(env.env.msg)
+                delivered += 1
+                continue
+            for cb in self._subs.get(env.topic, ()):
+                cb(env.msg)
+                delivered += 1
+        return delivered
+
+    # -- introspection ------------------------------------------------------------------------
+    def topics(self) -> dict[str, TopicInfo]:
+        return dict(self._topics)
+
+    def published_counts(self) -> dict[str, int]:
+        return {t: i.published for t, i in self._topics.items()}
+
+
+@dataclass(frozen=True)
+class _Redelivery:
+    env: Envelope
+    callback: Callback

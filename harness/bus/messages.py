@@ -1,0 +1,104 @@
+"""ROS 2 Jazzy message types and small constructors, backed by the rosbags typestore.
+
+Messages are the typestore's generated dataclasses, so what the bus carries is exactly what
+is serialized to CDR. Every stamp comes from simulation time in integer nanoseconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.store import Typestore
+
+__all__ = [
+    "TYPESTORE",
+    "clock",
+    "deserialize",
+    "header",
+    "msg_type",
+    "odometry",
+    "serialize",
+    "tf_message",
+    "time_msg",
+    "transform_stamped",
+    "twist",
+]
+
+TYPESTORE: Typestore = get_typestore(Stores.ROS2_JAZZY)
+
+
+def msg_type(name: str) -> Any:
+    """The message class for ``pkg/msg/Name`` (``pkg/Name`` is accepted too)."""
+    if "/msg/" not in name and name.count("/") == 1:
+        pkg, short = name.split("/")
+        name = f"{pkg}/msg/{short}"
+    try:
+        return TYPESTORE.types[name]
+    except KeyError:
+        raise KeyError(f"unknown ROS 2 message type {name!r}") from None
+
+
+def serialize(msg: Any, typename: str) -> bytes:
+    return bytes(TYPESTORE.serialize_cdr(msg, typename))
+
+
+def deserialize(data: bytes, typename: str) -> Any:
+    return TYPESTORE.deserialize_cdr(data, typename)
+
+
+def time_msg(ns: int) -> Any:
+    sec, nanosec = divmod(int(ns), 1_000_000_000)
+    return msg_type("builtin_interfaces/msg/Time")(sec=sec, nanosec=nanosec)
+
+
+def header(ns: int, frame_id: str) -> Any:
+    return msg_type("std_msgs/msg/Header")(stamp=time_msg(ns), frame_id=frame_id)
+
+
+def clock(ns: int) -> Any:
+    return msg_type("rosgraph_msgs/msg/Clock")(clock=time_msg(ns))
+
+
+def _vec3(v: Sequence[float]) -> Any:
+    return msg_type("geometry_msgs/msg/Vector3")(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+
+def _quat_xyzw(q: Sequence[float]) -> Any:
+    return msg_type("geometry_msgs/msg/Quaternion")(
+        x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+
+
+def twist(linear: Sequence[float], angular: Sequence[float]) -> Any:
+    return msg_type("geometry_msgs/msg/Twist")(linear=_vec3(linear), angular=_vec3(angular))
+
+
+def transform_stamped(ns: int, parent: str, child: str, translation: Sequence[float],
+                      rotation_xyzw: Sequence[float]) -> Any:
+    tf = msg_type("geometry_msgs/msg/Transform")(
+        translation=_vec3(translation), rotation=_quat_xyzw(rotation_xyzw))
+    return msg_type("geometry_msgs/msg/TransformStamped")(
+        header=header(ns, parent), child_frame_id=child, transform=tf)
+
+
+def tf_message(transforms: Sequence[Any]) -> Any:
+    return msg_type("tf2_msgs/msg/TFMessage")(transforms=list(transforms))
+
+
+def odometry(ns: int, odom_frame: str, child_frame: str, position: Sequence[float],
+             orientation_xyzw: Sequence[float], linear: Sequence[float],
+             angular: Sequence[float]) -> Any:
+    point = msg_type("geometry_msgs/msg/Point")(
+        x=float(position[0]), y=float(position[1]), z=float(position[2]))
+    pose = msg_type("geometry_msgs/msg/Pose")(position=point,
+                                               orientation=_quat_xyzw(orientation_xyzw))
+    cov = np.zeros(36, dtype=np.float64)
+    return msg_type("nav_msgs/msg/Odometry")(
+        header=header(ns, odom_frame),
+        child_frame_id=child_frame,
+        pose=msg_type("geometry_msgs/msg/PoseWithCovariance")(pose=pose, covariance=cov),
+        twist=msg_type("geometry_msgs/msg/TwistWithCovariance")(
+            twist=twist(linear, angular), covariance=cov.copy()),
+    )

@@ -1,0 +1,206 @@
+"""``srr`` command line: a thin layer over :mod:`harness.api`.
+
+Exit codes: 0 pass; 1 fail, regression or non-deterministic repeat; 2 bad input (one line
+naming the file and the field, never a traceback); 3 invalid run; 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import sys
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, NoReturn
+
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from harness import __version__, api
+from harness.bag import inspect_bag
+from harness.errors import SrrError
+
+__all__ = ["main"]
+
+err_console = Console(stderr=True, highlight=False, soft_wrap=True)
+out_console = Console(highlight=False, soft_wrap=True)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports bad arguments as one line and exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        err_console.print(f"srr {self.prog.split()[-1]}: error: {message}", markup=False)
+        raise SystemExit(2)
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="srr", description="Record-and-replay regression harness (MuJoCo).")
+    p.add_argument("--version", action="version", version=f"srr {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    run = sub.add_parser("run", help="run a scenario, record it and score it")
+    run.add_argument("scenario", type=Path)
+    run.add_argument("--out", type=Path, default=None, help="run directory "
+                     "(default reports/<scenario>/<run id>)")
+    run.add_argument("--seed", type=int, default=None)
+    run.add_argument("--duration", type=float, default=None, help="simulated seconds")
+    gt = run.add_mutually_exclusive_group()
+    gt.add_argument("--srr-gt", dest="srr_gt", action="store_const", const=True, default=None,
+                    help="build the ground-truth graph (/gt/*)")
+    gt.add_argument("--no-srr-gt", dest="srr_gt", action="store_const", const=False)
+    run.add_argument("--set", dest="overrides", action="append", default=[],
+                     metavar="KEY=VALUE", help="override a scenario field (dotted path; list "
+                     "items by index or name), e.g. robots.forklift.spawn.position=[0,0,0]")
+    run.add_argument("--repeat", type=int, default=1, help="run N times and compare digests")
+    run.add_argument("--update-baseline", action="store_true",
+                     help="bless this run as the scenario's baseline")
+    run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+
+    val = sub.add_parser("validate", help="check a scenario file without running it")
+    val.add_argument("scenario", type=Path)
+    val.add_argument("--set", dest="overrides", action="append", default=[])
+
+    gr = sub.add_parser("graph", help="print the scenario's action graphs")
+    gr.add_argument("scenario", type=Path)
+    gr.add_argument("--format", choices=("mermaid", "json"), default="mermaid")
+    gr.add_argument("--set", dest="overrides", action="append", default=[])
+
+    ins = sub.add_parser("inspect", help="list the topics of a recorded bag")
+    ins.add_argument("bag", type=Path)
+    return p
+
+
+@contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM finalizes the bag like Ctrl-C does."""
+
+    def handler(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _progress(quiet: bool) -> Any:
+    if quiet or not err_console.is_terminal and not sys.stderr.isatty():
+        return None
+    return Progress(TextColumn("[bold]{task.description}"), BarColumn(),
+                    TextColumn("{task.fields[sim]}"), TimeRemainingColumn(),
+                    console=err_console, transient=True)
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    scenario = api.load(args.scenario, seed=args.seed, duration=args.duration,
+                        srr_gt=args.srr_gt, overrides=args.overrides)
+    if args.update_baseline:
+        raise SrrError("--update-baseline: baselines are not implemented yet in this version")
+    bar = _progress(args.quiet)
+    task: Any = None
+
+    def tick(done: int, total: int) -> None:
+        if bar is not None and (done % 15 == 0 or done == total):
+            bar.update(task, completed=done, total=total,
+                       sim=f"{done / scenario.physics.tick_hz:6.1f} s sim")
+
+    with _sigterm_as_interrupt():
+        if bar is not None:
+            bar.start()
+            task = bar.add_task(scenario.name, total=scenario.n_ticks, sim="")
+        try:
+            if args.repeat != 1:
+                rep = api.run_repeat(scenario, args.repeat, source=str(args.scenario),
+                                     out=args.out, progress=tick)
+            else:
+                res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
+                                       progress=tick)
+        finally:
+            if bar is not None:
+                bar.stop()
+    if args.repeat != 1:
+        table = Table(title=f"determinism over {args.repeat} runs")
+        table.add_column("run")
+        table.add_column("verdict")
+        table.add_column("digest")
+        for r in rep.runs:
+            table.add_row(str(r.run_dir), r.verdict, r.summary["digest"][:16])
+        out_console.print(table)
+        if rep.identical:
+            out_console.print(f"identical per-topic digests across {args.repeat} runs")
+        else:
+            out_console.print("digests DIFFER on: " + ", ".join(rep.differing_topics))
+        out_console.print(str(rep.out_dir))
+        return rep.exit_code
+    _print_run(res)
+    return res.exit_code
+
+
+def _print_run(res: api.RunResult) -> None:
+    s = res.summary
+    table = Table(title=f"{s['scenario']}: {s['simulated_s']:.1f} s simulated, seed {s['seed']}")
+    for col in ("topic", "type", "count", "rate Hz"):
+        table.add_column(col, justify="right" if col in ("count", "rate Hz") else "left")
+    for name, t in s["topics"].items():
+        table.add_row(name, t["type"], str(t["count"]), f"{t['rate_hz']:.1f}")
+    out_console.print(table)
+    for h in s["health"]:
+        mark = "ok" if h["ok"] else "FAILED"
+        out_console.print(f"health {h['name']}: {mark} — {h['detail']}", markup=False)
+    out_console.print(f"verdict: {res.verdict}", markup=False)
+    out_console.print(str(res.run_dir), markup=False)
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    sc = api.load(args.scenario, overrides=args.overrides)
+    robots = ", ".join(f"{r.name} ({r.model})" for r in sc.robots if r.enabled) or "none"
+    out_console.print(f"{args.scenario}: ok — {sc.name}, {sc.duration:g} s, seed {sc.seed}, "
+                      f"robots: {robots}", markup=False)
+    return 0
+
+
+def _cmd_graph(args: argparse.Namespace) -> int:
+    sc = api.load(args.scenario, overrides=args.overrides)
+    sys.stdout.write(api.graph_text(sc, args.format, source=str(args.scenario)) + "\n")
+    return 0
+
+
+def _cmd_inspect(args: argparse.Namespace) -> int:
+    info = inspect_bag(args.bag)
+    table = Table(title=f"{info.path} ({info.storage}, {info.message_count} messages, "
+                  f"{(info.end_ns - info.start_ns) / 1e9:.2f} s)")
+    for col in ("topic", "type", "count", "durability"):
+        table.add_column(col)
+    for t in info.topics:
+        table.add_row(t.name, t.msgtype, str(t.count), t.durability)
+    out_console.print(table)
+    return 0
+
+
+COMMANDS = {"run": _cmd_run, "validate": _cmd_validate, "graph": _cmd_graph,
+            "inspect": _cmd_inspect}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        return COMMANDS[args.command](args)
+    except SrrError as err:
+        err_console.print(f"srr {args.command}: {err}", markup=False)
+        return err.exit_code
+    except KeyboardInterrupt:
+        err_console.print(f"srr {args.command}: interrupted", markup=False)
+        return 130
+
+
+def entry() -> None:
+    sys.exit(main())
+
+
+if __name__ == "__main__":
+    entry()

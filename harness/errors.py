@@ -1,0 +1,61 @@
+"""The small error hierarchy of srr.
+
+Every error a user can cause derives from :class:`SrrError`; the CLI turns it into one line and
+an exit code. Library code raises these and never calls ``sys.exit`` or prints.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "BagError",
+    "GraphError",
+    "InvalidRunError",
+    "PluginError",
+    "ScenarioError",
+    "SimulationError",
+    "SrrError",
+]
+
+
+class SrrError(Exception):
+    """Base of every error srr raises on purpose."""
+
+    exit_code: int = 2
+
+
+class ScenarioError(SrrError):
+    """A scenario file (or an override of it) is not acceptable.
+
+    ``file`` is the file the offending value came from, ``field`` a dotted path inside it.
+    """
+
+    def __init__(self, file: str, field: str, message: str) -> None:
+        self.file = file
+        self.field = field
+        self.message = message
+        where = f"{file}: {field}" if field else file
+        super().__init__(f"{where}: {message}")
+
+
+class GraphError(SrrError):
+    """An action graph could not be built: unknown node type, attribute or connection."""
+
+
+class PluginError(SrrError):
+    """A system-under-test plug-in could not be loaded or broke its contract."""
+
+
+class SimulationError(SrrError):
+    """The simulated world could not be built or stepped."""
+
+    exit_code = 3
+
+
+class BagError(SrrError):
+    """A recorded bag is missing, truncated or corrupt."""
+
+
+class InvalidRunError(SrrError):
+    """A health gate tripped, so the run's scores cannot be trusted."""
+
+    exit_code = 3

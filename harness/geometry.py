@@ -1,0 +1,75 @@
+"""Small rigid-body helpers. Quaternions are numpy arrays; the order is in each name.
+
+MuJoCo uses (w, x, y, z); ROS messages and Isaac's ``quatd`` attributes use (x, y, z, w).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+__all__ = [
+    "quat_conj",
+    "quat_from_rpy",
+    "quat_from_yaw",
+    "quat_mul",
+    "quat_rotate",
+    "quat_to_yaw",
+    "wxyz_to_xyzw",
+    "xyzw_to_wxyz",
+    "yaw_between",
+]
+
+
+def wxyz_to_xyzw(q: Sequence[float]) -> np.ndarray:
+    return np.array([q[1], q[2], q[3], q[0]], dtype=np.float64)
+
+
+def xyzw_to_wxyz(q: Sequence[float]) -> np.ndarray:
+    return np.array([q[3], q[0], q[1], q[2]], dtype=np.float64)
+
+
+def quat_mul(a: Sequence[float], b: Sequence[float]) -> np.ndarray:
+    """Hamilton product of two (w, x, y, z) quaternions."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return np.array([
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    ], dtype=np.float64)
+
+
+def quat_conj(q: Sequence[float]) -> np.ndarray:
+    return np.array([q[0], -q[1], -q[2], -q[3]], dtype=np.float64)
+
+
+def quat_rotate(q: Sequence[float], v: Sequence[float]) -> np.ndarray:
+    """Rotate vector ``v`` by the (w, x, y, z) quaternion ``q``."""
+    p = np.array([0.0, v[0], v[1], v[2]])
+    return quat_mul(quat_mul(q, p), quat_conj(q))[1:]
+
+
+def quat_from_yaw(yaw: float) -> np.ndarray:
+    return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+
+
+def quat_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """(w, x, y, z) for extrinsic X-Y-Z rotations (roll, then pitch, then yaw), radians."""
+    qx = np.array([math.cos(roll / 2), math.sin(roll / 2), 0.0, 0.0])
+    qy = np.array([math.cos(pitch / 2), 0.0, math.sin(pitch / 2), 0.0])
+    qz = quat_from_yaw(yaw)
+    return quat_mul(qz, quat_mul(qy, qx))
+
+
+def quat_to_yaw(q: Sequence[float]) -> float:
+    w, x, y, z = q
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def yaw_between(front: Sequence[float]) -> float:
+    """Yaw that turns the body +X axis onto ``front`` (projected on the XY plane)."""
+    return math.atan2(front[1], front[0])

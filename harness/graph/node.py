@@ -1,0 +1,183 @@
+"""The base class of node implementations and the ``db`` object their compute receives.
+
+A node type is a subclass of :class:`NodeType` with class-level ``kind``, ``inputs`` and
+``outputs``; the engine makes one instance per node, so per-node state lives on ``self``.
+``compute(db, ctx)`` reads ``db.inputs.<name>`` (pulling connected upstream values) and writes
+``db.outputs.<name> = value`` (coerced to the declared type).
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar, Literal, Protocol
+
+from harness.errors import GraphError
+from harness.graph.attributes import Attr
+
+__all__ = [
+    "NODE_KINDS",
+    "AttributeLookupError",
+    "Database",
+    "NodeKind",
+    "NodePort",
+    "NodeType",
+]
+
+NodeKind = Literal["event", "action", "data"]
+NODE_KINDS: tuple[str, ...] = ("event", "action", "data")
+
+
+class AttributeLookupError(GraphError, AttributeError):
+    """An unknown attribute was named on ``db.inputs`` / ``db.outputs``.
+
+    It is a :class:`~harness.errors.GraphError` and also an :class:`AttributeError`, so
+    ``getattr(db.inputs, "x", default)`` and ``hasattr`` behave as usual.
+    """
+
+
+class NodePort(Protocol):
+    """What a :class:`Database` needs from the engine for one node during one evaluation."""
+
+    @property
+    def node_path(self) -> str: ...
+
+    @property
+    def graph_path(self) -> str: ...
+
+    def input_attr(self, name: str) -> Attr | None: ...
+
+    def output_attr(self, name: str) -> Attr | None: ...
+
+    def input_names(self) -> tuple[str, ...]: ...
+
+    def output_names(self) -> tuple[str, ...]: ...
+
+    def read_input(self, name: str) -> Any: ...
+
+    def read_output(self, name: str) -> Any: ...
+
+    def write_output(self, name: str, value: Any) -> None: ...
+
+    def is_connected(self, name: str) -> bool: ...
+
+
+def _bare(name: str, prefix: str) -> str:
+    return name[len(prefix):] if name.startswith(prefix) else name
+
+
+class _Inputs:
+    """``db.inputs``: attribute reads pull values; writes are refused."""
+
+    __slots__ = ("_port",)
+
+    def __init__(self, port: NodePort) -> None:
+        object.__setattr__(self, "_port", port)
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__"):
+            raise AttributeError(name)
+        port: NodePort = object.__getattribute__(self, "_port")
+        if port.input_attr(name) is None:
+            known = ", ".join(port.input_names()) or "none"
+            raise AttributeLookupError(
+                f"{port.node_path}: no attribute 'inputs:{name}' (inputs: {known})"
+            )
+        return port.read_input(name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        port: NodePort = object.__getattribute__(self, "_port")
+        raise GraphError(f"{port.node_path}.inputs:{name}: inputs are read-only inside compute")
+
+    def __dir__(self) -> list[str]:
+        port: NodePort = object.__getattribute__(self, "_port")
+        return list(port.input_names())
+
+
+class _Outputs:
+    """``db.outputs``: writes are coerced and stored on the node; reads give the stored value."""
+
+    __slots__ = ("_port",)
+
+    def __init__(self, port: NodePort) -> None:
+        object.__setattr__(self, "_port", port)
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__"):
+            raise AttributeError(name)
+        port: NodePort = object.__getattribute__(self, "_port")
+        if port.output_attr(name) is None:
+            raise self._unknown(port, name)
+        return port.read_output(name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        port: NodePort = object.__getattribute__(self, "_port")
+        if port.output_attr(name) is None:
+            raise self._unknown(port, name)
+        port.write_output(name, value)
+
+    def __dir__(self) -> list[str]:
+        port: NodePort = object.__getattribute__(self, "_port")
+        return list(port.output_names())
+
+    @staticmethod
+    def _unknown(port: NodePort, name: str) -> AttributeLookupError:
+        known = ", ".join(port.output_names()) or "none"
+        return AttributeLookupError(
+            f"{port.node_path}: no attribute 'outputs:{name}' (outputs: {known})"
+        )
+
+
+class Database:
+    """The ``db`` handed to :meth:`NodeType.compute`.
+
+    ``db.inputs.<name>`` reads an input: the upstream value when connected (computing an upstream
+    data node first), else the value set on the node, else the declared default.
+    ``db.outputs.<name> = value`` stores an output, coerced to its type; setting an execution
+    output (``db.outputs.execOut = True``) selects which execution outputs fire.
+    """
+
+    __slots__ = ("_port", "inputs", "outputs")
+
+    def __init__(self, port: NodePort) -> None:
+        self._port = port
+        self.inputs = _Inputs(port)
+        self.outputs = _Outputs(port)
+
+    @property
+    def node_path(self) -> str:
+        """The node's absolute path, ``<graph_path>/<name>``."""
+        return self._port.node_path
+
+    @property
+    def graph_path(self) -> str:
+        """The path of the graph holding the node."""
+        return self._port.graph_path
+
+    def is_connected(self, input_name: str) -> bool:
+        """True when the input (``"x"`` or ``"inputs:x"``) has an upstream connection."""
+        name = _bare(input_name, "inputs:")
+        if self._port.input_attr(name) is None:
+            raise AttributeLookupError(f"{self.node_path}: no attribute 'inputs:{name}'")
+        return self._port.is_connected(name)
+
+
+class NodeType:
+    """Base class of node implementations; subclass, declare ports, register.
+
+    ``kind`` is ``"event"`` (fires every evaluation), ``"action"`` (runs when execution reaches
+    one of its execution inputs) or ``"data"`` (pure, computed when a downstream node pulls one of
+    its outputs, at most once per evaluation).
+    """
+
+    kind: ClassVar[str] = "action"
+    inputs: ClassVar[tuple[Attr, ...]] = ()
+    outputs: ClassVar[tuple[Attr, ...]] = ()
+
+    def initialize(self, db: Database, ctx: Any) -> None:
+        """Called once before the first compute (and again after :meth:`reset`)."""
+
+    def compute(self, db: Database, ctx: Any) -> bool:
+        """Do the node's work; True fires its execution outputs, False stops execution here."""
+        return True
+
+    def reset(self) -> None:
+        """Forget per-node state (the engine calls it from ``GraphStage.reset``)."""

@@ -1,0 +1,248 @@
+"""ROS bridge nodes: publishers and subscribers on the srr bus.
+
+Canonical names are ``srr.*``; the Isaac Sim spellings of the ROS 2 bridge (``isaacsim.ros2.bridge``
+and the older ``omni.isaac.ros2_bridge``) and of the ROS 1 bridge (``omni.isaac.ros_bridge``) are
+aliases, so a builder written for Isaac Sim ports by changing imports. Every message is stamped
+from simulation time: ``inputs:timeStamp`` when connected (seconds, as Isaac's
+ReadSimulationTime gives it), otherwise the tick's own time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from harness.bus import TopicNameError, resolve_topic
+from harness.bus.bus import Qos
+from harness.bus.messages import clock, odometry, tf_message, transform_stamped
+from harness.errors import GraphError
+from harness.geometry import quat_conj, quat_mul, quat_rotate, wxyz_to_xyzw
+from harness.graph import Attr, NodeType, register
+
+__all__ = [
+    "PublishClock",
+    "PublishOdometry",
+    "PublishRawTransformTree",
+    "PublishTransformTree",
+    "SubscribeTwist",
+    "aliases",
+]
+
+STATIC_QOS = Qos(durability="transient_local", depth=100)
+
+
+def aliases(name: str) -> tuple[str, ...]:
+    """The Isaac Sim spellings of a bridge node: ROS 2 (new and old) and ROS 1."""
+    return (
+        f"isaacsim.ros2.bridge.ROS2{name}",
+        f"omni.isaac.ros2_bridge.ROS2{name}",
+        f"omni.isaac.ros_bridge.ROS1{name}",
+    )
+
+
+_COMMON = (
+    Attr("execIn", "execution"),
+    Attr("context", "uint64", 0),
+    Attr("nodeNamespace", "string", ""),
+    Attr("qosProfile", "string", ""),
+    Attr("queueSize", "uint64", 10),
+)
+_EXEC_OUT = (Attr("execOut", "execution"),)
+
+
+def topic_of(db: Any, field: str = "topicName") -> str:
+    """The fully qualified topic of a bridge node, or a GraphError naming the node."""
+    try:
+        return resolve_topic(getattr(db.inputs, field), db.inputs.nodeNamespace)
+    except TopicNameError as err:
+        raise GraphError(f"{db.node_path}.inputs:{field}: {err}") from err
+
+
+def stamp_of(db: Any, ctx: Any) -> int:
+    """Stamp in ns: the connected ``timeStamp`` (seconds) or the tick's simulation time."""
+    if db.is_connected("timeStamp"):
+        return int(round(float(db.inputs.timeStamp) * 1e9))
+    return int(ctx.time_ns)
+
+
+class _Publisher(NodeType):
+    """Base for publishing nodes: advertises once, on first compute."""
+
+    kind = "action"
+    msgtype = ""
+
+    def initialize(self, db: Any, ctx: Any) -> None:
+        self._pub = ctx.bus.advertise(topic_of(db), self.msgtype, self.qos(db))
+
+    def qos(self, db: Any) -> Qos | None:
+        return None
+
+
+@register("srr.PublishClock", aliases=aliases("PublishClock"))
+class PublishClock(_Publisher):
+    inputs = (*_COMMON, Attr("topicName", "string", "clock"), Attr("timeStamp", "double", 0.0))
+    outputs = _EXEC_OUT
+    msgtype = "rosgraph_msgs/msg/Clock"
+
+    def compute(self, db: Any, ctx: Any) -> bool:
+        self._pub.publish(clock(stamp_of(db, ctx)))
+        return True
+
+
+@register("srr.SubscribeTwist", aliases=aliases("SubscribeTwist"))
+class SubscribeTwist(NodeType):
+    """Fires ``execOut`` on the tick a new Twist has arrived, with its velocities as outputs."""
+
+    kind = "action"
+    inputs = (*_COMMON, Attr("topicName", "string", "cmd_vel"))
+    outputs = (
+        *_EXEC_OUT,
+        Attr("linearVelocity", "double[3]", (0.0, 0.0, 0.0)),
+        Attr("angularVelocity", "double[3]", (0.0, 0.0, 0.0)),
+    )
+
+    def initialize(self, db: Any, ctx: Any) -> None:
+        self._pending: list[Any] = []
+        ctx.bus.subscribe(topic_of(db), "geometry_msgs/msg/Twist", self._pending.append)
+
+    def compute(self, db: Any, ctx: Any) -> bool:
+        if not self._pending:
+            return False
+        msg = self._pending[-1]
+        self._pending.clear()
+        db.outputs.linearVelocity = (msg.linear.x, msg.linear.y, msg.linear.z)
+        db.outputs.angularVelocity = (msg.angular.x, msg.angular.y, msg.angular.z)
+        return True
+
+
+@register("srr.PublishOdometry", aliases=aliases("PublishOdometry"))
+class PublishOdometry(_Publisher):
+    inputs = (
+        *_COMMON,
+        Attr("topicName", "string", "odom"),
+        Attr("timeStamp", "double", 0.0),
+        Attr("chassisFrameId", "string", "base_link"),
+        Attr("odomFrameId", "string", "odom"),
+        Attr("position", "double[3]", (0.0, 0.0, 0.0)),
+        Attr("orientation", "quatd[4]", (0.0, 0.0, 0.0, 1.0)),
+        Attr("linearVelocity", "double[3]", (0.0, 0.0, 0.0)),
+        Attr("angularVelocity", "double[3]", (0.0, 0.0, 0.0)),
+        Attr("robotFront", "double[3]", (1.0, 0.0, 0.0)),
+    )
+    outputs = _EXEC_OUT
+    msgtype = "nav_msgs/msg/Odometry"
+
+    def compute(self, db: Any, ctx: Any) -> bool:
+        i = db.inputs
+        self._pub.publish(odometry(stamp_of(db, ctx), i.odomFrameId, i.chassisFrameId,
+                                   i.position, i.orientation, i.linearVelocity,
+                                   i.angularVelocity))
+        return True
+
+
+class _TfPublisher(_Publisher):
+    """TF publishers: ``staticPublisher`` (or a ``tf_static`` topic) latches and publishes
+    only when the transforms change, like a ROS static broadcaster."""
+
+    msgtype = "tf2_msgs/msg/TFMessage"
+
+    def is_static(self, db: Any) -> bool:
+        return bool(db.inputs.staticPublisher) or topic_of(db).endswith("tf_static")
+
+    def qos(self, db: Any) -> Qos | None:
+        return STATIC_QOS if self.is_static(db) else None
+
+    def emit(self, db: Any, ctx: Any, transforms: list[Any], key: tuple[Any, ...]) -> None:
+        if self.is_static(db):
+            if getattr(self, "_last_key", None) == key:
+                return
+            self._last_key = key
+        self._pub.publish(tf_message(transforms))
+
+
+@register("srr.PublishRawTransformTree", aliases=aliases("PublishRawTransformTree"))
+class PublishRawTransformTree(_TfPublisher):
+    """One transform from explicit values. ``rotation`` is a quatd in Isaac's IJKR order
+    (x, y, z, w)."""
+
+    inputs = (
+        *_COMMON,
+        Attr("topicName", "string", "tf"),
+        Attr("timeStamp", "double", 0.0),
+        Attr("parentFrameId", "string", "odom"),
+        Attr("childFrameId", "string", "base_link"),
+        Attr("translation", "double[3]", (0.0, 0.0, 0.0)),
+        Attr("rotation", "quatd[4]", (0.0, 0.0, 0.0, 1.0)),
+        Attr("staticPublisher", "bool", False),
+    )
+    outputs = _EXEC_OUT
+
+    def compute(self, db: Any, ctx: Any) -> bool:
+        i = db.inputs
+        ns = stamp_of(db, ctx)
+        tr, rot = tuple(i.translation), tuple(i.rotation)
+        tf = transform_stamped(ns, i.parentFrameId, i.childFrameId, tr, rot)
+        self.emit(db, ctx, [tf], (i.parentFrameId, i.childFrameId, tr, rot))
+        return True
+
+
+def frame_of(prim: str) -> str:
+    """Isaac's frame naming: the last component of the prim path."""
+    return prim.rstrip("/").rsplit("/", 1)[-1]
+
+
+def relative_pose(world: Any, parent: str | None, child: str) -> tuple[np.ndarray, np.ndarray]:
+    """Pose of ``child`` in ``parent`` (or the world), as (translation, wxyz)."""
+    pos, quat = world.prim_pose(child)
+    if not parent:
+        return np.asarray(pos, dtype=np.float64), np.asarray(quat, dtype=np.float64)
+    ppos, pquat = world.prim_pose(parent)
+    inv = quat_conj(pquat)
+    return quat_rotate(inv, np.asarray(pos) - np.asarray(ppos)), quat_mul(inv, quat)
+
+
+@register("srr.PublishTransformTree", aliases=aliases("PublishTransformTree"))
+class PublishTransformTree(_TfPublisher):
+    """Transforms of ``targetPrims`` relative to ``parentPrim`` (default: the world frame)."""
+
+    inputs = (
+        *_COMMON,
+        Attr("topicName", "string", "tf"),
+        Attr("timeStamp", "double", 0.0),
+        Attr("parentPrim", "target", ()),
+        Attr("targetPrims", "target", ()),
+        Attr("staticPublisher", "bool", False),
+        Attr("worldFrameId", "string", "world"),
+    )
+    outputs = _EXEC_OUT
+
+    def initialize(self, db: Any, ctx: Any) -> None:
+        super().initialize(db, ctx)
+        for prim in (*_paths(db.inputs.parentPrim), *_paths(db.inputs.targetPrims)):
+            if not ctx.world.has_prim(prim):
+                raise GraphError(f"{db.node_path}: prim {prim!r} does not exist")
+
+    def compute(self, db: Any, ctx: Any) -> bool:
+        parents = _paths(db.inputs.parentPrim)
+        parent = parents[0] if parents else None
+        parent_frame = frame_of(parent) if parent else db.inputs.worldFrameId
+        ns = stamp_of(db, ctx)
+        transforms = []
+        key: list[Any] = []
+        for prim in _paths(db.inputs.targetPrims):
+            t, q = relative_pose(ctx.world, parent, prim)
+            xyzw = wxyz_to_xyzw(q)
+            transforms.append(transform_stamped(ns, parent_frame, frame_of(prim), t, xyzw))
+            key.append((prim, tuple(np.round(t, 9)), tuple(np.round(xyzw, 9))))
+        self.emit(db, ctx, transforms, tuple(key))
+        return True
+
+
+def _paths(value: Sequence[Any] | str | None) -> list[str]:
+    if not value:
+        return []
+    if isinstance(value, str):
+        return [value]
+    return [str(v) for v in value]

@@ -1,0 +1,1 @@
+"""Outputs for people and CI systems: JUnit XML (and, later, the HTML report)."""

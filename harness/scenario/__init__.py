@@ -1,0 +1,22 @@
+"""Scenario files: the typed model and its loader."""
+
+from harness.scenario.loader import (
+    apply_overrides,
+    load_scenario,
+    parse_override,
+    scenario_from_mapping,
+    scenario_to_mapping,
+    validate_dataclass,
+)
+from harness.scenario.schema import *  # noqa: F403
+from harness.scenario.schema import __all__ as _schema_all
+
+__all__ = [
+    "apply_overrides",
+    "load_scenario",
+    "parse_override",
+    "scenario_from_mapping",
+    "scenario_to_mapping",
+    "validate_dataclass",
+    *_schema_all,
+]

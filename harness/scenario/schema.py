@@ -1,0 +1,332 @@
+"""Typed, frozen model of a scenario file.
+
+The loader (:mod:`harness.scenario.loader`) validates raw YAML against these dataclasses using
+their type hints and the ``meta`` of each field (range checks, choices). Blocks follow the
+shape of the forklift seed's ``robots.yaml`` / ``cameras.yaml``: every block has an ``enabled``
+flag and the per-robot graphs read their settings from ``control``, ``odometry`` and
+``safety_indicator``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+__all__ = [
+    "FORMAT_VERSION",
+    "ROBOT_MODELS",
+    "CameraSpec",
+    "ClockSpec",
+    "DiffDriveControl",
+    "DockSpec",
+    "ForkliftControl",
+    "ImuSpec",
+    "LidarSpec",
+    "OdometrySpec",
+    "PhysicsSpec",
+    "Pose",
+    "ReverseLogic",
+    "RobotCameraSpec",
+    "RobotSpec",
+    "RouteSpec",
+    "SafetyIndicatorSpec",
+    "Scenario",
+    "SensorsSpec",
+    "ShelfSpec",
+    "SutSpec",
+    "TfTreeSpec",
+    "WorldSpec",
+]
+
+FORMAT_VERSION = 1
+ROBOT_MODELS = ("forklift", "turtlebot3_waffle_pi")
+
+Vec2 = tuple[float, float]
+Vec3 = tuple[float, float, float]
+
+
+def _range(lo: float | None = None, hi: float | None = None, *, lo_open: bool = False) -> Any:
+    """Field metadata read by the loader: an inclusive (or open at ``lo``) numeric range."""
+    return {"range": (lo, hi, lo_open)}
+
+
+def num(default: float, lo: float | None = None, hi: float | None = None,
+        *, lo_open: bool = False) -> Any:
+    return field(default=default, metadata=_range(lo, hi, lo_open=lo_open))
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A pose in the world frame: position in metres, roll/pitch/yaw in degrees (extrinsic XYZ)."""
+
+    position: Vec3 = (0.0, 0.0, 0.0)
+    rpy_deg: Vec3 = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class PhysicsSpec:
+    """Playback tick and physics step: ``dt = 1 / (tick_hz * substeps)``."""
+
+    tick_hz: int = num(60, 1, 1000)
+    substeps: int = num(4, 1, 100)
+    integrator: Literal["implicitfast", "euler", "rk4", "implicit"] = "implicitfast"
+    solver_iterations: int = num(50, 1, 1000)
+
+
+@dataclass(frozen=True)
+class ShelfSpec:
+    """A rack of shelving: centre on the floor, footprint ``size`` (length, depth, height)."""
+
+    position: Vec2 = (0.0, 0.0)
+    size: Vec3 = (6.0, 1.0, 2.5)
+    yaw_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class DockSpec:
+    """A trailer backed up to a dock door. ``position`` is the trailer's open end."""
+
+    enabled: bool = True
+    position: Vec2 = (12.0, 0.0)
+    yaw_deg: float = 0.0
+    length: float = num(12.0, 2.0, 20.0)
+    width: float = num(2.6, 1.5, 4.0)
+    height: float = num(2.8, 1.5, 5.0)
+
+
+@dataclass(frozen=True)
+class WorldSpec:
+    """The warehouse: floor of ``size`` metres centred on the origin, walls, shelving, dock."""
+
+    size: Vec2 = (30.0, 20.0)
+    wall_height: float = num(4.0, 0.5, 20.0)
+    shelves: tuple[ShelfSpec, ...] = (
+        ShelfSpec(position=(-6.0, 6.0)),
+        ShelfSpec(position=(2.0, 6.0)),
+        ShelfSpec(position=(-6.0, -6.0)),
+        ShelfSpec(position=(2.0, -6.0)),
+    )
+    dock: DockSpec = DockSpec()
+
+
+@dataclass(frozen=True)
+class ClockSpec:
+    """The top-level ``clock:`` block of the forklift seed's robots.yaml."""
+
+    enabled: bool = True
+    clock_topic: str = "clock"
+
+
+@dataclass(frozen=True)
+class ReverseLogic:
+    """Vehicle-frame vs ROS-frame sign flips applied by the swivel-drive IK."""
+
+    flip_linear_x: bool = True
+    flip_angular_z: bool = True
+
+
+@dataclass(frozen=True)
+class ForkliftControl:
+    """Forklift ``control:`` block: cmd_vel → swivel-drive IK → articulation (seed defaults)."""
+
+    enabled: bool = True
+    cmd_vel_topic: str = "cmd_vel"
+    wheelbase: float = num(1.49, 0.0, 10.0, lo_open=True)
+    wheel_radius: float = num(0.15, 0.0, 2.0, lo_open=True)
+    max_steer_deg: float = num(45.0, 0.0, 89.0, lo_open=True)
+    drive_joint: str = "back_wheel_drive"
+    swivel_joint: str = "back_wheel_swivel"
+    reverse_logic: ReverseLogic = ReverseLogic()
+
+
+@dataclass(frozen=True)
+class DiffDriveControl:
+    """Differential-drive ``control:`` block (TurtleBot3 Waffle Pi defaults)."""
+
+    enabled: bool = True
+    cmd_vel_topic: str = "cmd_vel"
+    joint_names: tuple[str, ...] = ("wheel_left_joint", "wheel_right_joint")
+    wheel_distance: float = num(0.287, 0.0, 5.0, lo_open=True)
+    wheel_radius: float = num(0.033, 0.0, 1.0, lo_open=True)
+    max_linear_speed: float = num(0.26, 0.0, 10.0, lo_open=True)
+    max_angular_speed: float = num(1.82, 0.0, 20.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class OdometrySpec:
+    """``odometry:`` block: nav_msgs/Odometry plus the odom → base TF."""
+
+    enabled: bool = True
+    odom_topic: str = "odom"
+    tf_topic: str = "tf"
+    robot_front: Vec3 | None = None  # None: the model's own forward axis
+    odom_frame: str = "odom"
+    base_frame: str | None = None  # None: the model's base frame
+
+
+@dataclass(frozen=True)
+class TfTreeSpec:
+    """``tf_tree:`` block: world → odom (static) and the robot's link tree."""
+
+    enabled: bool = True
+    world_frame: str = "world"
+    static_topic: str = "tf_static"
+    dynamic_topic: str = "tf"
+
+
+@dataclass(frozen=True)
+class SafetyIndicatorSpec:
+    """``safety_indicator:`` block: ``/safety/is_muted`` recolours a disk on the robot."""
+
+    enabled: bool = False
+    muted_topic: str = "/safety/is_muted"
+    indicator_prim: str | None = None
+
+
+@dataclass(frozen=True)
+class RobotCameraSpec:
+    """A camera mounted on a robot link."""
+
+    enabled: bool = True
+    link: str = "camera_link"
+    topic: str = "camera/color"
+    info_topic: str = "camera/camera_info"
+    depth_topic: str | None = None
+    frame_id: str = "camera"
+    resolution: tuple[int, int] = (320, 240)
+    fovy_deg: float = num(60.0, 1.0, 170.0)
+    fps: float = num(30.0, 0.0, 60.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class LidarSpec:
+    """A planar lidar published as ``sensor_msgs/LaserScan``."""
+
+    enabled: bool = True
+    link: str = "base_scan"
+    topic: str = "scan"
+    frame_id: str = "base_scan"
+    type: Literal["laser_scan", "point_cloud"] = "laser_scan"
+    beams: int = num(360, 1, 4096)
+    range_min: float = num(0.12, 0.0)
+    range_max: float = num(3.5, 0.0, 1000.0, lo_open=True)
+    fps: float = num(5.0, 0.0, 60.0, lo_open=True)
+    noise_std: float = num(0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class ImuSpec:
+    """An IMU published as ``sensor_msgs/Imu``."""
+
+    enabled: bool = True
+    link: str = "imu_link"
+    topic: str = "imu"
+    frame_id: str = "imu_link"
+    fps: float = num(60.0, 0.0, 1000.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class SensorsSpec:
+    camera: RobotCameraSpec | None = None
+    lidar: LidarSpec | None = None
+    imu: ImuSpec | None = None
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    """One block of the ``robots:`` list (forklift seed's robots.yaml shape)."""
+
+    name: str
+    model: Literal["forklift", "turtlebot3_waffle_pi"]
+    enabled: bool = True
+    articulation_prim: str | None = None  # default /World/<name>
+    namespace: str = ""
+    spawn: Pose = Pose()
+    control: ForkliftControl | DiffDriveControl | None = None  # None: the model's default
+    odometry: OdometrySpec = OdometrySpec()
+    tf_tree: TfTreeSpec = TfTreeSpec()
+    safety_indicator: SafetyIndicatorSpec = SafetyIndicatorSpec()
+    sensors: SensorsSpec = SensorsSpec()
+
+    @property
+    def prim(self) -> str:
+        return self.articulation_prim or f"/World/{self.name}"
+
+    @property
+    def control_spec(self) -> ForkliftControl | DiffDriveControl:
+        """The ``control:`` block, or the model's default when the scenario leaves it out."""
+        if self.control is not None:
+            return self.control
+        return ForkliftControl() if self.model == "forklift" else DiffDriveControl()
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    """One entry of ``cameras:`` (forklift seed's cameras.yaml shape) for a fixed camera."""
+
+    name: str
+    enabled: bool = True
+    camera_prim: str | None = None  # default /World/<name>
+    spawn: Pose = Pose(position=(0.0, 0.0, 3.0))
+    resolution: tuple[int, int] = (256, 256)
+    fovy_deg: float = num(60.0, 1.0, 170.0)
+    fps: float = num(30.0, 0.0, 60.0, lo_open=True)
+    outputs: tuple[Literal["rgb", "depth", "pointcloud", "camera_info"], ...] = (
+        "rgb", "depth", "pointcloud", "camera_info")
+    # RTSP fields of the seed's cameras.yaml, accepted so the files stay interchangeable.
+    port: int | None = None
+    mount_path: str | None = None
+
+    @property
+    def prim(self) -> str:
+        return self.camera_prim or f"/World/{self.name}"
+
+
+@dataclass(frozen=True)
+class RouteSpec:
+    """A polyline in the world frame (metres)."""
+
+    waypoints: tuple[Vec2, ...]
+
+
+@dataclass(frozen=True)
+class SutSpec:
+    """A system under test, loaded from a ``"module:Class"`` string."""
+
+    name: str
+    plugin: str
+    enabled: bool = True
+    params: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A whole scenario, resolved: includes expanded, defaults filled, overrides applied."""
+
+    format_version: int
+    name: str
+    duration: float = num(30.0, 0.0, 3600.0, lo_open=True)
+    description: str = ""
+    seed: int = num(0, 0, 2**32 - 1)
+    srr_gt: bool = False
+    physics: PhysicsSpec = PhysicsSpec()
+    world: WorldSpec = WorldSpec()
+    clock: ClockSpec = ClockSpec()
+    robots: tuple[RobotSpec, ...] = ()
+    cameras: tuple[CameraSpec, ...] = ()
+    routes: dict[str, RouteSpec] = field(default_factory=dict)
+    systems_under_test: tuple[SutSpec, ...] = ()
+
+    @property
+    def tick_ns(self) -> int:
+        return 1_000_000_000 // self.physics.tick_hz
+
+    @property
+    def n_ticks(self) -> int:
+        return int(round(self.duration * self.physics.tick_hz))
+
+    def robot(self, name: str) -> RobotSpec:
+        for r in self.robots:
+            if r.name == name:
+                return r
+        raise KeyError(name)

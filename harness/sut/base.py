@@ -1,0 +1,97 @@
+"""The plug-in contract for systems under test.
+
+A system under test is a class named in the scenario as ``"module:Class"``. The engine owns
+the loop; a plug-in gets narrow hooks and never reads clocks or globals:
+
+* ``setup(ctx)`` once, before the first tick: advertise and subscribe through ``ctx``;
+* ``step(now_ns)`` once per tick after the graphs ran and messages were delivered;
+* ``shutdown()`` once at the end.
+
+Messages arrive through subscription callbacks (delivered between graph evaluation and
+``step``); time is only what the engine passes in.
+"""
+
+from __future__ import annotations
+
+import importlib
+import zlib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from harness.bus import Bus, Publisher, Qos, TopicNameError, resolve_topic
+from harness.errors import PluginError, ScenarioError
+from harness.scenario import Scenario, SutSpec, validate_dataclass
+
+__all__ = ["SutContext", "SystemUnderTest", "load_sut", "sut_params"]
+
+
+@dataclass(frozen=True)
+class SutContext:
+    """What a plug-in may touch: its name and parameters, the scenario, a seeded RNG source
+    and the bus (through :meth:`publisher` and :meth:`subscribe` only)."""
+
+    name: str
+    params: Mapping[str, Any]
+    scenario: Scenario
+    seed: int
+    field: str
+    bus: Bus
+    namespace: str = ""
+
+    def rng(self) -> np.random.Generator:
+        """A generator seeded from the scenario seed and the plug-in's name."""
+        return np.random.default_rng([self.seed, zlib.crc32(self.name.encode())])
+
+    def _topic(self, topic: str) -> str:
+        try:
+            return resolve_topic(topic, self.namespace)
+        except TopicNameError as err:
+            raise PluginError(f"{self.field}: {err}") from err
+
+    def publisher(self, topic: str, msgtype: str, qos: Qos | None = None) -> Publisher:
+        return self.bus.advertise(self._topic(topic), msgtype, qos)
+
+    def subscribe(self, topic: str, msgtype: str, callback: Callable[[Any], None]) -> None:
+        self.bus.subscribe(self._topic(topic), msgtype, callback)
+
+
+class SystemUnderTest:
+    """Base class for plug-ins; override what you need."""
+
+    def setup(self, ctx: SutContext) -> None:
+        """Advertise, subscribe and read parameters."""
+
+    def step(self, now_ns: int) -> None:
+        """Called once per tick with the simulation time in nanoseconds."""
+
+    def shutdown(self) -> None:
+        """Called once after the last tick."""
+
+
+def sut_params(cls: type[Any], ctx: SutContext) -> Any:
+    """Validate ``ctx.params`` into the plug-in's frozen parameter dataclass."""
+    try:
+        return validate_dataclass(cls, dict(ctx.params), "<scenario>", f"{ctx.field}.params")
+    except ScenarioError as err:
+        raise PluginError(f"{err.field}: {err.message}") from err
+
+
+def load_sut(spec: SutSpec, field: str) -> SystemUnderTest:
+    """Import ``spec.plugin`` (``"module:Class"``) and instantiate it."""
+    module_name, _, attr = spec.plugin.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as err:
+        raise PluginError(f"{field}.plugin: cannot import module {module_name!r}: {err}") \
+            from err
+    cls = getattr(module, attr, None)
+    if cls is None:
+        raise PluginError(f"{field}.plugin: module {module_name!r} has no {attr!r}")
+    if not isinstance(cls, type) or not all(callable(getattr(cls, m, None))
+                                            for m in ("setup", "step", "shutdown")):
+        raise PluginError(f"{field}.plugin: {spec.plugin} is not a system under test "
+                          "(needs setup, step and shutdown)")
+    return cls()  # type: ignore[no-any-return]

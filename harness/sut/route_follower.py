@@ -1,0 +1,145 @@
+"""Reference system under test: a pure-pursuit route follower.
+
+Subscribes to the robot's ``odom`` and to ``/tf_static`` (for ``world → odom``, so routes are
+written in world coordinates), publishes ``cmd_vel`` at ``rate_hz``. It steers towards the
+point ``lookahead`` metres further along the route than the closest point, slows down near the
+goal and stops within ``goal_tolerance``; after that it keeps publishing zero velocity so its
+output stays alive.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from harness.bus.messages import twist
+from harness.geometry import quat_mul, quat_rotate, quat_to_yaw, xyzw_to_wxyz
+from harness.errors import PluginError
+from harness.sut.base import SutContext, SystemUnderTest, sut_params
+
+__all__ = ["RouteFollower", "RouteFollowerParams", "pure_pursuit"]
+
+
+@dataclass(frozen=True)
+class RouteFollowerParams:
+    route: str
+    speed: float = 1.2
+    lookahead: float = 1.5
+    rate_hz: float = 20.0
+    goal_tolerance: float = 0.3
+    max_angular: float = 0.8
+    slow_radius: float = 3.0
+    odom_topic: str = "odom"
+    cmd_vel_topic: str = "cmd_vel"
+    tf_static_topic: str = "/tf_static"
+    world_frame: str = "world"
+    odom_frame: str = "odom"
+
+
+def _project(path: np.ndarray, cum: np.ndarray, p: np.ndarray, start: int) -> tuple[float, int]:
+    """Arc length of the point of the path closest to ``p``, searching segments from
+    ``start`` on (progress never goes backwards)."""
+    best = (math.inf, cum[start], start)
+    for i in range(start, len(path) - 1):
+        a, b = path[i], path[i + 1]
+        seg = b - a
+        length2 = float(seg @ seg)
+        t = 0.0 if length2 == 0 else float(np.clip((p - a) @ seg / length2, 0.0, 1.0))
+        d = float(np.linalg.norm(a + t * seg - p))
+        if d < best[0] - 1e-12:
+            best = (d, cum[i] + t * math.sqrt(length2), i)
+    return best[1], best[2]
+
+
+def _point_at(path: np.ndarray, cum: np.ndarray, s: float) -> np.ndarray:
+    s = min(max(s, 0.0), float(cum[-1]))
+    i = int(np.searchsorted(cum, s, side="right") - 1)
+    i = min(i, len(path) - 2)
+    seg = cum[i + 1] - cum[i]
+    t = 0.0 if seg == 0 else (s - cum[i]) / seg
+    return path[i] + t * (path[i + 1] - path[i])
+
+
+def pure_pursuit(x: float, y: float, yaw: float, target: np.ndarray) -> float:
+    """Curvature of the arc from pose (x, y, yaw) through ``target``."""
+    dx, dy = target[0] - x, target[1] - y
+    local_y = -math.sin(yaw) * dx + math.cos(yaw) * dy
+    dist2 = dx * dx + dy * dy
+    return 0.0 if dist2 < 1e-9 else 2.0 * local_y / dist2
+
+
+class RouteFollower(SystemUnderTest):
+    def setup(self, ctx: SutContext) -> None:
+        self.p: RouteFollowerParams = sut_params(RouteFollowerParams, ctx)
+        route = ctx.scenario.routes.get(self.p.route)
+        if route is None:
+            raise PluginError(f"{ctx.field}.params.route: no route named {self.p.route!r} "
+                              f"(routes: {', '.join(sorted(ctx.scenario.routes)) or 'none'})")
+        self.path = np.array(route.waypoints, dtype=np.float64)
+        seg = np.linalg.norm(np.diff(self.path, axis=0), axis=1)
+        self.cum = np.concatenate([[0.0], np.cumsum(seg)])
+        self.period_ns = int(round(1e9 / self.p.rate_hz))
+        self.next_ns = 0
+        self.segment = 0
+        self.done = False
+        self.odom: Any = None
+        self.world_from_odom: tuple[np.ndarray, np.ndarray] | None = None
+        self.pub = ctx.publisher(self.p.cmd_vel_topic, "geometry_msgs/msg/Twist")
+        ctx.subscribe(self.p.odom_topic, "nav_msgs/msg/Odometry", self._on_odom)
+        ctx.subscribe(self.p.tf_static_topic, "tf2_msgs/msg/TFMessage", self._on_tf)
+
+    def _on_odom(self, msg: Any) -> None:
+        self.odom = msg
+
+    def _on_tf(self, msg: Any) -> None:
+        for tf in msg.transforms:
+            if tf.header.frame_id == self.p.world_frame and \
+                    tf.child_frame_id == self.p.odom_frame:
+                t, r = tf.transform.translation, tf.transform.rotation
+                self.world_from_odom = (np.array([t.x, t.y, t.z]),
+                                        xyzw_to_wxyz([r.x, r.y, r.z, r.w]))
+
+    def pose(self) -> tuple[float, float, float] | None:
+        """Robot pose in the world frame, or None until odom and world → odom are known."""
+        if self.odom is None or self.world_from_odom is None:
+            return None
+        p, q = self.odom.pose.pose.position, self.odom.pose.pose.orientation
+        t0, q0 = self.world_from_odom
+        pos = t0 + quat_rotate(q0, [p.x, p.y, p.z])
+        yaw = quat_to_yaw(quat_mul(q0, xyzw_to_wxyz([q.x, q.y, q.z, q.w])))
+        return float(pos[0]), float(pos[1]), yaw
+
+    def command(self) -> tuple[float, float]:
+        pose = self.pose()
+        if pose is None or self.done:
+            return 0.0, 0.0
+        x, y, yaw = pose
+        here = np.array([x, y])
+        goal_dist = float(np.linalg.norm(self.path[-1] - here))
+        s, self.segment = _project(self.path, self.cum, here, self.segment)
+        remaining = float(self.cum[-1]) - s
+        if goal_dist < self.p.goal_tolerance or (remaining < self.p.goal_tolerance
+                                                 and goal_dist < 2 * self.p.goal_tolerance):
+            self.done = True
+            return 0.0, 0.0
+        target = _point_at(self.path, self.cum, s + self.p.lookahead)
+        if s + self.p.lookahead > self.cum[-1]:
+            # Past the end of the route: aim along the last segment so the approach stays
+            # straight instead of circling the goal.
+            direction = self.path[-1] - self.path[-2]
+            direction = direction / max(float(np.linalg.norm(direction)), 1e-9)
+            target = self.path[-1] + direction * (s + self.p.lookahead - self.cum[-1])
+        v = self.p.speed * min(1.0, max(0.15, remaining / self.p.slow_radius))
+        w = float(np.clip(pure_pursuit(x, y, yaw, target) * v,
+                          -self.p.max_angular, self.p.max_angular))
+        return v, w
+
+    def step(self, now_ns: int) -> None:
+        if now_ns < self.next_ns:
+            return
+        self.next_ns = now_ns + self.period_ns
+        v, w = self.command()
+        self.pub.publish(twist((v, 0.0, 0.0), (0.0, 0.0, w)))

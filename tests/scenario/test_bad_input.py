@@ -1,0 +1,94 @@
+"""Every kind of bad scenario input exits 2 with one line naming the file and the field."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from harness.cli import main
+
+GOOD = """\
+format_version: 1
+name: t
+duration: 2
+robots:
+  - name: forklift
+    model: forklift
+"""
+
+
+def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, err.strip()
+
+
+@pytest.mark.parametrize(
+    ("text", "field", "words"),
+    [
+        ("", "", "empty"),
+        ("format_version: 1\nname: [unclosed\n", "", "YAML syntax error at line"),
+        (GOOD.replace("duration: 2", "duraton: 2"), "duraton", "did you mean 'duration'"),
+        (GOOD.replace("duration: 2", "duration: soon"), "duration", "expected a number"),
+        (GOOD.replace("duration: 2", "duration: -5"), "duration", "must be > 0"),
+        (GOOD.replace("model: forklift", "model: tractor"), "robots[0].model", "'tractor'"),
+        (GOOD + "include: missing_robots.yaml\n", "include", "file not found"),
+        (GOOD.replace("name: t", "name: 3d"), "name", "must be letters"),
+        (GOOD + "clock: {clock_topic: 'bad//topic'}\n", "clock.clock_topic", "'//'"),
+        (GOOD.replace("format_version: 1", "format_version: 99"), "format_version",
+         "unsupported version"),
+    ],
+    ids=["empty", "yaml-syntax", "misspelt-key", "text-for-number", "negative-duration",
+         "unknown-model", "missing-include", "bad-name", "bad-topic", "format-version"],
+)
+def test_bad_scenario_is_one_line_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                         text: str, field: str, words: str) -> None:
+    path = tmp_path / "scenario.yaml"
+    path.write_text(text)
+    for command in ("validate", "run"):
+        code, err = _run(capsys, command, str(path), "--out", str(tmp_path / "out")) \
+            if command == "run" else _run(capsys, command, str(path))
+        assert code == 2, err
+        assert len(err.splitlines()) == 1, err
+        assert "Traceback" not in err
+        culprit = str(tmp_path / "missing_robots.yaml") if "include" in field else str(path)
+        assert culprit in err
+        assert f": {field}:" in err if field else True
+        assert words in err
+    assert not (tmp_path / "out").exists(), "a rejected scenario must not leave a run dir"
+
+
+def test_missing_scenario_path(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, err = _run(capsys, "run", str(tmp_path / "nope.yaml"))
+    assert code == 2
+    assert err == f"srr run: {tmp_path / 'nope.yaml'}: file not found"
+
+
+def test_error_in_included_file_names_that_file(tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "robots.yaml").write_text(
+        "robots:\n  - name: f\n    model: forklift\n    control: {wheelbase: wide}\n")
+    main_file = tmp_path / "s.yaml"
+    main_file.write_text("format_version: 1\nname: s\ninclude: robots.yaml\n")
+    code, err = _run(capsys, "validate", str(main_file))
+    assert code == 2
+    assert f"{tmp_path / 'robots.yaml'}: robots[0].control.wheelbase: expected a number" in err
+
+
+def test_bad_override(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "s.yaml"
+    path.write_text(GOOD)
+    code, err = _run(capsys, "validate", str(path), "--set", "robots.nobody.model=forklift")
+    assert code == 2
+    assert "robots.nobody" in err and len(err.splitlines()) == 1
+    code, err = _run(capsys, "validate", str(path), "--set", "duration=-1")
+    assert code == 2 and ": duration: must be > 0" in err
+
+
+def test_bad_cli_argument_is_one_line(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["run", "x.yaml", "--seed", "many"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--seed" in err
