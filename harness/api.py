@@ -174,7 +174,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     (run_dir / "scenario.yaml").write_text(
         yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
     recorder = Recorder(run_dir / "bag")
-    recorder.open(sim.bus.topics())
+    recorder.open(sim.bus.qos)
     sim.add_tap(recorder)
     interrupted = False
     try:

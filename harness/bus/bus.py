@@ -139,6 +139,10 @@ class Bus:
     def topics(self) -> dict[str, TopicInfo]:
         return dict(self._topics)
 
+    def qos(self, topic: str) -> Qos:
+        info = self._topics.get(topic)
+        return info.qos if info is not None else Qos()
+
     def published_counts(self) -> dict[str, int]:
         return {t: i.published for t, i in self._topics.items()}
 

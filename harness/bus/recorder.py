@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import struct
 from dataclasses import dataclass
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +27,7 @@ from rosbags.interfaces import (
 )
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from harness.bus.bus import Envelope, Qos, TopicInfo
+from harness.bus.bus import Envelope, Qos
 from harness.bus.messages import TYPESTORE, serialize
 
 __all__ = ["Recorder", "TopicStats"]
@@ -80,19 +81,20 @@ def _bag_qos(qos: Qos) -> BagQos:
 class Recorder:
     """Writes a rosbag2 (version 9, MCAP) directory at ``bag_dir``.
 
-    Call :meth:`open` with the bus's topic table (read for QoS, so transient-local topics are
-    marked so in ``metadata.yaml``), feed it envelopes, then :meth:`close`.
+    Call :meth:`open` with the bus's QoS look-up (so transient-local topics are marked so in
+    ``metadata.yaml``), feed it envelopes, then :meth:`close`.
     """
 
     def __init__(self, bag_dir: Path) -> None:
         self.bag_dir = Path(bag_dir)
-        self._topic_info: dict[str, TopicInfo] | None = None
+        self._qos_of: Callable[[str], Qos] = lambda topic: Qos()
         self._writer: Writer | None = None
         self._state: dict[str, _TopicState] = {}
 
-    def open(self, topics: dict[str, TopicInfo]) -> None:
-        """Open the bag; ``topics`` is the bus's live topic table (read for QoS)."""
-        self._topic_info = topics
+    def open(self, qos_of: Callable[[str], Qos] | None = None) -> None:
+        """Open the bag; ``qos_of`` gives a topic's QoS when its first message arrives."""
+        if qos_of is not None:
+            self._qos_of = qos_of
         self._writer = Writer(self.bag_dir, version=9, storage_plugin=StoragePlugin.MCAP)
         self._writer.open()
 
@@ -104,7 +106,7 @@ class Recorder:
             raise RuntimeError("recorder is not open")
         st = self._state.get(env.topic)
         if st is None:
-            qos = self._topic_info[env.topic].qos if self._topic_info else Qos()
+            qos = self._qos_of(env.topic)
             conn = self._writer.add_connection(
                 env.topic, env.msgtype, typestore=TYPESTORE,
                 offered_qos_profiles=[_bag_qos(qos)])

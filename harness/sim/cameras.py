@@ -1,0 +1,78 @@
+"""Cameras: the axes convention of camera prims and the MuJoCo cameras behind them.
+
+Scenario camera orientations (and every camera pose :class:`~harness.sim.world.World` returns)
+use the *world* axes convention of Isaac Sim's ``Camera`` class: the camera looks along its +X,
++Z is up and +Y is to the left. A MuJoCo camera looks along its -Z with +Y up and +X to the
+right. The fixed rotation between the two is ``Q_MJ_IN_WORLD_CONVENTION``::
+
+    q_mujoco_camera = q_world_convention ⊗ Q_MJ_IN_WORLD_CONVENTION
+    q_world_convention = q_mujoco_camera ⊗ conj(Q_MJ_IN_WORLD_CONVENTION)
+
+(ROS optical frames — +Z forward, +X right, +Y down — are a further fixed rotation, applied by
+whoever publishes them.)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import mujoco
+import numpy as np
+
+from harness.scenario.schema import CameraSpec
+from harness.sim.geometry import FloatArray, quat_conj, quat_from_mat, quat_from_rpy_deg, quat_mul
+from harness.sim.prims import PrimKind, PrimTable
+
+__all__ = [
+    "Q_MJ_IN_WORLD_CONVENTION",
+    "add_fixed_camera",
+    "add_mounted_camera",
+    "mj_camera_quat",
+    "world_convention_quat",
+]
+
+# Columns: the MuJoCo camera's x (right), y (up), z (backwards) axes written in the world-
+# convention camera frame (+X forward, +Y left, +Z up).
+Q_MJ_IN_WORLD_CONVENTION: FloatArray = quat_from_mat(
+    np.array([[0.0, 0.0, -1.0],
+              [-1.0, 0.0, 0.0],
+              [0.0, 1.0, 0.0]])
+)
+
+
+def mj_camera_quat(q_world_convention: Sequence[float] | FloatArray) -> FloatArray:
+    """MuJoCo camera orientation for a world-convention camera orientation."""
+    return quat_mul(q_world_convention, Q_MJ_IN_WORLD_CONVENTION)
+
+
+def world_convention_quat(q_mj_camera: Sequence[float] | FloatArray) -> FloatArray:
+    """World-convention orientation (+X forward, +Z up) of a MuJoCo camera orientation."""
+    return quat_mul(q_mj_camera, quat_conj(Q_MJ_IN_WORLD_CONVENTION))
+
+
+def add_fixed_camera(spec: mujoco.MjSpec, camera: CameraSpec, prims: PrimTable) -> str:
+    """Add a world-fixed camera at ``camera.spawn``; returns its MuJoCo name."""
+    name = f"camera/{camera.name}"
+    spec.worldbody.add_camera(
+        name=name,
+        pos=[float(v) for v in camera.spawn.position],
+        quat=list(mj_camera_quat(quat_from_rpy_deg(camera.spawn.rpy_deg))),
+        fovy=float(camera.fovy_deg),
+        resolution=[float(camera.resolution[0]), float(camera.resolution[1])],
+    )
+    prims.declare(camera.prim, PrimKind.CAMERA, name)
+    return name
+
+
+def add_mounted_camera(body: mujoco.MjsBody, mj_name: str, fovy_deg: float,
+                       resolution: tuple[int, int], prim: str, prims: PrimTable) -> str:
+    """Add a camera on a robot link looking along the link's +X (REP-103 ``camera_link``)."""
+    body.add_camera(
+        name=mj_name,
+        pos=[0.0, 0.0, 0.0],
+        quat=list(Q_MJ_IN_WORLD_CONVENTION),
+        fovy=float(fovy_deg),
+        resolution=[float(resolution[0]), float(resolution[1])],
+    )
+    prims.declare(prim, PrimKind.CAMERA, mj_name)
+    return mj_name

@@ -1,0 +1,42 @@
+"""Robot models built into a MuJoCo spec, one module per model."""
+
+from __future__ import annotations
+
+import mujoco
+
+from harness.errors import SimulationError
+from harness.scenario.schema import DiffDriveControl, ForkliftControl, RobotSpec
+from harness.sim.geometry import FloatArray
+from harness.sim.prims import PrimTable
+from harness.sim.robots.common import ActuatorMode, RobotBuild
+from harness.sim.robots.forklift import add_forklift
+from harness.sim.robots.turtlebot3 import add_turtlebot3
+
+__all__ = ["ActuatorMode", "RobotBuild", "add_robot", "control_for"]
+
+
+def control_for(robot: RobotSpec) -> ForkliftControl | DiffDriveControl:
+    """The robot's control block, or its model's default; a mismatched block is refused."""
+    expected: type[ForkliftControl] | type[DiffDriveControl]
+    if robot.model == "forklift":
+        expected = ForkliftControl
+    elif robot.model == "turtlebot3_waffle_pi":
+        expected = DiffDriveControl
+    else:
+        raise SimulationError(f"robots.{robot.name}.model: unknown robot model {robot.model!r}")
+    if robot.control is None:
+        return expected()
+    if not isinstance(robot.control, expected):
+        raise SimulationError(
+            f"robots.{robot.name}.control: a {type(robot.control).__name__} block does not fit "
+            f"model {robot.model!r} (expected {expected.__name__})")
+    return robot.control
+
+
+def add_robot(spec: mujoco.MjSpec, robot: RobotSpec, pos: tuple[float, float, float],
+              quat: FloatArray, prims: PrimTable) -> RobotBuild:
+    """Add ``robot`` with its root frame (on the floor) at ``pos``/``quat``."""
+    control = control_for(robot)
+    if isinstance(control, ForkliftControl):
+        return add_forklift(spec, robot, control, pos, quat, prims)
+    return add_turtlebot3(spec, robot, control, pos, quat, prims)

@@ -1,0 +1,427 @@
+"""The simulated world: a MuJoCo model built from a :class:`~harness.scenario.schema.Scenario`.
+
+``World.build(scenario)`` assembles an ``MjSpec`` (warehouse, enabled robots, enabled fixed
+cameras, robot-mounted sensor attach points), compiles it and resolves every prim path to a
+MuJoCo object. Everything the rest of srr needs is addressed by prim path (``/World/...``) or
+by robot name; MuJoCo names stay internal.
+
+Conventions:
+
+* Physics: ``timestep = 1 / (tick_hz * substeps)``; single-threaded and deterministic — the
+  same scenario and the same command sequence give bit-identical states.
+* Ground robots are spawned with their root frame on the floor (the spawn's z is ignored) and
+  the spawn's roll/pitch/yaw (degrees, extrinsic X-Y-Z).
+* Poses are world-frame positions and quaternions ``(w, x, y, z)``. Camera prims use Isaac's
+  world axes convention (+X forward, +Z up); see :mod:`harness.sim.cameras`.
+* After :meth:`World.step` poses, velocities and position/velocity sensors (IMU orientation
+  and gyro) belong to the new state; acceleration sensors (the IMU accelerometer) and contact
+  forces are those of the last substep (one physics step, e.g. 1/240 s, old).
+"""
+
+from __future__ import annotations
+
+import math
+import types
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import mujoco
+import numpy as np
+
+from harness.errors import SimulationError
+from harness.scenario.schema import Scenario
+from harness.sim.cameras import add_fixed_camera, world_convention_quat
+from harness.sim.geometry import FloatArray, quat_from_mat, quat_from_rpy_deg
+from harness.sim.prims import PrimKind, PrimRef, PrimTable
+from harness.sim.robots import ActuatorMode, RobotBuild, add_robot
+from harness.sim.sensors import MountedSensors, add_robot_sensors
+from harness.sim.warehouse import add_warehouse, floor_half_extent
+
+__all__ = ["ImuReading", "JointRef", "RobotInfo", "World"]
+
+_INTEGRATORS = {
+    "euler": mujoco.mjtIntegrator.mjINT_EULER,
+    "rk4": mujoco.mjtIntegrator.mjINT_RK4,
+    "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+}
+_NEAR_CLIP_M = 0.03
+_MIN_OFFSCREEN = (640, 480)
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class JointRef:
+    """A robot joint: plain name, MuJoCo ids/addresses and its actuator (``-1``: passive)."""
+
+    name: str
+    joint_id: int
+    qposadr: int
+    dofadr: int
+    actuator_id: int
+    mode: ActuatorMode | None
+
+
+@dataclass(frozen=True)
+class RobotInfo:
+    """Everything the world knows about one robot, resolved to MuJoCo ids."""
+
+    name: str
+    model: str
+    prim: str
+    base_prim: str
+    robot_front: Vec3
+    default_base_frame: str
+    root_body_id: int
+    body_ids: tuple[int, ...]
+    joints: Mapping[str, JointRef]
+    links: Mapping[str, str]
+    sensors: Mapping[str, str]
+    imu_sensors: Mapping[str, tuple[int, int]]
+
+
+class ImuReading(NamedTuple):
+    """IMU sample in the IMU site frame: orientation (w, x, y, z) of the site in the world,
+    angular velocity (rad/s) and specific force (m/s^2, +9.81 on +Z when level and still)."""
+
+    orientation: FloatArray
+    angular_velocity: FloatArray
+    linear_acceleration: FloatArray
+
+
+def _configure(spec: mujoco.MjSpec, scenario: Scenario) -> None:
+    physics = scenario.physics
+    spec.modelname = "srr"
+    spec.compiler.degree = False
+    spec.compiler.autolimits = True
+    spec.option.timestep = 1.0 / (physics.tick_hz * physics.substeps)
+    spec.option.integrator = _INTEGRATORS[physics.integrator]
+    spec.option.iterations = physics.solver_iterations
+    hx, hy = floor_half_extent(scenario.world)
+    extent = 2.0 * max(hx, hy, scenario.world.wall_height)
+    spec.stat.extent = extent
+    spec.stat.center = [0.0, 0.0, scenario.world.wall_height / 2]
+    spec.visual.map.znear = _NEAR_CLIP_M / extent
+    spec.visual.map.zfar = 3.0
+    widths = [_MIN_OFFSCREEN[0]] + [c.resolution[0] for c in scenario.cameras]
+    heights = [_MIN_OFFSCREEN[1]] + [c.resolution[1] for c in scenario.cameras]
+    for robot in scenario.robots:
+        cam = robot.sensors.camera
+        if cam is not None:
+            widths.append(cam.resolution[0])
+            heights.append(cam.resolution[1])
+    spec.visual.global_.offwidth = max(widths)
+    spec.visual.global_.offheight = max(heights)
+
+
+def _resolve_robot(model: mujoco.MjModel, build: RobotBuild,
+                   sensors: MountedSensors) -> RobotInfo:
+    def lookup(objtype: mujoco.mjtObj, name: str) -> int:
+        idx = int(mujoco.mj_name2id(model, objtype, name))
+        if idx < 0:
+            raise SimulationError(f"robot {build.name}: {name!r} missing from the compiled model")
+        return idx
+
+    root = lookup(mujoco.mjtObj.mjOBJ_BODY, build.root_body)
+    body_ids = tuple(int(b) for b in np.flatnonzero(model.body_rootid == root))
+    refs: list[JointRef] = []
+    for plain, mj_name in build.joints.items():
+        jid = lookup(mujoco.mjtObj.mjOBJ_JOINT, mj_name)
+        act, mode = -1, None
+        if plain in build.actuators:
+            act_name, mode = build.actuators[plain]
+            act = lookup(mujoco.mjtObj.mjOBJ_ACTUATOR, act_name)
+        refs.append(JointRef(plain, jid, int(model.jnt_qposadr[jid]), int(model.jnt_dofadr[jid]),
+                             act, mode))
+    refs.sort(key=lambda r: r.joint_id)
+    imu: dict[str, tuple[int, int]] = {}
+    for kind, name in sensors.imu_sensors.items():
+        sid = lookup(mujoco.mjtObj.mjOBJ_SENSOR, name)
+        imu[kind] = (int(model.sensor_adr[sid]), int(model.sensor_dim[sid]))
+    return RobotInfo(
+        name=build.name, model=build.model, prim=build.prim, base_prim=build.base_prim,
+        robot_front=build.robot_front, default_base_frame=build.default_base_frame,
+        root_body_id=root, body_ids=body_ids,
+        joints=types.MappingProxyType({r.name: r for r in refs}),
+        links=types.MappingProxyType({k: v[0] for k, v in build.links.items()}),
+        sensors=sensors.prims, imu_sensors=types.MappingProxyType(imu),
+    )
+
+
+def _assemble(scenario: Scenario, prims: PrimTable,
+              ) -> tuple[mujoco.MjSpec, list[tuple[RobotBuild, MountedSensors]]]:
+    """The whole spec: options, warehouse, enabled robots with their sensors, fixed cameras."""
+    spec = mujoco.MjSpec()
+    _configure(spec, scenario)
+    add_warehouse(spec, scenario.world, prims)
+    builds: list[tuple[RobotBuild, MountedSensors]] = []
+    seen: set[str] = set()
+    for robot in scenario.robots:
+        if not robot.enabled:
+            continue
+        if robot.name in seen:
+            raise SimulationError(f"robots.{robot.name}: two robots share this name")
+        seen.add(robot.name)
+        x, y, _ = robot.spawn.position
+        quat = quat_from_rpy_deg(robot.spawn.rpy_deg)
+        build = add_robot(spec, robot, (float(x), float(y), 0.0), quat, prims)
+        builds.append((build, add_robot_sensors(spec, robot, build, prims)))
+    for camera in scenario.cameras:
+        if camera.enabled:
+            add_fixed_camera(spec, camera, prims)
+    return spec, builds
+
+
+class World:
+    """A compiled MuJoCo world plus the prim and robot tables; build it with :meth:`build`."""
+
+    def __init__(self, scenario: Scenario, model: mujoco.MjModel, data: mujoco.MjData,
+                 prims: Mapping[str, PrimRef], robots: Mapping[str, RobotInfo]) -> None:
+        self._scenario = scenario
+        self._model = model
+        self._data = data
+        self._prims = prims
+        self._robots = robots
+        self._rgba0 = model.geom_rgba.copy()
+        mujoco.mj_forward(model, data)
+
+    # ------------------------------------------------------------------ building
+    @classmethod
+    def build(cls, scenario: Scenario) -> World:
+        """Build the world for ``scenario`` (enabled robots and cameras only)."""
+        prims = PrimTable()
+        try:
+            spec, builds = _assemble(scenario, prims)
+            model = spec.compile()
+        except ValueError as err:  # MuJoCo refuses a spec element (e.g. a repeated name)
+            raise SimulationError(f"scenario {scenario.name}: MuJoCo model could not be built: "
+                                  f"{err}") from err
+        data = mujoco.MjData(model)
+        resolved = prims.resolve(model)
+        robots = {b.name: _resolve_robot(model, b, s) for b, s in builds}
+        return cls(scenario, model, data, resolved, types.MappingProxyType(robots))
+
+    # ------------------------------------------------------------------ state
+    @property
+    def model(self) -> mujoco.MjModel:
+        return self._model
+
+    @property
+    def data(self) -> mujoco.MjData:
+        return self._data
+
+    @property
+    def scenario(self) -> Scenario:
+        return self._scenario
+
+    @property
+    def timestep(self) -> float:
+        return float(self._model.opt.timestep)
+
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` physics steps, then refresh derived quantities for the new state."""
+        if n < 0:
+            raise SimulationError(f"cannot step a negative number of times ({n})")
+        m, d = self._model, self._data
+        for _ in range(n):
+            mujoco.mj_step(m, d)
+        if n:
+            # mj_step leaves poses/velocities of the state *before* its integration; refresh
+            # them (and position/velocity sensors) for the new state — far cheaper than
+            # mj_forward. Acceleration sensors keep the values of the last substep.
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            mujoco.mj_camlight(m, d)
+            mujoco.mj_comVel(m, d)
+            mujoco.mj_sensorPos(m, d)
+            mujoco.mj_sensorVel(m, d)
+        if d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number or not np.isfinite(d.qpos).all():
+            raise SimulationError(f"simulation diverged at t={d.time:.4f} s (non-finite state)")
+
+    def reset(self) -> None:
+        """Back to the spawn state: ``mj_resetData`` (controls, warm start, time cleared) and
+        the build-time geom colours."""
+        mujoco.mj_resetData(self._model, self._data)
+        self._model.geom_rgba[:] = self._rgba0
+        mujoco.mj_forward(self._model, self._data)
+
+    # ------------------------------------------------------------------ prims
+    def prims(self) -> tuple[str, ...]:
+        """Every prim path, sorted."""
+        return tuple(self._prims)
+
+    def has_prim(self, path: str) -> bool:
+        return path in self._prims
+
+    def prim_ref(self, path: str) -> PrimRef:
+        """The MuJoCo object (kind, id, name) behind ``path``."""
+        try:
+            return self._prims[path]
+        except KeyError:
+            raise SimulationError(f"no prim {path} in the world") from None
+
+    def prim_pose(self, path: str) -> tuple[FloatArray, FloatArray]:
+        """World position (3,) and orientation (w, x, y, z) of ``path``.
+
+        Camera prims are returned in the world axes convention (+X forward, +Z up).
+        """
+        ref, d = self.prim_ref(path), self._data
+        if ref.kind is PrimKind.BODY:
+            return d.xpos[ref.id].copy(), d.xquat[ref.id].copy()
+        if ref.kind is PrimKind.SITE:
+            return d.site_xpos[ref.id].copy(), quat_from_mat(d.site_xmat[ref.id])
+        if ref.kind is PrimKind.GEOM:
+            return d.geom_xpos[ref.id].copy(), quat_from_mat(d.geom_xmat[ref.id])
+        return d.cam_xpos[ref.id].copy(), world_convention_quat(quat_from_mat(d.cam_xmat[ref.id]))
+
+    def prim_velocity(self, path: str) -> tuple[FloatArray, FloatArray]:
+        """Linear (m/s) and angular (rad/s) velocity of ``path``'s origin, world frame."""
+        ref = self.prim_ref(path)
+        res = np.zeros(6)
+        # mjOBJ_BODY means the body's inertial frame to mj_objectVelocity; XBODY is its origin.
+        objtype = mujoco.mjtObj.mjOBJ_XBODY if ref.kind is PrimKind.BODY else ref.kind.objtype
+        mujoco.mj_objectVelocity(self._model, self._data, objtype, ref.id, res, 0)
+        return res[3:].copy(), res[:3].copy()
+
+    def prim_body_id(self, path: str) -> int:
+        """The MuJoCo body ``path`` belongs to (the body itself for body prims)."""
+        ref, m = self.prim_ref(path), self._model
+        if ref.kind is PrimKind.BODY:
+            return ref.id
+        if ref.kind is PrimKind.SITE:
+            return int(m.site_bodyid[ref.id])
+        if ref.kind is PrimKind.GEOM:
+            return int(m.geom_bodyid[ref.id])
+        return int(m.cam_bodyid[ref.id])
+
+    def set_geom_rgba(self, prim_path: str, rgba: Sequence[float]) -> None:
+        """Recolour the geom at ``prim_path`` (shows in the next render)."""
+        ref = self.prim_ref(prim_path)
+        if ref.kind is not PrimKind.GEOM:
+            raise SimulationError(f"prim {prim_path} is a {ref.kind.value}, not a geom")
+        values = [float(v) for v in rgba]
+        if len(values) != 4 or not all(0.0 <= v <= 1.0 for v in values):
+            raise SimulationError(f"rgba for {prim_path} must be 4 values in [0, 1], got {rgba}")
+        self._model.geom_rgba[ref.id] = values
+
+    # ------------------------------------------------------------------ robots
+    def robot_names(self) -> tuple[str, ...]:
+        return tuple(self._robots)
+
+    def robot(self, name: str) -> RobotInfo:
+        try:
+            return self._robots[name]
+        except KeyError:
+            raise SimulationError(f"no robot named {name!r} in the world "
+                                  f"(robots: {', '.join(self._robots) or 'none'})") from None
+
+    def robot_at(self, robot_prim: str) -> RobotInfo:
+        """The robot whose prim is ``robot_prim`` or an ancestor of it (deepest match)."""
+        best: RobotInfo | None = None
+        for info in self._robots.values():
+            inside = robot_prim == info.prim or robot_prim.startswith(info.prim + "/")
+            if inside and (best is None or len(info.prim) > len(best.prim)):
+                best = info
+        if best is None:
+            raise SimulationError(f"no robot at prim {robot_prim}")
+        return best
+
+    def robot_body_ids(self, robot_name: str) -> tuple[int, ...]:
+        return self.robot(robot_name).body_ids
+
+    def robot_front(self, name: str) -> Vec3:
+        """The model's forward axis in its chassis frame ((-1,0,0) forklift, (1,0,0) tb3)."""
+        return self.robot(name).robot_front
+
+    def base_prim(self, name: str) -> str:
+        """The chassis prim odometry reads (``<prim>/body`` or ``<prim>/base_footprint``)."""
+        return self.robot(name).base_prim
+
+    def default_base_frame(self, name: str) -> str:
+        return self.robot(name).default_base_frame
+
+    def link_prim(self, name: str, link: str) -> str:
+        """Prim path of robot ``name``'s link ``link`` (``base_scan``, ``body``, ...)."""
+        info = self.robot(name)
+        try:
+            return info.links[link]
+        except KeyError:
+            raise SimulationError(f"robot {name} has no link {link!r} "
+                                  f"(links: {', '.join(sorted(info.links))})") from None
+
+    def sensor_prim(self, name: str, kind: str) -> str:
+        """Prim of robot ``name``'s mounted ``lidar``/``imu``/``camera``."""
+        info = self.robot(name)
+        try:
+            return info.sensors[kind]
+        except KeyError:
+            raise SimulationError(f"robot {name} has no enabled {kind} sensor") from None
+
+    def imu(self, name: str) -> ImuReading:
+        """Current IMU sample of robot ``name`` (needs ``sensors.imu`` enabled)."""
+        info = self.robot(name)
+        if not info.imu_sensors:
+            raise SimulationError(f"robot {name} has no enabled imu sensor")
+        data = self._data.sensordata
+
+        def read(kind: str) -> FloatArray:
+            adr, dim = info.imu_sensors[kind]
+            return np.array(data[adr:adr + dim], dtype=np.float64)
+
+        return ImuReading(read("orientation"), read("gyro"), read("accelerometer"))
+
+    # ------------------------------------------------------------------ joints
+    def joint_names(self, robot_prim: str) -> tuple[str, ...]:
+        """Plain names of the robot's hinge joints, in model order."""
+        return tuple(self.robot_at(robot_prim).joints)
+
+    def _joint(self, info: RobotInfo, joint: str) -> JointRef:
+        try:
+            return info.joints[joint]
+        except KeyError:
+            raise SimulationError(
+                f"robot {info.name} ({info.prim}) has no joint {joint!r} "
+                f"(joints: {', '.join(info.joints)})") from None
+
+    def joint_state(self, robot_prim: str, joint: str) -> tuple[float, float]:
+        """(qpos, qvel) of a robot's joint: radians and rad/s."""
+        ref = self._joint(self.robot_at(robot_prim), joint)
+        return float(self._data.qpos[ref.qposadr]), float(self._data.qvel[ref.dofadr])
+
+    def apply_joint_commands(self, robot_prim: str, joint_names: Sequence[str],
+                             positions: Sequence[float] | None = None,
+                             velocities: Sequence[float] | None = None) -> None:
+        """Set actuator targets, IsaacArticulationController style.
+
+        For each named joint, a position-driven joint takes its ``positions`` entry and a
+        velocity-driven joint its ``velocities`` entry; ``None`` or an empty sequence means
+        "no command of that kind", and a NaN entry leaves that actuator as it is. Position
+        targets are clamped to the actuator's range by MuJoCo. Everything is checked before
+        anything is written.
+        """
+        info = self.robot_at(robot_prim)
+        names = list(joint_names)
+        pos = list(positions) if positions is not None and len(positions) else None
+        vel = list(velocities) if velocities is not None and len(velocities) else None
+        for label, values in (("positions", pos), ("velocities", vel)):
+            if values is not None and len(values) != len(names):
+                raise SimulationError(
+                    f"robot {info.name}: {len(names)} joint names but {len(values)} {label}")
+        writes: list[tuple[int, float]] = []
+        for i, joint in enumerate(names):
+            ref = self._joint(info, joint)
+            if ref.actuator_id < 0:
+                raise SimulationError(f"robot {info.name}: joint {joint!r} has no drive")
+            values = pos if ref.mode is ActuatorMode.POSITION else vel
+            if values is None:
+                continue
+            value = float(values[i])
+            if math.isnan(value):
+                continue
+            if not math.isfinite(value):
+                raise SimulationError(f"robot {info.name}: command {value} for joint {joint!r}")
+            writes.append((ref.actuator_id, value))
+        for act, value in writes:
+            self._data.ctrl[act] = value
