@@ -1,0 +1,38 @@
+"""Typed metric results: every metric says its unit and which direction is better."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+__all__ = ["Direction", "HealthResult", "MetricResult"]
+
+Direction = Literal["lower", "higher", "none"]
+
+
+@dataclass(frozen=True)
+class MetricResult:
+    """One scored value.
+
+    ``name`` is dotted and stable (``safety.match_rate``, ``perception.mota``), it is the key
+    in baselines. ``value`` is None when the metric is undefined for the run (e.g. no mute
+    edge to measure a lag on); ``detail`` says why. ``windows`` lists time intervals
+    (seconds of simulation time) that explain the value, for the report.
+    """
+
+    name: str
+    value: float | None
+    unit: str
+    direction: Direction
+    group: Literal["control", "perception", "safety", "health"]
+    detail: str = ""
+    windows: tuple[tuple[float, float], ...] = field(default=())
+
+
+@dataclass(frozen=True)
+class HealthResult:
+    """A health gate: a tripped one makes the run INVALID (exit 3), not FAIL."""
+
+    name: str
+    ok: bool
+    detail: str
