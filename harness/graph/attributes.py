@@ -17,6 +17,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from harness.errors import GraphError
 
 __all__ = [
@@ -63,6 +65,9 @@ def is_valid_attr_name(name: str) -> bool:
     return bool(_NAME_RE.match(name))
 
 
+_FLOAT64 = np.dtype(np.float64)
+
+
 def _describe(value: Any) -> str:
     text = repr(value)
     if len(text) > 60:
@@ -79,6 +84,8 @@ def _unwrap_numpy(value: Any) -> Any:
 
 
 def _real(value: Any, type_name: str) -> float:
+    if type(value) is float:  # the common case, checked first: this runs on every tick
+        return value
     value = _unwrap_numpy(value)
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ValueError(f"expected {type_name}, got {_describe(value)}")
@@ -146,6 +153,10 @@ def _sequence(value: Any, type_name: str) -> list[Any]:
 
 def _fixed_tuple(value: Any, type_name: str) -> tuple[float, ...]:
     size = _FIXED_TUPLES[type_name]
+    if type(value) is tuple and len(value) == size and all(type(v) is float for v in value):
+        return value  # already in stored form
+    if isinstance(value, np.ndarray) and value.dtype == _FLOAT64 and value.shape == (size,):
+        return tuple(value.tolist())
     items = _sequence(value, type_name)
     if len(items) != size:
         raise ValueError(f"expected {type_name} ({size} numbers), got {len(items)} items")

@@ -198,6 +198,9 @@ class Node:
 
     def require_attr(self, full_name: str) -> Attr:
         """The declaration of ``full_name``; unknown names raise GraphError with a suggestion."""
+        attr = self._static.get(full_name) or self._dynamic.get(full_name)
+        if attr is not None:
+            return attr
         split_attribute_name(full_name)
         attr = self.attr(full_name)
         if attr is None:
@@ -601,6 +604,9 @@ class Graph:
             if evaluation is not None and src.kind == "data":
                 self._pull(src, evaluation)
             raw = src.output_value(conn.src_attr)
+            src_attr = src.attr(conn.src_attr)
+            if src_attr is not None and src_attr.type == attr.type:
+                return raw  # outputs are stored coerced; the same type needs no conversion
         try:
             return coerce(attr.type, raw)
         except ValueError as err:
