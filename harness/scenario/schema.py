@@ -17,6 +17,12 @@ __all__ = [
     "ROBOT_MODELS",
     "CameraSpec",
     "ClockSpec",
+    "ControlScoring",
+    "HealthScoring",
+    "PerceptionScoring",
+    "SafetyScoring",
+    "ScoringSpec",
+    "ToleranceSpec",
     "DiffDriveControl",
     "DockSpec",
     "ForkliftControl",
@@ -300,6 +306,65 @@ class SutSpec:
 
 
 @dataclass(frozen=True)
+class ToleranceSpec:
+    """How far a metric may move in its worse direction before it counts as regressed:
+    ``max(abs, rel * |baseline|)``."""
+
+    abs: float | None = num(None, 0.0)  # type: ignore[arg-type]
+    rel: float | None = num(None, 0.0)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class ControlScoring:
+    """Score a robot's drive against a route (needs ``/gt/<robot>/tf``, i.e. ``srr_gt``)."""
+
+    enabled: bool = True
+    robot: str = "forklift"
+    route: str = ""
+    goal_tolerance: float = num(0.5, 0.0, 100.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class PerceptionScoring:
+    """Score tracked objects (MarkerArray) against ``/gt/character_<i>/tf``."""
+
+    enabled: bool = True
+    marker_topics: tuple[str, ...] = ()
+    classes: tuple[str, ...] = ("person",)
+    gate: float = num(1.0, 0.0, 100.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class SafetyScoring:
+    """The forklift SIL's mute scoring: expected muted state vs ``/safety/is_muted``."""
+
+    enabled: bool = True
+    robot: str = "forklift"
+    muted_topic: str = "/safety/is_muted"
+    min_window_s: float = num(0.5, 0.0, 60.0)
+
+
+@dataclass(frozen=True)
+class HealthScoring:
+    """Health gates: topics at their rate, SUT outputs alive."""
+
+    rate_fraction: float = num(0.9, 0.0, 1.0)
+    expected_rates: dict[str, float] = field(default_factory=dict)
+    sut_outputs: dict[str, float] = field(default_factory=dict)  # topic → max silence (s)
+
+
+@dataclass(frozen=True)
+class ScoringSpec:
+    """What to score and how much each metric may move (keys: metric names or globs)."""
+
+    control: ControlScoring | None = None
+    perception: PerceptionScoring | None = None
+    safety: SafetyScoring | None = None
+    health: HealthScoring = HealthScoring()
+    tolerances: dict[str, ToleranceSpec] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class Scenario:
     """A whole scenario, resolved: includes expanded, defaults filled, overrides applied."""
 
@@ -316,6 +381,7 @@ class Scenario:
     cameras: tuple[CameraSpec, ...] = ()
     routes: dict[str, RouteSpec] = field(default_factory=dict)
     systems_under_test: tuple[SutSpec, ...] = ()
+    scoring: ScoringSpec = ScoringSpec()
 
     @property
     def tick_ns(self) -> int:

@@ -1,0 +1,115 @@
+"""Baselines on disk: ``baselines/<scenario>.json``.
+
+A baseline holds the blessed run's metric values (with unit and direction), its per-topic
+counts and digests, the versions and seed it ran with, and who blessed it and why.
+"""
+
+from __future__ import annotations
+
+import getpass
+import json
+import os
+import time
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from harness.errors import SrrError
+
+__all__ = ["BASELINE_VERSION", "Baseline", "BaselineError", "BaselineMetric", "baseline_path",
+           "load_baseline", "save_baseline"]
+
+BASELINE_VERSION = 1
+
+
+class BaselineError(SrrError):
+    """A baseline file is unreadable or malformed."""
+
+
+@dataclass(frozen=True)
+class BaselineMetric:
+    value: float | None
+    unit: str
+    direction: str
+
+
+@dataclass(frozen=True)
+class Baseline:
+    scenario: str
+    metrics: Mapping[str, BaselineMetric]
+    topics: Mapping[str, Mapping[str, Any]]
+    digest: str
+    seed: int
+    versions: Mapping[str, str]
+    blessed_by: str
+    reason: str
+    blessed_at: str
+    source_run: str
+    format_version: int = BASELINE_VERSION
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        data = asdict(self)
+        data["metrics"] = {k: asdict(v) for k, v in sorted(self.metrics.items())}
+        data["topics"] = {k: dict(v) for k, v in sorted(self.topics.items())}
+        return data
+
+
+def baseline_path(scenario: str, root: Path = Path("baselines")) -> Path:
+    return Path(root) / f"{scenario}.json"
+
+
+def load_baseline(path: Path) -> Baseline | None:
+    """The baseline at ``path``, or None if there is none; malformed files raise."""
+    if not path.exists():
+        return None
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        metrics = {k: BaselineMetric(v["value"], v["unit"], v["direction"])
+                   for k, v in data["metrics"].items()}
+        return Baseline(
+            scenario=data["scenario"], metrics=metrics, topics=data.get("topics", {}),
+            digest=data.get("digest", ""), seed=int(data["seed"]),
+            versions=data.get("versions", {}), blessed_by=data.get("blessed_by", ""),
+            reason=data.get("reason", ""), blessed_at=data.get("blessed_at", ""),
+            source_run=data.get("source_run", ""),
+            format_version=int(data.get("format_version", BASELINE_VERSION)),
+            extra=data.get("extra", {}),
+        )
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise BaselineError(f"{path}: not a valid baseline: {err}") from err
+
+
+def who() -> str:
+    """The person blessing: ``SRR_BLESSED_BY``, else the login name."""
+    name = os.environ.get("SRR_BLESSED_BY")
+    if name:
+        return name
+    try:
+        return getpass.getuser()
+    except (KeyError, OSError):
+        return "unknown"
+
+
+def save_baseline(path: Path, summary: Mapping[str, Any], *, reason: str,
+                  source_run: str) -> Baseline:
+    """Write a baseline from a run's ``summary.json`` content (atomically)."""
+    if not reason.strip():
+        raise SrrError("--reason: say why this run becomes the baseline")
+    metrics = {m["name"]: BaselineMetric(m["value"], m["unit"], m["direction"])
+               for m in summary.get("metrics", [])}
+    topics = {name: {"count": t["count"], "sha256": t["sha256"], "type": t["type"]}
+              for name, t in summary.get("topics", {}).items()}
+    baseline = Baseline(
+        scenario=summary["scenario"], metrics=metrics, topics=topics,
+        digest=summary.get("digest", ""), seed=int(summary["seed"]),
+        versions=dict(summary.get("versions", {})), blessed_by=who(), reason=reason.strip(),
+        blessed_at=time.strftime("%Y-%m-%dT%H:%M:%S%z"), source_run=source_run,
+    )
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(baseline.to_json(), indent=2, sort_keys=True) + "\n",
+                   encoding="utf-8")
+    os.replace(tmp, path)
+    return baseline
