@@ -52,7 +52,9 @@ def inspect_bag(path: str | Path) -> BagInfo:
                 durability = qos[0].durability.name.lower() if qos else "volatile"
                 topics.append(BagTopic(conn.topic, conn.msgtype, counts.get(conn.topic, 0),
                                        durability))
-            return BagInfo(p, str(reader.metadata["storage_identifier"]),
+            storage = type(reader.storage).__module__.rsplit("_", 1)[-1] \
+                if reader.storage is not None else "unknown"
+            return BagInfo(p, storage,
                            sum(counts.values()), reader.start_time, reader.end_time,
                            tuple(sorted(topics, key=lambda t: t.name)))
     except (ReaderError, OSError, KeyError, ValueError, EOFError) as err:

@@ -1,0 +1,65 @@
+"""inspect, interruption, and bags that are not bags."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from harness import api
+from harness.cli import main
+
+SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
+
+
+def test_inspect_lists_topics(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    res = api.run_scenario(api.load(SCENARIO, duration=1.0), out=tmp_path / "r")
+    assert main(["inspect", str(res.run_dir / "bag")]) == 0
+    out = capsys.readouterr().out
+    assert "/odom" in out and "nav_msgs/msg/Odometry" in out and "60" in out
+    assert "transient_local" in out
+
+
+@pytest.mark.parametrize("broken", ["missing", "no-metadata", "truncated"])
+def test_inspect_refuses_broken_bags(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                     broken: str) -> None:
+    bag = tmp_path / "bag"
+    if broken != "missing":
+        res = api.run_scenario(api.load(SCENARIO, duration=1.0), out=tmp_path / "r")
+        bag = res.run_dir / "bag"
+        if broken == "no-metadata":
+            (bag / "metadata.yaml").unlink()
+        else:
+            (mcap,) = bag.glob("*.mcap")
+            data = mcap.read_bytes()
+            mcap.write_bytes(data[: len(data) // 2])
+    code = main(["inspect", str(bag)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err
+    assert str(bag) in err
+
+
+def test_interrupt_finalizes_bag_and_marks_summary(tmp_path: Path) -> None:
+    sc = api.load(SCENARIO, duration=5.0)
+
+    def stop_midway(done: int, total: int) -> None:
+        if done == 90:
+            raise KeyboardInterrupt
+
+    res = api.run_scenario(sc, out=tmp_path / "r", progress=stop_midway)
+    summary = json.loads((res.run_dir / "summary.json").read_text())
+    assert summary["interrupted"] is True and summary["verdict"] == "INTERRUPTED"
+    assert res.exit_code == 130
+    assert summary["topics"]["/clock"]["count"] == 90
+    from harness.bag import inspect_bag
+
+    info = inspect_bag(res.run_dir / "bag")  # the bag is finalized and readable
+    assert {t.name: t.count for t in info.topics}["/clock"] == 90
+
+
+def test_out_dir_not_empty_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "keep.txt").write_text("x")
+    code = main(["run", str(SCENARIO), "--out", str(tmp_path), "--duration", "0.5", "-q"])
+    assert code == 2 and "not empty" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.txt"]
