@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+import yaml
 from rosbags.rosbag2 import Reader
 from rosbags.rosbag2.errors import ReaderError
 
@@ -52,10 +53,11 @@ def inspect_bag(path: str | Path) -> BagInfo:
                 durability = qos[0].durability.name.lower() if qos else "volatile"
                 topics.append(BagTopic(conn.topic, conn.msgtype, counts.get(conn.topic, 0),
                                        durability))
-            storage = type(reader.storage).__module__.rsplit("_", 1)[-1] \
-                if reader.storage is not None else "unknown"
+            meta = yaml.safe_load((p / "metadata.yaml").read_text(encoding="utf-8"))
+            storage = str(meta["rosbag2_bagfile_information"]["storage_identifier"])
             return BagInfo(p, storage,
                            sum(counts.values()), reader.start_time, reader.end_time,
                            tuple(sorted(topics, key=lambda t: t.name)))
-    except (ReaderError, OSError, KeyError, ValueError, EOFError) as err:
+    except (ReaderError, OSError, KeyError, ValueError, TypeError, EOFError,
+            yaml.YAMLError) as err:
         raise BagError(f"{path}: cannot read bag: {err}") from err

@@ -9,7 +9,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from harness.builders import clock, diff_drive_control, forklift_control, odometry, tf_tree
+from harness.builders import (
+    clock,
+    diff_drive_control,
+    forklift_control,
+    odometry,
+    robot_sensors,
+    tf_tree,
+)
 from harness.builders.base import BuildContext, fresh_graph
 from harness.scenario import RobotSpec
 
@@ -21,6 +28,8 @@ ROBOT_BUILDERS: tuple[Callable[[BuildContext, RobotSpec], str | None], ...] = (
     diff_drive_control.build,
     odometry.build,
     tf_tree.build,
+    robot_sensors.build_lidar,
+    robot_sensors.build_imu,
 )
 
 

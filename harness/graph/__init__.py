@@ -33,8 +33,9 @@ from harness.graph.registry import Registry, all_types, canonical_name, lookup, 
 # Simulation and ROS bridge nodes use the public API above, so they register last.
 from harness.graph.nodes import isaac_core as _isaac_core  # noqa: E402
 from harness.graph.nodes import ros_bridge as _ros_bridge  # noqa: E402
+from harness.graph.nodes import sensors_range as _sensors_range  # noqa: E402
 
-del _core, _isaac_core, _ros_bridge
+del _core, _isaac_core, _ros_bridge, _sensors_range
 
 __all__ = [
     "Attr",
