@@ -18,6 +18,7 @@ __all__ = [
     "clock",
     "deserialize",
     "header",
+    "make",
     "msg_type",
     "odometry",
     "serialize",
@@ -39,6 +40,45 @@ def msg_type(name: str) -> Any:
         return TYPESTORE.types[name]
     except KeyError:
         raise KeyError(f"unknown ROS 2 message type {name!r}") from None
+
+
+_NUMPY_DTYPES = {
+    "bool": np.bool_, "int8": np.int8, "uint8": np.uint8, "byte": np.uint8, "char": np.uint8,
+    "int16": np.int16, "uint16": np.uint16, "int32": np.int32, "uint32": np.uint32,
+    "int64": np.int64, "uint64": np.uint64, "float32": np.float32, "float64": np.float64,
+}
+
+
+def _zero(node: Any) -> Any:
+    kind, detail = node
+    name = getattr(kind, "name", str(kind))
+    if name == "BASE":
+        base = detail[0]
+        if base == "string":
+            return ""
+        if base == "bool":
+            return False
+        return 0.0 if base.startswith("float") else 0
+    if name == "NAME":
+        return make(detail)
+    sub, count = detail
+    sub_name = getattr(sub[0], "name", str(sub[0]))
+    if sub_name == "BASE" and sub[1][0] in _NUMPY_DTYPES:
+        return np.zeros(count if name == "ARRAY" else 0, dtype=_NUMPY_DTYPES[sub[1][0]])
+    if name == "ARRAY":
+        return [_zero(sub) for _ in range(count)]
+    return []
+
+
+def make(typename: str, **fields: Any) -> Any:
+    """A message of ``typename`` with ``fields`` set and every other field zero / empty,
+    recursively (the rosbags dataclasses have no defaults)."""
+    cls = msg_type(typename)
+    _, defs = TYPESTORE.fielddefs[cls.__msgtype__]
+    values = {name: fields.pop(name) if name in fields else _zero(node) for name, node in defs}
+    if fields:
+        raise TypeError(f"{typename} has no field(s) {', '.join(sorted(fields))}")
+    return cls(**values)
 
 
 def serialize(msg: Any, typename: str) -> bytes:

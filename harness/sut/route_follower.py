@@ -1,7 +1,8 @@
 """Reference system under test: a pure-pursuit route follower.
 
 Subscribes to the robot's ``odom`` and to ``/tf_static`` (for ``world → odom``, so routes are
-written in world coordinates), publishes ``cmd_vel`` at ``rate_hz``. It steers towards the
+written in world coordinates), publishes ``cmd_vel`` at ``rate_hz``. With ``alarm_topic`` set
+it slows down and then stops while that topic says true (the safety monitor's alarm). It steers towards the
 point ``lookahead`` metres further along the route than the closest point, slows down near the
 goal and stops within ``goal_tolerance``; after that it keeps publishing zero velocity so its
 output stays alive.
@@ -16,9 +17,9 @@ from typing import Any
 import numpy as np
 
 from harness.bus.messages import twist
-from harness.geometry import quat_mul, quat_rotate, quat_to_yaw, xyzw_to_wxyz
 from harness.errors import PluginError
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
+from harness.sut.pose import OdomPose
 
 __all__ = ["RouteFollower", "RouteFollowerParams", "pure_pursuit"]
 
@@ -37,6 +38,8 @@ class RouteFollowerParams:
     tf_static_topic: str = "/tf_static"
     world_frame: str = "world"
     odom_frame: str = "odom"
+    alarm_topic: str = ""  # e.g. /safety/alarm: slow down, then stop while it is true
+    alarm_stop_after: int = 4  # commands at reduced speed before stopping
 
 
 def _project(path: np.ndarray, cum: np.ndarray, p: np.ndarray, start: int) -> tuple[float, int]:
@@ -85,32 +88,16 @@ class RouteFollower(SystemUnderTest):
         self.next_ns = 0
         self.segment = 0
         self.done = False
-        self.odom: Any = None
-        self.world_from_odom: tuple[np.ndarray, np.ndarray] | None = None
+        self.alarm_ticks = 0
+        self.pose = OdomPose(ctx, self.p.odom_topic, self.p.tf_static_topic,
+                             self.p.world_frame, self.p.odom_frame).pose
+        self.alarm = False
+        if self.p.alarm_topic:
+            ctx.subscribe(self.p.alarm_topic, "std_msgs/msg/Bool", self._on_alarm)
         self.pub = ctx.publisher(self.p.cmd_vel_topic, "geometry_msgs/msg/Twist")
-        ctx.subscribe(self.p.odom_topic, "nav_msgs/msg/Odometry", self._on_odom)
-        ctx.subscribe(self.p.tf_static_topic, "tf2_msgs/msg/TFMessage", self._on_tf)
 
-    def _on_odom(self, msg: Any) -> None:
-        self.odom = msg
-
-    def _on_tf(self, msg: Any) -> None:
-        for tf in msg.transforms:
-            if tf.header.frame_id == self.p.world_frame and \
-                    tf.child_frame_id == self.p.odom_frame:
-                t, r = tf.transform.translation, tf.transform.rotation
-                self.world_from_odom = (np.array([t.x, t.y, t.z]),
-                                        xyzw_to_wxyz([r.x, r.y, r.z, r.w]))
-
-    def pose(self) -> tuple[float, float, float] | None:
-        """Robot pose in the world frame, or None until odom and world → odom are known."""
-        if self.odom is None or self.world_from_odom is None:
-            return None
-        p, q = self.odom.pose.pose.position, self.odom.pose.pose.orientation
-        t0, q0 = self.world_from_odom
-        pos = t0 + quat_rotate(q0, [p.x, p.y, p.z])
-        yaw = quat_to_yaw(quat_mul(q0, xyzw_to_wxyz([q.x, q.y, q.z, q.w])))
-        return float(pos[0]), float(pos[1]), yaw
+    def _on_alarm(self, msg: Any) -> None:
+        self.alarm = bool(msg.data)
 
     def command(self) -> tuple[float, float]:
         pose = self.pose()
@@ -133,6 +120,11 @@ class RouteFollower(SystemUnderTest):
             direction = direction / max(float(np.linalg.norm(direction)), 1e-9)
             target = self.path[-1] + direction * (s + self.p.lookahead - self.cum[-1])
         v = self.p.speed * min(1.0, max(0.15, remaining / self.p.slow_radius))
+        if self.alarm:  # a person where the safety monitor says it matters: creep, then stop
+            self.alarm_ticks += 1
+            v = 0.0 if self.alarm_ticks > self.p.alarm_stop_after else v * 0.3
+        else:
+            self.alarm_ticks = 0
         w = float(np.clip(pure_pursuit(x, y, yaw, target) * v,
                           -self.p.max_angular, self.p.max_angular))
         return v, w
@@ -140,6 +132,7 @@ class RouteFollower(SystemUnderTest):
     def step(self, now_ns: int) -> None:
         if now_ns < self.next_ns:
             return
-        self.next_ns = now_ns + self.period_ns
+        while self.next_ns <= now_ns:
+            self.next_ns += self.period_ns
         v, w = self.command()
         self.pub.publish(twist((v, 0.0, 0.0), (0.0, 0.0, w)))
