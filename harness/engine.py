@@ -2,7 +2,8 @@
 
 Per tick ``k`` (simulation time ``k * 1e9 // tick_hz`` ns, integer so it never drifts):
 
-1. every action graph evaluates (sensors and state publish, control graphs apply the latest
+1. workers on foot move to their pose at this time (a pure function of time); every action
+   graph evaluates (sensors and state publish, control graphs apply the latest
    commands to the articulations);
 2. the bus delivers queued messages; each system under test steps; the bus delivers again
    (so a ``cmd_vel`` published at tick ``k`` reaches the control graph at tick ``k + 1``);
@@ -80,6 +81,7 @@ class Simulation:
         k = self.tick_index
         self.time_ns = k * 1_000_000_000 // self.scenario.physics.tick_hz
         self.ctx.tick, self.ctx.time_ns = k, self.time_ns
+        self.world.update_workers(self.time_ns)
         with self.stage:
             self.stage.evaluate(self.ctx)
         self.bus.spin()
@@ -98,3 +100,7 @@ class Simulation:
     def close(self) -> None:
         for _, sut, _ in self.suts:
             sut.shutdown()
+        for extra in self.ctx.extras.values():  # e.g. the render products' GL contexts
+            close = getattr(extra, "close", None)
+            if callable(close):
+                close()

@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
+
+# Headless rendering for the camera tests (EGL: a GPU, or Mesa's llvmpipe on CPU). MuJoCo reads
+# MUJOCO_GL when it is first imported, so this must run before anything imports it.
+os.environ.setdefault("MUJOCO_GL", "egl")
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"

@@ -31,11 +31,14 @@ from harness.graph.nodes import core as _core  # registers the built-in node typ
 from harness.graph.registry import Registry, all_types, canonical_name, lookup, register
 
 # Simulation and ROS bridge nodes use the public API above, so they register last.
+from harness.graph.nodes import camera as _camera  # noqa: E402
 from harness.graph.nodes import isaac_core as _isaac_core  # noqa: E402
+from harness.graph.nodes import prims as _prims  # noqa: E402
 from harness.graph.nodes import ros_bridge as _ros_bridge  # noqa: E402
+from harness.graph.nodes import ros_subscriber as _ros_subscriber  # noqa: E402
 from harness.graph.nodes import sensors_range as _sensors_range  # noqa: E402
 
-del _core, _isaac_core, _ros_bridge, _sensors_range
+del _core, _isaac_core, _ros_bridge, _sensors_range, _prims, _ros_subscriber, _camera
 
 __all__ = [
     "Attr",

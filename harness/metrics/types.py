@@ -17,7 +17,8 @@ class MetricResult:
     ``name`` is dotted and stable (``safety.match_rate``, ``perception.mota``), it is the key
     in baselines. ``value`` is None when the metric is undefined for the run (e.g. no mute
     edge to measure a lag on); ``detail`` says why. ``windows`` lists time intervals
-    (seconds of simulation time) that explain the value, for the report.
+    (seconds of simulation time) that explain the value, for the report. ``verdict`` is set
+    by metrics that carry their own pass bands (``safety.match_rate``: PASS / NEAR / FAIL).
     """
 
     name: str
@@ -27,6 +28,7 @@ class MetricResult:
     group: Literal["control", "perception", "safety", "health"]
     detail: str = ""
     windows: tuple[tuple[float, float], ...] = field(default=())
+    verdict: str | None = None
 
 
 @dataclass(frozen=True)

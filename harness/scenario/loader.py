@@ -338,6 +338,7 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
     for name, route in sc.routes.items():
         if len(route.waypoints) < 2:
             v.fail(f"routes.{name}.waypoints", "a route needs at least two waypoints")
+    _check_workers_and_zones(sc, v)
     _check_topics(v, sc, "")
     suts: set[str] = set()
     for i, sut in enumerate(sc.systems_under_test):
@@ -348,6 +349,39 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
         if not sep or not module or not attr:
             v.fail(f"systems_under_test[{i}].plugin",
                    f"expected 'module:Class', got {sut.plugin!r}")
+
+
+def _check_workers_and_zones(sc: Scenario, v: _Validator) -> None:
+    """Workers: unique names, walkable routes, bodies taller than wide. Zones: a real polygon
+    (three or more points, non-zero area) and a tripwire with two distinct ends."""
+    seen: set[str] = set()
+    for i, worker in enumerate(sc.workers):
+        where = f"workers[{i}]"
+        if worker.name:
+            _check_name(v, f"{where}.name", worker.name)
+        name = sc.worker_name(i)
+        if name in seen:
+            v.fail(f"{where}.name", f"duplicate worker name {name!r}")
+        seen.add(name)
+        if len(worker.route) < 2:
+            v.fail(f"{where}.route", "a route needs at least two waypoints")
+        for j in range(1, len(worker.route)):
+            if worker.route[j] == worker.route[j - 1]:
+                v.fail(f"{where}.route[{j}]", "repeats the previous waypoint")
+        if worker.radius > worker.height / 3:
+            v.fail(f"{where}.radius", f"must be at most height / 3 ({worker.height / 3:g}), "
+                   f"got {worker.radius!r}")
+    roi = sc.zones.loading_roi
+    if roi:
+        if len(roi) < 3:
+            v.fail("zones.loading_roi", f"a polygon needs at least three points, got {len(roi)}")
+        area2 = sum(x0 * y1 - x1 * y0
+                    for (x0, y0), (x1, y1) in zip(roi, roi[1:] + roi[:1], strict=True))
+        if abs(area2) < 1e-9:
+            v.fail("zones.loading_roi", "the polygon has zero area")
+    wire = sc.zones.trailer_tripwire
+    if wire is not None and wire.a == wire.b:
+        v.fail("zones.trailer_tripwire.b", f"must differ from a {list(wire.a)}")
 
 
 def _check_topics(v: _Validator, obj: Any, path: str) -> None:

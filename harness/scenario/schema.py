@@ -18,17 +18,14 @@ __all__ = [
     "CameraSpec",
     "ClockSpec",
     "ControlScoring",
-    "HealthScoring",
-    "PerceptionScoring",
-    "SafetyScoring",
-    "ScoringSpec",
-    "ToleranceSpec",
     "DiffDriveControl",
     "DockSpec",
     "ForkliftControl",
+    "HealthScoring",
     "ImuSpec",
     "LidarSpec",
     "OdometrySpec",
+    "PerceptionScoring",
     "PhysicsSpec",
     "Pose",
     "ReverseLogic",
@@ -36,12 +33,18 @@ __all__ = [
     "RobotSpec",
     "RouteSpec",
     "SafetyIndicatorSpec",
+    "SafetyScoring",
     "Scenario",
+    "ScoringSpec",
     "SensorsSpec",
     "ShelfSpec",
     "SutSpec",
     "TfTreeSpec",
+    "ToleranceSpec",
+    "TripwireSpec",
+    "WorkerSpec",
     "WorldSpec",
+    "ZonesSpec",
 ]
 
 FORMAT_VERSION = 1
@@ -306,6 +309,49 @@ class SutSpec:
 
 
 @dataclass(frozen=True)
+class WorkerSpec:
+    """A person on foot walking a polyline ``route`` (world XY, metres) at ``speed``.
+
+    ``loop``: ``once`` stops at the last waypoint, ``back_and_forth`` walks the route back to
+    its start and again, ``cycle`` walks back from the last waypoint straight to the first;
+    ``pause_s`` is spent standing at each turn. ``variation`` scales the speed by a factor drawn
+    once per worker from U(1 - variation, 1 + variation), seeded by the scenario seed. The
+    name (default ``character_<i>``) names the prim ``/World/Characters/<name>``; ground truth
+    is always ``/gt/character_<i>/tf`` with ``i`` the index in ``workers``.
+    """
+
+    route: tuple[Vec2, ...]
+    name: str = ""
+    enabled: bool = True
+    speed: float = num(1.2, 0.0, 5.0, lo_open=True)
+    start_delay: float = num(0.0, 0.0, 3600.0)
+    loop: Literal["once", "back_and_forth", "cycle"] = "back_and_forth"
+    pause_s: float = num(0.0, 0.0, 3600.0)
+    height: float = num(1.75, 0.5, 2.5)
+    radius: float = num(0.25, 0.05, 0.8)
+    variation: float = num(0.0, 0.0, 0.9)
+
+
+@dataclass(frozen=True)
+class TripwireSpec:
+    """A directed line ``a → b``; the forklift is inside the trailer when its ground-truth
+    position is on the ``inside`` side (left = counter-clockwise of ``a → b``)."""
+
+    a: Vec2
+    b: Vec2
+    inside: Literal["left", "right"] = "left"
+
+
+@dataclass(frozen=True)
+class ZonesSpec:
+    """Zones the safety scoring uses: the loading ROI polygon (empty: none) and the trailer
+    tripwire (None: none). Geometry (edges included or not) is :mod:`harness.sut.zones`."""
+
+    loading_roi: tuple[Vec2, ...] = ()
+    trailer_tripwire: TripwireSpec | None = None
+
+
+@dataclass(frozen=True)
 class ToleranceSpec:
     """How far a metric may move in its worse direction before it counts as regressed:
     ``max(abs, rel * |baseline|)``."""
@@ -380,6 +426,8 @@ class Scenario:
     robots: tuple[RobotSpec, ...] = ()
     cameras: tuple[CameraSpec, ...] = ()
     routes: dict[str, RouteSpec] = field(default_factory=dict)
+    workers: tuple[WorkerSpec, ...] = ()
+    zones: ZonesSpec = ZonesSpec()
     systems_under_test: tuple[SutSpec, ...] = ()
     scoring: ScoringSpec = ScoringSpec()
 
@@ -390,6 +438,10 @@ class Scenario:
     @property
     def n_ticks(self) -> int:
         return int(round(self.duration * self.physics.tick_hz))
+
+    def worker_name(self, index: int) -> str:
+        """Name of ``workers[index]``: its ``name`` or ``character_<index>``."""
+        return self.workers[index].name or f"character_{index}"
 
     def robot(self, name: str) -> RobotSpec:
         for r in self.robots:

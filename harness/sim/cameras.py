@@ -9,7 +9,7 @@ right. The fixed rotation between the two is ``Q_MJ_IN_WORLD_CONVENTION``::
     q_world_convention = q_mujoco_camera ⊗ conj(Q_MJ_IN_WORLD_CONVENTION)
 
 (ROS optical frames — +Z forward, +X right, +Y down — are a further fixed rotation, applied by
-whoever publishes them.)
+whoever publishes them: ``q_optical = q_world_convention ⊗ Q_OPTICAL_IN_WORLD_CONVENTION``.)
 """
 
 from __future__ import annotations
@@ -25,9 +25,11 @@ from harness.sim.prims import PrimKind, PrimTable
 
 __all__ = [
     "Q_MJ_IN_WORLD_CONVENTION",
+    "Q_OPTICAL_IN_WORLD_CONVENTION",
     "add_fixed_camera",
     "add_mounted_camera",
     "mj_camera_quat",
+    "optical_quat",
     "world_convention_quat",
 ]
 
@@ -38,6 +40,20 @@ Q_MJ_IN_WORLD_CONVENTION: FloatArray = quat_from_mat(
               [-1.0, 0.0, 0.0],
               [0.0, 1.0, 0.0]])
 )
+
+# Columns: the ROS optical frame's x (right), y (down), z (forward) axes written in the world-
+# convention camera frame. Its inverse, (w, x, y, z) = (0.5, 0.5, -0.5, 0.5), is seed 001's
+# static <camera> → <camera>_world rotation (quatd [0.5, -0.5, 0.5, 0.5] in IJKR order).
+Q_OPTICAL_IN_WORLD_CONVENTION: FloatArray = quat_from_mat(
+    np.array([[0.0, 0.0, 1.0],
+              [-1.0, 0.0, 0.0],
+              [0.0, -1.0, 0.0]])
+)
+
+
+def optical_quat(q_world_convention: Sequence[float] | FloatArray) -> FloatArray:
+    """ROS optical-frame orientation (+Z forward, +X right, +Y down) of a camera prim."""
+    return quat_mul(q_world_convention, Q_OPTICAL_IN_WORLD_CONVENTION)
 
 
 def mj_camera_quat(q_world_convention: Sequence[float] | FloatArray) -> FloatArray:

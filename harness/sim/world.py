@@ -1,9 +1,9 @@
 """The simulated world: a MuJoCo model built from a :class:`~harness.scenario.schema.Scenario`.
 
 ``World.build(scenario)`` assembles an ``MjSpec`` (warehouse, enabled robots, enabled fixed
-cameras, robot-mounted sensor attach points), compiles it and resolves every prim path to a
-MuJoCo object. Everything the rest of srr needs is addressed by prim path (``/World/...``) or
-by robot name; MuJoCo names stay internal.
+cameras, robot-mounted sensor attach points, workers on foot), compiles it and resolves every
+prim path to a MuJoCo object. Everything the rest of srr needs is addressed by prim path
+(``/World/...``) or by robot name; MuJoCo names stay internal.
 
 Conventions:
 
@@ -37,6 +37,7 @@ from harness.sim.prims import PrimKind, PrimRef, PrimTable
 from harness.sim.robots import ActuatorMode, RobotBuild, add_robot
 from harness.sim.sensors import MountedSensors, add_robot_sensors
 from harness.sim.warehouse import add_warehouse, floor_half_extent
+from harness.sim.workers import Worker, WorkerDriver, add_workers, plan_workers
 
 __all__ = ["ImuReading", "JointRef", "RobotInfo", "World"]
 
@@ -178,12 +179,14 @@ class World:
     """A compiled MuJoCo world plus the prim and robot tables; build it with :meth:`build`."""
 
     def __init__(self, scenario: Scenario, model: mujoco.MjModel, data: mujoco.MjData,
-                 prims: Mapping[str, PrimRef], robots: Mapping[str, RobotInfo]) -> None:
+                 prims: Mapping[str, PrimRef], robots: Mapping[str, RobotInfo],
+                 workers: WorkerDriver | None = None) -> None:
         self._scenario = scenario
         self._model = model
         self._data = data
         self._prims = prims
         self._robots = robots
+        self._workers = workers if workers is not None else WorkerDriver(model, ())
         self._rgba0 = model.geom_rgba.copy()
         mujoco.mj_forward(model, data)
 
@@ -192,8 +195,10 @@ class World:
     def build(cls, scenario: Scenario) -> World:
         """Build the world for ``scenario`` (enabled robots and cameras only)."""
         prims = PrimTable()
+        workers = plan_workers(scenario)
         try:
             spec, builds = _assemble(scenario, prims)
+            add_workers(spec, workers, prims)
             model = spec.compile()
         except ValueError as err:  # MuJoCo refuses a spec element (e.g. a repeated name)
             raise SimulationError(f"scenario {scenario.name}: MuJoCo model could not be built: "
@@ -201,7 +206,8 @@ class World:
         data = mujoco.MjData(model)
         resolved = prims.resolve(model)
         robots = {b.name: _resolve_robot(model, b, s) for b, s in builds}
-        return cls(scenario, model, data, resolved, types.MappingProxyType(robots))
+        return cls(scenario, model, data, resolved, types.MappingProxyType(robots),
+                   WorkerDriver(model, workers))
 
     # ------------------------------------------------------------------ state
     @property
@@ -246,6 +252,23 @@ class World:
         mujoco.mj_resetData(self._model, self._data)
         self._model.geom_rgba[:] = self._rgba0
         mujoco.mj_forward(self._model, self._data)
+
+    # ------------------------------------------------------------------ workers
+    def update_workers(self, time_ns: int) -> None:
+        """Put every worker where it is at ``time_ns`` (a pure function of time, see
+        :mod:`harness.sim.workers`) and refresh poses so prims, rays and renders agree."""
+        if self._workers.place(self._data, time_ns):
+            mujoco.mj_kinematics(self._model, self._data)
+            mujoco.mj_comPos(self._model, self._data)
+            mujoco.mj_camlight(self._model, self._data)
+
+    def workers(self) -> tuple[Worker, ...]:
+        """The enabled workers, in ``scenario.workers`` order."""
+        return self._workers.workers
+
+    def worker_prims(self) -> tuple[str, ...]:
+        """Prims of the enabled workers (``/World/Characters/<name>``), in list order."""
+        return tuple(w.prim for w in self._workers.workers)
 
     # ------------------------------------------------------------------ prims
     def prims(self) -> tuple[str, ...]:

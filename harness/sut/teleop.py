@@ -52,7 +52,7 @@ def command_at(segments: tuple[Segment, ...], t_ns: int) -> tuple[float, float]:
         return 0.0, 0.0
     end = 0
     for seg in segments:
-        end += int(round(seg.duration * 1e9))
+        end += round(seg.duration * 1e9)
         if t_ns < end:
             return seg.linear, seg.angular
     return 0.0, 0.0
@@ -65,13 +65,13 @@ class ScriptedTeleop(SystemUnderTest):
         self.params: TeleopParams = sut_params(TeleopParams, ctx)
         if not self.params.segments:
             raise PluginError(f"{ctx.field}.params.segments: give at least one segment")
-        self._rate_hz = self.params.rate_hz
+        self._rate_hz: float = float(self.params.rate_hz)
         self._k = 0
         self._pub: Publisher = ctx.publisher(self.params.cmd_vel_topic,
                                              "geometry_msgs/msg/Twist")
 
     def _due_ns(self, k: int) -> int:
-        return int(round(k * 1e9 / self._rate_hz))
+        return round(k * 1e9 / self._rate_hz)
 
     def step(self, now_ns: int) -> None:
         if now_ns < self._due_ns(self._k):

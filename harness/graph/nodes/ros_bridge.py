@@ -20,6 +20,8 @@ from harness.bus.messages import clock, odometry, tf_message, transform_stamped
 from harness.errors import GraphError
 from harness.geometry import quat_conj, quat_mul, quat_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
+from harness.sim.cameras import optical_quat
+from harness.sim.prims import PrimKind
 
 __all__ = [
     "PublishClock",
@@ -28,6 +30,7 @@ __all__ = [
     "PublishTransformTree",
     "SubscribeTwist",
     "aliases",
+    "frame_pose",
 ]
 
 STATIC_QOS = Qos(durability="transient_local", depth=100)
@@ -193,12 +196,21 @@ def frame_of(prim: str) -> str:
     return prim.rstrip("/").rsplit("/", 1)[-1]
 
 
+def frame_pose(world: Any, prim: str) -> tuple[np.ndarray, np.ndarray]:
+    """World pose (position, wxyz) of ``prim``'s TF frame. Like Isaac's transform-tree
+    publishers, a camera prim's frame is its ROS optical frame (+Z forward, +X right, +Y down)."""
+    pos, quat = world.prim_pose(prim)
+    if world.prim_ref(prim).kind is PrimKind.CAMERA:
+        quat = optical_quat(quat)
+    return np.asarray(pos, dtype=np.float64), np.asarray(quat, dtype=np.float64)
+
+
 def relative_pose(world: Any, parent: str | None, child: str) -> tuple[np.ndarray, np.ndarray]:
-    """Pose of ``child`` in ``parent`` (or the world), as (translation, wxyz)."""
-    pos, quat = world.prim_pose(child)
+    """Pose of ``child``'s frame in ``parent``'s (or the world), as (translation, wxyz)."""
+    pos, quat = frame_pose(world, child)
     if not parent:
-        return np.asarray(pos, dtype=np.float64), np.asarray(quat, dtype=np.float64)
-    ppos, pquat = world.prim_pose(parent)
+        return pos, quat
+    ppos, pquat = frame_pose(world, parent)
     inv = quat_conj(pquat)
     return quat_rotate(inv, np.asarray(pos) - np.asarray(ppos)), quat_mul(inv, quat)
 

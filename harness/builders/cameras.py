@@ -1,0 +1,96 @@
+"""Fixed-camera graphs (/World/<camera>_CameraGraph, one per enabled ``cameras:`` entry).
+
+Seed 001's publishing pattern: the camera's streams run behind a simulation gate whose step
+sets the rate (``step = round(tick_hz / fps)``; 2 for 30 fps on the 60 Hz tick)::
+
+    OnPlaybackTick ─▶ IsaacSimulationGate ─▶ IsaacCreateRenderProduct ─┬▶ CameraHelperRgb
+                                             cameraPrim, width, height  ├▶ CameraHelperDepth
+                                                       renderProductPath ├▶ CameraHelperPointCloud
+                                                                         └▶ CameraHelperInfo
+
+One helper per entry of the camera's ``outputs`` (rgb, depth, pointcloud, camera_info), on
+topics ``<camera>_rgb``, ``<camera>_depth``, ``<camera>_pointcloud`` and
+``<camera>_camera_info`` (seed 001's names), frame id = the last component of the camera's
+prim path, which is the optical frame :mod:`harness.builders.camera_tf` publishes. One graph
+per camera keeps each camera's gate and ``enabled`` flag its own, and adding a camera a
+config change. The helpers of one camera share one render per gated tick.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from harness.builders.base import BuildContext, fresh_graph
+from harness.graph import Controller
+from harness.graph.nodes.ros_bridge import frame_of
+from harness.scenario import CameraSpec
+
+__all__ = ["HELPERS", "build", "gate_step", "graph_path", "topic_names"]
+
+#: ``outputs`` entry → (node name, node type, CameraHelper ``type``).
+HELPERS: dict[str, tuple[str, str, str | None]] = {
+    "rgb": ("CameraHelperRgb", "isaacsim.ros2.bridge.ROS2CameraHelper", "rgb"),
+    "depth": ("CameraHelperDepth", "isaacsim.ros2.bridge.ROS2CameraHelper", "depth"),
+    "pointcloud": ("CameraHelperPointCloud", "isaacsim.ros2.bridge.ROS2CameraHelper",
+                   "depth_pcl"),
+    "camera_info": ("CameraHelperInfo", "isaacsim.ros2.bridge.ROS2CameraInfoHelper", None),
+}
+
+
+def graph_path(camera: CameraSpec) -> str:
+    return f"/World/{camera.name}_CameraGraph"
+
+
+def gate_step(tick_hz: int, fps: float) -> int:
+    """SimulationGate step for ``fps`` on a ``tick_hz`` tick: ``round(tick_hz / fps)``, >= 1."""
+    return max(1, round(tick_hz / fps))
+
+
+def topic_names(camera: CameraSpec) -> dict[str, str]:
+    """``outputs`` entry → topic name (relative, as seed 001 names them)."""
+    return {out: f"{camera.name}_{out}" for out in camera.outputs}
+
+
+def build(bc: BuildContext, camera: CameraSpec) -> str | None:
+    if not camera.enabled:
+        return None
+    path = graph_path(camera)
+    width, height = camera.resolution
+    keys = Controller.Keys
+    nodes: list[tuple[str, str]] = [
+        ("OnPlaybackTick", "omni.graph.action.OnPlaybackTick"),
+        ("ROS2Context", "isaacsim.ros2.bridge.ROS2Context"),
+        ("IsaacSimulationGate", "isaacsim.core.nodes.IsaacSimulationGate"),
+        ("CreateRenderProduct", "isaacsim.core.nodes.IsaacCreateRenderProduct"),
+    ]
+    connect: list[tuple[str, str]] = [
+        ("OnPlaybackTick.outputs:tick", "IsaacSimulationGate.inputs:execIn"),
+        ("IsaacSimulationGate.outputs:execOut", "CreateRenderProduct.inputs:execIn"),
+    ]
+    values: list[tuple[str, Any]] = [
+        ("IsaacSimulationGate.inputs:step", gate_step(bc.scenario.physics.tick_hz, camera.fps)),
+        ("CreateRenderProduct.inputs:cameraPrim", [camera.prim]),
+        ("CreateRenderProduct.inputs:width", width),
+        ("CreateRenderProduct.inputs:height", height),
+    ]
+    for out, topic in topic_names(camera).items():
+        name, type_name, stream = HELPERS[out]
+        nodes.append((name, type_name))
+        connect += [
+            ("CreateRenderProduct.outputs:execOut", f"{name}.inputs:execIn"),
+            ("CreateRenderProduct.outputs:renderProductPath",
+             f"{name}.inputs:renderProductPath"),
+            ("ROS2Context.outputs:context", f"{name}.inputs:context"),
+        ]
+        values += [
+            (f"{name}.inputs:topicName", topic),
+            (f"{name}.inputs:frameId", frame_of(camera.prim)),
+        ]
+        if stream is not None:
+            values.append((f"{name}.inputs:type", stream))
+    Controller.edit(fresh_graph(path), {
+        keys.CREATE_NODES: nodes,
+        keys.CONNECT: connect,
+        keys.SET_VALUES: values,
+    })
+    return path

@@ -1,0 +1,109 @@
+"""Robot-mounted camera graph (/World/<robot>_CameraGraph), for robots with ``sensors.camera``.
+
+Seed 000's camera graph (the TurtleBot3's ``camera/color`` and ``camera/camera_info``), with a
+simulation gate for the block's ``fps`` and the optional depth stream::
+
+    OnPlaybackTick ─▶ IsaacSimulationGate ─▶ IsaacCreateRenderProduct ─┬▶ CameraHelperRgb
+                      step = round(tick_hz / fps)   cameraPrim = the    ├▶ CameraHelperInfo
+                                                    mounted camera      └▶ CameraHelperDepth
+    OnPlaybackTick ─▶ PublishCameraTF (static; with the robot's tf_tree, frame_id ≠ the link)
+
+on ``topic``, ``info_topic`` and ``depth_topic`` (when set), in the robot's namespace.
+
+The camera is the one the world mounts on ``sensors.camera.link`` (``<link prim>/camera``,
+looking along the link's +X). Every stream carries ``frame_id``; unless that is the link's own
+frame, ``PublishCameraTF`` puts it in the TF tree as the camera's ROS optical frame under the
+link (``<link> → <frame_id>`` on the robot's static TF topic; the default ``camera`` gives
+``camera_link → camera``), so the images, and a point cloud made from them, can be placed in
+the world. A ``frame_id`` equal to the link (``camera_link``) publishes in the link's axes
+(+X forward), which is not the optical convention ROS image consumers assume.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from harness.builders.base import BuildContext, fresh_graph
+from harness.builders.cameras import gate_step
+from harness.geometry import wxyz_to_xyzw
+from harness.graph import Controller
+from harness.graph.nodes.ros_bridge import frame_of, relative_pose
+from harness.scenario import RobotSpec
+
+__all__ = ["build", "graph_path"]
+
+_HELPER = "isaacsim.ros2.bridge.ROS2CameraHelper"
+
+
+def graph_path(robot: RobotSpec) -> str:
+    return f"/World/{robot.name}_CameraGraph"
+
+
+def build(bc: BuildContext, robot: RobotSpec) -> str | None:
+    spec = robot.sensors.camera
+    if spec is None or not spec.enabled:
+        return None
+    path = graph_path(robot)
+    camera_prim = bc.world.sensor_prim(robot.name, "camera")
+    link_prim = bc.world.link_prim(robot.name, spec.link)
+    width, height = spec.resolution
+    keys = Controller.Keys
+    nodes: list[tuple[str, str]] = [
+        ("OnPlaybackTick", "omni.graph.action.OnPlaybackTick"),
+        ("ROS2Context", "isaacsim.ros2.bridge.ROS2Context"),
+        ("IsaacSimulationGate", "isaacsim.core.nodes.IsaacSimulationGate"),
+        ("CreateRenderProduct", "isaacsim.core.nodes.IsaacCreateRenderProduct"),
+    ]
+    connect: list[tuple[str, str]] = [
+        ("OnPlaybackTick.outputs:tick", "IsaacSimulationGate.inputs:execIn"),
+        ("IsaacSimulationGate.outputs:execOut", "CreateRenderProduct.inputs:execIn"),
+    ]
+    values: list[tuple[str, Any]] = [
+        ("IsaacSimulationGate.inputs:step", gate_step(bc.scenario.physics.tick_hz, spec.fps)),
+        ("CreateRenderProduct.inputs:cameraPrim", [camera_prim]),
+        ("CreateRenderProduct.inputs:width", width),
+        ("CreateRenderProduct.inputs:height", height),
+    ]
+    streams = [("CameraHelperRgb", "rgb", spec.topic),
+               ("CameraHelperInfo", "camera_info", spec.info_topic)]
+    if spec.depth_topic:
+        streams.append(("CameraHelperDepth", "depth", spec.depth_topic))
+    for name, stream, topic in streams:
+        nodes.append((name, _HELPER))
+        connect += [
+            ("CreateRenderProduct.outputs:execOut", f"{name}.inputs:execIn"),
+            ("CreateRenderProduct.outputs:renderProductPath", f"{name}.inputs:renderProductPath"),
+            ("ROS2Context.outputs:context", f"{name}.inputs:context"),
+        ]
+        values += [
+            (f"{name}.inputs:type", stream),
+            (f"{name}.inputs:topicName", topic),
+            (f"{name}.inputs:nodeNamespace", robot.namespace),
+            (f"{name}.inputs:frameId", spec.frame_id),
+        ]
+    if robot.tf_tree.enabled and spec.frame_id != frame_of(link_prim):
+        translation, rotation = relative_pose(bc.world, link_prim, camera_prim)
+        nodes += [
+            ("ReadSimTime", "isaacsim.core.nodes.IsaacReadSimulationTime"),
+            ("PublishCameraTF", "isaacsim.ros2.bridge.ROS2PublishRawTransformTree"),
+        ]
+        connect += [
+            ("OnPlaybackTick.outputs:tick", "PublishCameraTF.inputs:execIn"),
+            ("ReadSimTime.outputs:simulationTime", "PublishCameraTF.inputs:timeStamp"),
+        ]
+        values += [
+            ("PublishCameraTF.inputs:topicName", robot.tf_tree.static_topic),
+            ("PublishCameraTF.inputs:nodeNamespace", robot.namespace),
+            ("PublishCameraTF.inputs:staticPublisher", True),
+            ("PublishCameraTF.inputs:parentFrameId", frame_of(link_prim)),
+            ("PublishCameraTF.inputs:childFrameId", spec.frame_id),
+            ("PublishCameraTF.inputs:translation", [float(v) for v in translation]),
+            ("PublishCameraTF.inputs:rotation",
+             [float(v) for v in wxyz_to_xyzw([float(c) for c in rotation])]),
+        ]
+    Controller.edit(fresh_graph(path), {
+        keys.CREATE_NODES: nodes,
+        keys.CONNECT: connect,
+        keys.SET_VALUES: values,
+    })
+    return path

@@ -1,0 +1,113 @@
+"""Lidar and IMU graphs of a robot (``robots[].sensors.lidar`` / ``.imu``).
+
+/World/<name>_LidarGraph, the seed's ``add_lidar`` helper behind a rate gate::
+
+    OnPlaybackTick ─▶ SimulationGate ─▶ CreateRenderProduct ─▶ RtxLidarHelper ─▶ scan
+                       step = round(tick_hz / fps)  cameraPrim = lidar   ▲ renderProductPath
+    ReadSimTime ───────────────────────────────────────────────────────┘ timeStamp
+
+/World/<name>_ImuGraph, the seed's ``add_imu`` helper behind a rate gate::
+
+    OnPlaybackTick ─▶ SimulationGate ─▶ ReadIMU ─▶ PublishImu ─▶ imu
+                                         linAcc, angVel, orientation ─┘  ▲ timeStamp
+    ReadSimTime ─────────────────────────────────────────────────────────┘
+
+Topic, frame and rate come from the sensor block; the robot's namespace applies to the topic.
+The lidar prim is the site the world mounts on the block's link (``<link prim>/lidar``, e.g.
+``/turtlebot3_waffle_pi/base_scan/lidar`` as in the seed).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from harness.builders.base import BuildContext, fresh_graph
+from harness.graph import Controller, usdrt
+from harness.scenario import RobotSpec
+
+__all__ = ["build_imu", "build_lidar", "gate_step", "imu_graph_path", "lidar_graph_path"]
+
+
+def lidar_graph_path(robot: RobotSpec) -> str:
+    return f"/World/{robot.name}_LidarGraph"
+
+
+def imu_graph_path(robot: RobotSpec) -> str:
+    return f"/World/{robot.name}_ImuGraph"
+
+
+def gate_step(tick_hz: int, fps: float) -> int:
+    """SimulationGate step for a sensor at ``fps`` on a ``tick_hz`` playback tick (>= 1)."""
+    return max(1, round(tick_hz / fps))
+
+
+def build_lidar(bc: BuildContext, robot: RobotSpec) -> str | None:
+    spec = robot.sensors.lidar
+    if spec is None or not spec.enabled:
+        return None
+    path = lidar_graph_path(robot)
+    prim = bc.world.sensor_prim(robot.name, "lidar")
+    keys = Controller.Keys
+    nodes = [
+        ("OnPlaybackTick", "omni.graph.action.OnPlaybackTick"),
+        ("ReadSimTime", "isaacsim.core.nodes.IsaacReadSimulationTime"),
+        ("SimulationGate", "isaacsim.core.nodes.IsaacSimulationGate"),
+        ("CreateRenderProduct", "isaacsim.core.nodes.IsaacCreateRenderProduct"),
+        ("LidarHelper", "isaacsim.ros2.bridge.ROS2RtxLidarHelper"),
+    ]
+    connect = [
+        ("OnPlaybackTick.outputs:tick", "SimulationGate.inputs:execIn"),
+        ("SimulationGate.outputs:execOut", "CreateRenderProduct.inputs:execIn"),
+        ("CreateRenderProduct.outputs:execOut", "LidarHelper.inputs:execIn"),
+        ("CreateRenderProduct.outputs:renderProductPath", "LidarHelper.inputs:renderProductPath"),
+        ("ReadSimTime.outputs:simulationTime", "LidarHelper.inputs:timeStamp"),
+    ]
+    values: list[tuple[str, Any]] = [
+        ("SimulationGate.inputs:step", gate_step(bc.scenario.physics.tick_hz, spec.fps)),
+        ("CreateRenderProduct.inputs:cameraPrim", [usdrt.Sdf.Path(prim)]),
+        ("LidarHelper.inputs:type", spec.type),
+        ("LidarHelper.inputs:topicName", spec.topic),
+        ("LidarHelper.inputs:frameId", spec.frame_id),
+        ("LidarHelper.inputs:nodeNamespace", robot.namespace),
+    ]
+    Controller.edit(fresh_graph(path), {
+        keys.CREATE_NODES: nodes,
+        keys.CONNECT: connect,
+        keys.SET_VALUES: values,
+    })
+    return path
+
+
+def build_imu(bc: BuildContext, robot: RobotSpec) -> str | None:
+    spec = robot.sensors.imu
+    if spec is None or not spec.enabled:
+        return None
+    path = imu_graph_path(robot)
+    keys = Controller.Keys
+    Controller.edit(fresh_graph(path), {
+        keys.CREATE_NODES: [
+            ("OnPlaybackTick", "omni.graph.action.OnPlaybackTick"),
+            ("ReadSimTime", "isaacsim.core.nodes.IsaacReadSimulationTime"),
+            ("SimulationGate", "isaacsim.core.nodes.IsaacSimulationGate"),
+            ("ReadIMU", "isaacsim.sensors.physics.IsaacReadIMU"),
+            ("PublishIMU", "isaacsim.ros2.bridge.ROS2PublishImu"),
+        ],
+        keys.CONNECT: [
+            ("OnPlaybackTick.outputs:tick", "SimulationGate.inputs:execIn"),
+            ("SimulationGate.outputs:execOut", "ReadIMU.inputs:execIn"),
+            ("ReadIMU.outputs:execOut", "PublishIMU.inputs:execIn"),
+            ("ReadSimTime.outputs:simulationTime", "PublishIMU.inputs:timeStamp"),
+            ("ReadIMU.outputs:linAcc", "PublishIMU.inputs:linearAcceleration"),
+            ("ReadIMU.outputs:angVel", "PublishIMU.inputs:angularVelocity"),
+            ("ReadIMU.outputs:orientation", "PublishIMU.inputs:orientation"),
+        ],
+        keys.SET_VALUES: [
+            ("SimulationGate.inputs:step", gate_step(bc.scenario.physics.tick_hz, spec.fps)),
+            ("ReadIMU.inputs:imuPrim", [usdrt.Sdf.Path(bc.world.sensor_prim(robot.name,
+                                                                             "imu"))]),
+            ("PublishIMU.inputs:topicName", spec.topic),
+            ("PublishIMU.inputs:frameId", spec.frame_id),
+            ("PublishIMU.inputs:nodeNamespace", robot.namespace),
+        ],
+    })
+    return path

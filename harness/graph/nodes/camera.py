@@ -1,0 +1,372 @@
+"""Camera nodes: render products and the ROS camera helpers (Isaac Sim names as aliases).
+
+* ``CreateRenderProduct`` (``IsaacCreateRenderProduct``) registers a *render product* — a
+  prim plus an image size — in the run's :class:`RenderProductTable` (kept on
+  ``ctx.extras["render_products"]``, never global) and outputs its handle
+  ``renderProductPath`` (``/Render<node path>``). The prim is usually a camera; the lidar
+  helper also takes its lidar prim from a render product, as in Isaac.
+* ``CameraHelper`` (``ROS2CameraHelper`` / ``ROS1CameraHelper``) publishes one stream of a
+  render product, chosen by ``inputs:type``:
+
+  ============== ============================ ==============================================
+  type           message                      content
+  ============== ============================ ==============================================
+  rgb            sensor_msgs/Image ``rgb8``   colour, top row first
+  depth          sensor_msgs/Image ``32FC1``  metres along the optical axis; ``+inf`` where
+                                              nothing was hit (see :mod:`harness.sim.render`)
+  depth_pcl,     sensor_msgs/PointCloud2      x, y, z float32 in the optical frame, from the
+  pointcloud                                  depth image and the intrinsics; pixels without
+                                              depth are dropped (``height = 1``,
+                                              ``is_dense = true``), row-major pixel order
+  camera_info    sensor_msgs/CameraInfo       ``plumb_bob`` with zero distortion, ``K``,
+                                              ``R = I``, ``P = [K | 0]``
+  ============== ============================ ==============================================
+
+* ``CameraInfoHelper`` (``ROS2CameraInfoHelper``) is the ``camera_info`` stream on its own.
+
+Intrinsics are MuJoCo's pinhole: ``fy = fx = h / (2 tan(fovy / 2))``, ``cx = (w - 1) / 2``,
+``cy = (h - 1) / 2`` (ROS pixel coordinates, integers at pixel centres); the point cloud uses
+the same numbers, so re-projecting a point gives back its pixel. Stamps are the tick's
+simulation time. ``frameId`` defaults to the last component of the camera prim's path (what
+the TF publishers name the camera's optical frame). ``useSystemTime`` must stay false (the
+harness has only simulation time); ``frameSkipCount = n`` publishes every (n+1)-th execution.
+``qosProfile``, ``queueSize`` and ``resetSimulationTimeOnStop`` are accepted for
+compatibility and change nothing.
+
+Rendering happens only when a helper that needs pixels executes (so a SimulationGate upstream
+sets the cost), and at most once per camera, size and tick however many helpers publish it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from harness.bus.messages import header, msg_type
+from harness.errors import GraphError, SimulationError
+from harness.graph import Attr, NodeType, register
+from harness.graph.nodes.ros_bridge import aliases, frame_of, topic_of
+from harness.sim.prims import PrimKind
+from harness.sim.render import CameraFrame, Intrinsics, Renderer, points_from_depth
+
+__all__ = [
+    "CAMERA_TYPES",
+    "RENDER_PRODUCTS",
+    "CameraHelper",
+    "CameraInfoHelper",
+    "CreateRenderProduct",
+    "RenderProduct",
+    "RenderProductTable",
+    "camera_info_message",
+    "depth_image_message",
+    "point_cloud_message",
+    "render_products",
+    "rgb_image_message",
+]
+
+#: Key of the run's render-product table in ``ctx.extras``.
+RENDER_PRODUCTS = "render_products"
+
+#: ``inputs:type`` of CameraHelper → message type.
+CAMERA_TYPES: Mapping[str, str] = {
+    "rgb": "sensor_msgs/msg/Image",
+    "depth": "sensor_msgs/msg/Image",
+    "depth_pcl": "sensor_msgs/msg/PointCloud2",
+    "pointcloud": "sensor_msgs/msg/PointCloud2",
+    "camera_info": "sensor_msgs/msg/CameraInfo",
+}
+
+
+# ----------------------------------------------------------------------------- messages
+
+def rgb_image_message(ns: int, frame_id: str, rgb: np.ndarray) -> Any:
+    """``sensor_msgs/Image`` ``rgb8`` from a ``(h, w, 3)`` uint8 array, top row first."""
+    h, w, _ = rgb.shape
+    data = np.ascontiguousarray(rgb, dtype=np.uint8).reshape(-1)
+    return msg_type("sensor_msgs/msg/Image")(
+        header=header(ns, frame_id), height=h, width=w, encoding="rgb8", is_bigendian=0,
+        step=3 * w, data=data)
+
+
+def depth_image_message(ns: int, frame_id: str, depth: np.ndarray) -> Any:
+    """``sensor_msgs/Image`` ``32FC1`` (little-endian float32 metres) from ``(h, w)``."""
+    h, w = depth.shape
+    data = np.ascontiguousarray(depth, dtype="<f4").view(np.uint8).reshape(-1)
+    return msg_type("sensor_msgs/msg/Image")(
+        header=header(ns, frame_id), height=h, width=w, encoding="32FC1", is_bigendian=0,
+        step=4 * w, data=data)
+
+
+def point_cloud_message(ns: int, frame_id: str, points: np.ndarray) -> Any:
+    """Unorganised ``sensor_msgs/PointCloud2``: x, y, z float32, ``height = 1``."""
+    pts = np.ascontiguousarray(points, dtype="<f4").reshape(-1, 3)
+    field = msg_type("sensor_msgs/msg/PointField")
+    fields = [field(name=name, offset=4 * k, datatype=field.FLOAT32, count=1)
+              for k, name in enumerate("xyz")]
+    return msg_type("sensor_msgs/msg/PointCloud2")(
+        header=header(ns, frame_id), height=1, width=len(pts), fields=fields,
+        is_bigendian=False, point_step=12, row_step=12 * len(pts),
+        data=pts.view(np.uint8).reshape(-1), is_dense=True)
+
+
+def camera_info_message(ns: int, frame_id: str, intr: Intrinsics) -> Any:
+    """``sensor_msgs/CameraInfo`` of an undistorted pinhole (``plumb_bob``, D = 0)."""
+    roi = msg_type("sensor_msgs/msg/RegionOfInterest")(
+        x_offset=0, y_offset=0, height=0, width=0, do_rectify=False)
+    return msg_type("sensor_msgs/msg/CameraInfo")(
+        header=header(ns, frame_id), height=intr.height, width=intr.width,
+        distortion_model="plumb_bob", d=np.zeros(5, dtype=np.float64),
+        k=np.array(intr.k, dtype=np.float64),
+        r=np.eye(3, dtype=np.float64).reshape(-1),
+        p=np.array(intr.p, dtype=np.float64),
+        binning_x=0, binning_y=0, roi=roi)
+
+
+# ----------------------------------------------------------------------------- products
+
+@dataclass(frozen=True)
+class RenderProduct:
+    """What ``renderProductPath`` names: a prim rendered at ``width`` x ``height``."""
+
+    path: str
+    camera_prim: str
+    width: int
+    height: int
+
+
+class RenderProductTable(Mapping[str, RenderProduct]):
+    """The render products of one run (handle → product) and the frames rendered this tick.
+
+    It owns the run's :class:`~harness.sim.render.Renderer`, created on the first frame
+    requested, and caches frames by (camera, size) for one tick, so helpers publishing rgb,
+    depth and a point cloud of the same camera share one render.
+    """
+
+    def __init__(self, world: Any) -> None:
+        self.world = world
+        self._products: dict[str, RenderProduct] = {}
+        self._renderer: Renderer | None = None
+        self._frames: dict[tuple[int, int, int], CameraFrame] = {}
+        self._frames_tick: int | None = None
+
+    def __getitem__(self, path: str) -> RenderProduct:
+        return self._products[path]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._products)
+
+    def __len__(self) -> int:
+        return len(self._products)
+
+    @property
+    def renderer(self) -> Renderer | None:
+        """The renderer, once a frame has been rendered."""
+        return self._renderer
+
+    def register(self, path: str, camera_prim: str, width: int, height: int) -> RenderProduct:
+        """Add (or update) the product at ``path``."""
+        product = RenderProduct(path, camera_prim, int(width), int(height))
+        self._products[path] = product
+        return product
+
+    def product(self, path: str, where: str) -> RenderProduct:
+        """The product at ``path``; unknown handles raise GraphError naming ``where``."""
+        product = self._products.get(path)
+        if product is None:
+            known = ", ".join(sorted(self._products)) or "none"
+            raise GraphError(f"{where}.inputs:renderProductPath: no render product {path!r} "
+                             f"(created: {known}); connect it to "
+                             "CreateRenderProduct.outputs:renderProductPath")
+        return product
+
+    def camera_id(self, product: RenderProduct, where: str) -> int:
+        """MuJoCo camera id of the product's prim; a prim that is no camera is a GraphError."""
+        try:
+            ref = self.world.prim_ref(product.camera_prim)
+        except SimulationError as err:
+            raise GraphError(f"{where}: {err}") from err
+        if ref.kind is not PrimKind.CAMERA:
+            raise GraphError(f"{where}: render product {product.path!r} renders "
+                             f"{product.camera_prim}, a {ref.kind.value}, not a camera")
+        return int(ref.id)
+
+    def intrinsics(self, product: RenderProduct, where: str) -> Intrinsics:
+        """Intrinsics of the product (no rendering)."""
+        cam = self.camera_id(product, where)
+        fovy = float(self.world.model.cam_fovy[cam])
+        return Intrinsics.from_fovy(product.width, product.height, fovy)
+
+    def frame(self, product: RenderProduct, tick: int, where: str) -> CameraFrame:
+        """The product's frame for ``tick``: rendered on the first request of the tick."""
+        cam = self.camera_id(product, where)
+        if self._frames_tick != tick:
+            self._frames.clear()
+            self._frames_tick = tick
+        key = (cam, product.width, product.height)
+        frame = self._frames.get(key)
+        if frame is None:
+            if self._renderer is None:
+                self._renderer = Renderer(self.world.model, self.world.data)
+            try:
+                frame = self._renderer.render(cam, product.width, product.height)
+            except SimulationError as err:
+                raise GraphError(f"{where}: {err}") from err
+            self._frames[key] = frame
+        return frame
+
+    def close(self) -> None:
+        """Free the renderer's GL resources (idempotent)."""
+        self._frames.clear()
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+
+def render_products(ctx: Any) -> RenderProductTable:
+    """The run's render-product table on ``ctx.extras`` (created on first use)."""
+    table = ctx.extras.get(RENDER_PRODUCTS)
+    if not isinstance(table, RenderProductTable) or table.world is not ctx.world:
+        table = RenderProductTable(ctx.world)
+        ctx.extras[RENDER_PRODUCTS] = table
+    return table
+
+
+def _first(value: Any) -> str:
+    if isinstance(value, str):
+        return value
+    return str(value[0]) if value else ""
+
+
+# ----------------------------------------------------------------------------- nodes
+
+def _core(name: str) -> tuple[str, ...]:
+    return (f"omni.isaac.core_nodes.{name}", f"isaacsim.core.nodes.{name}")
+
+
+@register("srr.CreateRenderProduct", aliases=_core("IsaacCreateRenderProduct"))
+class CreateRenderProduct(NodeType):
+    """Registers ``cameraPrim`` at ``width`` x ``height`` and outputs the product's handle.
+
+    ``enabled = false`` stops execution here (nothing downstream renders or publishes).
+    """
+
+    kind = "action"
+    inputs = (
+        Attr("execIn", "execution"),
+        Attr("cameraPrim", "target", ()),
+        Attr("width", "uint", 1280),
+        Attr("height", "uint", 720),
+        Attr("enabled", "bool", True),
+    )
+    outputs = (Attr("execOut", "execution"), Attr("renderProductPath", "token", ""))
+
+    def initialize(self, db: Any, ctx: Any) -> None:
+        self._handle = f"/Render{db.node_path}"
+
+    def compute(self, db: Any, ctx: Any) -> bool:
+        prim = _first(db.inputs.cameraPrim)
+        if not prim:
+            raise GraphError(f"{db.node_path}.inputs:cameraPrim: no prim set")
+        if not ctx.world.has_prim(prim):
+            raise GraphError(f"{db.node_path}.inputs:cameraPrim: prim {prim!r} does not exist")
+        width, height = int(db.inputs.width), int(db.inputs.height)
+        if width < 1 or height < 1:
+            raise GraphError(f"{db.node_path}: width and height must be >= 1, "
+                             f"got {width}x{height}")
+        render_products(ctx).register(self._handle, prim, width, height)
+        db.outputs.renderProductPath = self._handle
+        return bool(db.inputs.enabled)
+
+
+_HELPER_INPUTS = (
+    Attr("execIn", "execution"),
+    Attr("context", "uint64", 0),
+    Attr("nodeNamespace", "string", ""),
+    Attr("qosProfile", "string", ""),
+    Attr("queueSize", "uint64", 10),
+    Attr("renderProductPath", "token", ""),
+    Attr("frameId", "string", ""),
+    Attr("frameSkipCount", "uint", 0),
+    Attr("resetSimulationTimeOnStop", "bool", False),
+    Attr("useSystemTime", "bool", False),
+    Attr("enabled", "bool", True),
+)
+
+
+class _CameraPublisher(NodeType):
+    """Shared logic of the camera helpers: checks, frame skipping, publishing."""
+
+    kind = "action"
+    outputs = (Attr("execOut", "execution"),)
+
+    def stream(self, db: Any) -> str:
+        raise NotImplementedError
+
+    def initialize(self, db: Any, ctx: Any) -> None:
+        stream = self.stream(db)
+        if stream not in CAMERA_TYPES:
+            raise GraphError(f"{db.node_path}.inputs:type: {stream!r} is not supported "
+                             f"(supported: {', '.join(CAMERA_TYPES)})")
+        if db.inputs.useSystemTime:
+            raise GraphError(f"{db.node_path}.inputs:useSystemTime: must be false; srr "
+                             "stamps every message with simulation time")
+        self._stream = stream
+        self._pub = ctx.bus.advertise(topic_of(db), CAMERA_TYPES[stream])
+        self._count = 0
+
+    def reset(self) -> None:
+        self._count = 0
+
+    def compute(self, db: Any, ctx: Any) -> bool:
+        if db.inputs.useSystemTime:
+            raise GraphError(f"{db.node_path}.inputs:useSystemTime: must be false; srr "
+                             "stamps every message with simulation time")
+        count = self._count
+        self._count += 1
+        if not db.inputs.enabled or count % (int(db.inputs.frameSkipCount) + 1):
+            return True
+        table = render_products(ctx)
+        product = table.product(str(db.inputs.renderProductPath), db.node_path)
+        frame_id = str(db.inputs.frameId) or frame_of(product.camera_prim)
+        ns = int(ctx.time_ns)
+        stream = self._stream
+        if stream == "camera_info":
+            msg = camera_info_message(ns, frame_id, table.intrinsics(product, db.node_path))
+        else:
+            frame = table.frame(product, int(ctx.tick), db.node_path)
+            if stream == "rgb":
+                msg = rgb_image_message(ns, frame_id, frame.rgb)
+            elif stream == "depth":
+                msg = depth_image_message(ns, frame_id, frame.depth)
+            else:
+                msg = point_cloud_message(ns, frame_id,
+                                          points_from_depth(frame.depth, frame.intrinsics))
+        self._pub.publish(msg)
+        return True
+
+
+@register("srr.CameraHelper", aliases=aliases("CameraHelper"))
+class CameraHelper(_CameraPublisher):
+    """Publishes the ``type`` stream of a render product on ``topicName``."""
+
+    inputs = (
+        *_HELPER_INPUTS,
+        Attr("type", "token", "rgb"),
+        Attr("topicName", "string", "rgb"),
+    )
+
+    def stream(self, db: Any) -> str:
+        return str(db.inputs.type)
+
+
+@register("srr.CameraInfoHelper", aliases=aliases("CameraInfoHelper"))
+class CameraInfoHelper(_CameraPublisher):
+    """Publishes a render product's ``sensor_msgs/CameraInfo`` on ``topicName``."""
+
+    inputs = (*_HELPER_INPUTS, Attr("topicName", "string", "camera_info"))
+
+    def stream(self, db: Any) -> str:
+        return "camera_info"

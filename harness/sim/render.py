@@ -1,0 +1,332 @@
+"""Offscreen camera rendering: RGB and linear depth from ONE render pass.
+
+:class:`Renderer` draws a MuJoCo camera with the low-level API — ``mjv_updateScene`` once,
+``mjr_render`` once and ``mjr_readPixels`` once for colour *and* depth. (``mujoco.Renderer``
+renders RGB and depth in two passes; on an H100 that caps 4 cameras at 640x480 to ~39 sets/s,
+the single pass gives ~58-60.) A frame is a pure function of the model and the state in
+``data``: nothing is carried over from one render to the next.
+
+OpenGL comes from ``mujoco.GLContext``, whose backend ``MUJOCO_GL`` selects before ``mujoco``
+is imported: ``egl`` on a GPU (or with Mesa's llvmpipe on a CPU-only machine: Debian packages
+``libegl1 libegl-mesa0 libgl1-mesa-dri libopengl0``), or ``osmesa`` (``libosmesa6``).
+
+Conventions of a :class:`CameraFrame`:
+
+* images are top row first (OpenGL reads bottom-up; the renderer flips);
+* ``rgb`` is ``uint8`` ``(height, width, 3)``;
+* ``depth`` is ``float32`` ``(height, width)`` metres along the optical axis (distance to the
+  image plane, as ROS ``32FC1`` depth images and Isaac's ``distance_to_image_plane``), ``+inf``
+  where nothing was hit (REP 117's "no return"; ROS ``depth_image_proc`` treats every
+  non-finite value as invalid). "Nothing" means the far clip plane or the sky: MuJoCo draws
+  the skybox into the depth buffer at a range of about 0.69 x zfar, so every pixel whose
+  *range* (distance from the camera) is at least :data:`SKY_RANGE_FRACTION` x zfar is
+  ``+inf``. The world puts zfar at 3 x its extent, far beyond any of its geometry;
+* :class:`Intrinsics` are those of the ideal pinhole MuJoCo renders with: square pixels,
+  ``fy = fx = h / (2 tan(fovy / 2))`` and the principal point at the image centre in ROS/OpenCV
+  pixel coordinates (integer coordinates are pixel *centres*): ``cx = (w - 1) / 2``,
+  ``cy = (h - 1) / 2``.
+
+Contexts: one GL context per renderer (so per world), made current before each render, and
+one ``MjrContext`` per output resolution, created on first use with its offscreen buffer
+exactly that size and *without multisampling* (the model's ``offwidth``, ``offheight`` and
+``offsamples`` are set for the duration of ``mjr_makeContext`` and restored). Multisampling
+would antialias the colour, but the depth read back from a multisampled buffer is one sample's,
+taken off the pixel centre (0.35 px on Mesa's llvmpipe), which shifts every back-projected point;
+a depth camera wants the depth at the pixel centre, and one pass serves both images. Call
+:meth:`Renderer.close` to free the contexts.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from harness.errors import SimulationError
+
+__all__ = [
+    "MAX_GEOMS",
+    "SKY_RANGE_FRACTION",
+    "CameraFrame",
+    "Intrinsics",
+    "Renderer",
+    "depth_from_buffer",
+    "points_from_depth",
+]
+
+MAX_GEOMS = 10_000
+#: Ranges at or beyond this fraction of the far clip distance are sky (see the module doc).
+SKY_RANGE_FRACTION = 0.65
+
+UInt8Array = npt.NDArray[np.uint8]
+Float32Array = npt.NDArray[np.float32]
+
+
+@dataclass(frozen=True)
+class Intrinsics:
+    """Pinhole intrinsics of a ``width`` x ``height`` image (pixels; see the module doc)."""
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+
+    @classmethod
+    def from_fovy(cls, width: int, height: int, fovy_deg: float) -> Intrinsics:
+        """Square pixels, vertical field of view ``fovy_deg``, centred principal point."""
+        if width < 1 or height < 1:
+            raise SimulationError(f"image size must be positive, got {width}x{height}")
+        if not 0.0 < fovy_deg < 180.0:
+            raise SimulationError(f"fovy must be in (0, 180) degrees, got {fovy_deg}")
+        f = height / (2.0 * math.tan(math.radians(fovy_deg) / 2.0))
+        return cls(int(width), int(height), f, f, (width - 1) / 2.0, (height - 1) / 2.0)
+
+    @property
+    def k(self) -> tuple[float, ...]:
+        """Row-major 3x3 camera matrix ``K``."""
+        return (self.fx, 0.0, self.cx, 0.0, self.fy, self.cy, 0.0, 0.0, 1.0)
+
+    @property
+    def p(self) -> tuple[float, ...]:
+        """Row-major 3x4 projection matrix ``P = [K | 0]`` (monocular, no rectification)."""
+        return (self.fx, 0.0, self.cx, 0.0, 0.0, self.fy, self.cy, 0.0, 0.0, 0.0, 1.0, 0.0)
+
+    def project(self, xyz_optical: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Pixel coordinates ``(u, v)`` of points in the optical frame (+Z forward)."""
+        p = np.asarray(xyz_optical, dtype=np.float64).reshape(-1, 3)
+        return np.stack([self.fx * p[:, 0] / p[:, 2] + self.cx,
+                         self.fy * p[:, 1] / p[:, 2] + self.cy], axis=1)
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """One render of one camera (arrays are read-only; see the module doc)."""
+
+    camera_id: int
+    rgb: UInt8Array
+    depth: Float32Array
+    intrinsics: Intrinsics
+
+
+def depth_from_buffer(buffer: npt.NDArray[np.floating[Any]], near: float, far: float,
+                      z_limit: npt.NDArray[np.float64] | float | None = None) -> Float32Array:
+    """Linear depth in metres from MuJoCo's reversed-Z depth buffer.
+
+    The buffer is read with ``mjDEPTH_ZEROFAR`` (window depth 1 at the near plane, 0 at the far
+    plane), so eye-space depth is ``z = near·far / (near + d·(far - near))``; ``d <= 0``
+    (nothing drawn) and ``z >= z_limit`` (per pixel or scalar: the sky) become ``+inf``.
+    Computed in float32 (relative error below 1e-6).
+    """
+    limit = 0.0 if z_limit is None else _buffer_limit(near, far, z_limit)
+    return _linear_depth(np.asarray(buffer, dtype=np.float32), near, far, limit)
+
+
+def _buffer_limit(near: float, far: float,
+                  z_limit: npt.NDArray[np.float64] | float) -> npt.NDArray[np.float32] | float:
+    """Window depth of ``z_limit`` (``z >= z_limit`` ⇔ ``d <= this``), at least 0."""
+    z = np.asarray(z_limit, dtype=np.float64)
+    d = np.maximum((near * far / z - near) / (far - near), 0.0).astype(np.float32)
+    return float(d) if d.ndim == 0 else d
+
+
+def _linear_depth(buffer: npt.NDArray[np.float32], near: float, far: float,
+                  d_limit: npt.NDArray[np.float32] | float) -> Float32Array:
+    """``near·far / (near + d·(far - near))`` in float32, ``+inf`` where ``d <= d_limit``."""
+    z = np.multiply(buffer, np.float32(far - near))
+    z += np.float32(near)
+    np.divide(np.float32(near * far), z, out=z)
+    z[buffer <= np.maximum(d_limit, 0.0)] = np.inf
+    return z
+
+
+def _ray_norms(intr: Intrinsics) -> npt.NDArray[np.float64]:
+    """Per pixel, range ÷ depth: the length of the pixel's ray with unit depth."""
+    u = (np.arange(intr.width) - intr.cx) / intr.fx
+    v = (np.arange(intr.height) - intr.cy) / intr.fy
+    return np.sqrt(1.0 + u[None, :] ** 2 + v[:, None] ** 2)
+
+
+def points_from_depth(depth: Float32Array, intr: Intrinsics) -> Float32Array:
+    """Points ``(N, 3)`` float32 in the optical frame (x right, y down, z forward) for every
+    finite depth pixel, in row-major pixel order; non-finite pixels are dropped."""
+    h, w = depth.shape
+    if (w, h) != (intr.width, intr.height):
+        raise SimulationError(f"depth image {w}x{h} does not match intrinsics "
+                              f"{intr.width}x{intr.height}")
+    ray_x, ray_y = _pixel_rays(intr)
+    valid = np.isfinite(depth)
+    z = depth[valid]
+    out = np.empty((z.size, 3), dtype=np.float32)
+    np.multiply(ray_x[valid], z, out=out[:, 0])
+    np.multiply(ray_y[valid], z, out=out[:, 1])
+    out[:, 2] = z
+    return out
+
+
+@functools.lru_cache(maxsize=32)
+def _pixel_rays(intr: Intrinsics) -> tuple[Float32Array, Float32Array]:
+    """Per pixel, ``(u - cx) / fx`` and ``(v - cy) / fy`` (float32, read-only)."""
+    u = (np.arange(intr.width) - intr.cx) / intr.fx
+    v = (np.arange(intr.height) - intr.cy) / intr.fy
+    ray_x = np.broadcast_to(u[None, :], (intr.height, intr.width)).astype(np.float32)
+    ray_y = np.broadcast_to(v[:, None], (intr.height, intr.width)).astype(np.float32)
+    ray_x.flags.writeable = False
+    ray_y.flags.writeable = False
+    return ray_x, ray_y
+
+
+class _Target:
+    """Per-resolution state: the MjrContext (offscreen buffer of exactly that size), the
+    viewport and the read-back buffers."""
+
+    def __init__(self, model: mujoco.MjModel, width: int, height: int) -> None:
+        vis, quality = model.vis.global_, model.vis.quality
+        saved = (vis.offwidth, vis.offheight, quality.offsamples)
+        vis.offwidth, vis.offheight, quality.offsamples = width, height, 0
+        try:
+            self.context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
+        finally:
+            vis.offwidth, vis.offheight, quality.offsamples = saved
+        # Read depth as stored (reversed Z: 0 at the far plane), which keeps float32
+        # precision far away; depth_from_buffer undoes it.
+        self.context.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self.context)
+        if (self.context.offWidth, self.context.offHeight) != (width, height):
+            raise SimulationError(f"offscreen buffer is {self.context.offWidth}x"
+                                  f"{self.context.offHeight}, wanted {width}x{height}")
+        self.viewport = mujoco.MjrRect(0, 0, width, height)
+        self.rgb = np.empty((height, width, 3), dtype=np.uint8)
+        self.depth = np.empty((height, width), dtype=np.float32)
+
+    def free(self) -> None:
+        self.context.free()
+
+
+class Renderer:
+    """Renders the cameras of one MuJoCo model/data pair (one world).
+
+    ``render(camera_id, width, height)`` is one ``mjv_updateScene`` + one ``mjr_render`` + one
+    ``mjr_readPixels``; :attr:`renders` counts them (tests and benchmarks read it).
+    """
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, *,
+                 max_geoms: int = MAX_GEOMS) -> None:
+        self._model = model
+        self._data = data
+        self._max_geoms = max_geoms
+        self._gl: Any = None
+        self._scene: mujoco.MjvScene | None = None
+        self._option = mujoco.MjvOption()
+        self._camera = mujoco.MjvCamera()
+        self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
+        self._targets: dict[tuple[int, int], _Target] = {}
+        self._d_limits: dict[Intrinsics, npt.NDArray[np.float32]] = {}
+        self._closed = False
+        self.renders = 0
+
+    @property
+    def near_far(self) -> tuple[float, float]:
+        """Clip distances in metres: ``map.znear`` and ``map.zfar`` scaled by the extent."""
+        extent = float(self._model.stat.extent)
+        return (float(self._model.vis.map.znear) * extent,
+                float(self._model.vis.map.zfar) * extent)
+
+    def intrinsics(self, camera_id: int, width: int, height: int) -> Intrinsics:
+        """Intrinsics of ``camera_id`` rendered at ``width`` x ``height``."""
+        self._check_camera(camera_id)
+        return Intrinsics.from_fovy(width, height, float(self._model.cam_fovy[camera_id]))
+
+    def _check_camera(self, camera_id: int) -> None:
+        if not 0 <= camera_id < self._model.ncam:
+            raise SimulationError(f"no camera with id {camera_id} (the model has "
+                                  f"{self._model.ncam})")
+
+    def _start(self) -> None:
+        if self._closed:
+            raise SimulationError("renderer is closed")
+        if self._gl is None:
+            vis = self._model.vis.global_
+            backend = str(getattr(mujoco.GLContext, "__module__", "")).rsplit(".", 1)[-1]
+            if backend == "glfw" and not (os.environ.get("DISPLAY")
+                                          or os.environ.get("WAYLAND_DISPLAY")):
+                # GLFW without a display aborts the process inside mjr_makeContext.
+                raise SimulationError(
+                    "cannot render: MuJoCo uses GLFW (MUJOCO_GL unset or 'glfw') and there is "
+                    "no display; set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa "
+                    "before starting")
+            try:
+                self._gl = mujoco.GLContext(max(1, vis.offwidth), max(1, vis.offheight))
+                self._gl.make_current()
+            except Exception as err:  # backend-specific (ImportError, RuntimeError, ...)
+                raise SimulationError(
+                    f"cannot create an OpenGL context for rendering ({type(err).__name__}: "
+                    f"{err}); set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa"
+                ) from err
+            self._scene = mujoco.MjvScene(self._model, self._max_geoms)
+        else:
+            self._gl.make_current()
+
+    def _target(self, width: int, height: int) -> _Target:
+        key = (int(width), int(height))
+        target = self._targets.get(key)
+        if target is None:
+            if width < 1 or height < 1:
+                raise SimulationError(f"image size must be positive, got {width}x{height}")
+            target = _Target(self._model, *key)
+            self._targets[key] = target
+        return target
+
+    def render(self, camera_id: int, width: int, height: int) -> CameraFrame:
+        """RGB and linear depth of camera ``camera_id`` for the current state."""
+        self._check_camera(camera_id)
+        self._start()
+        target = self._target(width, height)
+        scene = self._scene
+        assert scene is not None
+        self._camera.fixedcamid = camera_id
+        mujoco.mjv_updateScene(self._model, self._data, self._option, None, self._camera,
+                               mujoco.mjtCatBit.mjCAT_ALL, scene)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, target.context)
+        mujoco.mjr_render(target.viewport, scene, target.context)
+        mujoco.mjr_readPixels(target.rgb, target.depth, target.viewport, target.context)
+        self.renders += 1
+        intr = self.intrinsics(camera_id, width, height)
+        near, far = self.near_far
+        d_limit = self._d_limits.get(intr)
+        if d_limit is None:  # per pixel, the window depth of the sky's range, top row first
+            z_limit = SKY_RANGE_FRACTION * far / _ray_norms(intr)
+            d_limit = np.asarray(_buffer_limit(near, far, z_limit), dtype=np.float32)
+            self._d_limits[intr] = d_limit
+        rgb = np.ascontiguousarray(target.rgb[::-1])
+        depth = _linear_depth(target.depth[::-1], near, far, d_limit)
+        rgb.flags.writeable = False
+        depth.flags.writeable = False
+        return CameraFrame(camera_id, rgb, depth, intr)
+
+    def close(self) -> None:
+        """Free the MjrContexts and the GL context (idempotent)."""
+        if self._closed:
+            return
+        self._closed = True
+        if self._gl is not None:
+            self._gl.make_current()
+            for target in self._targets.values():
+                target.free()
+            self._gl.free()
+        self._targets.clear()
+        self._gl = None
+        self._scene = None
+
+    def __enter__(self) -> Renderer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
