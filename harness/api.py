@@ -5,8 +5,9 @@ that every published message was recorded, and writes the run directory:
 
     scenario.yaml   resolved scenario (includes expanded, defaults and overrides applied)
     bag/            rosbag2 directory: metadata.yaml + one .mcap
-    summary.json    verdict, health checks, per-topic count/rate/bytes/sha256, versions, seed
-    junit.xml       the health checks as test cases, for CI systems
+    summary.json    verdict and reasons, health gates, metrics, baseline comparison,
+                    per-topic count/rate/bytes/sha256, versions, seed, command to reproduce
+    junit.xml       health gates and metric comparisons as test cases, for CI systems
 """
 
 from __future__ import annotations
@@ -29,15 +30,18 @@ import yaml
 from harness import __version__
 from harness.bus import Recorder, TopicStats
 from harness.engine import Simulation
-from harness.errors import SrrError
+from harness.errors import InvalidRunError, SrrError
+from harness.regression import baseline_path, compare, decide, load_baseline, save_baseline
 from harness.graph import stage_to_json, stage_to_mermaid
-from harness.report.junit import write_junit
+from harness.report.junit import junit_cases, write_junit
+from harness.scoring import Scores, score_run
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
 
 __all__ = [
-    "HealthCheck",
     "RepeatResult",
     "RunResult",
+    "baselines_dir",
+    "bless",
     "build_graphs",
     "default_run_dir",
     "graph_text",
@@ -48,13 +52,6 @@ __all__ = [
 ]
 
 Progress = Callable[[int, int], None]
-
-
-@dataclass(frozen=True)
-class HealthCheck:
-    name: str
-    ok: bool
-    detail: str
 
 
 @dataclass(frozen=True)
@@ -119,20 +116,6 @@ def default_run_dir(scenario: Scenario, root: Path = Path("reports")) -> Path:
     return candidate
 
 
-def _health(stats: dict[str, TopicStats], published: dict[str, int]) -> list[HealthCheck]:
-    checks = []
-    mismatched = {t: (published.get(t, 0), stats[t].count if t in stats else 0)
-                  for t in set(stats) | set(published)
-                  if published.get(t, 0) != (stats[t].count if t in stats else 0)}
-    detail = ("every published message was recorded "
-              f"({sum(published.values())} messages on {len(published)} topics)")
-    if mismatched:
-        detail = "; ".join(f"{t}: published {p}, recorded {r}"
-                           for t, (p, r) in sorted(mismatched.items()))
-    checks.append(HealthCheck("recorded_equals_published", not mismatched, detail))
-    return checks
-
-
 def combined_digest(topics: dict[str, Any]) -> str:
     h = hashlib.sha256()
     for name in sorted(topics):
@@ -164,7 +147,9 @@ def _write_json_atomic(path: Path, data: Any) -> None:
 
 
 def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
-                 progress: Progress | None = None) -> RunResult:
+                 progress: Progress | None = None, baselines: Path | None = None,
+                 update_baseline: bool = False, update_reason: str = "updated with "
+                 "--update-baseline") -> RunResult:
     """Build, run and record ``scenario``; write the run directory and return its verdict."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
     if run_dir.exists() and any(run_dir.iterdir()):
@@ -190,11 +175,10 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     stats = recorder.close()
     published = sim.bus.published_counts()
     sim_s = sim.tick_index / scenario.physics.tick_hz
-    checks = _health(stats, published)
     topics = _topic_table(stats, published, sim_s)
-    ok = all(c.ok for c in checks)
-    verdict = "INTERRUPTED" if interrupted else ("PASS" if ok else "INVALID")
-    exit_code = 130 if interrupted else (0 if ok else 3)
+    scores = score_run(scenario, run_dir / "bag", srr_gt=sim.srr_gt, published=published,
+                       recorded={t: st.count for t, st in stats.items()}, duration_s=sim_s,
+                       source=source)
     summary: dict[str, Any] = {
         "scenario": scenario.name,
         "scenario_file": source,
@@ -205,28 +189,100 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         "ticks": sim.tick_index,
         "tick_hz": scenario.physics.tick_hz,
         "interrupted": interrupted,
-        "verdict": verdict,
-        "exit_code": exit_code,
-        "health": [dataclasses.asdict(c) for c in checks],
+        "health": [dataclasses.asdict(h) for h in scores.health],
+        "metrics": [dataclasses.asdict(m) for m in scores.metrics],
         "graphs": sim.graph_paths,
         "systems_under_test": [name for name, _, _ in sim.suts],
         "topics": topics,
         "digest": combined_digest(topics),
         "versions": versions(),
+        "command": reproduce_command(source, scenario, run_dir),
     }
+    bdir = baselines_dir(source, baselines)
+    if update_baseline and not interrupted:
+        if not all(h.ok for h in scores.health):
+            raise InvalidRunError(f"{run_dir}: health gates tripped; an invalid run cannot "
+                                  "become the baseline")
+        save_baseline(baseline_path(baseline_name(scenario), bdir), summary,
+                      reason=update_reason, source_run=str(run_dir))
+    _judge(summary, scenario, scores, bdir)
+    if interrupted:
+        summary["verdict"], summary["exit_code"] = "INTERRUPTED", 130
+        summary["reasons"] = ["interrupted before the end of the scenario"]
     _write_json_atomic(run_dir / "summary.json", summary)
-    write_junit(run_dir / "junit.xml", scenario.name, checks)
-    return RunResult(run_dir, verdict, exit_code, summary)
+    write_junit(run_dir / "junit.xml", scenario.name, junit_cases(summary))
+    return RunResult(run_dir, summary["verdict"], summary["exit_code"], summary)
+
+
+def baseline_name(scenario: Scenario) -> str:
+    return scenario.baseline or scenario.name
+
+
+def baselines_dir(source: str, explicit: Path | None = None) -> Path:
+    """``--baselines`` if given, else the ``baselines/`` folder of the project the scenario
+    file lives in (the nearest ancestor that has one), else ``./baselines``."""
+    if explicit is not None:
+        return Path(explicit)
+    here = Path(source).resolve().parent if source and not source.startswith("<") else None
+    while here is not None and here != here.parent:
+        if (here / "baselines").is_dir():
+            return here / "baselines"
+        here = here.parent
+    return Path("baselines")
+
+
+def reproduce_command(source: str, scenario: Scenario, run_dir: Path) -> str:
+    return (f"srr run {source} --seed {scenario.seed} --duration {scenario.duration:g} "
+            f"--out {run_dir}")
+
+
+def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Path) -> None:
+    """Compare with the baseline and fill ``verdict``, ``exit_code``, ``reasons``,
+    ``baseline`` and ``comparison`` in the summary."""
+    path = baseline_path(baseline_name(scenario), bdir)
+    base = load_baseline(path) if scores.metrics else None
+    cmp = compare(scores.metrics, base, scenario.scoring.tolerances) if base else None
+    note = (f"no baseline at {path}: bless one with `srr baseline bless RUN_DIR --reason "
+            "TEXT` or `srr run ... --update-baseline`")
+    verdict = decide(scores.health, scores.metrics, cmp, note)
+    summary["verdict"], summary["exit_code"] = verdict.name, verdict.exit_code
+    summary["reasons"] = list(verdict.reasons)
+    summary["baseline"] = None if base is None else {
+        "path": str(path), "blessed_by": base.blessed_by, "reason": base.reason,
+        "blessed_at": base.blessed_at, "seed": base.seed, "digest": base.digest,
+        "digest_matches": base.digest == summary["digest"],
+    }
+    summary["comparison"] = [] if cmp is None else [dataclasses.asdict(e) for e in cmp.entries]
+
+
+def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
+    """Make a finished run the baseline of its scenario (``srr baseline bless``)."""
+    summary_file = Path(run_dir) / "summary.json"
+    if not summary_file.exists():
+        raise SrrError(f"{run_dir}: summary.json: missing (not a finished run directory)")
+    try:
+        summary = json.loads(summary_file.read_text(encoding="utf-8"))
+    except ValueError as err:
+        raise SrrError(f"{summary_file}: not valid JSON: {err}") from err
+    if summary.get("verdict") == "INVALID" or summary.get("interrupted"):
+        raise InvalidRunError(f"{run_dir}: the run is {summary.get('verdict', 'invalid')}; "
+                              "only a valid, complete run can become the baseline")
+    scenario = load_scenario(Path(run_dir) / "scenario.yaml")
+    path = baseline_path(baseline_name(scenario),
+                         baselines_dir(summary.get("scenario_file", ""), baselines))
+    save_baseline(path, summary, reason=reason, source_run=str(run_dir))
+    return path
 
 
 def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
-               out: Path | None = None, progress: Progress | None = None) -> RepeatResult:
+               out: Path | None = None, progress: Progress | None = None,
+               baselines: Path | None = None) -> RepeatResult:
     """Run ``n`` times (``run_1`` … ``run_n`` under one directory) and compare digests."""
     if n < 1:
         raise SrrError(f"--repeat: must be >= 1, got {n}")
     out_dir = Path(out) if out is not None else default_run_dir(scenario)
     runs = tuple(run_scenario(scenario, source=source, out=out_dir / f"run_{i + 1}",
-                              progress=progress) for i in range(n))
+                              progress=progress, baselines=baselines) for i in range(n))
     first = runs[0].summary["topics"]
     differing = sorted({t for r in runs[1:] for t in set(first) | set(r.summary["topics"])
                         if first.get(t, {}).get("sha256")

@@ -7,7 +7,6 @@ naming the file and the field, never a traceback); 3 invalid run; 130 interrupte
 from __future__ import annotations
 
 import argparse
-import json
 import signal
 import sys
 from collections.abc import Iterator, Sequence
@@ -26,7 +25,9 @@ from harness.errors import SrrError
 __all__ = ["main"]
 
 err_console = Console(stderr=True, highlight=False, soft_wrap=True)
-out_console = Console(highlight=False, soft_wrap=True)
+# Piped output (CI logs) gets wide tables instead of rich's 80-column default.
+out_console = Console(highlight=False, soft_wrap=True,
+                      width=None if sys.stdout.isatty() else 160)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -58,6 +59,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--repeat", type=int, default=1, help="run N times and compare digests")
     run.add_argument("--update-baseline", action="store_true",
                      help="bless this run as the scenario's baseline")
+    run.add_argument("--reason", default="updated with --update-baseline",
+                     help="why, recorded in the baseline (with --update-baseline)")
+    run.add_argument("--baselines", type=Path, default=None,
+                     help="baselines folder (default: the project's baselines/)")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
 
     val = sub.add_parser("validate", help="check a scenario file without running it")
@@ -71,6 +76,13 @@ def _parser() -> argparse.ArgumentParser:
 
     ins = sub.add_parser("inspect", help="list the topics of a recorded bag")
     ins.add_argument("bag", type=Path)
+
+    base = sub.add_parser("baseline", help="manage baselines")
+    base_sub = base.add_subparsers(dest="baseline_command", required=True, parser_class=_Parser)
+    bl = base_sub.add_parser("bless", help="make a finished run its scenario's baseline")
+    bl.add_argument("run_dir", type=Path)
+    bl.add_argument("--reason", required=True, help="why this run becomes the baseline")
+    bl.add_argument("--baselines", type=Path, default=None)
     return p
 
 
@@ -99,8 +111,8 @@ def _progress(quiet: bool) -> Any:
 def _cmd_run(args: argparse.Namespace) -> int:
     scenario = api.load(args.scenario, seed=args.seed, duration=args.duration,
                         srr_gt=args.srr_gt, overrides=args.overrides)
-    if args.update_baseline:
-        raise SrrError("--update-baseline: baselines are not implemented yet in this version")
+    if args.update_baseline and args.repeat != 1:
+        raise SrrError("--update-baseline: bless one run, not a --repeat series")
     bar = _progress(args.quiet)
     task: Any = None
 
@@ -116,10 +128,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         try:
             if args.repeat != 1:
                 rep = api.run_repeat(scenario, args.repeat, source=str(args.scenario),
-                                     out=args.out, progress=tick)
+                                     out=args.out, progress=tick, baselines=args.baselines)
             else:
                 res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
-                                       progress=tick)
+                                       progress=tick, baselines=args.baselines,
+                                       update_baseline=args.update_baseline,
+                                       update_reason=args.reason)
         finally:
             if bar is not None:
                 bar.stop()
@@ -141,6 +155,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return res.exit_code
 
 
+def _fmt(v: Any) -> str:
+    return "—" if v is None else f"{v:.4g}"
+
+
 def _print_run(res: api.RunResult) -> None:
     s = res.summary
     table = Table(title=f"{s['scenario']}: {s['simulated_s']:.1f} s simulated, seed {s['seed']}")
@@ -149,11 +167,36 @@ def _print_run(res: api.RunResult) -> None:
     for name, t in s["topics"].items():
         table.add_row(name, t["type"], str(t["count"]), f"{t['rate_hz']:.1f}")
     out_console.print(table)
-    for h in s["health"]:
-        mark = "ok" if h["ok"] else "FAILED"
-        out_console.print(f"health {h['name']}: {mark} — {h['detail']}", markup=False)
+    if s["comparison"]:
+        mt = Table(title="metrics against the baseline (regressions first)")
+        for col in ("metric", "value", "baseline", "delta", "tolerance", "status"):
+            mt.add_column(col)
+        for e in s["comparison"]:
+            style = {"regressed": "bold red", "missing": "bold red",
+                     "improved": "green"}.get(e["status"], "")
+            mt.add_row(e["name"], f"{_fmt(e['value'])} {e['unit']}", _fmt(e["baseline"]),
+                       _fmt(e["delta"]), f"±{e['tolerance']:.3g}", e["status"], style=style)
+        out_console.print(mt)
+    elif s["metrics"]:
+        mt = Table(title="metrics (no baseline)")
+        for col in ("metric", "value", "unit"):
+            mt.add_column(col)
+        for m in s["metrics"]:
+            mt.add_row(m["name"], _fmt(m["value"]), m["unit"])
+        out_console.print(mt)
+    bad = [h for h in s["health"] if not h["ok"]]
+    out_console.print(f"health: {len(s['health']) - len(bad)}/{len(s['health'])} gates ok",
+                      markup=False)
     out_console.print(f"verdict: {res.verdict}", markup=False)
+    for reason in s.get("reasons", []):
+        out_console.print(f"  - {reason}", markup=False)
     out_console.print(str(res.run_dir), markup=False)
+
+
+def _cmd_baseline(args: argparse.Namespace) -> int:
+    path = api.bless(args.run_dir, args.reason, baselines=args.baselines)
+    out_console.print(f"blessed {args.run_dir} as {path}", markup=False)
+    return 0
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -183,7 +226,7 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
 
 
 COMMANDS = {"run": _cmd_run, "validate": _cmd_validate, "graph": _cmd_graph,
-            "inspect": _cmd_inspect}
+            "inspect": _cmd_inspect, "baseline": _cmd_baseline}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

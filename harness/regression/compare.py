@@ -36,6 +36,7 @@ DEFAULT_TOLERANCES: dict[str, ToleranceSpec] = {
     "m": ToleranceSpec(abs=0.05, rel=0.05),
     "m/s": ToleranceSpec(abs=0.02, rel=0.05),
     "rad": ToleranceSpec(abs=0.02, rel=0.05),
+    "rad/s": ToleranceSpec(abs=0.02, rel=0.05),
     "deg": ToleranceSpec(abs=1.0, rel=0.05),
     "s": ToleranceSpec(abs=0.1, rel=0.05),
     "%": ToleranceSpec(abs=1.0, rel=0.0),

@@ -6,9 +6,34 @@ import os
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Protocol
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Protocol
 
-__all__ = ["write_junit"]
+__all__ = ["Case", "junit_cases", "write_junit"]
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    ok: bool
+    detail: str
+
+
+def junit_cases(summary: Mapping[str, Any]) -> list[Case]:
+    """One case per health gate and per compared metric (or per metric, without baseline)."""
+    cases = [Case(f"health.{h['name']}", h["ok"], h["detail"]) for h in summary["health"]]
+    if summary.get("comparison"):
+        for e in summary["comparison"]:
+            ok = e["status"] not in ("regressed", "missing")
+            cases.append(Case(e["name"], ok, f"{e['status']}: value {e['value']} "
+                              f"baseline {e['baseline']} tolerance {e['tolerance']}"))
+    else:
+        for m in summary.get("metrics", []):
+            cases.append(Case(m["name"], True, f"{m['value']} {m['unit']} (no baseline)"))
+    if summary.get("verdict") == "FAIL":
+        cases.append(Case("verdict", False, "; ".join(summary.get("reasons", []))))
+    return cases
 
 
 class _Case(Protocol):

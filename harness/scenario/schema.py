@@ -430,6 +430,7 @@ class Scenario:
     zones: ZonesSpec = ZonesSpec()
     systems_under_test: tuple[SutSpec, ...] = ()
     scoring: ScoringSpec = ScoringSpec()
+    baseline: str | None = None  # which baselines/<name>.json to compare with (default: name)
 
     @property
     def tick_ns(self) -> int:

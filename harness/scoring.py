@@ -1,0 +1,146 @@
+"""Score a recorded run: the scenario's ``scoring:`` block → metric functions and health gates.
+
+This is the only place that knows which metric family reads which part of the scenario; the
+metric functions themselves stay pure (frames in, results out).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from harness.bus import resolve_topic
+from harness.errors import ScenarioError
+from harness.frames import Frames, load_frames
+from harness.metrics import (
+    HealthResult,
+    MetricResult,
+    OutputSpec,
+    Tripwire,
+    control_metrics,
+    health_gates,
+    perception_metrics,
+    safety_metrics,
+)
+from harness.scenario import Scenario
+
+__all__ = ["ROBOT_RADIUS", "Scores", "expected_rates", "score_frames", "score_run"]
+
+# Footprint circle radius per model (half the diagonal of the chassis), for clearance and
+# collisions against workers.
+ROBOT_RADIUS = {"forklift": 1.23, "turtlebot3_waffle_pi": 0.21}
+
+
+@dataclass(frozen=True)
+class Scores:
+    metrics: tuple[MetricResult, ...]
+    health: tuple[HealthResult, ...]
+
+
+def _gate_rate(tick_hz: int, fps: float) -> float:
+    step = max(1, round(tick_hz / fps))
+    return tick_hz / step
+
+
+def expected_rates(sc: Scenario) -> dict[str, float]:
+    """Topic → expected Hz: what the configuration publishes at a fixed rate, plus the
+    scenario's own ``scoring.health.expected_rates``."""
+    hz = sc.physics.tick_hz
+    rates: dict[str, float] = {}
+    if sc.clock.enabled:
+        rates[resolve_topic(sc.clock.clock_topic)] = float(hz)
+    for robot in sc.robots:
+        if not robot.enabled:
+            continue
+        if robot.odometry.enabled:
+            rates[resolve_topic(robot.odometry.odom_topic, robot.namespace)] = float(hz)
+        lidar, imu = robot.sensors.lidar, robot.sensors.imu
+        if lidar is not None and lidar.enabled:
+            rates[resolve_topic(lidar.topic, robot.namespace)] = _gate_rate(hz, lidar.fps)
+        if imu is not None and imu.enabled:
+            rates[resolve_topic(imu.topic, robot.namespace)] = _gate_rate(hz, imu.fps)
+    for cam in sc.cameras:
+        if not cam.enabled:
+            continue
+        suffix = {"rgb": "rgb", "depth": "depth", "pointcloud": "pointcloud",
+                  "camera_info": "camera_info"}
+        for out in cam.outputs:
+            rates[resolve_topic(f"{cam.name}_{suffix[out]}")] = _gate_rate(hz, cam.fps)
+    for topic, value in sc.scoring.health.expected_rates.items():
+        rates[resolve_topic(topic)] = value
+    return rates
+
+
+def _gt_names(sc: Scenario) -> list[str]:
+    names = [r.name for r in sc.robots if r.enabled]
+    # Workers are published by index, as the seed's /gt/character_<i>/tf, whatever their name.
+    names += [f"character_{i}" for i, w in enumerate(sc.workers) if w.enabled]
+    return names
+
+
+def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
+                 published: Mapping[str, int] | None = None,
+                 recorded: Mapping[str, int] | None = None,
+                 duration_s: float | None = None, source: str = "<scenario>") -> Scores:
+    """Metrics and health gates for one run's frames."""
+    s = sc.scoring
+    metrics: list[MetricResult] = []
+    need_gt = any(block is not None and block.enabled
+                  for block in (s.control, s.perception, s.safety))
+    if need_gt and not srr_gt:
+        raise ScenarioError(source, "scoring", "scoring needs ground truth: set srr_gt: true "
+                            "or run with --srr-gt")
+    workers = [w for w in sc.workers if w.enabled]
+    if s.control is not None and s.control.enabled:
+        route = sc.routes.get(s.control.route)
+        if route is None:
+            raise ScenarioError(source, "scoring.control.route",
+                                f"no route named {s.control.route!r}")
+        try:
+            robot = sc.robot(s.control.robot)
+        except KeyError:
+            raise ScenarioError(source, "scoring.control.robot",
+                                f"no robot named {s.control.robot!r}") from None
+        metrics += control_metrics(
+            frames, robot=robot.name, route=route.waypoints,
+            goal_tolerance=s.control.goal_tolerance,
+            robot_radius=ROBOT_RADIUS[robot.model],
+            worker_radius=workers[0].radius if workers else 0.25,
+            odom_topic=resolve_topic(robot.odometry.odom_topic, robot.namespace),
+            cmd_topic=resolve_topic(robot.control_spec.cmd_vel_topic, robot.namespace))
+    if s.perception is not None and s.perception.enabled:
+        topic = s.perception.marker_topics[0] if s.perception.marker_topics else None
+        for cls in s.perception.classes:
+            metrics += perception_metrics(frames, cls=cls, gate=s.perception.gate,
+                                          topic=resolve_topic(topic) if topic else None)
+    if s.safety is not None and s.safety.enabled:
+        wire = sc.zones.trailer_tripwire
+        if wire is None or len(sc.zones.loading_roi) < 3:
+            raise ScenarioError(source, "zones", "safety scoring needs zones.loading_roi and "
+                                "zones.trailer_tripwire")
+        metrics += safety_metrics(frames, tripwire=Tripwire(wire.a, wire.b, wire.inside),
+                                  roi=sc.zones.loading_roi, robot=s.safety.robot,
+                                  min_window_s=s.safety.min_window_s)
+    outputs = {resolve_topic(t): OutputSpec(min_count=1, first_within_s=silence,
+                                            max_silence_s=silence)
+               for t, silence in s.health.sut_outputs.items()}
+    health = health_gates(
+        frames, expected_hz=expected_rates(sc), recorded=recorded, published=published,
+        gt_expected=_gt_names(sc) if srr_gt else None, robots=[r.name for r in sc.robots
+                                                               if r.enabled],
+        outputs=outputs, duration_s=duration_s, min_fraction=s.health.rate_fraction)
+    return Scores(tuple(metrics), tuple(health))
+
+
+def score_run(sc: Scenario, bag_dir: Path, *, srr_gt: bool,
+              published: Mapping[str, int] | None = None,
+              recorded: Mapping[str, int] | None = None, duration_s: float | None = None,
+              source: str = "<scenario>") -> Scores:
+    markers = list(sc.scoring.perception.marker_topics) if sc.scoring.perception else None
+    frames = load_frames(bag_dir, marker_topics=[resolve_topic(t) for t in markers]
+                         if markers else None, muted_topic=resolve_topic(
+                             sc.scoring.safety.muted_topic) if sc.scoring.safety
+                         else "/safety/is_muted")
+    return score_frames(sc, frames, srr_gt=srr_gt, published=published, recorded=recorded,
+                        duration_s=duration_s, source=source)
