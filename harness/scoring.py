@@ -6,9 +6,12 @@ metric functions themselves stay pure (frames in, results out).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import dataclasses
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from harness.bus import resolve_topic
 from harness.errors import ScenarioError
@@ -24,6 +27,7 @@ from harness.metrics import (
     safety_metrics,
 )
 from harness.scenario import Scenario
+from harness.sut.zones import points_in_polygon
 
 __all__ = ["ROBOT_RADIUS", "Scores", "expected_rates", "score_frames", "score_run"]
 
@@ -72,6 +76,19 @@ def expected_rates(sc: Scenario) -> dict[str, float]:
     return rates
 
 
+def within_area(frames: Frames, area: Sequence[Sequence[float]]) -> Frames:
+    """The frames with ground-truth characters and tracks outside ``area`` left out (robots'
+    ground truth is kept: control and safety scoring need it wherever the robot is)."""
+    poly = np.asarray(area, dtype=np.float64)
+    g = frames.gt_poses
+    is_char = g["name"].str.startswith("character_").to_numpy()
+    inside = points_in_polygon(g[["x", "y"]].to_numpy(np.float64), poly)
+    t = frames.tracks
+    t_inside = points_in_polygon(t[["x", "y"]].to_numpy(np.float64), poly)
+    return dataclasses.replace(frames, gt_poses=g[~is_char | inside].reset_index(drop=True),
+                               tracks=t[t_inside].reset_index(drop=True))
+
+
 def _gt_names(sc: Scenario) -> list[str]:
     names = [r.name for r in sc.robots if r.enabled]
     # Workers are published by index, as the seed's /gt/character_<i>/tf, whatever their name.
@@ -111,8 +128,9 @@ def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
             cmd_topic=resolve_topic(robot.control_spec.cmd_vel_topic, robot.namespace))
     if s.perception is not None and s.perception.enabled:
         topic = s.perception.marker_topics[0] if s.perception.marker_topics else None
+        scored = within_area(frames, s.perception.area) if s.perception.area else frames
         for cls in s.perception.classes:
-            metrics += perception_metrics(frames, cls=cls, gate=s.perception.gate,
+            metrics += perception_metrics(scored, cls=cls, gate=s.perception.gate,
                                           topic=resolve_topic(topic) if topic else None)
     if s.safety is not None and s.safety.enabled:
         wire = sc.zones.trailer_tripwire

@@ -378,6 +378,9 @@ class PerceptionScoring:
     marker_topics: tuple[str, ...] = ()
     classes: tuple[str, ...] = ("person",)
     gate: float = num(1.0, 0.0, 100.0, lo_open=True)
+    # Evaluation area (world XY polygon): ground truth and tracks outside it are not scored,
+    # so objects the cameras cannot see do not count as misses. Empty: everywhere.
+    area: tuple[tuple[float, float], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -3,8 +3,11 @@
 :class:`Renderer` draws a MuJoCo camera with the low-level API — ``mjv_updateScene`` once,
 ``mjr_render`` once and ``mjr_readPixels`` once for colour *and* depth. (``mujoco.Renderer``
 renders RGB and depth in two passes; on an H100 that caps 4 cameras at 640x480 to ~39 sets/s,
-the single pass gives ~58-60.) A frame is a pure function of the model and the state in
-``data``: nothing is carried over from one render to the next.
+the single pass gives ~58-60; measured here on an H100, a 640x480 frame costs 3.9 ms from
+scene update to linear depth, most of it the synchronous read-back.) A frame is a pure function
+of the model and the state in ``data``: nothing is carried over from one render to the next.
+Images depend on the OpenGL implementation: EGL and OSMesa on Mesa's llvmpipe give identical
+bytes, a GPU driver different ones, so camera digests are per renderer.
 
 OpenGL comes from ``mujoco.GLContext``, whose backend ``MUJOCO_GL`` selects before ``mujoco``
 is imported: ``egl`` on a GPU (or with Mesa's llvmpipe on a CPU-only machine: Debian packages

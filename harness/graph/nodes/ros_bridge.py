@@ -217,7 +217,8 @@ def relative_pose(world: Any, parent: str | None, child: str) -> tuple[np.ndarra
 
 @register("srr.PublishTransformTree", aliases=aliases("PublishTransformTree"))
 class PublishTransformTree(_TfPublisher):
-    """Transforms of ``targetPrims`` relative to ``parentPrim`` (default: the world frame)."""
+    """Transforms of ``targetPrims`` relative to ``parentPrim`` (default: the world frame).
+    Camera prims stand for their ROS optical frames (see :func:`frame_pose`)."""
 
     inputs = (
         *_COMMON,
