@@ -12,6 +12,7 @@ that every published message was recorded, and writes the run directory:
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
@@ -167,7 +168,8 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     except KeyboardInterrupt:
         interrupted = True
     except BaseException:
-        recorder.close()
+        with contextlib.suppress(Exception):  # the original error is the one to report
+            recorder.close()
         shutil.rmtree(run_dir, ignore_errors=True)
         raise
     finally:

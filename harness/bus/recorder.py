@@ -9,7 +9,9 @@ without reading the bags back.
 from __future__ import annotations
 
 import hashlib
+import queue
 import struct
+import threading
 from dataclasses import dataclass
 from collections.abc import Callable
 from pathlib import Path
@@ -48,9 +50,11 @@ class TopicStats:
 
 
 class _TopicState:
-    __slots__ = ("bytes", "conn", "count", "digest", "first_ns", "last_ns", "msgtype", "qos")
+    __slots__ = ("bytes", "conn", "count", "digest", "first_ns", "last_ns", "msgtype", "qos",
+                 "topic")
 
     def __init__(self, conn: Any, msgtype: str, qos: Qos) -> None:
+        self.topic = ""
         self.conn = conn
         self.msgtype = msgtype
         self.qos = qos
@@ -83,13 +87,23 @@ class Recorder:
 
     Call :meth:`open` with the bus's QoS look-up (so transient-local topics are marked so in
     ``metadata.yaml``), feed it envelopes, then :meth:`close`.
+
+    Messages are serialized on the caller's thread (the message objects are not shared
+    further); writing to MCAP and hashing run on one background thread, in publication order,
+    so they overlap with rendering and physics (both release the GIL). The queue is bounded
+    and ``put`` blocks: the recorder slows the loop down rather than dropping anything. An
+    error on the writer thread is raised again by the next :meth:`write` or by :meth:`close`.
     """
 
-    def __init__(self, bag_dir: Path) -> None:
+    def __init__(self, bag_dir: Path, *, queue_size: int = 64) -> None:
         self.bag_dir = Path(bag_dir)
         self._qos_of: Callable[[str], Qos] = lambda topic: Qos()
         self._writer: Writer | None = None
         self._state: dict[str, _TopicState] = {}
+        self._queue: queue.Queue[tuple[_TopicState, int, bytes] | None] = queue.Queue(
+            maxsize=queue_size)
+        self._thread: threading.Thread | None = None
+        self._error: BaseException | None = None
 
     def open(self, qos_of: Callable[[str], Qos] | None = None) -> None:
         """Open the bag; ``qos_of`` gives a topic's QoS when its first message arrives."""
@@ -97,6 +111,8 @@ class Recorder:
             self._qos_of = qos_of
         self._writer = Writer(self.bag_dir, version=9, storage_plugin=StoragePlugin.MCAP)
         self._writer.open()
+        self._thread = threading.Thread(target=self._drain, name="srr-recorder", daemon=True)
+        self._thread.start()
 
     def __call__(self, env: Envelope) -> None:
         self.write(env)
@@ -104,28 +120,50 @@ class Recorder:
     def write(self, env: Envelope) -> None:
         if self._writer is None:
             raise RuntimeError("recorder is not open")
+        if self._error is not None:
+            raise self._error
         st = self._state.get(env.topic)
         if st is None:
-            qos = self._qos_of(env.topic)
-            conn = self._writer.add_connection(
-                env.topic, env.msgtype, typestore=TYPESTORE,
-                offered_qos_profiles=[_bag_qos(qos)])
-            st = _TopicState(conn, env.msgtype, qos)
+            st = _TopicState(None, env.msgtype, self._qos_of(env.topic))
+            st.topic = env.topic
             self._state[env.topic] = st
-        data = serialize(env.msg, env.msgtype)
-        self._writer.write(st.conn, env.stamp_ns, data)
-        st.count += 1
-        st.bytes += len(data)
-        st.digest.update(struct.pack("<qI", env.stamp_ns, len(data)))
-        st.digest.update(data)
-        if st.first_ns is None:
-            st.first_ns = env.stamp_ns
-        st.last_ns = env.stamp_ns
+        self._queue.put((st, env.stamp_ns, serialize(env.msg, env.msgtype)))
+
+    def _drain(self) -> None:
+        writer = self._writer
+        assert writer is not None
+        while (item := self._queue.get()) is not None:
+            if self._error is not None:
+                continue  # keep draining so producers never block on a dead writer
+            st, stamp, data = item
+            try:
+                if st.conn is None:
+                    st.conn = writer.add_connection(
+                        st.topic, st.msgtype, typestore=TYPESTORE,
+                        offered_qos_profiles=[_bag_qos(st.qos)])
+                writer.write(st.conn, stamp, data)
+            except BaseException as err:  # noqa: BLE001 - handed to the caller's thread
+                self._error = err
+                continue
+            st.count += 1
+            st.bytes += len(data)
+            st.digest.update(struct.pack("<qI", stamp, len(data)))
+            st.digest.update(data)
+            if st.first_ns is None:
+                st.first_ns = stamp
+            st.last_ns = stamp
 
     def close(self) -> dict[str, TopicStats]:
+        """Flush the queue, close the bag, return per-topic statistics."""
+        if self._thread is not None:
+            self._queue.put(None)
+            self._thread.join()
+            self._thread = None
         if self._writer is not None:
             self._writer.close()
             self._writer = None
+        if self._error is not None:
+            raise self._error
         return self.stats()
 
     def stats(self) -> dict[str, TopicStats]:
