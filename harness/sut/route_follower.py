@@ -1,11 +1,11 @@
 """Reference system under test: a pure-pursuit route follower.
 
 Subscribes to the robot's ``odom`` and to ``/tf_static`` (for ``world → odom``, so routes are
-written in world coordinates), publishes ``cmd_vel`` at ``rate_hz``. With ``alarm_topic`` set
-it slows down and then stops while that topic says true (the safety monitor's alarm). It steers towards the
+written in world coordinates), publishes ``cmd_vel`` at ``rate_hz``. It steers towards the
 point ``lookahead`` metres further along the route than the closest point, slows down near the
 goal and stops within ``goal_tolerance``; after that it keeps publishing zero velocity so its
-output stays alive.
+output stays alive. With ``alarm_topic`` set it slows down and then stops while that topic
+says true (the safety monitor's alarm).
 """
 
 from __future__ import annotations
@@ -84,7 +84,7 @@ class RouteFollower(SystemUnderTest):
         self.path = np.array(route.waypoints, dtype=np.float64)
         seg = np.linalg.norm(np.diff(self.path, axis=0), axis=1)
         self.cum = np.concatenate([[0.0], np.cumsum(seg)])
-        self.period_ns = int(round(1e9 / self.p.rate_hz))
+        self.period_ns = round(1e9 / self.p.rate_hz)
         self.next_ns = 0
         self.segment = 0
         self.done = False
