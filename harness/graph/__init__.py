@@ -27,18 +27,7 @@ from harness.graph.controller import Controller, GraphPipelineStage, Keys
 from harness.graph.dump import stage_to_dict, stage_to_json, stage_to_mermaid
 from harness.graph.engine import Attribute, Connection, Graph, GraphStage, Node
 from harness.graph.node import Database, NodeType
-from harness.graph.nodes import core as _core  # registers the built-in node types
 from harness.graph.registry import Registry, all_types, canonical_name, lookup, register
-
-# Simulation and ROS bridge nodes use the public API above, so they register last.
-from harness.graph.nodes import camera as _camera  # noqa: E402
-from harness.graph.nodes import isaac_core as _isaac_core  # noqa: E402
-from harness.graph.nodes import prims as _prims  # noqa: E402
-from harness.graph.nodes import ros_bridge as _ros_bridge  # noqa: E402
-from harness.graph.nodes import ros_subscriber as _ros_subscriber  # noqa: E402
-from harness.graph.nodes import sensors_range as _sensors_range  # noqa: E402
-
-del _core, _isaac_core, _ros_bridge, _sensors_range, _prims, _ros_subscriber, _camera
 
 __all__ = [
     "Attr",
@@ -63,3 +52,10 @@ __all__ = [
     "stage_to_mermaid",
     "usdrt",
 ]
+
+# The node modules import the public API above (``from harness.graph import register``), so
+# they must load after it: register them at the very end, in one place.
+from harness.graph.nodes import register_all as _register_all
+
+_register_all()
+del _register_all
