@@ -9,6 +9,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = [
     "quat_conj",
@@ -22,16 +23,20 @@ __all__ = [
     "yaw_between",
 ]
 
+FloatArray = npt.NDArray[np.float64]
+# Quaternions and vectors come in as plain sequences or as numpy arrays.
+FloatVec = Sequence[float] | FloatArray
 
-def wxyz_to_xyzw(q: Sequence[float]) -> np.ndarray:
+
+def wxyz_to_xyzw(q: FloatVec) -> FloatArray:
     return np.array([q[1], q[2], q[3], q[0]], dtype=np.float64)
 
 
-def xyzw_to_wxyz(q: Sequence[float]) -> np.ndarray:
+def xyzw_to_wxyz(q: FloatVec) -> FloatArray:
     return np.array([q[3], q[0], q[1], q[2]], dtype=np.float64)
 
 
-def quat_mul(a: Sequence[float], b: Sequence[float]) -> np.ndarray:
+def quat_mul(a: FloatVec, b: FloatVec) -> FloatArray:
     """Hamilton product of two (w, x, y, z) quaternions."""
     aw, ax, ay, az = a
     bw, bx, by, bz = b
@@ -43,21 +48,21 @@ def quat_mul(a: Sequence[float], b: Sequence[float]) -> np.ndarray:
     ], dtype=np.float64)
 
 
-def quat_conj(q: Sequence[float]) -> np.ndarray:
+def quat_conj(q: FloatVec) -> FloatArray:
     return np.array([q[0], -q[1], -q[2], -q[3]], dtype=np.float64)
 
 
-def quat_rotate(q: Sequence[float], v: Sequence[float]) -> np.ndarray:
+def quat_rotate(q: FloatVec, v: FloatVec) -> FloatArray:
     """Rotate vector ``v`` by the (w, x, y, z) quaternion ``q``."""
     p = np.array([0.0, v[0], v[1], v[2]])
     return quat_mul(quat_mul(q, p), quat_conj(q))[1:]
 
 
-def quat_from_yaw(yaw: float) -> np.ndarray:
+def quat_from_yaw(yaw: float) -> FloatArray:
     return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
 
 
-def quat_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+def quat_from_rpy(roll: float, pitch: float, yaw: float) -> FloatArray:
     """(w, x, y, z) for extrinsic X-Y-Z rotations (roll, then pitch, then yaw), radians."""
     qx = np.array([math.cos(roll / 2), math.sin(roll / 2), 0.0, 0.0])
     qy = np.array([math.cos(pitch / 2), 0.0, math.sin(pitch / 2), 0.0])
@@ -65,11 +70,11 @@ def quat_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
     return quat_mul(qz, quat_mul(qy, qx))
 
 
-def quat_to_yaw(q: Sequence[float]) -> float:
+def quat_to_yaw(q: FloatVec) -> float:
     w, x, y, z = q
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
-def yaw_between(front: Sequence[float]) -> float:
+def yaw_between(front: FloatVec) -> float:
     """Yaw that turns the body +X axis onto ``front`` (projected on the XY plane)."""
     return math.atan2(front[1], front[0])

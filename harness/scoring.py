@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.builders.base import gate_step
 from harness.bus import resolve_topic
 from harness.errors import ScenarioError
 from harness.frames import Frames, load_frames
@@ -43,8 +44,7 @@ class Scores:
 
 
 def _gate_rate(tick_hz: int, fps: float) -> float:
-    step = max(1, round(tick_hz / fps))
-    return tick_hz / step
+    return tick_hz / gate_step(tick_hz, fps)
 
 
 def expected_rates(sc: Scenario) -> dict[str, float]:

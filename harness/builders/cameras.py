@@ -18,9 +18,7 @@ config change. The helpers of one camera share one render per gated tick.
 
 from __future__ import annotations
 
-from typing import Any
-
-from harness.builders.base import BuildContext, fresh_graph
+from harness.builders.base import BuildContext, fresh_graph, gate_step, gated_render_product
 from harness.graph import Controller
 from harness.graph.nodes.ros_bridge import frame_of
 from harness.scenario import CameraSpec
@@ -41,11 +39,6 @@ def graph_path(camera: CameraSpec) -> str:
     return f"/World/{camera.name}_CameraGraph"
 
 
-def gate_step(tick_hz: int, fps: float) -> int:
-    """SimulationGate step for ``fps`` on a ``tick_hz`` tick: ``round(tick_hz / fps)``, >= 1."""
-    return max(1, round(tick_hz / fps))
-
-
 def topic_names(camera: CameraSpec) -> dict[str, str]:
     """``outputs`` entry → topic name (relative, as seed 001 names them)."""
     return {out: f"{camera.name}_{out}" for out in camera.outputs}
@@ -55,24 +48,9 @@ def build(bc: BuildContext, camera: CameraSpec) -> str | None:
     if not camera.enabled:
         return None
     path = graph_path(camera)
-    width, height = camera.resolution
     keys = Controller.Keys
-    nodes: list[tuple[str, str]] = [
-        ("OnPlaybackTick", "omni.graph.action.OnPlaybackTick"),
-        ("ROS2Context", "isaacsim.ros2.bridge.ROS2Context"),
-        ("IsaacSimulationGate", "isaacsim.core.nodes.IsaacSimulationGate"),
-        ("CreateRenderProduct", "isaacsim.core.nodes.IsaacCreateRenderProduct"),
-    ]
-    connect: list[tuple[str, str]] = [
-        ("OnPlaybackTick.outputs:tick", "IsaacSimulationGate.inputs:execIn"),
-        ("IsaacSimulationGate.outputs:execOut", "CreateRenderProduct.inputs:execIn"),
-    ]
-    values: list[tuple[str, Any]] = [
-        ("IsaacSimulationGate.inputs:step", gate_step(bc.scenario.physics.tick_hz, camera.fps)),
-        ("CreateRenderProduct.inputs:cameraPrim", [camera.prim]),
-        ("CreateRenderProduct.inputs:width", width),
-        ("CreateRenderProduct.inputs:height", height),
-    ]
+    nodes, connect, values = gated_render_product(bc.scenario.physics.tick_hz, camera.fps,
+                                                  camera.prim, camera.resolution)
     for out, topic in topic_names(camera).items():
         name, type_name, stream = HELPERS[out]
         nodes.append((name, type_name))

@@ -6,6 +6,8 @@ ReadSimulationTime (timeStamp) ─────────┴▶ ROS2PublishRawT
 
 from __future__ import annotations
 
+from typing import cast
+
 from harness.builders.base import BuildContext, fresh_graph
 from harness.graph import Controller
 from harness.scenario import RobotSpec
@@ -19,7 +21,9 @@ def graph_path(robot: RobotSpec) -> str:
 
 def robot_front(bc: BuildContext, robot: RobotSpec) -> tuple[float, float, float]:
     front = robot.odometry.robot_front
-    return tuple(front) if front is not None else tuple(bc.world.robot_front(robot.name))
+    # tuple() only normalises the container; both sources hold three floats (Vec3).
+    return cast("tuple[float, float, float]",
+                tuple(front) if front is not None else tuple(bc.world.robot_front(robot.name)))
 
 
 def base_frame(bc: BuildContext, robot: RobotSpec) -> str:

@@ -21,10 +21,7 @@ the world. A ``frame_id`` equal to the link (``camera_link``) publishes in the l
 
 from __future__ import annotations
 
-from typing import Any
-
-from harness.builders.base import BuildContext, fresh_graph
-from harness.builders.cameras import gate_step
+from harness.builders.base import BuildContext, fresh_graph, gated_render_product
 from harness.geometry import wxyz_to_xyzw
 from harness.graph import Controller
 from harness.graph.nodes.ros_bridge import frame_of, relative_pose
@@ -46,24 +43,9 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
     path = graph_path(robot)
     camera_prim = bc.world.sensor_prim(robot.name, "camera")
     link_prim = bc.world.link_prim(robot.name, spec.link)
-    width, height = spec.resolution
     keys = Controller.Keys
-    nodes: list[tuple[str, str]] = [
-        ("OnPlaybackTick", "omni.graph.action.OnPlaybackTick"),
-        ("ROS2Context", "isaacsim.ros2.bridge.ROS2Context"),
-        ("IsaacSimulationGate", "isaacsim.core.nodes.IsaacSimulationGate"),
-        ("CreateRenderProduct", "isaacsim.core.nodes.IsaacCreateRenderProduct"),
-    ]
-    connect: list[tuple[str, str]] = [
-        ("OnPlaybackTick.outputs:tick", "IsaacSimulationGate.inputs:execIn"),
-        ("IsaacSimulationGate.outputs:execOut", "CreateRenderProduct.inputs:execIn"),
-    ]
-    values: list[tuple[str, Any]] = [
-        ("IsaacSimulationGate.inputs:step", gate_step(bc.scenario.physics.tick_hz, spec.fps)),
-        ("CreateRenderProduct.inputs:cameraPrim", [camera_prim]),
-        ("CreateRenderProduct.inputs:width", width),
-        ("CreateRenderProduct.inputs:height", height),
-    ]
+    nodes, connect, values = gated_render_product(bc.scenario.physics.tick_hz, spec.fps,
+                                                  camera_prim, spec.resolution)
     streams = [("CameraHelperRgb", "rgb", spec.topic),
                ("CameraHelperInfo", "camera_info", spec.info_topic)]
     if spec.depth_topic:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from harness.builders.base import BuildContext, fresh_graph
+from harness.builders.base import BuildContext, fresh_graph, gate_step
 from harness.graph import Controller, usdrt
 from harness.scenario import RobotSpec
 
@@ -34,11 +34,6 @@ def lidar_graph_path(robot: RobotSpec) -> str:
 
 def imu_graph_path(robot: RobotSpec) -> str:
     return f"/World/{robot.name}_ImuGraph"
-
-
-def gate_step(tick_hz: int, fps: float) -> int:
-    """SimulationGate step for a sensor at ``fps`` on a ``tick_hz`` playback tick (>= 1)."""
-    return max(1, round(tick_hz / fps))
 
 
 def build_lidar(bc: BuildContext, robot: RobotSpec) -> str | None:

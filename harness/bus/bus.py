@@ -88,9 +88,8 @@ class Bus:
             self._topics[topic] = info
         elif info.msgtype != msgtype:
             raise BusError(f"topic {topic} carries {info.msgtype}, not {msgtype}")
-        elif qos is not None and qos != info.qos:
-            if info.published == 0:
-                info.qos = qos
+        elif qos is not None and qos != info.qos and info.published == 0:
+            info.qos = qos
         return info
 
     def advertise(self, topic: str, msgtype: str, qos: Qos | None = None) -> Publisher:

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
@@ -29,6 +30,9 @@ __all__ = [
 ]
 
 TYPESTORE: Typestore = get_typestore(Stores.ROS2_JAZZY)
+
+# Vectors and quaternions come in as plain sequences or as numpy arrays.
+_FloatVec = Sequence[float] | npt.NDArray[np.float64]
 
 
 def msg_type(name: str) -> Any:
@@ -102,11 +106,11 @@ def clock(ns: int) -> Any:
     return msg_type("rosgraph_msgs/msg/Clock")(clock=time_msg(ns))
 
 
-def _vec3(v: Sequence[float]) -> Any:
+def _vec3(v: _FloatVec) -> Any:
     return msg_type("geometry_msgs/msg/Vector3")(x=float(v[0]), y=float(v[1]), z=float(v[2]))
 
 
-def _quat_xyzw(q: Sequence[float]) -> Any:
+def _quat_xyzw(q: _FloatVec) -> Any:
     return msg_type("geometry_msgs/msg/Quaternion")(
         x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
 
@@ -115,8 +119,8 @@ def twist(linear: Sequence[float], angular: Sequence[float]) -> Any:
     return msg_type("geometry_msgs/msg/Twist")(linear=_vec3(linear), angular=_vec3(angular))
 
 
-def transform_stamped(ns: int, parent: str, child: str, translation: Sequence[float],
-                      rotation_xyzw: Sequence[float]) -> Any:
+def transform_stamped(ns: int, parent: str, child: str, translation: _FloatVec,
+                      rotation_xyzw: _FloatVec) -> Any:
     tf = msg_type("geometry_msgs/msg/Transform")(
         translation=_vec3(translation), rotation=_quat_xyzw(rotation_xyzw))
     return msg_type("geometry_msgs/msg/TransformStamped")(

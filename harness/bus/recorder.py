@@ -12,8 +12,8 @@ import hashlib
 import queue
 import struct
 import threading
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -142,7 +142,7 @@ class Recorder:
                         st.topic, st.msgtype, typestore=TYPESTORE,
                         offered_qos_profiles=[_bag_qos(st.qos)])
                 writer.write(st.conn, stamp, data)
-            except BaseException as err:  # noqa: BLE001 - handed to the caller's thread
+            except BaseException as err:
                 self._error = err
                 continue
             st.count += 1

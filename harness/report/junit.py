@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import os
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
-from pathlib import Path
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Protocol
 
 __all__ = ["Case", "junit_cases", "write_junit"]
@@ -37,9 +36,12 @@ def junit_cases(summary: Mapping[str, Any]) -> list[Case]:
 
 
 class _Case(Protocol):
-    name: str
-    ok: bool
-    detail: str
+    @property
+    def name(self) -> str: ...
+    @property
+    def ok(self) -> bool: ...
+    @property
+    def detail(self) -> str: ...
 
 
 def write_junit(path: Path, suite: str, cases: Sequence[_Case]) -> None:

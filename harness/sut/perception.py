@@ -18,9 +18,10 @@ and publishes confirmed tracks as ``visualization_msgs/MarkerArray`` in the worl
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
+import numpy.typing as npt
 from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
 
@@ -102,10 +103,15 @@ class DepthPeopleTracker(SystemUnderTest):
         self.p: PerceptionParams = sut_params(PerceptionParams, ctx)
         self.cams = {name: _Camera() for name in self.p.cameras}
         for name, cam in self.cams.items():
-            ctx.subscribe(f"{name}_depth", "sensor_msgs/msg/Image",
-                          lambda m, c=cam: setattr(c, "depth", m))
-            ctx.subscribe(f"{name}_camera_info", "sensor_msgs/msg/CameraInfo",
-                          lambda m, c=cam: self._on_info(c, m))
+            # Named callbacks rather than lambdas: mypy cannot type a lambda's default argument.
+            def on_depth(m: Any, c: _Camera = cam) -> None:
+                c.depth = m
+
+            def on_info(m: Any, c: _Camera = cam) -> None:
+                self._on_info(c, m)
+
+            ctx.subscribe(f"{name}_depth", "sensor_msgs/msg/Image", on_depth)
+            ctx.subscribe(f"{name}_camera_info", "sensor_msgs/msg/CameraInfo", on_info)
         ctx.subscribe(self.p.tf_topic, "tf2_msgs/msg/TFMessage", self._on_tf)
         self.pub = ctx.publisher(self.p.tracks_topic, "visualization_msgs/msg/MarkerArray")
         self.area = np.array(self.p.watch_area, dtype=np.float64) if self.p.watch_area else None
@@ -125,7 +131,7 @@ class DepthPeopleTracker(SystemUnderTest):
                     t, r = tf.transform.translation, tf.transform.rotation
                     cam.pose = (np.array([t.x, t.y, t.z]), xyzw_to_wxyz([r.x, r.y, r.z, r.w]))
 
-    def _world_points(self, cam: _Camera) -> np.ndarray:
+    def _world_points(self, cam: _Camera) -> npt.NDArray[np.float64]:
         msg = cam.depth
         if cam.k is None or cam.pose is None:
             return np.empty((0, 3))
@@ -140,7 +146,7 @@ class DepthPeopleTracker(SystemUnderTest):
         d = depth[ok].astype(np.float64)
         optical = np.stack([cam.rays[0][ok] * d, cam.rays[1][ok] * d, d], axis=1)
         t, q = cam.pose
-        world = _rotate_many(q, optical) + t
+        world: npt.NDArray[np.float64] = _rotate_many(q, optical) + t
         keep = (world[:, 2] >= self.p.z_min) & (world[:, 2] <= self.p.z_max)
         world = world[keep]
         if self.area is not None and len(world):
@@ -200,7 +206,7 @@ class DepthPeopleTracker(SystemUnderTest):
         self._publish(now_ns)
 
 
-def _rotate_many(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+def _rotate_many(q: np.ndarray, v: np.ndarray) -> npt.NDArray[np.float64]:
     """Rotate rows of ``v`` by the (w, x, y, z) quaternion ``q``."""
     w, x, y, z = q
     r = np.array([
@@ -208,7 +214,7 @@ def _rotate_many(q: np.ndarray, v: np.ndarray) -> np.ndarray:
         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
     ])
-    return v @ r.T
+    return cast("npt.NDArray[np.float64]", v @ r.T)  # numpy types ``@`` of unshaped arrays as Any
 
 
 def _person_marker(now_ns: int, frame: str, tr: Track) -> Any:

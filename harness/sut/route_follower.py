@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from harness.bus.messages import twist
 from harness.errors import PluginError
@@ -57,13 +58,14 @@ def _project(path: np.ndarray, cum: np.ndarray, p: np.ndarray, start: int) -> tu
     return best[1], best[2]
 
 
-def _point_at(path: np.ndarray, cum: np.ndarray, s: float) -> np.ndarray:
+def _point_at(path: np.ndarray, cum: np.ndarray, s: float) -> npt.NDArray[np.float64]:
     s = min(max(s, 0.0), float(cum[-1]))
     i = int(np.searchsorted(cum, s, side="right") - 1)
     i = min(i, len(path) - 2)
     seg = cum[i + 1] - cum[i]
     t = 0.0 if seg == 0 else (s - cum[i]) / seg
-    return path[i] + t * (path[i + 1] - path[i])
+    # Indexing an unshaped array is typed as Any; the rows of ``path`` are float64 points.
+    return cast("npt.NDArray[np.float64]", path[i] + t * (path[i + 1] - path[i]))
 
 
 def pure_pursuit(x: float, y: float, yaw: float, target: np.ndarray) -> float:

@@ -59,14 +59,14 @@ class SafetyMonitor(SystemUnderTest):
         ctx.subscribe(self.p.tracks_topic, "visualization_msgs/msg/MarkerArray", self._on_tracks)
         self.muted_pub = ctx.publisher(self.p.muted_topic, "std_msgs/msg/Bool")
         self.alarm_pub = ctx.publisher(self.p.alarm_topic, "std_msgs/msg/Bool")
-        self.period_ns = int(round(1e9 / self.p.rate_hz))
-        self.delay_ns = int(round(self.p.reaction_delay * 1e9))
+        self.period_ns = round(1e9 / self.p.rate_hz)
+        self.delay_ns = round(self.p.reaction_delay * 1e9)
         self.next_ns = 0
         self.output = False
         self.pending: tuple[bool, int] | None = None
 
     def _on_tracks(self, msg: Any) -> None:
-        people = []
+        people: list[tuple[float, float]] = []
         for m in msg.markers:
             if m.action == 3:  # DELETEALL
                 people = []

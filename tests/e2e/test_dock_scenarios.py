@@ -75,7 +75,7 @@ def test_degraded_variant_exits_1_naming_the_metric(variant: str, metric: str, t
 
 def test_silent_perception_makes_the_run_invalid(tmp_path: Path,
                                                  capsys: pytest.CaptureFixture[str]) -> None:
-    code, summary, printed = _run(
+    code, summary, _printed = _run(
         capsys, SCENARIOS / "dock_worker_crossing.yaml", tmp_path / "r", "--duration", "4",
         "--set", "systems_under_test.perception.enabled=false")
     assert code == 3

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from collections import Counter
@@ -42,7 +43,7 @@ def test_run_directory_follows_the_contract(run: api.RunResult) -> None:
 def test_every_message_decodes_with_an_independent_reader(run: api.RunResult) -> None:
     counts: Counter[str] = Counter()
     last_clock = -1
-    for topic, schema, log_ns, msg in decoded(run.run_dir):
+    for topic, _schema, log_ns, msg in decoded(run.run_dir):
         counts[topic] += 1
         if topic == "/clock":
             ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
@@ -88,7 +89,7 @@ def test_forklift_reaches_the_end_of_its_route(run: api.RunResult) -> None:
     wx = world_odom.translation.x + math.cos(yaw) * end.x - math.sin(yaw) * end.y
     wy = world_odom.translation.y + math.sin(yaw) * end.x + math.cos(yaw) * end.y
     assert math.hypot(wx - 21.0, wy - 0.0) < 0.5, (wx, wy)
-    travelled = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(odom, odom[1:]))
+    travelled = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in itertools.pairwise(odom))
     assert 32.0 < travelled < 36.0  # route length is 33.7 m
 
 

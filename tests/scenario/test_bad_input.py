@@ -20,7 +20,7 @@ robots:
 
 def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str]:
     code = main(list(argv))
-    out, err = capsys.readouterr()
+    _out, err = capsys.readouterr()
     return code, err.strip()
 
 

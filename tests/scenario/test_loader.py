@@ -12,8 +12,8 @@ from harness.scenario import (
     ForkliftControl,
     load_scenario,
     parse_override,
-    scenario_to_mapping,
     scenario_from_mapping,
+    scenario_to_mapping,
 )
 
 

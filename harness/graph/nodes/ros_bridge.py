@@ -24,6 +24,8 @@ from harness.sim.cameras import optical_quat
 from harness.sim.prims import PrimKind
 
 __all__ = [
+    "BRIDGE_INPUTS",
+    "EXEC_OUT",
     "PublishClock",
     "PublishOdometry",
     "PublishRawTransformTree",
@@ -45,14 +47,14 @@ def aliases(name: str) -> tuple[str, ...]:
     )
 
 
-_COMMON = (
+BRIDGE_INPUTS = (
     Attr("execIn", "execution"),
     Attr("context", "uint64", 0),
     Attr("nodeNamespace", "string", ""),
     Attr("qosProfile", "string", ""),
     Attr("queueSize", "uint64", 10),
 )
-_EXEC_OUT = (Attr("execOut", "execution"),)
+EXEC_OUT = (Attr("execOut", "execution"),)
 
 
 def topic_of(db: Any, field: str = "topicName") -> str:
@@ -66,7 +68,7 @@ def topic_of(db: Any, field: str = "topicName") -> str:
 def stamp_of(db: Any, ctx: Any) -> int:
     """Stamp in ns: the connected ``timeStamp`` (seconds) or the tick's simulation time."""
     if db.is_connected("timeStamp"):
-        return int(round(float(db.inputs.timeStamp) * 1e9))
+        return round(float(db.inputs.timeStamp) * 1e9)
     return int(ctx.time_ns)
 
 
@@ -85,8 +87,9 @@ class _Publisher(NodeType):
 
 @register("srr.PublishClock", aliases=aliases("PublishClock"))
 class PublishClock(_Publisher):
-    inputs = (*_COMMON, Attr("topicName", "string", "clock"), Attr("timeStamp", "double", 0.0))
-    outputs = _EXEC_OUT
+    inputs = (*BRIDGE_INPUTS, Attr("topicName", "string", "clock"),
+              Attr("timeStamp", "double", 0.0))
+    outputs = EXEC_OUT
     msgtype = "rosgraph_msgs/msg/Clock"
 
     def compute(self, db: Any, ctx: Any) -> bool:
@@ -99,9 +102,9 @@ class SubscribeTwist(NodeType):
     """Fires ``execOut`` on the tick a new Twist has arrived, with its velocities as outputs."""
 
     kind = "action"
-    inputs = (*_COMMON, Attr("topicName", "string", "cmd_vel"))
+    inputs = (*BRIDGE_INPUTS, Attr("topicName", "string", "cmd_vel"))
     outputs = (
-        *_EXEC_OUT,
+        *EXEC_OUT,
         Attr("linearVelocity", "double[3]", (0.0, 0.0, 0.0)),
         Attr("angularVelocity", "double[3]", (0.0, 0.0, 0.0)),
     )
@@ -123,7 +126,7 @@ class SubscribeTwist(NodeType):
 @register("srr.PublishOdometry", aliases=aliases("PublishOdometry"))
 class PublishOdometry(_Publisher):
     inputs = (
-        *_COMMON,
+        *BRIDGE_INPUTS,
         Attr("topicName", "string", "odom"),
         Attr("timeStamp", "double", 0.0),
         Attr("chassisFrameId", "string", "base_link"),
@@ -134,7 +137,7 @@ class PublishOdometry(_Publisher):
         Attr("angularVelocity", "double[3]", (0.0, 0.0, 0.0)),
         Attr("robotFront", "double[3]", (1.0, 0.0, 0.0)),
     )
-    outputs = _EXEC_OUT
+    outputs = EXEC_OUT
     msgtype = "nav_msgs/msg/Odometry"
 
     def compute(self, db: Any, ctx: Any) -> bool:
@@ -171,7 +174,7 @@ class PublishRawTransformTree(_TfPublisher):
     (x, y, z, w)."""
 
     inputs = (
-        *_COMMON,
+        *BRIDGE_INPUTS,
         Attr("topicName", "string", "tf"),
         Attr("timeStamp", "double", 0.0),
         Attr("parentFrameId", "string", "odom"),
@@ -180,7 +183,7 @@ class PublishRawTransformTree(_TfPublisher):
         Attr("rotation", "quatd[4]", (0.0, 0.0, 0.0, 1.0)),
         Attr("staticPublisher", "bool", False),
     )
-    outputs = _EXEC_OUT
+    outputs = EXEC_OUT
 
     def compute(self, db: Any, ctx: Any) -> bool:
         i = db.inputs
@@ -221,7 +224,7 @@ class PublishTransformTree(_TfPublisher):
     Camera prims stand for their ROS optical frames (see :func:`frame_pose`)."""
 
     inputs = (
-        *_COMMON,
+        *BRIDGE_INPUTS,
         Attr("topicName", "string", "tf"),
         Attr("timeStamp", "double", 0.0),
         Attr("parentPrim", "target", ()),
@@ -229,7 +232,7 @@ class PublishTransformTree(_TfPublisher):
         Attr("staticPublisher", "bool", False),
         Attr("worldFrameId", "string", "world"),
     )
-    outputs = _EXEC_OUT
+    outputs = EXEC_OUT
 
     def initialize(self, db: Any, ctx: Any) -> None:
         super().initialize(db, ctx)

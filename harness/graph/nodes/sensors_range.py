@@ -31,7 +31,14 @@ from harness.errors import GraphError
 from harness.geometry import quat_conj, quat_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
 from harness.graph.nodes.camera import point_cloud_message, render_products
-from harness.graph.nodes.ros_bridge import _Publisher, aliases, stamp_of, topic_of
+from harness.graph.nodes.ros_bridge import (
+    BRIDGE_INPUTS,
+    EXEC_OUT,
+    _Publisher,
+    aliases,
+    stamp_of,
+    topic_of,
+)
 from harness.scenario.schema import LidarSpec
 from harness.sim.lidar import Lidar, LidarConfig, Scan, noise_rng
 
@@ -50,14 +57,8 @@ __all__ = [
 LIDAR_TYPES = ("laser_scan", "point_cloud")
 _UNKNOWN_COVARIANCE = -1.0  # sensor_msgs/Imu: covariance[0] = -1 means "no estimate"
 
-_BRIDGE = (
-    Attr("execIn", "execution"),
-    Attr("context", "uint64", 0),
-    Attr("nodeNamespace", "string", ""),
-    Attr("qosProfile", "string", ""),
-    Attr("queueSize", "uint64", 10),
-)
-_EXEC_OUT = (Attr("execOut", "execution"),)
+_BRIDGE = BRIDGE_INPUTS
+_EXEC_OUT = EXEC_OUT
 
 
 def _first(value: Any) -> str:
