@@ -39,7 +39,8 @@ def test_random_mappings_validate_or_fail_cleanly(doc: dict[str, Any]) -> None:
         _check(err)
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=150, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.text(max_size=200))
 def test_random_text_files_fail_cleanly(tmp_path: Path, text: str) -> None:
     path = tmp_path / "s.yaml"
