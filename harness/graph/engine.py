@@ -324,9 +324,12 @@ class _Binding:
 
     def is_connected(self, name: str) -> bool:
         full = f"inputs:{name}"
+        graph = self._node.graph
+        if (self._node.name, full) in graph._index_data_in():  # the common, per-tick case
+            return True
         return any(
             c.dst_node == self._node.name and c.dst_attr == full
-            for c in self._node.graph.connections
+            for c in graph.connections
         )
 
 

@@ -158,13 +158,21 @@ class _TfPublisher(_Publisher):
         return bool(db.inputs.staticPublisher) or topic_of(db).endswith("tf_static")
 
     def qos(self, db: Any) -> Qos | None:
-        return STATIC_QOS if self.is_static(db) else None
+        self._static = self.is_static(db)  # fixed once the publisher exists
+        self._last_key: tuple[Any, ...] | None = None
+        return STATIC_QOS if self._static else None
 
-    def emit(self, db: Any, ctx: Any, transforms: list[Any], key: tuple[Any, ...]) -> None:
-        if self.is_static(db):
-            if getattr(self, "_last_key", None) == key:
-                return
-            self._last_key = key
+    def unchanged(self, key: tuple[Any, ...]) -> bool:
+        """For a static publisher: True when ``key`` (what the transforms depend on) is what
+        was published last, so there is nothing to send; remembers ``key`` otherwise."""
+        if not self._static:
+            return False
+        if self._last_key == key:
+            return True
+        self._last_key = key
+        return False
+
+    def emit(self, transforms: list[Any]) -> None:
         self._pub.publish(tf_message(transforms))
 
 
@@ -187,10 +195,11 @@ class PublishRawTransformTree(_TfPublisher):
 
     def compute(self, db: Any, ctx: Any) -> bool:
         i = db.inputs
-        ns = stamp_of(db, ctx)
         tr, rot = tuple(i.translation), tuple(i.rotation)
-        tf = transform_stamped(ns, i.parentFrameId, i.childFrameId, tr, rot)
-        self.emit(db, ctx, [tf], (i.parentFrameId, i.childFrameId, tr, rot))
+        parent, child = i.parentFrameId, i.childFrameId
+        if self.unchanged((parent, child, tr, rot)):
+            return True
+        self.emit([transform_stamped(stamp_of(db, ctx), parent, child, tr, rot)])
         return True
 
 
@@ -244,15 +253,17 @@ class PublishTransformTree(_TfPublisher):
         parents = _paths(db.inputs.parentPrim)
         parent = parents[0] if parents else None
         parent_frame = frame_of(parent) if parent else db.inputs.worldFrameId
-        ns = stamp_of(db, ctx)
-        transforms = []
-        key: list[Any] = []
+        poses = []
         for prim in _paths(db.inputs.targetPrims):
             t, q = relative_pose(ctx.world, parent, prim)
-            xyzw = wxyz_to_xyzw(q)
-            transforms.append(transform_stamped(ns, parent_frame, frame_of(prim), t, xyzw))
-            key.append((prim, tuple(np.round(t, 9)), tuple(np.round(xyzw, 9))))
-        self.emit(db, ctx, transforms, tuple(key))
+            poses.append((prim, t, wxyz_to_xyzw(q)))
+        key = tuple((prim, tuple(np.round(t, 9)), tuple(np.round(xyzw, 9)))
+                    for prim, t, xyzw in poses)
+        if self.unchanged((parent_frame, key)):
+            return True
+        ns = stamp_of(db, ctx)
+        self.emit([transform_stamped(ns, parent_frame, frame_of(prim), t, xyzw)
+                   for prim, t, xyzw in poses])
         return True
 
 
