@@ -61,7 +61,7 @@ def main() -> None:
         b.append(bare(args.duration))
         h.append(harness(args.duration))
     tb, th = min(b), min(h)
-    ticks = int(round(args.duration * 60))
+    ticks = round(args.duration * 60)
     print(f"machine: {platform.processor() or platform.machine()}, python "
           f"{platform.python_version()}, mujoco {mujoco.__version__}")
     print(f"simulated {args.duration:.1f} s = {ticks} ticks x 4 substeps, best of {args.repeats}")

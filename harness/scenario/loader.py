@@ -271,7 +271,7 @@ class _Validator:
     def mapping(self, tp: Any, raw: Any, path: str) -> dict[str, Any]:
         if not isinstance(raw, dict):
             self.fail(path, f"expected a mapping, got {raw!r}")
-        key_tp, val_tp = get_args(tp)
+        _key_tp, val_tp = get_args(tp)
         out: dict[str, Any] = {}
         for k, v in raw.items():
             if not isinstance(k, str):

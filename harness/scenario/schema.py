@@ -441,7 +441,7 @@ class Scenario:
 
     @property
     def n_ticks(self) -> int:
-        return int(round(self.duration * self.physics.tick_hz))
+        return round(self.duration * self.physics.tick_hz)
 
     def worker_name(self, index: int) -> str:
         """Name of ``workers[index]``: its ``name`` or ``character_<index>``."""
