@@ -8,6 +8,7 @@ that every published message was recorded, and writes the run directory:
     summary.json    verdict and reasons, health gates, metrics, baseline comparison,
                     per-topic count/rate/bytes/sha256, versions, seed, command to reproduce
     junit.xml       health gates and metric comparisons as test cases, for CI systems
+    report.html     the reviewer's page (harness.report), written last
 """
 
 from __future__ import annotations
@@ -32,11 +33,12 @@ from harness import __version__
 from harness.bus import Recorder, TopicStats
 from harness.engine import Simulation
 from harness.errors import InvalidRunError, SrrError
-from harness.regression import baseline_path, compare, decide, load_baseline, save_baseline
 from harness.graph import stage_to_json, stage_to_mermaid
+from harness.regression import baseline_path, compare, decide, load_baseline, save_baseline
+from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
-from harness.scoring import Scores, score_run
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
+from harness.scoring import Scores, score_run
 
 __all__ = [
     "RepeatResult",
@@ -213,6 +215,13 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         summary["reasons"] = ["interrupted before the end of the scenario"]
     _write_json_atomic(run_dir / "summary.json", summary)
     write_junit(run_dir / "junit.xml", scenario.name, junit_cases(summary))
+    try:  # last: a report that fails to render never costs the run its summary
+        write_report(run_dir, summary=summary, scenario=scenario)
+    except SrrError:
+        raise
+    except Exception as err:
+        raise SrrError(f"{run_dir / 'report.html'}: the report could not be rendered "
+                       f"({type(err).__name__}: {err}); summary.json is complete") from err
     return RunResult(run_dir, summary["verdict"], summary["exit_code"], summary)
 
 

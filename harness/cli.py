@@ -21,6 +21,7 @@ from rich.table import Table
 from harness import __version__, api
 from harness.bag import inspect_bag
 from harness.errors import SrrError
+from harness.report import write_report
 
 __all__ = ["main"]
 
@@ -77,6 +78,9 @@ def _parser() -> argparse.ArgumentParser:
     ins = sub.add_parser("inspect", help="list the topics of a recorded bag")
     ins.add_argument("bag", type=Path)
 
+    rep = sub.add_parser("report", help="(re-)render a run directory's report.html")
+    rep.add_argument("run_dir", type=Path)
+
     base = sub.add_parser("baseline", help="manage baselines")
     base_sub = base.add_subparsers(dest="baseline_command", required=True, parser_class=_Parser)
     bl = base_sub.add_parser("bless", help="make a finished run its scenario's baseline")
@@ -101,7 +105,7 @@ def _sigterm_as_interrupt() -> Iterator[None]:
 
 
 def _progress(quiet: bool) -> Any:
-    if quiet or not err_console.is_terminal and not sys.stderr.isatty():
+    if quiet or (not err_console.is_terminal and not sys.stderr.isatty()):
         return None
     return Progress(TextColumn("[bold]{task.description}"), BarColumn(),
                     TextColumn("{task.fields[sim]}"), TimeRemainingColumn(),
@@ -225,8 +229,14 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_report(args: argparse.Namespace) -> int:
+    path = write_report(args.run_dir)
+    out_console.print(str(path), markup=False)
+    return 0
+
+
 COMMANDS = {"run": _cmd_run, "validate": _cmd_validate, "graph": _cmd_graph,
-            "inspect": _cmd_inspect, "baseline": _cmd_baseline}
+            "inspect": _cmd_inspect, "baseline": _cmd_baseline, "report": _cmd_report}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

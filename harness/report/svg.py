@@ -12,7 +12,7 @@ from html import escape
 
 import numpy as np
 
-__all__ = ["Scale", "Svg", "decimate", "fmt_num", "nice_ticks"]
+__all__ = ["Scale", "Svg", "decimate", "fmt_num", "nice_ticks", "tick_label"]
 
 
 def fmt_num(v: float) -> str:
@@ -40,12 +40,13 @@ def nice_ticks(lo: float, hi: float, n: int = 6) -> list[float]:
 
 
 def tick_label(v: float, ticks: Sequence[float]) -> str:
+    """``v`` with as many decimals as the tick step needs (0.25 steps get two)."""
     step = abs(ticks[1] - ticks[0]) if len(ticks) > 1 else 1.0
     decimals = max(0, -math.floor(math.log10(step))) if step > 0 else 0
-    if step > 0 and round(step * 10**decimals) % 10 == 5 and decimals > 0:
-        decimals = decimals  # 0.25-type steps print as 0.25 through the loop below
-    text = f"{v:.{min(decimals + 1, 6)}f}".rstrip("0").rstrip(".")
-    return text if text not in ("-0", "") else "0"
+    while decimals < 6 and abs(step * 10**decimals - round(step * 10**decimals)) > 1e-6:
+        decimals += 1
+    text = f"{v:.{decimals}f}"
+    return "0" if text.strip("-0.") == "" else text
 
 
 class Scale:
@@ -113,10 +114,15 @@ class Svg:
     def add(self, raw: str) -> None:
         self.parts.append(raw)
 
-    def el(self, tag: str, text: str | None = None, title: str | None = None,
-           **attrs: object) -> None:
+    def el(self, tag: str, text: str | None = None, **attrs: object) -> None:
+        """``<tag attrs>text<title>…</title></tag>``; a ``title`` attribute becomes the
+        element's tooltip."""
+        self._emit(tag, dict(attrs), text)
+
+    def _emit(self, tag: str, attrs: dict[str, object], text: str | None = None) -> None:
+        title = attrs.pop("title", None)
         inner = (escape(text, quote=False) if text is not None else "") + (
-            f"<title>{escape(title, quote=False)}</title>" if title else "")
+            f"<title>{escape(str(title), quote=False)}</title>" if title else "")
         self.parts.append(f"<{tag}{_attrs(attrs)}>{inner}</{tag}>" if inner
                           else f"<{tag}{_attrs(attrs)}/>")
 
@@ -127,35 +133,35 @@ class Svg:
         self.parts.append(f"</{tag}>")
 
     def line(self, x1: float, y1: float, x2: float, y2: float, **attrs: object) -> None:
-        self.el("line", x1=float(x1), y1=float(y1), x2=float(x2), y2=float(y2), **attrs)
+        self._emit("line", {"x1": float(x1), "y1": float(y1), "x2": float(x2),
+                            "y2": float(y2), **attrs})
 
     def rect(self, x: float, y: float, w: float, h: float, **attrs: object) -> None:
-        self.el("rect", x=float(x), y=float(y), width=float(max(w, 0.0)),
-                height=float(max(h, 0.0)), **attrs)
+        self._emit("rect", {"x": float(x), "y": float(y), "width": float(max(w, 0.0)),
+                            "height": float(max(h, 0.0)), **attrs})
 
     def circle(self, cx: float, cy: float, r: float, **attrs: object) -> None:
-        self.el("circle", cx=float(cx), cy=float(cy), r=float(r), **attrs)
+        self._emit("circle", {"cx": float(cx), "cy": float(cy), "r": float(r), **attrs})
 
     def text(self, x: float, y: float, text: str, **attrs: object) -> None:
-        self.el("text", text, x=float(x), y=float(y), **attrs)
+        self._emit("text", {"x": float(x), "y": float(y), **attrs}, text)
 
     def polyline(self, xs: Iterable[float], ys: Iterable[float], **attrs: object) -> None:
-        pts = _points(xs, ys)
-        for chunk in pts:
+        for chunk in _points(xs, ys):
             if len(chunk) > 1:
-                self.el("polyline", points=" ".join(chunk), fill="none", **attrs)
+                self._emit("polyline", {"points": " ".join(chunk), "fill": "none", **attrs})
 
     def polygon(self, xs: Iterable[float], ys: Iterable[float], **attrs: object) -> None:
-        (chunk, *_rest) = _points(xs, ys) or [[]]
-        if len(chunk) > 2:
-            self.el("polygon", points=" ".join(chunk), **attrs)
+        chunks = _points(xs, ys)
+        if chunks and len(chunks[0]) > 2:
+            self._emit("polygon", {"points": " ".join(chunks[0]), **attrs})
 
     def path(self, d: str, **attrs: object) -> None:
-        self.el("path", d=d, **attrs)
+        self._emit("path", {"d": d, **attrs})
 
     def render(self) -> str:
         aria = f' role="img" aria-label="{escape(self.label, quote=True)}"' if self.label else ""
-        return (f'<svg xmlns="http://www.w3.org/2000/svg" class="{self.class_}" '
+        return (f'<svg class="{self.class_}" '
                 f'viewBox="0 0 {fmt_num(self.width)} {fmt_num(self.height)}" '
                 f'width="{fmt_num(self.width)}" height="{fmt_num(self.height)}"'
                 f'{aria}>' + "".join(self.parts) + "</svg>")

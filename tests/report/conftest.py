@@ -9,29 +9,18 @@ dock_worker_crossing baseline (about 10 s of wall time on 2 cores).
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import subprocess
-from collections.abc import Sequence
 from pathlib import Path
 
 import pytest
 
 from harness import api
+from tests.report.browser import chromium_path
 
 ROOT = Path(__file__).resolve().parents[2]
 SLOW_REACTION = ROOT / "scenarios" / "regressions" / "dock_worker_crossing_slow_reaction.yaml"
 SHORT = ["robots.forklift.spawn.position=[7.0, 0.0, 0.0]",
          "routes.dock_approach.waypoints=[[7.0, 0.0], [15.0, 0.0], [21.0, 0.0]]",
          "workers.0.start_delay=7.0"]
-CHROMIUM_FLAGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-    "--hide-scrollbars",
-    # any network request the page might make fails instead of leaving the machine
-    "--proxy-server=127.0.0.1:9", "--host-resolver-rules=MAP * ~NOTFOUND",
-]
-VIEWPORT = (1280, 900)
 
 
 @pytest.fixture(scope="session")
@@ -46,17 +35,6 @@ def summary(failing_run: api.RunResult) -> dict:
     return json.loads((failing_run.run_dir / "summary.json").read_text())
 
 
-def chromium_path() -> str | None:
-    explicit = os.environ.get("SRR_CHROMIUM")
-    if explicit:
-        return explicit
-    for name in ("/usr/bin/chromium", "chromium", "chromium-browser"):
-        found = shutil.which(name)
-        if found:
-            return found
-    return None
-
-
 @pytest.fixture(scope="session")
 def chromium() -> str:
     path = chromium_path()
@@ -64,14 +42,3 @@ def chromium() -> str:
         pytest.skip("headless Chromium not installed (/usr/bin/chromium missing): "
                     "apt-get install -y chromium, or set SRR_CHROMIUM")
     return path
-
-
-def run_chromium(binary: str, tmp: Path, url: str, extra: Sequence[str]) -> str:
-    """Run Chromium once with a fresh profile; return stdout (the DOM for --dump-dom)."""
-    profile = tmp / f"profile-{len(list(tmp.glob('profile-*')))}"
-    cmd = [binary, *CHROMIUM_FLAGS, f"--user-data-dir={profile}",
-           f"--window-size={VIEWPORT[0]},{VIEWPORT[1]}", *extra, url]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
-    if proc.returncode != 0:
-        raise AssertionError(f"chromium exited {proc.returncode}: {proc.stderr[-2000:]}")
-    return proc.stdout

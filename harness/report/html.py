@@ -1,0 +1,378 @@
+"""``report.html``: one self-contained page per run for the reviewer.
+
+Top of the page (what a 1280×900 window shows first): the verdict banner with its reasons,
+the table of what regressed (or failed, or which health gate tripped) with the sim-time
+windows that explain each value, and the time-series panels of the regressed metrics' group
+with those windows outlined. Below: the top-down map with the numbered moments, camera
+keyframes at those moments, the other time series, every metric, the health gates, the
+action graphs, the topic table, versions and the command to reproduce the run, and the
+resolved scenario.
+
+The page has no script and loads nothing: plots are inline SVG, images base64 PNG, CSS
+inline.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shlex
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from jinja2 import Environment, StrictUndefined
+from markupsafe import Markup
+
+from harness import __version__
+from harness.errors import SrrError
+from harness.frames import Frames
+from harness.report.data import RunData, load_run, metric_windows
+from harness.report.graphs import graph_diagrams
+from harness.report.images import Keyframe, keyframes
+from harness.report.plots import Highlight, Panel, map_legend, map_svg, time_panels
+from harness.report.templates import CSS, MACROS, REPORT
+from harness.scenario import Scenario
+
+__all__ = ["fmt_value", "fmt_windows", "render_report", "write_report"]
+
+REPORT_NAME = "report.html"
+MAX_REASONS = 3
+
+
+def fmt_value(v: Any, unit: str = "", *, signed: bool = False) -> str:
+    """A metric value for people: 4 significant digits, the unit, "—" when undefined."""
+    if v is None:
+        return "—"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if not isinstance(v, (int, float)):
+        return str(v)
+    if unit == "bool" and not signed:
+        return "yes" if v >= 0.5 else "no"
+    if signed and v == 0:
+        return "0"
+    text = f"{v:+.4g}" if signed else f"{v:.4g}"
+    if unit == "count" and float(v).is_integer():
+        text = f"{int(v):+d}" if signed else f"{int(v)}"
+    suffix = {"": "", "ratio": "", "count": "", "bool": ""}.get(unit, f" {unit}")
+    return text + suffix
+
+
+def fmt_windows(ws: Sequence[tuple[float, float]], limit: int = 3) -> str:
+    """``20.53–22.05, @7.42 +2 more`` (a point window is ``@t``)."""
+    parts = []
+    for a, b in list(ws)[:limit]:
+        parts.append(f"@{a:.2f}" if abs(b - a) < 1e-9 else f"{a:.2f}–{b:.2f}")
+    more = len(ws) - limit
+    return ", ".join(parts) + (f" +{more} more" if more > 0 else "")
+
+
+def _human_bytes(n: Any) -> str:
+    if not isinstance(n, (int, float)):
+        return str(n)
+    for unit in ("B", "kB", "MB", "GB"):
+        if abs(n) < 1000 or unit == "GB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1000.0
+    return str(n)
+
+
+def _group(name: str, data: RunData) -> str:
+    m = data.metric(name)
+    if m and m.get("group"):
+        return str(m["group"])
+    return name.split(".", 1)[0]
+
+
+@dataclass
+class _Headline:
+    kind: str  # regressions | failures | health | changes | none
+    rows: list[Any] = field(default_factory=list)
+    text: str = ""
+    metrics: list[str] = field(default_factory=list)
+
+
+def _comparison_row(e: dict[str, Any], data: RunData) -> dict[str, Any]:
+    unit = str(e.get("unit", ""))
+    m = data.metric(e["name"]) or {}
+    direction = e.get("direction")
+    return {
+        "name": e["name"],
+        "value": fmt_value(e.get("value"), unit),
+        "baseline": fmt_value(e.get("baseline"), unit),
+        "delta": fmt_value(e.get("delta"), unit if unit != "bool" else "", signed=True),
+        "tolerance": "±" + f"{e.get('tolerance', 0):.3g}",
+        "status": e.get("status", ""),
+        "better": {"lower": "lower is better", "higher": "higher is better"}.get(
+            str(direction), ""),
+        "when": fmt_windows(metric_windows(e["name"], data)),
+        "detail": m.get("detail", ""),
+    }
+
+
+def _failing(m: dict[str, Any]) -> bool:
+    v = m.get("value")
+    return (m.get("verdict") == "FAIL"
+            or (m.get("name") == "safety.match_rate" and v is not None and v < 80.0)
+            or (m.get("name") == "control.goal_reached" and v is not None and v < 0.5))
+
+
+def _metric_row(m: dict[str, Any], data: RunData) -> dict[str, Any]:
+    return {
+        "name": m["name"],
+        "value": fmt_value(m.get("value"), str(m.get("unit", ""))),
+        "verdict": m.get("verdict") or "",
+        "detail": m.get("detail", ""),
+        "when": fmt_windows(metric_windows(m["name"], data)),
+        "failing": _failing(m),
+    }
+
+
+def _headline(data: RunData) -> _Headline:
+    s = data.summary
+    verdict = s.get("verdict")
+    comparison = s.get("comparison") or []
+    if verdict == "INVALID":
+        rows = [h for h in s.get("health", []) if not h.get("ok")]
+        if rows:
+            return _Headline("health", rows)
+    regressed = [e for e in comparison if e.get("status") in ("regressed", "missing")]
+    if regressed:
+        return _Headline("regressions", [_comparison_row(e, data) for e in regressed],
+                         metrics=[e["name"] for e in regressed])
+    failing = [m for m in s.get("metrics", []) if _failing(m)]
+    if failing:
+        return _Headline("failures", [_metric_row(m, data) for m in failing],
+                         metrics=[m["name"] for m in failing])
+    notable = [e for e in comparison if e.get("status") in ("improved", "changed", "new")]
+    if notable:
+        return _Headline("changes", [_comparison_row(e, data) for e in notable])
+    n_gates = len(s.get("health", []))
+    if comparison:
+        text = (f"All {len(comparison)} metrics within tolerance of the baseline; "
+                f"{n_gates} health gates ok.")
+    elif verdict == "INTERRUPTED":
+        text = "The run was interrupted: the scores cover the recorded part only."
+    elif s.get("metrics"):
+        text = "No baseline to compare with: the metric values are listed below."
+    else:
+        text = "This scenario scores no metrics; health gates below."
+    return _Headline("none", text=text)
+
+
+def _highlights(data: RunData, names: Sequence[str]) -> dict[str, Highlight]:
+    out: dict[str, Highlight] = {}
+    for name in names:
+        group = _group(name, data)
+        if group in out:
+            continue
+        ws = metric_windows(name, data)
+        if ws:
+            m = data.metric(name) or {}
+            out[group] = Highlight(f"{name} = {fmt_value(m.get('value'), m.get('unit', ''))}",
+                                   tuple(ws))
+    return out
+
+
+def _graphs(data: RunData) -> tuple[list[Any], str, str | None]:
+    """(diagrams, mermaid text, problem) for the run's scenario."""
+    if data.scenario is None:
+        return [], "", None
+    from harness.engine import Simulation
+    from harness.graph import stage_to_dict, stage_to_mermaid
+
+    srr_gt = data.summary.get("srr_gt")
+    sim = None
+    try:
+        sim = Simulation(data.scenario, srr_gt=srr_gt if isinstance(srr_gt, bool) else None,
+                         source=str(data.run_dir / "scenario.yaml"))
+        stage = stage_to_dict(sim.stage)
+        mermaid = stage_to_mermaid(sim.stage)
+    except Exception as err:  # a plug-in that no longer imports must not hide the report
+        return [], "", f"action graphs could not be rebuilt: {err}"
+    finally:
+        if sim is not None:
+            with contextlib.suppress(Exception):  # nothing ran: nothing worth reporting
+                sim.close()
+    return graph_diagrams(stage), mermaid, None
+
+
+@dataclass
+class _KfRow:
+    moment: Any
+    frames: list[Keyframe]
+
+
+def _keyframes(data: RunData) -> tuple[list[_KfRow], str | None]:
+    if not data.moments or data.frames is None:
+        return [], None
+    tp = data.frames.topics
+    gaps = {str(r["name"]): int(r["max_gap_ns"]) for _, r in tp.iterrows()
+            if r["type"] == "sensor_msgs/msg/Image"}
+    if not gaps:
+        return [], None
+    targets = [round(m.t_s * 1e9) for m in data.moments]
+    try:
+        found = keyframes(data.run_dir / "bag", targets, max_gap_ns=gaps)
+    except Exception as err:  # a damaged chunk costs the images, not the report
+        return [], f"camera keyframes could not be read: {err}"
+    rows = [_KfRow(m, found.get(t, [])) for m, t in zip(data.moments, targets, strict=True)]
+    if not any(r.frames for r in rows):
+        return [], None
+    return rows, None
+
+
+def _panel_ctx(p: Panel, hl: dict[str, Highlight]) -> dict[str, Any]:
+    h = hl.get(p.group)
+    return {"key": p.key, "group": p.group, "title": p.title, "svg": Markup(p.svg),
+            "legend": p.legend, "note": p.note, "highlight": h.label if h else ""}
+
+
+def _exact_command(data: RunData) -> str:
+    """Re-run from the resolved scenario of the run directory: includes, defaults and every
+    ``--set`` override are already in it."""
+    s = data.summary
+    run_dir = data.run_dir
+    parts = ["srr", "run", str(run_dir / "scenario.yaml"), "--seed", str(s.get("seed", 0)),
+             "--out", f"{run_dir}-rerun"]
+    base = s.get("baseline")
+    if base and base.get("path"):
+        parts += ["--baselines", str(Path(str(base["path"])).parent)]
+    return " ".join(shlex.quote(p) for p in parts)
+
+
+def _environment() -> Environment:
+    return Environment(autoescape=True, undefined=StrictUndefined, trim_blocks=True,
+                       lstrip_blocks=True)
+
+
+def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
+                  scenario: Scenario | None = None, frames: Frames | None = None) -> str:
+    """The HTML text of a run directory's report.
+
+    ``summary``, ``scenario`` and ``frames`` may be passed when the caller already has them
+    (``run_scenario`` does); otherwise they are read from ``run_dir``. Raises
+    :class:`SrrError` when ``run_dir`` is not a run directory."""
+    data = load_run(Path(run_dir), summary=summary, scenario=scenario, frames=frames)
+    s = data.summary
+    verdict = str(s.get("verdict", "INVALID"))
+    head = _headline(data)
+    # the group with the most regressed (or failing) metrics first, then first come
+    # the group with the most regressed (or failing) metrics first, then a group whose
+    # metrics point at moments in time, then first come
+    groups = [_group(name, data) for name in head.metrics]
+    timed = {_group(n, data) for n in head.metrics if metric_windows(n, data)}
+    focus_groups = sorted(dict.fromkeys(groups), key=lambda g: (
+        -groups.count(g), g not in timed, groups.index(g)))
+    hl = _highlights(data, head.metrics)
+    panels = time_panels(data, hl)
+    focus = [p for g in focus_groups for p in panels if p.group == g]
+    others = [p for p in panels if p not in focus]
+    graphs, mermaid, graph_problem = _graphs(data)
+    kf_rows, kf_problem = _keyframes(data)
+    problems = list(data.problems) + [p for p in (graph_problem, kf_problem) if p]
+
+    reasons = [str(r) for r in s.get("reasons", [])]
+    baseline = s.get("baseline")
+    meta = [f"seed {s.get('seed', '?')}", f"{float(s.get('simulated_s') or 0):.1f} s simulated"]
+    if s.get("duration_s") and s.get("simulated_s") is not None and \
+            abs(float(s["duration_s"]) - float(s["simulated_s"])) > 1e-6:
+        meta[-1] += f" of {float(s['duration_s']):g} s"
+    if baseline:
+        meta.append(f"baseline {Path(str(baseline.get('path', ''))).stem}, blessed "
+                    f"{str(baseline.get('blessed_at', ''))[:10]} by "
+                    f"{baseline.get('blessed_by', '?')}")
+        meta.append("recording identical to the baseline's" if baseline.get("digest_matches")
+                    else "recording differs from the baseline's")
+    no_baseline = ""
+    if not baseline and s.get("metrics"):
+        no_baseline = next((r for r in reasons if "baseline" in r), "")
+        reasons = [r for r in reasons if r != no_baseline]
+    toc = [("headline", "Summary")]
+    if focus:
+        toc.append(("focus", "In time"))
+    if data.scenario is not None and data.tracks:
+        toc.append(("map", "Map"))
+    if kf_rows:
+        toc.append(("cameras", "Cameras"))
+    if others:
+        toc.append(("timeseries", "Time series"))
+    toc += [("metrics", "All metrics"), ("health", "Health"), ("graphs", "Action graphs"),
+            ("topics", "Topics"), ("run", "Reproduce"), ("scenario", "Scenario")]
+    topics = [{"name": name, "type": t.get("type", ""), "count": t.get("count", ""),
+               "published": t.get("published", ""),
+               "rate": f"{t['rate_hz']:.2f}" if isinstance(t.get("rate_hz"), (int, float))
+               else "", "bytes": _human_bytes(t.get("bytes")),
+               "durability": t.get("durability", ""), "sha256": str(t.get("sha256", ""))}
+              for name, t in sorted((s.get("topics") or {}).items())]
+    run_info = [("run directory", str(data.run_dir)),
+                ("scenario file", s.get("scenario_file", "")),
+                ("seed", s.get("seed", "")),
+                ("simulated", f"{s.get('simulated_s', '')} s, {s.get('ticks', '')} ticks at "
+                              f"{s.get('tick_hz', '')} Hz"),
+                ("ground truth", "on (/gt/*)" if s.get("srr_gt") else "off"),
+                ("systems under test", ", ".join(s.get("systems_under_test", [])) or "—"),
+                ("recording digest", s.get("digest", ""))]
+    if baseline:
+        run_info += [("baseline", baseline.get("path", "")),
+                     ("baseline blessed", f"{baseline.get('blessed_at', '')} by "
+                                          f"{baseline.get('blessed_by', '')}: "
+                                          f"{baseline.get('reason', '')}"),
+                     ("baseline digest", f"{baseline.get('digest', '')} ("
+                      + ("same" if baseline.get("digest_matches") else "differs") + ")")]
+    ctx = {
+        "css": Markup(CSS),
+        "verdict": verdict,
+        "exit_code": s.get("exit_code", ""),
+        "scenario_name": s.get("scenario", data.run_dir.name),
+        "meta": meta,
+        "reasons": reasons,
+        "reasons_shown": reasons[:MAX_REASONS],
+        "reasons_more": max(0, len(reasons) - MAX_REASONS),
+        "no_baseline": no_baseline,
+        "toc": toc,
+        "problems": problems,
+        "headline": head,
+        "n_compared": len(s.get("comparison") or []),
+        "focus_panels": [_panel_ctx(p, hl) for p in focus],
+        "other_panels": [_panel_ctx(p, hl) for p in others],
+        "map_svg": Markup(map_svg(data)) if data.tracks else "",
+        "map_legend": map_legend(data) if data.tracks else [],
+        "moments": data.moments,
+        "keyframes": kf_rows,
+        "comparison": [_comparison_row(e, data) for e in s.get("comparison") or []],
+        "metrics": [_metric_row(m, data) for m in s.get("metrics", [])],
+        "health": s.get("health", []),
+        "health_ok": sum(bool(h.get("ok")) for h in s.get("health", [])),
+        "graphs": [{"path": g.path, "svg": Markup(g.svg)} for g in graphs],
+        "graph_paths": s.get("graphs", []) if not graphs else [],
+        "mermaid": mermaid,
+        "topics": topics,
+        "command": s.get("command", ""),
+        "command_exact": _exact_command(data),
+        "run_info": run_info,
+        "versions": sorted((s.get("versions") or {}).items()),
+        "scenario_text": data.scenario_text,
+        "scenario_lines": data.scenario_text.count("\n"),
+        "srr_version": __version__,
+        "run_dir": str(data.run_dir),
+    }
+    return _environment().from_string(MACROS + REPORT).render(**ctx)
+
+
+def write_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
+                 scenario: Scenario | None = None, frames: Frames | None = None) -> Path:
+    """Render and write ``<run_dir>/report.html`` (atomically); returns its path."""
+    run_dir = Path(run_dir)
+    text = render_report(run_dir, summary=summary, scenario=scenario, frames=frames)
+    path = run_dir / REPORT_NAME
+    tmp = path.with_suffix(".html.tmp")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as err:
+        tmp.unlink(missing_ok=True)
+        raise SrrError(f"{path}: cannot write the report: {err.strerror or err}") from err
+    return path

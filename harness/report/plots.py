@@ -1,0 +1,578 @@
+"""The report's figures as inline SVG: time-series panels on one shared time axis and the
+top-down map of the run.
+
+Every time-series panel has the same width and margins, so panels stacked in the page line up
+second for second. Panels mark the run's numbered moments (M1, M2, …) and can highlight the
+windows of a metric under review.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from harness.report.data import (
+    ControlSeries,
+    Moment,
+    PerceptionSeries,
+    RunData,
+    SafetySeries,
+    Track,
+)
+from harness.report.svg import Scale, Svg, decimate, nice_ticks, tick_label
+from harness.scenario import Scenario
+
+__all__ = [
+    "COLORS",
+    "Highlight",
+    "Panel",
+    "TimeAxis",
+    "control_panel",
+    "map_legend",
+    "map_svg",
+    "perception_panels",
+    "safety_panel",
+    "time_panels",
+]
+
+WIDTH = 1200.0
+LEFT = 168.0
+RIGHT = 24.0
+TOP = 22.0  # room for moment labels and highlight brackets
+BOTTOM = 30.0
+MAX_POINTS = 3000  # scatter points per panel
+MAX_LAG_LABELS = 12  # reaction-lag labels per safety panel
+
+COLORS = {
+    "muted": "#16a34a",
+    "inside": "#64748b",
+    "roi": "#7c3aed",
+    "over": "#dc2626",
+    "under": "#f59e0b",
+    "robot": "#2563eb",
+    "odom": "#0891b2",
+    "route": "#cbd5e1",
+    "worker": "#92400e",
+    "tracks": "#2563eb",
+    "objects": "#475569",
+    "error": "#0f766e",
+    "miss": "#dc2626",
+    "highlight": "#111827",
+    "moment": "#6b7280",
+    "collision": "#111827",
+}
+
+
+@dataclass(frozen=True)
+class Highlight:
+    """Windows of the metric under review, outlined on its group's panels."""
+
+    label: str
+    windows: tuple[tuple[float, float], ...]
+
+
+@dataclass
+class Panel:
+    """One figure: ``key`` (safety, control, perception…), ``group`` (the metric group it
+    explains), a caption, a legend (label → colour, style) and the SVG text."""
+
+    key: str
+    group: str
+    title: str
+    svg: str
+    legend: list[tuple[str, str, str]] = field(default_factory=list)
+    note: str = ""
+
+
+class TimeAxis:
+    """The shared time axis: seconds of simulation time from 0 to the end of the run."""
+
+    def __init__(self, end_s: float) -> None:
+        self.end_s = max(float(end_s), 1e-3)
+        self.x = Scale(0.0, self.end_s, LEFT, WIDTH - RIGHT)
+        self.ticks = nice_ticks(0.0, self.end_s, 14)
+
+    def frame(self, svg: Svg, top: float, bottom: float, moments: Sequence[Moment]) -> None:
+        """Grid, time tick labels under the plot area and the moment markers."""
+        for t in self.ticks:
+            x = self.x(t)
+            svg.line(x, top, x, bottom, class_="grid")
+            svg.text(x, bottom + 14, tick_label(t, self.ticks), class_="tick",
+                     text_anchor="middle")
+        svg.text(WIDTH - RIGHT, bottom + 26, "sim time (s)", class_="axis-label",
+                 text_anchor="end")
+        svg.line(LEFT, bottom, WIDTH - RIGHT, bottom, class_="axis")
+        for m in moments:
+            x = self.x(m.t_s)
+            svg.line(x, top - 6, x, bottom, class_="moment-line")
+            svg.text(x, top - 9, f"M{m.number}", class_="moment-label", text_anchor="middle",
+                     title=f"M{m.number} {m.t_s:.2f} s: {m.label}")
+
+    def highlight(self, svg: Svg, top: float, bottom: float, hl: Highlight | None) -> None:
+        if hl is None:
+            return
+        for a, b in hl.windows:
+            x0, x1 = self.x(a), self.x(b)
+            if x1 - x0 < 3:
+                x0, x1 = x0 - 2, x1 + 2
+            svg.rect(x0, top, x1 - x0, bottom - top, class_="hl-box",
+                     title=f"{hl.label}: {a:.2f}–{b:.2f} s")
+            svg.path(f"M{x0:.1f},{top + 5:.1f}V{top:.1f}H{x1:.1f}V{top + 5:.1f}",
+                     class_="hl-bracket")
+
+
+def _bool_runs(t: np.ndarray, v: np.ndarray, end: float) -> list[tuple[float, float]]:
+    """[start, end) intervals where a sampled boolean is True (each sample holds until the
+    next one, the last until ``end``)."""
+    if t.size == 0:
+        return []
+    v = np.asarray(v, dtype=bool)
+    m = np.concatenate(([False], v, [False])).astype(np.int8)
+    d = np.diff(m)
+    out = []
+    for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True):
+        out.append((float(t[a]), float(t[b]) if b < t.size else float(end)))
+    return out
+
+
+def _lane(svg: Svg, ax: TimeAxis, y: float, h: float, label: str, runs: Sequence[tuple[float,
+          float]], color: str, sub: str = "") -> None:
+    svg.text(LEFT - 8, y + h / 2 + (0 if sub else 4), label, class_="lane-label",
+             text_anchor="end")
+    if sub:
+        svg.text(LEFT - 8, y + h / 2 + 12, sub, class_="lane-sub", text_anchor="end")
+    svg.line(LEFT, y + h, WIDTH - RIGHT, y + h, class_="lane-base")
+    for a, b in runs:
+        svg.rect(ax.x(a), y + 3, ax.x(b) - ax.x(a), h - 3, fill=color, opacity="0.85",
+                 title=f"{label}: {a:.2f}–{b:.2f} s")
+
+
+# --------------------------------------------------------------------------- safety
+
+
+def safety_panel(s: SafetySeries, ax: TimeAxis, moments: Sequence[Moment],
+                 hl: Highlight | None = None) -> Panel:
+    """Lanes: forklift in trailer, worker in ROI, expected and actual muted state; mismatch
+    windows shaded; every expected edge marked with the reaction lag to it."""
+    lane_h, gap = 24.0, 10.0
+    n_lanes = 4
+    lag_row = 30.0
+    height = TOP + n_lanes * (lane_h + gap) + lag_row + BOTTOM
+    top, bottom = TOP, TOP + n_lanes * (lane_h + gap) + lag_row
+    svg = Svg(WIDTH, height, label="expected vs actual muted state")
+    ax.frame(svg, top, bottom, moments)
+    for w in s.mismatches:
+        x0, x1 = ax.x(w.start_s), ax.x(w.end_s)
+        svg.rect(x0, top, max(x1 - x0, 1.0), bottom - top - lag_row,
+                 fill=COLORS[w.kind], opacity="0.28" if w.long else "0.12",
+                 class_=f"mismatch mismatch-{w.kind}",
+                 title=f"{w.kind}-mute {w.start_s:.2f}–{w.end_s:.2f} s "
+                       f"({w.end_s - w.start_s:.2f} s)")
+    ys = [top + 4 + i * (lane_h + gap) for i in range(n_lanes)]
+    _lane(svg, ax, ys[0], lane_h, f"{s.robot} in trailer", _bool_runs(s.t, s.inside, s.end_s),
+          COLORS["inside"], "past the tripwire")
+    _lane(svg, ax, ys[1], lane_h, "worker in loading ROI",
+          _bool_runs(s.t, s.worker_in_roi, s.end_s), COLORS["roi"])
+    _lane(svg, ax, ys[2], lane_h, "expected muted", _bool_runs(s.t, s.expected, s.end_s),
+          COLORS["muted"], "in trailer, ROI clear")
+    _lane(svg, ax, ys[3], lane_h, "actual muted", _bool_runs(s.msg_t, s.msg_v, s.end_s),
+          COLORS["muted"], s.topic)
+    y_lag = ys[3] + lane_h + 12
+    row_end = [-1e9, -1e9]  # right end of the last label in each of two label rows
+    # many edges (a flapping state): label only the slowest reactions, arrows for all
+    order = sorted(range(len(s.edges)), key=lambda k: -(
+        math.inf if s.edges[k].lag_s is None else s.edges[k].lag_s or 0.0))
+    labelled = set(order[:MAX_LAG_LABELS])
+    for k, e in enumerate(s.edges):
+        x0 = ax.x(e.t_s)
+        end = e.response_s if e.response_s is not None else e.limit_s
+        x1 = ax.x(end)
+        if e.response_s is None:
+            text = f"{e.kind}: never {'engaged' if e.target else 'released'}"
+        else:
+            text = f"{e.kind} lag {e.lag_s:.2f} s"
+        width = 6.6 * len(text) if k in labelled else 0.0
+        lx = max(x1, x0 + 4) + 4
+        start = x0
+        if lx + width > WIDTH - 2:  # no room right of the arrow: put the text left of it
+            lx = x0 - 4 - width
+            start = lx
+        free = [r for r in (0, 1) if start > row_end[r] + 4]
+        row = free[0] if free else int(row_end[1] < row_end[0])
+        row_end[row] = max(lx + width, x1)
+        y = y_lag + row * 13
+        svg.line(x0, ys[2], x0, y + 4, class_="edge-line")
+        cls = "lag-arrow" if e.response_s is not None else "lag-arrow never"
+        svg.line(x0, y, x1, y, class_=cls)
+        svg.path(f"M{x1:.1f},{y:.1f}l-6,-4v8z", class_=cls + " head")
+        tip = (f"expected {e.kind} at {e.t_s:.2f} s, actual "
+               + (f"at {e.response_s:.2f} s" if e.response_s is not None
+                  else f"never before {e.limit_s:.2f} s"))
+        if k not in labelled:
+            svg.line(x0, y - 5, x0, y + 5, class_=cls, title=tip)
+            continue
+        svg.text(lx, y + 4, text, class_="lag-label",
+                 title=tip)
+    svg.text(LEFT - 8, y_lag + 4, "reaction lag", class_="lane-label", text_anchor="end")
+    ax.highlight(svg, top, bottom, hl)
+    note = f"strong shading: mismatches ≥ {s.min_window_s:g} s (the scored windows)"
+    return Panel("safety", "safety", "Safety: expected vs actual muted state, reaction lags",
+                 svg.render(), [("expected / actual muted", COLORS["muted"], "fill"),
+                                ("over-mute (muted, should alarm)", COLORS["over"], "fill"),
+                                ("under-mute (alarm, should be muted)", COLORS["under"], "fill"),
+                                ("worker in ROI", COLORS["roi"], "fill"),
+                                (f"{s.robot} in trailer", COLORS["inside"], "fill")], note)
+
+
+# --------------------------------------------------------------------------- line panels
+
+
+def _y_axis(svg: Svg, y: Scale, ticks: Sequence[float], label: str) -> None:
+    for v in ticks:
+        py = y(v)
+        svg.line(LEFT, py, WIDTH - RIGHT, py, class_="grid")
+        svg.text(LEFT - 6, py + 4, tick_label(v, ticks), class_="tick", text_anchor="end")
+    svg.text(LEFT - 48, (y.r0 + y.r1) / 2, label, class_="axis-label", text_anchor="middle",
+             transform=f"rotate(-90 {LEFT - 48:.1f} {(y.r0 + y.r1) / 2:.1f})")
+
+
+def _point_label(svg: Svg, px: float, y: float, text: str) -> None:
+    """A label beside a marked point, on its left when it would run off the plot."""
+    if px + 8 + 6.8 * len(text) > WIDTH - RIGHT:
+        svg.text(px - 8, y, text, class_="point-label", text_anchor="end")
+    else:
+        svg.text(px + 8, y, text, class_="point-label")
+
+
+def _value_ticks(hi: float) -> list[float]:
+    """About four round ticks from 0, the last one at or above ``hi``."""
+    ticks = nice_ticks(0.0, hi, 4)
+    if len(ticks) > 1 and ticks[-1] < hi:
+        ticks.append(round(ticks[-1] + ticks[1] - ticks[0], 10))
+    return ticks
+
+
+def control_panel(c: ControlSeries, ax: TimeAxis, moments: Sequence[Moment],
+                  hl: Highlight | None = None) -> Panel:
+    """Cross-track error to the route over time, its maximum marked, collisions shaded."""
+    plot_h = 150.0
+    top, bottom = TOP, TOP + plot_h
+    svg = Svg(WIDTH, bottom + BOTTOM, label="cross-track error over time")
+    hi = float(np.nanmax(c.cte)) if c.cte.size else 1.0
+    ticks = _value_ticks(max(hi, 0.01))
+    y = Scale(0.0, max(ticks[-1], hi * 1.08), bottom, top)
+    _y_axis(svg, y, ticks, "cross-track (m)")
+    ax.frame(svg, top, bottom, moments)
+    for a, b in c.collisions:
+        svg.rect(ax.x(a), top, max(ax.x(b) - ax.x(a), 2.0), plot_h, fill=COLORS["over"],
+                 opacity="0.25", title=f"collision {a:.2f}–{b:.2f} s")
+    xs, vs = decimate(c.t, c.cte, int(WIDTH))
+    svg.polyline(ax.x.array(xs), y.array(vs), stroke=COLORS["robot"], stroke_width="1.6",
+                 class_="series")
+    if c.cte.size:
+        i = int(np.argmax(c.cte))
+        px, py = ax.x(c.t[i]), y(c.cte[i])
+        svg.circle(px, py, 4, fill=COLORS["robot"], stroke="#fff", stroke_width="1.5")
+        _point_label(svg, px, py - 6 if py > top + 14 else py + 14,
+                     f"max {c.cte[i]:.3f} m at {c.t[i]:.2f} s")
+    ax.highlight(svg, top, bottom, hl)
+    legend = [(f"cross-track error of {c.robot} ({c.source})", COLORS["robot"], "line")]
+    if c.collisions:
+        legend.append(("collision", COLORS["over"], "fill"))
+    return Panel("control", "control", "Control: cross-track error to the route",
+                 svg.render(), legend)
+
+
+def perception_panels(p: PerceptionSeries, ax: TimeAxis, moments: Sequence[Moment],
+                      hl: Highlight | None = None) -> list[Panel]:
+    """Position error of matched tracks (misses marked) and tracks vs ground-truth objects."""
+    out = []
+    plot_h = 120.0
+    top, bottom = TOP, TOP + plot_h
+    svg = Svg(WIDTH, bottom + BOTTOM, label=f"{p.cls} position error over time")
+    hi = float(np.max(p.err_v)) if p.err_v.size else p.gate
+    ticks = _value_ticks(max(hi, 0.05))
+    y = Scale(0.0, max(ticks[-1], hi * 1.08), bottom, top)
+    _y_axis(svg, y, ticks, "error (m)")
+    ax.frame(svg, top, bottom, moments)
+    dt = float(np.median(np.diff(p.frame_t))) if p.frame_t.size > 1 else 0.0
+    for a, b in _bool_runs(p.frame_t, p.n_missed > 0, float(p.frame_t[-1]) + dt
+                           if p.frame_t.size else 0.0):
+        svg.rect(ax.x(a), top - 5, max(ax.x(b) - ax.x(a), 2.0), 5, fill=COLORS["miss"],
+                 title=f"frames with a missed object {a:.2f}–{b:.2f} s")
+    stride = max(1, p.err_t.size // MAX_POINTS)  # long runs: thin the scatter evenly
+    keep = np.zeros(p.err_t.size, dtype=bool)
+    keep[::stride] = True
+    if p.err_v.size:
+        keep[int(np.argmax(p.err_v))] = True
+    for t, v in zip(p.err_t[keep], p.err_v[keep], strict=True):
+        svg.circle(ax.x(t), y(v), 2.2, fill=COLORS["error"],
+                   title=f"{t:.2f} s: {v:.3f} m")
+    if p.err_v.size:
+        i = int(np.argmax(p.err_v))
+        px, py = ax.x(p.err_t[i]), y(p.err_v[i])
+        svg.circle(px, py, 4.5, fill="none", stroke=COLORS["error"], stroke_width="1.5")
+        _point_label(svg, px, py + 4 if py > top + 10 else py + 14,
+                     f"max {p.err_v[i]:.3f} m at {p.err_t[i]:.2f} s")
+    ax.highlight(svg, top, bottom, hl)
+    out.append(Panel(f"perception.{p.cls}.error", "perception",
+                     f"Perception ({p.cls}): position error of matched tracks", svg.render(),
+                     [("matched track error", COLORS["error"], "dot"),
+                      ("frames with a missed object", COLORS["miss"], "fill")],
+                     f"per frame, objects and {p.cls} tracks paired within the {p.gate:g} m "
+                     f"gate (minimum total distance); topic {p.topic}"))
+    svg = Svg(WIDTH, TOP + 80 + BOTTOM, label=f"{p.cls} track count over time")
+    top, bottom = TOP, TOP + 80.0
+    hi_n = int(max(p.n_tracks.max(initial=0), p.n_objects.max(initial=0), 1))
+    ticks = [float(v) for v in range(0, hi_n + 1, max(1, math.ceil(hi_n / 4)))]
+    y = Scale(0.0, max(hi_n + 0.3, 1.0), bottom, top)
+    _y_axis(svg, y, ticks, "count")
+    ax.frame(svg, top, bottom, moments)
+    if p.frame_t.size:
+        end = ax.end_s
+        for series, color, cls in ((p.n_objects, COLORS["objects"], "series dashed"),
+                                   (p.n_tracks, COLORS["tracks"], "series")):
+            xs = np.repeat(np.append(p.frame_t, end), 2)[1:-1]
+            vs = np.repeat(series.astype(np.float64), 2)
+            xs, vs = decimate(xs, vs, int(WIDTH))
+            svg.polyline(ax.x.array(xs), y.array(vs), stroke=color, stroke_width="1.6",
+                         class_=cls)
+    ax.highlight(svg, top, bottom, hl)
+    out.append(Panel(f"perception.{p.cls}.count", "perception",
+                     f"Perception ({p.cls}): tracks vs ground-truth objects in the area",
+                     svg.render(), [(f"{p.cls} tracks", COLORS["tracks"], "line"),
+                                    ("ground-truth objects", COLORS["objects"], "dashed")]))
+    return out
+
+
+def time_panels(data: RunData, highlights: dict[str, Highlight] | None = None
+                ) -> list[Panel]:
+    """Every panel whose data exist, in order safety, control, perception."""
+    ax = TimeAxis(data.end_s)
+    hl = highlights or {}
+    out = []
+    if data.safety is not None:
+        out.append(safety_panel(data.safety, ax, data.moments, hl.get("safety")))
+    if data.control is not None:
+        out.append(control_panel(data.control, ax, data.moments, hl.get("control")))
+    for p in data.perception:
+        out += perception_panels(p, ax, data.moments, hl.get("perception"))
+    return out
+
+
+# --------------------------------------------------------------------------- map
+
+
+def _rot(points: Sequence[tuple[float, float]], cx: float, cy: float, yaw_deg: float
+         ) -> list[tuple[float, float]]:
+    c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
+    return [(cx + c * x - s * y, cy + s * x + c * y) for x, y in points]
+
+
+def _trailer(sc: Scenario) -> list[tuple[float, float]]:
+    d = sc.world.dock
+    hw = d.width / 2 + 0.1
+    return _rot([(0.0, -hw), (d.length + 0.1, -hw), (d.length + 0.1, hw), (0.0, hw)],
+                d.position[0], d.position[1], d.yaw_deg)
+
+
+def map_svg(data: RunData, *, width: float = WIDTH, max_height: float = 560.0) -> str:
+    """Top-down view: walls, shelves, trailer, routes, zones, cameras, trajectories (ground
+    truth solid, odometry dashed), workers' paths, collisions and the numbered moments."""
+    sc = data.scenario
+    if sc is None:
+        return ""
+    wx, wy = sc.world.size
+    xs = [-wx / 2, wx / 2]
+    ys = [-wy / 2, wy / 2]
+    trailer = _trailer(sc) if sc.world.dock.enabled else []
+    for x, y in trailer:
+        xs.append(x)
+        ys.append(y)
+    for tr in data.tracks:
+        if tr.x.size:
+            xs += [float(np.nanmin(tr.x)), float(np.nanmax(tr.x))]
+            ys += [float(np.nanmin(tr.y)), float(np.nanmax(tr.y))]
+    x0, x1, y0, y1 = min(xs) - 1.0, max(xs) + 1.0, min(ys) - 1.0, max(ys) + 1.0
+    pad_l, pad_b, pad_t, pad_r = 40.0, 26.0, 10.0, 10.0
+    k = min((width - pad_l - pad_r) / (x1 - x0), (max_height - pad_b - pad_t) / (y1 - y0))
+    w = pad_l + pad_r + k * (x1 - x0)
+    h = pad_t + pad_b + k * (y1 - y0)
+    X = Scale(x0, x1, pad_l, pad_l + k * (x1 - x0))
+    Y = Scale(y0, y1, pad_t + k * (y1 - y0), pad_t)
+    svg = Svg(w, h, label="top-down map of the run", class_="plot map")
+
+    def poly(pts: Sequence[tuple[float, float]], **attrs: object) -> None:
+        svg.polygon([X(p[0]) for p in pts], [Y(p[1]) for p in pts], **attrs)
+
+    def line(pts: Sequence[tuple[float, float]] | np.ndarray, **attrs: object) -> None:
+        a = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
+        svg.polyline(X.array(a[:, 0]), Y.array(a[:, 1]), **attrs)
+
+    svg.rect(X(x0), Y(y1), X(x1) - X(x0), Y(y0) - Y(y1), class_="map-bg")
+    gx = nice_ticks(x0, x1, 12)
+    gy = nice_ticks(y0, y1, 6)
+    for v in gx:
+        svg.line(X(v), Y(y0), X(v), Y(y1), class_="grid")
+        svg.text(X(v), Y(y0) + 15, tick_label(v, gx), class_="tick", text_anchor="middle")
+    for v in gy:
+        svg.line(X(x0), Y(v), X(x1), Y(v), class_="grid")
+        svg.text(X(x0) - 5, Y(v) + 4, tick_label(v, gy), class_="tick", text_anchor="end")
+    poly([(-wx / 2, -wy / 2), (wx / 2, -wy / 2), (wx / 2, wy / 2), (-wx / 2, wy / 2)],
+         class_="floor", title=f"warehouse floor {wx:g} × {wy:g} m (walls)")
+    for i, sh in enumerate(sc.world.shelves):
+        lx, ly = sh.size[0] / 2, sh.size[1] / 2
+        poly(_rot([(-lx, -ly), (lx, -ly), (lx, ly), (-lx, ly)], sh.position[0], sh.position[1],
+                  sh.yaw_deg), class_="shelf", title=f"shelf {i}")
+    if trailer:
+        poly(trailer, class_="trailer", title="trailer (open end at the dock)")
+        d = sc.world.dock
+        lx, ly = _rot([(d.length * 0.8, -d.width / 2 - 0.6)], d.position[0], d.position[1],
+                      d.yaw_deg)[0]
+        svg.text(X(lx), Y(ly) + 4, "trailer", class_="map-label", text_anchor="middle")
+    z = sc.zones
+    if len(z.loading_roi) >= 3:
+        poly(list(z.loading_roi), class_="roi", title="loading ROI")
+        svg.text(X(min(p[0] for p in z.loading_roi)) + 4,
+                 Y(max(p[1] for p in z.loading_roi)) + 13, "loading ROI",
+                 class_="map-label roi-label")
+    p = sc.scoring.perception
+    if p is not None and p.enabled and len(p.area) >= 3:
+        poly(list(p.area), class_="area", title="perception scoring area")
+    if z.trailer_tripwire is not None:
+        a, b = z.trailer_tripwire.a, z.trailer_tripwire.b
+        line([a, b], class_="tripwire")
+        mx, my = (a[0] + b[0]) / 2, (a[1] + b[1]) / 2
+        dx, dy = b[0] - a[0], b[1] - a[1]
+        n = math.hypot(dx, dy) or 1.0
+        sgn = 1.0 if z.trailer_tripwire.inside == "left" else -1.0
+        ix, iy = -dy / n * sgn, dx / n * sgn
+        svg.line(X(mx), Y(my), X(mx + ix * 1.2), Y(my + iy * 1.2), class_="tripwire-dir")
+        svg.text(X(a[0]) + 4, Y(a[1]) - 4, "tripwire", class_="map-label trip-label")
+    for name, route in sc.routes.items():
+        pts = np.asarray(route.waypoints, dtype=np.float64)
+        line(pts, class_="route", title=f"route {name}")
+        for wx_, wy_ in pts:
+            svg.circle(X(wx_), Y(wy_), 3, class_="waypoint")
+        svg.text(X(pts[0, 0]), Y(pts[0, 1]) + 16, f"route {name}", class_="map-label")
+    for cam in sc.cameras:
+        if cam.enabled:
+            cx, cy = cam.spawn.position[0], cam.spawn.position[1]
+            svg.path(f"M{X(cx):.1f},{Y(cy) - 6:.1f}l6,10h-12z", class_="camera",
+                     title=f"camera {cam.name}")
+            svg.text(X(cx) - 8, Y(cy) + 3, cam.name, class_="map-label cam-label",
+                     text_anchor="end")
+    robots = [t for t in data.tracks if t.kind == "robot"]
+    workers = [t for t in data.tracks if t.kind == "worker"]
+    for tr in workers:
+        if tr.planned:
+            line(list(tr.planned), class_="worker-plan", title=f"{tr.name} planned route")
+        _track(svg, X, Y, tr, COLORS["worker"], "worker-path")
+    s = data.safety
+    for tr in robots:
+        if tr.odom_x is not None and tr.odom_y is not None:
+            ox, oy = tr.odom_x, tr.odom_y
+            step = max(1, ox.size // 1500)
+            svg.polyline(X.array(ox[::step]), Y.array(oy[::step]), class_="odom-path",
+                         stroke=COLORS["odom"])
+        _track(svg, X, Y, tr, COLORS["robot"], "robot-path")
+        if s is not None and tr.name == s.robot:
+            for win in s.mismatches:
+                if not win.long:
+                    continue
+                sel = (tr.t >= win.start_s) & (tr.t <= win.end_s)
+                if sel.sum() >= 1:
+                    svg.polyline(X.array(tr.x[sel]), Y.array(tr.y[sel]),
+                                 class_=f"mismatch-path mismatch-{win.kind}",
+                                 stroke=COLORS[win.kind],
+                                 title=f"{win.kind}-mute {win.start_s:.2f}–{win.end_s:.2f} s")
+                    px, py = tr.at(win.start_s) or (0.0, 0.0)
+                    svg.circle(X(px), Y(py), 5, fill=COLORS[win.kind], class_="mismatch-point",
+                               title=f"{win.kind}-mute from {win.start_s:.2f} s")
+    c = data.control
+    for tr in robots:
+        if c is not None and tr.name == c.robot:
+            for t0, _ in c.collisions:
+                hit = tr.at(t0)
+                if hit:
+                    svg.path(f"M{X(hit[0]) - 6:.1f},{Y(hit[1]) - 6:.1f}l12,12m0,-12l-12,12",
+                             class_="collision", title=f"collision at {t0:.2f} s")
+    focus = robots[0] if robots else None
+    placed: list[tuple[float, float]] = []
+    for m in data.moments:
+        if focus is None:
+            break
+        pos = focus.at(m.t_s)
+        if pos is None:
+            continue
+        if m.kind in ("over", "under", "collision"):
+            for wk in workers:
+                wp = wk.at(m.t_s)
+                if wp:
+                    svg.rect(X(wp[0]) - 4, Y(wp[1]) - 4, 8, 8, class_="worker-at",
+                             title=f"{wk.name} at M{m.number} ({m.t_s:.2f} s)")
+                    svg.text(X(wp[0]) + 6, Y(wp[1]) + 4, f"M{m.number}",
+                             class_="moment-map worker-m")
+        px, py = X(pos[0]), Y(pos[1])
+        mx, my = px, py
+        for k in range(12):  # markers of a standing robot would hide each other: fan out
+            mx, my = px + 22 * ((k + 1) // 2) * (1 if k % 2 else -1) * (k > 0), py - 24 * (k > 0)
+            if all(math.hypot(mx - qx, my - qy) >= 19 for qx, qy in placed):
+                break
+        placed.append((mx, my))
+        if (mx, my) != (px, py):
+            svg.line(px, py, mx, my, class_="moment-leader")
+            svg.circle(px, py, 2.5, fill="#111827")
+        svg.circle(mx, my, 9, class_="moment-dot",
+                   title=f"M{m.number} {m.t_s:.2f} s: {m.label}")
+        svg.text(mx, my + 3.5, str(m.number), class_="moment-num", text_anchor="middle")
+    return svg.render()
+
+
+def map_legend(data: RunData) -> list[tuple[str, str, str]]:
+    """(label, colour, style) of what :func:`map_svg` draws for this run."""
+    sc = data.scenario
+    if sc is None:
+        return []
+    robots = [t for t in data.tracks if t.kind == "robot"]
+    out = []
+    for source in sorted({t.source for t in robots}):
+        out.append((f"robot ({source})", COLORS["robot"], "line"))
+    if any(t.odom_x is not None for t in robots):
+        out.append(("odometry (world frame)", COLORS["odom"], "dashed"))
+    if sc.routes:
+        out.append(("route", COLORS["route"], "line"))
+    if any(t.kind == "worker" for t in data.tracks):
+        out.append(("worker (ground truth; dotted: planned)", COLORS["worker"], "line"))
+    if len(sc.zones.loading_roi) >= 3:
+        out.append(("loading ROI", COLORS["roi"], "fill"))
+    if sc.zones.trailer_tripwire is not None:
+        out.append(("trailer tripwire (tick: inside)", COLORS["over"], "dashed"))
+    p = sc.scoring.perception
+    if p is not None and p.enabled and len(p.area) >= 3:
+        out.append(("perception area", COLORS["error"], "dashed"))
+    if sc.cameras:
+        out.append(("camera", "#111827", "tri"))
+    if data.safety is not None and any(w.long for w in data.safety.mismatches):
+        kinds = {w.kind for w in data.safety.mismatches if w.long}
+        out += [(f"{k}-mute", COLORS[k], "line") for k in ("over", "under") if k in kinds]
+    if data.control is not None and data.control.collisions:
+        out.append(("collision", COLORS["collision"], "x"))
+    if data.moments:
+        out.append(("moment M1… (robot; square: worker)", "#111827", "dot"))
+    return out
+
+
+def _track(svg: Svg, X: Scale, Y: Scale, tr: Track, color: str, cls: str) -> None:
+    if tr.x.size == 0:
+        return
+    step = max(1, tr.x.size // 1500)
+    svg.polyline(X.array(tr.x[::step]), Y.array(tr.y[::step]), class_=cls, stroke=color,
+                 title=f"{tr.name} ({tr.source})")
+    svg.circle(X(tr.x[0]), Y(tr.y[0]), 4, fill="#fff", stroke=color, stroke_width="2",
+               title=f"{tr.name} start")
+    svg.rect(X(tr.x[-1]) - 3.5, Y(tr.y[-1]) - 3.5, 7, 7, fill=color,
+             title=f"{tr.name} end")

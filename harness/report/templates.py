@@ -1,0 +1,428 @@
+"""Jinja2 templates and the stylesheet of the HTML report and the suite index.
+
+They live in a Python module (not loose files) so that they ship with the package whatever
+installs it. Autoescaping is on: every value is text unless wrapped in ``Markup`` (the SVGs
+the report builds itself).
+"""
+
+from __future__ import annotations
+
+__all__ = ["CSS", "INDEX", "MACROS", "REPORT", "VERDICT_COLORS"]
+
+VERDICT_COLORS = {
+    "PASS": "#15803d",
+    "FAIL": "#b91c1c",
+    "REGRESSED": "#c2410c",
+    "INVALID": "#6d28d9",
+    "INTERRUPTED": "#475569",
+}
+
+CSS = """
+:root { --fg:#111827; --muted:#6b7280; --line:#e5e7eb; --bg:#ffffff; --soft:#f8fafc;
+  --PASS:#15803d; --FAIL:#b91c1c; --REGRESSED:#c2410c; --INVALID:#6d28d9;
+  --INTERRUPTED:#475569; }
+* { box-sizing: border-box; }
+html, body { margin:0; padding:0; background:var(--bg); color:var(--fg);
+  font: 14px/1.4 system-ui, -apple-system, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif; }
+code, pre, .mono { font-family: ui-monospace, "DejaVu Sans Mono", Menlo, Consolas, monospace;
+  font-size: 12.5px; }
+.wrap { max-width: 1248px; margin: 0 auto; padding: 0 16px; }
+.banner { color:#fff; }
+.banner .wrap { display:flex; gap:20px; align-items:flex-start; padding-top:12px;
+  padding-bottom:12px; }
+.banner.v-PASS { background:var(--PASS); } .banner.v-FAIL { background:var(--FAIL); }
+.banner.v-REGRESSED { background:var(--REGRESSED); } .banner.v-INVALID { background:var(--INVALID); }
+.banner.v-INTERRUPTED { background:var(--INTERRUPTED); }
+.verdict-word { font-size:30px; font-weight:800; letter-spacing:.04em; min-width:210px;
+  line-height:1.1; }
+.verdict-word small { display:block; font-size:12px; font-weight:500; letter-spacing:0;
+  opacity:.9; margin-top:4px; }
+.banner h1 { font-size:19px; margin:0 0 2px 0; font-weight:700; }
+.banner .meta { margin:0; opacity:.93; font-size:13px; }
+.banner ul.reasons { margin:6px 0 0 0; padding-left:18px; font-size:13px; }
+.banner ul.reasons li { margin:1px 0; }
+.banner .nobaseline { margin-top:6px; background:rgba(255,255,255,.16); padding:4px 8px;
+  border-radius:4px; font-size:13px; display:inline-block; }
+nav.toc { border-bottom:1px solid var(--line); background:var(--soft); font-size:13px; }
+nav.toc .wrap { padding-top:5px; padding-bottom:5px; }
+nav.toc a { color:#1d4ed8; text-decoration:none; margin-right:14px; }
+section { margin: 14px 0 22px 0; }
+h2 { font-size:15px; margin:0 0 6px 0; padding-bottom:3px; border-bottom:2px solid var(--line); }
+h2 .count { color:var(--muted); font-weight:500; }
+h3 { font-size:13.5px; margin:10px 0 4px 0; }
+p.note, .note { color:var(--muted); font-size:12.5px; margin:3px 0; }
+table { border-collapse:collapse; width:100%; font-size:13px; }
+th, td { text-align:left; padding:3px 8px; border-bottom:1px solid var(--line);
+  vertical-align:top; }
+th { background:var(--soft); font-weight:600; white-space:nowrap; }
+td.num, th.num { text-align:right; font-variant-numeric: tabular-nums; white-space:nowrap; }
+td.when { white-space:nowrap; font-variant-numeric: tabular-nums; }
+td.name { font-family: ui-monospace, "DejaVu Sans Mono", Menlo, Consolas, monospace;
+  font-size:12.5px; white-space:nowrap; }
+tr.st-regressed td, tr.st-missing td { background:#fef2f2; }
+tr.st-improved td { background:#f0fdf4; }
+.badge { display:inline-block; padding:0 7px; border-radius:9px; font-size:12px;
+  font-weight:600; line-height:18px; white-space:nowrap; }
+.b-regressed, .b-missing, .b-FAIL, .b-tripped { background:#dc2626; color:#fff; }
+.b-improved, .b-PASS, .b-okgate { background:#dcfce7; color:#166534; }
+.b-ok { background:#f1f5f9; color:#475569; }
+.b-changed { background:#dbeafe; color:#1e40af; }
+.b-new { background:#fef9c3; color:#854d0e; }
+.b-NEAR { background:#fef3c7; color:#92400e; }
+.b-v-PASS { background:var(--PASS); color:#fff; } .b-v-FAIL { background:var(--FAIL); color:#fff; }
+.b-v-REGRESSED { background:var(--REGRESSED); color:#fff; }
+.b-v-INVALID { background:var(--INVALID); color:#fff; }
+.b-v-INTERRUPTED { background:var(--INTERRUPTED); color:#fff; }
+.headline table { font-size:13.5px; }
+.headline td, .headline th { padding:2px 8px; }
+figure.panel { margin:6px 0 10px 0; }
+figure.panel figcaption { font-weight:600; font-size:13.5px; margin:0 0 1px 0; }
+figure.panel figcaption .hl-name { font-weight:500; color:#111827; background:#fde68a;
+  padding:0 5px; border-radius:3px; margin-left:8px; font-size:12.5px; }
+.legend { font-size:12px; color:#374151; margin:0 0 2px 0; }
+.legend span.key { margin-right:12px; white-space:nowrap; }
+.legend i { display:inline-block; width:14px; height:10px; margin-right:4px;
+  vertical-align:-1px; border-radius:2px; }
+.legend i.line { height:3px; vertical-align:3px; }
+.legend i.dashed { height:0; border-top:2px dashed; vertical-align:3px; background:none !important; }
+.legend i.dot { width:8px; height:8px; border-radius:50%; }
+.legend i.tri { width:0; height:0; border-left:5px solid transparent; border-right:5px solid
+  transparent; border-bottom:9px solid #111827; background:none !important; border-radius:0; }
+.legend i.x { width:10px; height:10px; background:none !important; border-radius:0;
+  background-image:none; position:relative; }
+.legend i.x::before, .legend i.x::after { content:""; position:absolute; left:4px; top:-1px;
+  width:2.5px; height:12px; background:#111827; transform:rotate(45deg); }
+.legend i.x::after { transform:rotate(-45deg); }
+svg.plot, svg.graph-svg { display:block; max-width:100%; height:auto; }
+svg text { font-family: system-ui, -apple-system, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif; }
+svg .grid { stroke:#eef0f3; stroke-width:1; }
+svg .axis { stroke:#9ca3af; stroke-width:1; }
+svg .tick { font-size:11px; fill:#6b7280; }
+svg .axis-label { font-size:11px; fill:#6b7280; }
+svg .lane-label { font-size:12px; fill:#111827; font-weight:600; }
+svg .lane-sub { font-size:10.5px; fill:#6b7280; }
+svg .lane-base { stroke:#d1d5db; stroke-width:1; }
+svg .moment-line { stroke:#9ca3af; stroke-width:1; stroke-dasharray:2 3; }
+svg .moment-label { font-size:10.5px; fill:#374151; font-weight:700; }
+svg .edge-line { stroke:#111827; stroke-width:1; stroke-dasharray:3 2; }
+svg .lag-arrow { stroke:#111827; stroke-width:1.6; fill:#111827; }
+svg .lag-arrow.never { stroke:#dc2626; fill:#dc2626; }
+svg .lag-arrow.head { stroke:none; }
+svg .lag-label { font-size:11.5px; fill:#111827; font-weight:600; }
+svg .hl-box { fill:none; stroke:#111827; stroke-width:1.5; stroke-dasharray:5 3; }
+svg .hl-bracket { fill:none; stroke:#111827; stroke-width:2.5; }
+svg .series { fill:none; }
+svg .series.dashed { stroke-dasharray:5 3; }
+svg .point-label { font-size:11.5px; fill:#111827; font-weight:600; }
+svg .point-label, svg .lag-label, svg .moment-label { paint-order:stroke; stroke:#fff;
+  stroke-width:3px; stroke-linejoin:round; }
+svg.map .map-bg { fill:#fafafa; }
+svg.map .floor { fill:#ffffff; stroke:#374151; stroke-width:3; }
+svg.map .shelf { fill:#d6d3d1; stroke:#a8a29e; }
+svg.map .trailer { fill:#f5f5f4; stroke:#57534e; stroke-width:2; }
+svg.map .roi { fill:#7c3aed; fill-opacity:.12; stroke:#7c3aed; stroke-width:1.5; }
+svg.map .area { fill:none; stroke:#0f766e; stroke-width:1.2; stroke-dasharray:6 4; }
+svg.map .tripwire { stroke:#dc2626; stroke-width:3; stroke-dasharray:6 3; }
+svg.map .tripwire-dir { stroke:#dc2626; stroke-width:1.5; }
+svg.map .route { stroke:#cbd5e1; stroke-width:9; stroke-linecap:round; stroke-linejoin:round; }
+svg.map .waypoint { fill:#94a3b8; }
+svg.map .camera { fill:#111827; }
+svg.map .map-label { font-size:11.5px; fill:#374151; }
+svg.map .roi-label { fill:#6d28d9; font-weight:600; }
+svg.map .trip-label { fill:#b91c1c; font-weight:600; }
+svg.map .cam-label { font-size:10.5px; fill:#6b7280; }
+svg.map .robot-path { fill:none; stroke-width:2.2; }
+svg.map .odom-path { fill:none; stroke-width:1.5; stroke-dasharray:5 4; }
+svg.map .worker-path { fill:none; stroke-width:2; }
+svg.map .worker-plan { stroke:#92400e; stroke-width:1.2; stroke-dasharray:2 4; }
+svg.map .mismatch-path { fill:none; stroke-width:8; stroke-opacity:.55; stroke-linecap:round; }
+svg.map .collision { stroke:#111827; stroke-width:3; }
+svg.map .moment-leader { stroke:#111827; stroke-width:1; }
+svg.map .moment-dot { fill:#111827; stroke:#fff; stroke-width:1.5; }
+svg.map .moment-num { font-size:11px; fill:#fff; font-weight:700; }
+svg.map .worker-at { fill:#92400e; stroke:#fff; }
+svg.map .moment-map { font-size:11px; font-weight:700; fill:#92400e; }
+.two-col { display:grid; grid-template-columns: 1fr; gap:8px; }
+ol.moments { margin:4px 0; padding-left:0; list-style:none; columns:2; font-size:13px; }
+ol.moments li { margin:1px 0; break-inside:avoid; }
+ol.moments b { display:inline-block; min-width:30px; }
+.kf-grid { display:grid; grid-template-columns: repeat(3, minmax(0, 1fr)); gap:10px; }
+.kf-card { border:1px solid var(--line); border-radius:6px; padding:6px 8px; }
+.kf-head { font-size:12.5px; margin-bottom:4px; min-height:2.6em; }
+.kf-head b { font-size:13.5px; }
+.kf-imgs { display:grid; grid-template-columns: repeat(auto-fit, minmax(140px, 1fr)); gap:6px; }
+figure.kf { margin:0; }
+figure.kf img { display:block; width:100%; height:auto; border:1px solid #d1d5db;
+  background:#000; }
+figure.kf figcaption { font-size:11px; color:#4b5563; }
+.graphs { display:flex; flex-wrap:wrap; gap:10px; }
+.graph-card { border:1px solid var(--line); border-radius:6px; padding:6px 8px; background:#fff; }
+.graph-card h3 { margin:0 0 4px 0; font-family: ui-monospace, "DejaVu Sans Mono", monospace;
+  font-size:12.5px; }
+svg .g-node rect { stroke:#64748b; stroke-width:1.2; fill:#f8fafc; }
+svg .g-node-event rect { fill:#dcfce7; stroke:#16a34a; }
+svg .g-node-data rect { fill:#e0f2fe; stroke:#0284c7; stroke-dasharray:4 2; }
+svg .g-name { font-size:12px; font-weight:600; fill:#111827; }
+svg .g-type { font-size:10.5px; fill:#6b7280; }
+svg .g-edge { fill:none; stroke-width:1.5; }
+svg .g-exec { stroke:#111827; fill:#111827; }
+svg .g-edge.g-exec { fill:none; }
+svg .g-data { stroke:#0284c7; fill:#0284c7; }
+svg .g-edge.g-data { stroke-dasharray:4 3; fill:none; }
+svg .g-head { stroke:none; }
+details { margin:6px 0; }
+details > summary { cursor:pointer; color:#1d4ed8; font-size:13px; }
+pre { background:var(--soft); border:1px solid var(--line); padding:8px 10px; overflow:auto;
+  max-height:560px; margin:4px 0; white-space:pre; }
+pre.cmd { max-height:none; white-space:pre-wrap; word-break:break-all; }
+dl.kv { display:grid; grid-template-columns: 160px 1fr; gap:2px 12px; margin:4px 0; font-size:13px; }
+dl.kv dt { color:var(--muted); } dl.kv dd { margin:0; word-break:break-all; }
+.problem { border-left:4px solid #dc2626; background:#fef2f2; padding:6px 10px; margin:8px 0;
+  font-size:13px; }
+.allgood { background:#f0fdf4; border-left:4px solid #16a34a; padding:6px 10px; font-size:13.5px; }
+footer { color:var(--muted); font-size:12px; padding:16px 0 28px 0; }
+"""
+
+REPORT = """<!doctype html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>{{ verdict }} · {{ scenario_name }} · srr report</title>
+<style>{{ css }}</style>
+</head>
+<body>
+<header class="banner v-{{ verdict }}" id="verdict" data-verdict="{{ verdict }}">
+ <div class="wrap">
+  <div class="verdict-word">{{ verdict }}<small>exit code {{ exit_code }}</small></div>
+  <div class="banner-main">
+   <h1>{{ scenario_name }}</h1>
+   <p class="meta">{{ meta | join(" · ") }}</p>
+   {% if reasons %}<ul class="reasons">
+    {% for r in reasons_shown %}<li>{{ r }}</li>{% endfor %}
+    {% if reasons_more %}<li>… and {{ reasons_more }} more (table below)</li>{% endif %}
+   </ul>{% endif %}
+   {% if no_baseline %}<div class="nobaseline">No baseline: metric values only, nothing
+    compared — {{ no_baseline }}</div>{% endif %}
+  </div>
+ </div>
+</header>
+<nav class="toc"><div class="wrap">
+ {% for id, label in toc %}<a href="#{{ id }}">{{ label }}</a>{% endfor %}
+</div></nav>
+<main class="wrap">
+{% for p in problems %}<div class="problem report-problem">{{ p }}</div>{% endfor %}
+
+<section id="headline" class="headline">
+{% if headline.kind == "regressions" %}
+ <h2>Regressed metrics <span class="count">({{ headline.rows | length }} of {{ n_compared }}
+  compared with the baseline)</span></h2>
+ {{ comparison_table(headline.rows, "headline-table") }}
+{% elif headline.kind == "failures" %}
+ <h2>Failing criteria <span class="count">({{ headline.rows | length }})</span></h2>
+ {{ metric_table(headline.rows, "headline-table") }}
+{% elif headline.kind == "health" %}
+ <h2>Tripped health gates <span class="count">({{ headline.rows | length }}): the scores of
+  this run cannot be trusted</span></h2>
+ <table class="headline-table"><thead><tr><th>gate</th><th>detail</th></tr></thead><tbody>
+ {% for h in headline.rows %}<tr class="st-regressed"><td class="name">{{ h.name }}</td>
+  <td>{{ h.detail }}</td></tr>{% endfor %}
+ </tbody></table>
+{% elif headline.kind == "changes" %}
+ <h2>Changes against the baseline <span class="count">(none regressed; {{ n_compared }}
+  compared)</span></h2>
+ {{ comparison_table(headline.rows, "headline-table") }}
+{% else %}
+ <div class="allgood">{{ headline.text }}</div>
+{% endif %}
+</section>
+
+{% if focus_panels %}
+<section id="focus">
+ {% for p in focus_panels %}{{ panel(p) }}{% endfor %}
+</section>
+{% endif %}
+
+{% if map_svg %}
+<section id="map">
+ <h2>Top-down map <span class="count">(world frame, metres)</span></h2>
+ <div class="legend">{% for label, color, style in map_legend %}<span class="key"><i
+  class="{{ style }}" style="{% if style == 'dashed' %}border-color{% else %}background{% endif %}:{{ color }}{% if style == 'fill' %};opacity:.35{% endif %}"></i>{{ label }}</span>{% endfor %}</div>
+ {{ map_svg }}
+ {% if moments %}<ol class="moments">
+  {% for m in moments %}<li><b>M{{ m.number }}</b> {{ "%.2f" | format(m.t_s) }} s — {{ m.label }}</li>{% endfor %}
+ </ol>{% endif %}
+</section>
+{% endif %}
+
+{% if keyframes %}
+<section id="cameras">
+ <h2>Camera keyframes <span class="count">(nearest recorded image to each moment)</span></h2>
+ <div class="kf-grid">
+ {% for row in keyframes %}
+  <div class="kf-card" id="kf-m{{ row.moment.number }}"><div class="kf-head"><b>M{{ row.moment.number }}</b>
+   · {{ "%.2f" | format(row.moment.t_s) }} s — {{ row.moment.label }}</div>
+   <div class="kf-imgs">
+   {% for k in row.frames %}<figure class="kf"><img src="{{ k.uri }}" width="{{ k.width }}"
+     height="{{ k.height }}" alt="{{ k.topic }} at {{ '%.2f' | format(k.t_ns / 1e9) }} s">
+     <figcaption>{{ k.topic }} · {{ "%.2f" | format(k.t_ns / 1e9) }} s</figcaption></figure>
+   {% else %}<span class="note">no colour image near this moment</span>{% endfor %}
+   </div></div>
+ {% endfor %}
+ </div>
+</section>
+{% endif %}
+
+{% if other_panels %}
+<section id="timeseries">
+ <h2>Time series <span class="count">(shared time axis, seconds of simulation time{% if focus_panels %}; the panels that explain the summary are at the top{% endif %})</span></h2>
+ {% for p in other_panels %}{{ panel(p) }}{% endfor %}
+</section>
+{% endif %}
+
+<section id="metrics">
+{% if comparison %}
+ <h2>All metrics against the baseline <span class="count">({{ comparison | length }})</span></h2>
+ {{ comparison_table(comparison, "metrics-table") }}
+{% elif not metrics %}
+ <h2>All metrics <span class="count">(0)</span></h2>
+ <p class="note">This scenario has no <code>scoring:</code> block that produces metrics.</p>
+{% else %}
+ <h2>All metrics <span class="count">({{ metrics | length }}{% if no_baseline %}; no baseline:
+  values only{% endif %})</span></h2>
+ {{ metric_table(metrics, "metrics-table") }}
+{% endif %}
+</section>
+
+<section id="health">
+ <h2>Health gates <span class="count">({{ health_ok }}/{{ health | length }} ok)</span></h2>
+ <table><thead><tr><th>gate</th><th>status</th><th>detail</th></tr></thead><tbody>
+ {% for h in health %}<tr{% if not h.ok %} class="st-regressed"{% endif %}><td class="name">{{ h.name }}</td>
+  <td>{% if h.ok %}<span class="badge b-okgate">ok</span>{% else %}<span class="badge b-tripped">tripped</span>{% endif %}</td>
+  <td>{{ h.detail }}</td></tr>{% endfor %}
+ </tbody></table>
+</section>
+
+<section id="graphs">
+ <h2>Action graphs <span class="count">({{ graphs | length }})</span></h2>
+ {% if graphs %}
+ <p class="note">Columns follow execution and data depth. Solid: execution; dashed blue:
+  data; rounded green: event nodes; dashed boxes: data nodes. Hover for attributes.</p>
+ <div class="graphs">
+ {% for g in graphs %}<div class="graph-card"><h3>{{ g.path }}</h3>{{ g.svg }}</div>{% endfor %}
+ </div>
+ {% endif %}
+ {% if graph_paths %}<p class="note">Graph paths in the summary: {{ graph_paths | join(", ") }}</p>{% endif %}
+ {% if mermaid %}<details><summary>Mermaid text of the graphs</summary><pre class="mermaid-text">{{ mermaid }}</pre></details>{% endif %}
+</section>
+
+<section id="topics">
+ <h2>Topics <span class="count">({{ topics | length }})</span></h2>
+ <table><thead><tr><th>topic</th><th>type</th><th class="num">count</th>
+  <th class="num">published</th><th class="num">rate (Hz)</th><th class="num">bytes</th>
+  <th>durability</th><th>sha256</th></tr></thead><tbody>
+ {% for t in topics %}<tr><td class="name">{{ t.name }}</td><td class="mono">{{ t.type }}</td>
+  <td class="num">{{ t.count }}</td><td class="num">{{ t.published }}</td>
+  <td class="num">{{ t.rate }}</td><td class="num">{{ t.bytes }}</td><td>{{ t.durability }}</td>
+  <td class="mono" title="{{ t.sha256 }}">{{ t.sha256[:16] }}</td></tr>{% endfor %}
+ </tbody></table>
+</section>
+
+<section id="run">
+ <h2>Reproduce</h2>
+ <pre class="cmd" id="command">{{ command }}</pre>
+ <p class="note">The same run from its resolved scenario (includes, defaults and <code>--set</code>
+  overrides applied):</p>
+ <pre class="cmd" id="command-exact">{{ command_exact }}</pre>
+ <dl class="kv">
+  {% for k, v in run_info %}<dt>{{ k }}</dt><dd class="mono">{{ v }}</dd>{% endfor %}
+ </dl>
+ <h3>Versions</h3>
+ <dl class="kv">
+  {% for k, v in versions %}<dt>{{ k }}</dt><dd class="mono">{{ v }}</dd>{% endfor %}
+ </dl>
+</section>
+
+<section id="scenario">
+ <h2>Resolved scenario <span class="count">(scenario.yaml, {{ scenario_lines }} lines)</span></h2>
+ <details><summary>show scenario.yaml</summary><pre class="scenario-yaml">{{ scenario_text }}</pre></details>
+</section>
+<footer>srr {{ srr_version }} · report generated from {{ run_dir }} · self-contained: no
+ scripts, no network requests.</footer>
+</main>
+</body>
+</html>
+"""
+
+MACROS = """
+{% macro comparison_table(rows, cls) -%}
+<table class="{{ cls }}"><thead><tr><th>metric</th><th class="num">value</th>
+ <th class="num">baseline</th><th class="num">delta</th><th class="num">tolerance</th>
+ <th>status</th><th>when (sim s)</th></tr></thead><tbody>
+{% for e in rows %}<tr class="st-{{ e.status }}" data-metric="{{ e.name }}">
+ <td class="name" title="{{ e.detail }}">{{ e.name }}</td><td class="num">{{ e.value }}</td>
+ <td class="num">{{ e.baseline }}</td><td class="num">{{ e.delta }}</td>
+ <td class="num">{{ e.tolerance }}</td>
+ <td><span class="badge b-{{ e.status }}">{{ e.status }}</span> <span class="note">{{ e.better }}</span></td>
+ <td class="when">{{ e.when }}</td></tr>
+{% endfor %}</tbody></table>
+{%- endmacro %}
+
+{% macro metric_table(rows, cls) -%}
+<table class="{{ cls }}"><thead><tr><th>metric</th><th class="num">value</th><th>band</th>
+ <th>detail</th><th>when (sim s)</th></tr></thead><tbody>
+{% for m in rows %}<tr data-metric="{{ m.name }}"{% if m.failing %} class="st-regressed"{% endif %}>
+ <td class="name">{{ m.name }}</td><td class="num">{{ m.value }}</td>
+ <td>{% if m.verdict %}<span class="badge b-{{ m.verdict }}">{{ m.verdict }}</span>{% endif %}</td>
+ <td>{{ m.detail }}</td><td class="when">{{ m.when }}</td></tr>
+{% endfor %}</tbody></table>
+{%- endmacro %}
+
+{% macro panel(p) -%}
+<figure class="panel" id="panel-{{ p.key }}" data-group="{{ p.group }}">
+ <figcaption>{{ p.title }}{% if p.highlight %}<span class="hl-name">dashed outline:
+  {{ p.highlight }}</span>{% endif %}</figcaption>
+ <div class="legend">{% for label, color, style in p.legend %}<span class="key"><i
+  class="{{ style }}" style="{% if style == 'dashed' %}border-color{% else %}background{% endif %}:{{ color }}{% if style == 'fill' %};opacity:.6{% endif %}"></i>{{ label }}</span>{% endfor %}
+  {% if p.note %}<span class="note">{{ p.note }}</span>{% endif %}</div>
+ {{ p.svg }}
+</figure>
+{%- endmacro %}
+"""
+
+INDEX = """<!doctype html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>{{ title }}</title>
+<style>{{ css }}</style>
+</head>
+<body>
+<header class="banner v-{{ overall }}" id="verdict" data-verdict="{{ overall }}"><div class="wrap">
+ <div class="verdict-word">{{ overall }}<small>{{ runs | length }} run(s)</small></div>
+ <div class="banner-main"><h1>{{ title }}</h1>
+  <p class="meta">{% for v, n in counts %}{{ n }} {{ v }}{% if not loop.last %} · {% endif %}{% endfor %}</p>
+ </div></div>
+</header>
+<main class="wrap">
+<section id="runs">
+ <h2>Runs <span class="count">(worst first)</span></h2>
+ <table class="index-table"><thead><tr><th>verdict</th><th>scenario</th><th>key regressions / reasons</th>
+  <th class="num">sim s</th><th class="num">seed</th><th>run</th></tr></thead><tbody>
+ {% for r in runs %}<tr data-verdict="{{ r.verdict }}">
+  <td><span class="badge b-v-{{ r.verdict }}">{{ r.verdict }}</span></td>
+  <td class="name">{% if r.href %}<a href="{{ r.href }}">{{ r.scenario }}</a>{% else %}{{ r.scenario }}{% endif %}</td>
+  <td>{% if r.key %}<ul style="margin:0;padding-left:16px">{% for k in r.key %}<li>{{ k }}</li>{% endfor %}</ul>{% endif %}
+   {% if r.more %}<span class="note">+{{ r.more }} more</span>{% endif %}</td>
+  <td class="num">{{ r.sim_s }}</td><td class="num">{{ r.seed }}</td>
+  <td class="mono">{% if r.href %}<a href="{{ r.href }}">{{ r.label }}</a>{% else %}{{ r.label }}{% endif %}</td>
+ </tr>{% endfor %}
+ </tbody></table>
+</section>
+<footer>srr suite index · links are relative to this file · self-contained: no scripts, no
+ network requests.</footer>
+</main>
+</body>
+</html>
+"""

@@ -1,0 +1,42 @@
+"""Headless Chromium for the report tests: a fresh profile per call and no network."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from collections.abc import Sequence
+from pathlib import Path
+
+__all__ = ["CHROMIUM_FLAGS", "VIEWPORT", "chromium_path", "run_chromium"]
+
+CHROMIUM_FLAGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+    "--hide-scrollbars",
+    # any network request the page might make fails instead of leaving the machine
+    "--proxy-server=127.0.0.1:9", "--host-resolver-rules=MAP * ~NOTFOUND",
+]
+VIEWPORT = (1280, 900)
+
+
+def chromium_path() -> str | None:
+    explicit = os.environ.get("SRR_CHROMIUM")
+    if explicit:
+        return explicit
+    for name in ("/usr/bin/chromium", "chromium", "chromium-browser"):
+        found = shutil.which(name)
+        if found:
+            return found
+    return None
+
+
+def run_chromium(binary: str, tmp: Path, url: str, extra: Sequence[str]) -> str:
+    """Run Chromium once with a fresh profile; return stdout (the DOM for --dump-dom)."""
+    profile = tmp / f"profile-{len(list(tmp.glob('profile-*')))}"
+    cmd = [binary, *CHROMIUM_FLAGS, f"--user-data-dir={profile}",
+           f"--window-size={VIEWPORT[0]},{VIEWPORT[1]}", *extra, url]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
+    if proc.returncode != 0:
+        raise AssertionError(f"chromium exited {proc.returncode}: {proc.stderr[-2000:]}")
+    return proc.stdout

@@ -1,0 +1,196 @@
+"""The report of a real (short) failing run: what it holds, that it is self-contained, that
+``srr report`` re-renders it, and that the plotted series are what was scored."""
+
+from __future__ import annotations
+
+import copy
+import json
+import re
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from harness import api
+from harness.cli import main
+from harness.errors import SrrError
+from harness.report import render_report, write_index
+from harness.report.data import load_run, metric_windows
+from harness.report.images import keyframes
+
+pytestmark = pytest.mark.slow
+
+# attributes through which a page can make the browser fetch something
+URL_ATTRS = {"src", "href", "xlink:href", "srcset", "poster", "data", "action", "formaction",
+             "background", "manifest", "ping", "cite", "longdesc", "codebase"}
+
+
+class _Refs(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.refs: list[tuple[str, str, str]] = []
+        self.tags: list[str] = []
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        self.tags.append(tag)
+        for k, v in attrs:
+            if v is not None and (k in URL_ATTRS or k == "style"):
+                self.refs.append((tag, k, v))
+
+
+def test_run_writes_a_self_contained_report(failing_run: api.RunResult) -> None:
+    assert failing_run.verdict == "REGRESSED" and failing_run.exit_code == 1
+    html = (failing_run.run_dir / "report.html").read_text(encoding="utf-8")
+    parser = _Refs()
+    parser.feed(html)
+    remote = [r for r in parser.refs if re.search(r"(?i)(https?:)?//", r[2])
+              and not r[2].startswith("data:")]
+    assert remote == [], f"remote references: {remote[:5]}"
+    for tag, attr, value in parser.refs:
+        if attr in ("src", "href"):
+            assert value.startswith(("data:image/png;base64,", "#")), (tag, attr, value[:60])
+    assert "script" not in parser.tags and "link" not in parser.tags
+    assert "iframe" not in parser.tags and "object" not in parser.tags
+    assert not re.search(r"(?i)@import|@font-face|url\(\s*['\"]?(https?:)?//", html)
+    assert "mermaid.js" not in html and "mermaid.min.js" not in html
+
+
+def test_report_leads_with_what_regressed(failing_run: api.RunResult, summary: dict) -> None:
+    html = (failing_run.run_dir / "report.html").read_text(encoding="utf-8")
+    regressed = [e["name"] for e in summary["comparison"] if e["status"] == "regressed"]
+    assert "safety.mute_lag.max" in regressed
+    head = html[html.index('id="headline"'):html.index('id="focus"')]
+    for name in regressed:
+        assert f'data-metric="{name}"' in head
+    assert 'data-metric="perception.f1"' not in head  # ok rows stay in the full table
+    # the headline shows the lag metric's window (edge -> response)
+    row = head[head.index('data-metric="safety.mute_lag.max"'):]
+    row = row[:row.index("</tr>")]
+    (window,) = metric_windows("safety.mute_lag.max", load_run(failing_run.run_dir))
+    assert f"{window[0]:.2f}–{window[1]:.2f}" in row
+    # the focus panel is the safety group's, with the regressed windows outlined
+    focus = html[html.index('id="focus"'):html.index('id="map"')]
+    groups = re.findall(r'data-group="(\w+)"', focus)
+    assert groups[0] == "safety" and 'class="hl-box"' in focus
+
+
+def test_series_agree_with_the_metrics(failing_run: api.RunResult, summary: dict) -> None:
+    data = load_run(failing_run.run_dir)
+    assert data.problems == []
+    metrics = {m["name"]: m for m in summary["metrics"]}
+    s = data.safety
+    assert s is not None
+    for kind in ("over", "under"):
+        longs = [[w.start_s, w.end_s] for w in s.mismatches if w.kind == kind and w.long]
+        np.testing.assert_allclose(longs, metrics[f"safety.{kind}_mute"]["windows"] or
+                                   np.zeros((0, 2)), atol=1e-6)
+    match = 100.0 * float((s.actual == s.expected).mean())
+    assert match == pytest.approx(metrics["safety.match_rate"]["value"])
+    for kind in ("mute", "unmute"):
+        lags = [e.lag_s for e in s.edges if e.kind == kind and e.lag_s is not None]
+        assert max(lags) == pytest.approx(metrics[f"safety.{kind}_lag.max"]["value"])
+    c = data.control
+    assert c is not None and c.source == "ground truth"
+    assert c.cte.max() == pytest.approx(metrics["control.cross_track_error.max"]["value"])
+    assert c.cte.mean() == pytest.approx(metrics["control.cross_track_error.mean"]["value"])
+    assert [m.number for m in data.moments] == list(range(1, len(data.moments) + 1))
+    starts = {round(m.t_s, 6) for m in data.moments}
+    assert all(round(w.start_s, 6) in starts for w in s.mismatches if w.long)
+    targets = [round(m.t_s * 1e9) for m in data.moments]
+    frames = keyframes(failing_run.run_dir / "bag", targets)
+    for t in targets:  # each rgb camera (5 Hz) once, its nearest image; depth left out
+        assert sorted(k.topic for k in frames[t]) == ["/dock_cam_left_rgb",
+                                                      "/dock_cam_right_rgb"]
+        assert all(abs(k.t_ns - t) <= 100_000_000 for k in frames[t])
+        assert all(k.png.startswith(b"\x89PNG") and (k.width, k.height) == (160, 120)
+                   for k in frames[t])
+
+
+def test_srr_report_rerenders_the_same_page(failing_run: api.RunResult,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    path = failing_run.run_dir / "report.html"
+    before = path.read_bytes()
+    path.unlink()
+    assert main(["report", str(failing_run.run_dir)]) == 0
+    assert capsys.readouterr().out.strip() == str(path)
+    assert path.read_bytes() == before  # from the run directory alone, byte for byte
+
+
+@pytest.mark.parametrize("what", ["missing", "not-a-run", "bad-json"])
+def test_srr_report_refuses_what_is_not_a_run(tmp_path: Path, what: str,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    target = tmp_path / "x"
+    if what != "missing":
+        target.mkdir()
+    if what == "bad-json":
+        (target / "summary.json").write_text("{", encoding="utf-8")
+    assert main(["report", str(target)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("srr report: ") and str(target) in err
+    assert "Traceback" not in err
+
+
+def _variant(summary: dict, **changes: object) -> dict:
+    s = copy.deepcopy(summary)
+    s.update(changes)
+    return s
+
+
+def test_no_baseline_shows_values_only(failing_run: api.RunResult, summary: dict) -> None:
+    note = "no baseline at baselines/x.json: bless one with `srr baseline bless RUN_DIR`"
+    s = _variant(summary, verdict="FAIL", exit_code=1, reasons=[note], baseline=None,
+                 comparison=[])
+    html = render_report(failing_run.run_dir, summary=s)
+    assert 'data-verdict="FAIL"' in html and "No baseline: metric values only" in html
+    assert "<th class=\"num\">baseline</th>" not in html
+    table = html[html.index('id="metrics"'):html.index('id="health"')]
+    assert all(f'data-metric="{m["name"]}"' in table for m in summary["metrics"])
+
+
+def test_invalid_run_leads_with_tripped_gates(failing_run: api.RunResult,
+                                              summary: dict) -> None:
+    health = copy.deepcopy(summary["health"])
+    health[0]["ok"] = False
+    health[0]["detail"] = "1.0 Hz (13 messages); expected 60 Hz"
+    s = _variant(summary, verdict="INVALID", exit_code=3, health=health,
+                 reasons=[f"health {health[0]['name']}: {health[0]['detail']}"])
+    html = render_report(failing_run.run_dir, summary=s)
+    head = html[html.index('id="headline"'):]
+    assert "Tripped health gates" in head[:400] and health[0]["detail"] in head[:1500]
+    assert 'id="focus"' not in html
+
+
+def test_interrupted_run_renders(failing_run: api.RunResult, summary: dict) -> None:
+    s = _variant(summary, verdict="INTERRUPTED", exit_code=130, interrupted=True,
+                 reasons=["interrupted before the end of the scenario"])
+    html = render_report(failing_run.run_dir, summary=s)
+    assert 'class="banner v-INTERRUPTED"' in html
+
+
+def test_index_links_reports_relatively(failing_run: api.RunResult, tmp_path: Path) -> None:
+    missing = tmp_path / "gone"
+    path = write_index(tmp_path / "suite", [failing_run.run_dir, missing])
+    html = path.read_text(encoding="utf-8")
+    assert path.name == "index.html"
+    hrefs = re.findall(r'href="([^"]+)"', html)
+    assert hrefs and all(not h.startswith(("/", "http")) for h in hrefs)
+    target = (path.parent / hrefs[0]).resolve()
+    assert target == (failing_run.run_dir / "report.html").resolve()
+    assert "REGRESSED" in html and "control.goal_reached: no vs yes (regressed)" in html
+    assert html.index('data-verdict="INVALID"', html.index("<tbody>")) < html.index(
+        'data-verdict="REGRESSED"', html.index("<tbody>"))  # worst first
+    assert "not a run directory" in html
+
+
+def test_summary_is_kept_when_the_report_fails(tmp_path: Path,
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    def broken(*args: object, **kwargs: object) -> None:
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(api, "write_report", broken)
+    sc = api.load(Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml",
+                  duration=0.5)
+    with pytest.raises(SrrError, match=r"report\.html.*boom"):
+        api.run_scenario(sc, out=tmp_path / "r")
+    assert json.loads((tmp_path / "r" / "summary.json").read_text())["verdict"]
