@@ -38,7 +38,7 @@ from harness.regression import baseline_path, compare, decide, load_baseline, sa
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
-from harness.scoring import Scores, score_run
+from harness.scoring import Scores, check_scoring, score_run
 
 __all__ = [
     "RepeatResult",
@@ -157,6 +157,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
     if run_dir.exists() and any(run_dir.iterdir()):
         raise SrrError(f"--out {run_dir}: directory exists and is not empty")
+    check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(scenario, source=source)
     run_dir.mkdir(parents=True, exist_ok=True)
     (run_dir / "scenario.yaml").write_text(

@@ -22,6 +22,7 @@ from harness import __version__, api
 from harness.bag import inspect_bag
 from harness.errors import SrrError
 from harness.report import write_report
+from harness.scoring import check_scoring
 
 __all__ = ["main"]
 
@@ -205,6 +206,7 @@ def _cmd_baseline(args: argparse.Namespace) -> int:
 
 def _cmd_validate(args: argparse.Namespace) -> int:
     sc = api.load(args.scenario, overrides=args.overrides)
+    check_scoring(sc, srr_gt=sc.srr_gt, source=str(args.scenario))
     robots = ", ".join(f"{r.name} ({r.model})" for r in sc.robots if r.enabled) or "none"
     out_console.print(f"{args.scenario}: ok — {sc.name}, {sc.duration:g} s, seed {sc.seed}, "
                       f"robots: {robots}", markup=False)

@@ -30,7 +30,8 @@ from harness.metrics import (
 from harness.scenario import Scenario
 from harness.sut.zones import points_in_polygon
 
-__all__ = ["ROBOT_RADIUS", "Scores", "expected_rates", "score_frames", "score_run"]
+__all__ = ["ROBOT_RADIUS", "Scores", "check_scoring", "expected_rates", "score_frames",
+           "score_run"]
 
 # Footprint circle radius per model (half the diagonal of the chassis), for clearance and
 # collisions against workers.
@@ -96,29 +97,43 @@ def _gt_names(sc: Scenario) -> list[str]:
     return names
 
 
-def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
-                 published: Mapping[str, int] | None = None,
-                 recorded: Mapping[str, int] | None = None,
-                 duration_s: float | None = None, source: str = "<scenario>") -> Scores:
-    """Metrics and health gates for one run's frames."""
+def check_scoring(sc: Scenario, *, srr_gt: bool, source: str = "<scenario>") -> None:
+    """Refuse a ``scoring:`` block that cannot be scored, before anything runs."""
     s = sc.scoring
-    metrics: list[MetricResult] = []
     need_gt = any(block is not None and block.enabled
                   for block in (s.control, s.perception, s.safety))
     if need_gt and not srr_gt:
         raise ScenarioError(source, "scoring", "scoring needs ground truth: set srr_gt: true "
                             "or run with --srr-gt")
-    workers = [w for w in sc.workers if w.enabled]
+    robots = {r.name for r in sc.robots if r.enabled}
     if s.control is not None and s.control.enabled:
-        route = sc.routes.get(s.control.route)
-        if route is None:
+        if s.control.route not in sc.routes:
             raise ScenarioError(source, "scoring.control.route",
                                 f"no route named {s.control.route!r}")
-        try:
-            robot = sc.robot(s.control.robot)
-        except KeyError:
+        if s.control.robot not in robots:
             raise ScenarioError(source, "scoring.control.robot",
-                                f"no robot named {s.control.robot!r}") from None
+                                f"no enabled robot named {s.control.robot!r}")
+    if s.safety is not None and s.safety.enabled:
+        if sc.zones.trailer_tripwire is None or len(sc.zones.loading_roi) < 3:
+            raise ScenarioError(source, "zones", "safety scoring needs zones.loading_roi and "
+                                "zones.trailer_tripwire")
+        if s.safety.robot not in robots:
+            raise ScenarioError(source, "scoring.safety.robot",
+                                f"no enabled robot named {s.safety.robot!r}")
+
+
+def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
+                 published: Mapping[str, int] | None = None,
+                 recorded: Mapping[str, int] | None = None,
+                 duration_s: float | None = None, source: str = "<scenario>") -> Scores:
+    """Metrics and health gates for one run's frames."""
+    check_scoring(sc, srr_gt=srr_gt, source=source)
+    s = sc.scoring
+    metrics: list[MetricResult] = []
+    workers = [w for w in sc.workers if w.enabled]
+    if s.control is not None and s.control.enabled:
+        route = sc.routes[s.control.route]
+        robot = sc.robot(s.control.robot)
         metrics += control_metrics(
             frames, robot=robot.name, route=route.waypoints,
             goal_tolerance=s.control.goal_tolerance,
@@ -134,9 +149,7 @@ def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
                                           topic=resolve_topic(topic) if topic else None)
     if s.safety is not None and s.safety.enabled:
         wire = sc.zones.trailer_tripwire
-        if wire is None or len(sc.zones.loading_roi) < 3:
-            raise ScenarioError(source, "zones", "safety scoring needs zones.loading_roi and "
-                                "zones.trailer_tripwire")
+        assert wire is not None  # check_scoring
         metrics += safety_metrics(frames, tripwire=Tripwire(wire.a, wire.b, wire.inside),
                                   roi=sc.zones.loading_roi, robot=s.safety.robot,
                                   min_window_s=s.safety.min_window_s)

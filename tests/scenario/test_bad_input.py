@@ -92,3 +92,21 @@ def test_bad_cli_argument_is_one_line(capsys: pytest.CaptureFixture[str]) -> Non
     assert exc.value.code == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--seed" in err
+
+
+@pytest.mark.parametrize(("override", "field"), [
+    ("scoring.control.route=nowhere", "scoring.control.route"),
+    ("srr_gt=false", "scoring"),
+    ("scoring.safety={robot: forklift}", "zones"),
+])
+def test_unscorable_scoring_is_refused_before_running(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str],
+                                                      override: str, field: str) -> None:
+    from tests.conftest import SCENARIOS
+
+    path = str(SCENARIOS / "forklift_warehouse.yaml")
+    for argv in (["validate", path, "--set", override],
+                 ["run", path, "--set", override, "--out", str(tmp_path / "r")]):
+        code, err = _run(capsys, *argv)
+        assert code == 2 and f"{path}: {field}:" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "r").exists()
