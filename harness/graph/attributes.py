@@ -10,6 +10,7 @@ tuples; ``target`` is a tuple of absolute prim path strings; ``bundle`` / ``any`
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 import re
@@ -27,6 +28,7 @@ __all__ = [
     "Attr",
     "coerce",
     "compatible",
+    "converter",
     "is_valid_attr_name",
     "zero_value",
 ]
@@ -153,8 +155,12 @@ def _sequence(value: Any, type_name: str) -> list[Any]:
 
 def _fixed_tuple(value: Any, type_name: str) -> tuple[float, ...]:
     size = _FIXED_TUPLES[type_name]
-    if type(value) is tuple and len(value) == size and all(type(v) is float for v in value):
-        return value  # already in stored form
+    if type(value) is tuple and len(value) == size:
+        for v in value:  # a plain loop: cheaper than all(<genexpr>) on this per-tick path
+            if type(v) is not float:
+                break
+        else:
+            return value  # already in stored form
     if isinstance(value, np.ndarray) and value.dtype == _FLOAT64 and value.shape == (size,):
         return tuple(value.tolist())
     items = _sequence(value, type_name)
@@ -205,24 +211,56 @@ _SCALAR_CONVERTERS: dict[str, Callable[[Any, str], Any]] = {
 }
 
 
+Converter = Callable[[Any], Any]
+
+
+def _identity(value: Any) -> Any:
+    return value
+
+
+def _conversion(type_name: str) -> Callable[..., Any]:
+    """The ``(value, type_name) -> stored value`` function behind ``type_name``."""
+    if type_name in _SCALAR_CONVERTERS:
+        return _SCALAR_CONVERTERS[type_name]
+    if type_name in _FIXED_TUPLES:
+        return _fixed_tuple
+    if type_name in _ARRAYS:
+        return _array
+    if type_name == "target":
+        return _target
+    if type_name == EXECUTION:
+        return _execution
+    raise ValueError(f"unknown attribute type {type_name!r}")
+
+
+def _make_converter(type_name: str) -> Converter:
+    if type_name in _OPAQUE:
+        return _identity
+    return functools.partial(_conversion(type_name), type_name=type_name)
+
+
+_CONVERTERS: dict[str, Converter] = {name: _make_converter(name) for name in ATTRIBUTE_TYPES}
+
+
+def converter(type_name: str) -> Converter:
+    """``coerce`` with the type already dispatched: ``converter(t)(v) == coerce(t, v)``.
+
+    The engine resolves one per attribute when it plans a node (see
+    :mod:`harness.graph.plan`), so per-tick writes and reads skip the type dispatch.
+    Unknown type names raise ValueError, as :func:`coerce` does.
+    """
+    found = _CONVERTERS.get(type_name)
+    if found is None:
+        raise ValueError(f"unknown attribute type {type_name!r}")
+    return found
+
+
 def coerce(type_name: str, value: Any) -> Any:
     """Return ``value`` in the stored form of ``type_name``; raise ValueError when it does not fit.
 
     Unknown type names raise ValueError too. ``bundle`` and ``any`` accept anything unchanged.
     """
-    if type_name in _OPAQUE:
-        return value
-    if type_name in _SCALAR_CONVERTERS:
-        return _SCALAR_CONVERTERS[type_name](value, type_name)
-    if type_name in _FIXED_TUPLES:
-        return _fixed_tuple(value, type_name)
-    if type_name in _ARRAYS:
-        return _array(value, type_name)
-    if type_name == "target":
-        return _target(value, type_name)
-    if type_name == EXECUTION:
-        return _execution(value, type_name)
-    raise ValueError(f"unknown attribute type {type_name!r}")
+    return converter(type_name)(value)
 
 
 def zero_value(type_name: str) -> Any:

@@ -26,7 +26,8 @@ from typing import Any, Literal
 
 from harness.errors import GraphError, SrrError
 from harness.graph.attributes import EXECUTION, Attr, coerce, compatible, is_valid_attr_name
-from harness.graph.node import Database, NodeType
+from harness.graph.node import MISSING, Database, NodeType
+from harness.graph.plan import Evaluation, NodePlan, build_plan
 from harness.graph.registry import DEFAULT_REGISTRY, Registry
 
 __all__ = [
@@ -119,6 +120,8 @@ class Node:
         self._values: dict[str, Any] = {}
         self._outputs: dict[str, Any] = {}
         self._initialized = False
+        # Resolved bindings, built by Graph._plan and dropped by Graph._invalidate.
+        self._plan: NodePlan | None = None
         self._reset_outputs()
 
     def __repr__(self) -> str:
@@ -267,23 +270,21 @@ class Attribute:
         return self.name
 
 
-class _Evaluation:
-    """Book-keeping of one ``Graph.evaluate`` call."""
-
-    def __init__(self, ctx: Any) -> None:
-        self.ctx = ctx
-        self.done: set[str] = set()
-        self.computing: set[str] = set()
-        self.exec_stack: list[str] = []
-
-
 class _Binding:
-    """Implements :class:`~harness.graph.node.NodePort` for one node in one evaluation."""
+    """Implements :class:`~harness.graph.node.NodePort` for one node in one evaluation.
 
-    def __init__(self, node: Node, evaluation: _Evaluation | None) -> None:
+    Reads and writes go through the node's :class:`~harness.graph.plan.NodePlan`, fetched
+    from the node on every access (never kept here): a compute that edits the graph (e.g. adds
+    an attribute to its own node) drops the plan, and the next access sees the new bindings.
+    """
+
+    __slots__ = ("_evaluation", "_node", "fired")
+
+    def __init__(self, node: Node, evaluation: Evaluation | None) -> None:
         self._node = node
         self._evaluation = evaluation
-        self.fired: dict[str, bool] = {}
+        # Execution outputs written by this run, by full name (created on the first write).
+        self.fired: dict[str, bool] | None = None
 
     @property
     def node_path(self) -> str:
@@ -306,31 +307,56 @@ class _Binding:
         return tuple(a.name for a in self._node.output_attrs())
 
     def read_input(self, name: str) -> Any:
-        return self._node.graph._input_value(self._node, f"inputs:{name}", self._evaluation)
+        """Fast path of ``db.inputs.<name>``: one plan lookup, then the value or its reader."""
+        node = self._node
+        plan = node._plan
+        if plan is None:
+            plan = node._graph._build_plan(node)
+        entry = plan.readable.get(name)
+        if entry is None:
+            return MISSING
+        full, default, reader = entry
+        if reader is None:
+            return node._values.get(full, default)
+        return reader(self._evaluation)
 
     def read_output(self, name: str) -> Any:
         return self._node.output_value(f"outputs:{name}")
 
-    def write_output(self, name: str, value: Any) -> None:
-        full = f"outputs:{name}"
-        attr = self._node.require_attr(full)
-        if attr.type == EXECUTION:
-            self.fired[full] = bool(value)
-            return
+    def write_output(self, name: str, value: Any) -> bool:
+        """Fast path of ``db.outputs.<name> = value``; False when there is no such output.
+
+        A value already in the stored form of the output's type (a ``float`` for ``double``,
+        a ``str`` for ``string``...) is stored as is, which is what its converter would do.
+        """
+        node = self._node
+        plan = node._plan
+        if plan is None:
+            plan = node._graph._build_plan(node)
+        slot = plan.outputs.get(name)
+        if slot is None:
+            return False
+        if slot.is_execution:
+            if self.fired is None:
+                self.fired = {}
+            self.fired[slot.full] = bool(value)
+            return True
+        if type(value) is slot.stored_as:
+            node._outputs[slot.full] = value
+            return True
+        assert slot.convert is not None
         try:
-            self._node._outputs[full] = coerce(attr.type, value)
+            node._outputs[slot.full] = slot.convert(value)
         except ValueError as err:
-            raise GraphError(f"{self._node.path}.{full} (type {attr.type}): {err}") from err
+            raise GraphError(f"{node.path}.{slot.full} (type {slot.type_name}): {err}") from err
+        return True
 
     def is_connected(self, name: str) -> bool:
-        full = f"inputs:{name}"
-        graph = self._node.graph
-        if (self._node.name, full) in graph._index_data_in():  # the common, per-tick case
-            return True
-        return any(
-            c.dst_node == self._node.name and c.dst_attr == full
-            for c in graph.connections
-        )
+        node = self._node
+        plan = node._plan
+        if plan is None:
+            plan = node._graph._build_plan(node)
+        return name in plan.connected
 
 
 class Graph:
@@ -351,7 +377,7 @@ class Graph:
         self._nodes: dict[str, Node] = {}
         self._connections: list[Connection] = []
         self._data_in: dict[tuple[str, str], Connection] | None = None
-        self._exec_out: dict[str, list[Connection]] | None = None
+        self._events: tuple[Node, ...] | None = None
 
     def __repr__(self) -> str:
         return f"Graph({self.path!r}, nodes={len(self._nodes)})"
@@ -413,13 +439,15 @@ class Graph:
             raise GraphError(f"{self.path}/{name}: {err}") from None
         node = Node(self, name, type_name, canonical, cls)
         self._nodes[name] = node
+        self._invalidate()
         return node
 
     def delete_node(self, name: str) -> None:
         """Delete a node and every connection touching it."""
-        self.node(name)
+        node = self.node(name)
         del self._nodes[name]
         self._connections = [c for c in self._connections if name not in (c.src_node, c.dst_node)]
+        node._plan = None
         self._invalidate()
 
     def create_attribute(self, node_name: str, full_name: str, type_name: str) -> Attr:
@@ -443,6 +471,7 @@ class Graph:
         node._dynamic[full_name] = attr
         if port == "outputs":
             node._outputs[full_name] = attr.default
+        self._invalidate()
         return attr
 
     def connect(self, src_node: str, src_attr: str, dst_node: str, dst_attr: str) -> Connection:
@@ -516,6 +545,7 @@ class Graph:
             node._values[full_name] = coerced
         else:
             node._outputs[full_name] = coerced
+        self._invalidate()
 
     def get_value(self, node_name: str, full_name: str) -> Any:
         """The value of an attribute now, without computing anything.
@@ -533,9 +563,13 @@ class Graph:
 
     def evaluate(self, ctx: Any) -> None:
         """Run one tick: fire every event node in creation order (see the module docstring)."""
-        evaluation = _Evaluation(ctx)
-        for node in list(self._nodes.values()):
-            if node.kind == "event" and self._nodes.get(node.name) is node:
+        evaluation = Evaluation(ctx)
+        events = self._events
+        if events is None:  # cached until the next edit (see _invalidate)
+            events = self._events = tuple(n for n in self._nodes.values() if n.kind == "event")
+        nodes = self._nodes
+        for node in events:
+            if nodes.get(node.name) is node:
                 self._fire(node, evaluation)
 
     def reset(self) -> None:
@@ -544,29 +578,33 @@ class Graph:
             node.impl.reset()
             node._reset_outputs()
             node._initialized = False
+        self._invalidate()
 
-    def _fire(self, node: Node, evaluation: _Evaluation) -> None:
-        if node.name in evaluation.exec_stack:
-            chain = " -> ".join([*evaluation.exec_stack, node.name])
+    def _fire(self, node: Node, evaluation: Evaluation) -> None:
+        stack = evaluation.exec_stack
+        if node.name in stack:
+            chain = " -> ".join([*stack, node.name])
             raise GraphError(f"{self.path}: execution cycle {chain}")
-        evaluation.exec_stack.append(node.name)
+        stack.append(node.name)
         try:
             binding = _Binding(node, evaluation)
             if not self._run(node, binding, evaluation):
                 return
-            selected = (
-                {name for name, on in binding.fired.items() if on} if binding.fired else None
-            )
-            for conn in list(self._index_exec_out().get(node.name, ())):
-                if selected is not None and conn.src_attr not in selected:
+            fired = binding.fired
+            selected = {name for name, on in fired.items() if on} if fired else None
+            # The plan is fetched after compute, which may have edited the graph; its exec_out
+            # is an immutable snapshot, like the copy of the connection list it replaces.
+            plan = node._plan if node._plan is not None else self._build_plan(node)
+            for src_attr, dst_name in plan.exec_out:
+                if selected is not None and src_attr not in selected:
                     continue
-                target = self._nodes.get(conn.dst_node)
+                target = self._nodes.get(dst_name)
                 if target is not None:
                     self._fire(target, evaluation)
         finally:
-            evaluation.exec_stack.pop()
+            stack.pop()
 
-    def _run(self, node: Node, binding: _Binding, evaluation: _Evaluation) -> bool:
+    def _run(self, node: Node, binding: _Binding, evaluation: Evaluation) -> bool:
         db = Database(binding)
         try:
             if not node._initialized:
@@ -581,7 +619,7 @@ class Graph:
                 f"{type(err).__name__}: {err}"
             ) from err
 
-    def _pull(self, node: Node, evaluation: _Evaluation) -> None:
+    def _pull(self, node: Node, evaluation: Evaluation) -> None:
         if node.name in evaluation.done:
             return
         if node.name in evaluation.computing:
@@ -593,36 +631,35 @@ class Graph:
             evaluation.computing.discard(node.name)
         evaluation.done.add(node.name)
 
-    def _input_value(self, node: Node, full_name: str, evaluation: _Evaluation | None) -> Any:
+    def _input_value(self, node: Node, full_name: str, evaluation: Evaluation | None) -> Any:
         attr = node.require_attr(full_name)
         if attr.type == EXECUTION:
             return None
-        conn = self._index_data_in().get((node.name, full_name))
-        if conn is None:
-            return node._values.get(full_name, attr.default)
-        src = self._nodes[conn.src_node]
-        if conn.src_attr.startswith("inputs:"):
-            raw = self._input_value(src, conn.src_attr, evaluation)
-        else:
-            if evaluation is not None and src.kind == "data":
-                self._pull(src, evaluation)
-            raw = src.output_value(conn.src_attr)
-            src_attr = src.attr(conn.src_attr)
-            if src_attr is not None and src_attr.type == attr.type:
-                return raw  # outputs are stored coerced; the same type needs no conversion
-        try:
-            return coerce(attr.type, raw)
-        except ValueError as err:
-            raise GraphError(
-                f"{node.path}.{full_name} (type {attr.type}): value from "
-                f"{src.path}.{conn.src_attr} does not fit: {err}"
-            ) from err
+        plan = node._plan if node._plan is not None else self._build_plan(node)
+        _, default, reader = plan.inputs[full_name.partition(":")[2]]
+        if reader is None:
+            return node._values.get(full_name, default)
+        return reader(evaluation)
+
+    # -- plans -----------------------------------------------------------------------------
+
+    def _build_plan(self, node: Node) -> NodePlan:
+        """The node's resolved bindings, built now when the last edit dropped them."""
+        plan = build_plan(
+            node, self._nodes, tuple(self._connections), self._pull, self._input_value
+        )
+        node._plan = plan
+        return plan
 
     # -- indexes and cycle checks --------------------------------------------------------
 
     def _invalidate(self) -> None:
+        """Drop every cache derived from the graph's structure: the data-input index, the
+        event-node list and each node's plan. Called by every edit (see :mod:`.plan`)."""
         self._data_in = None
-        self._exec_out = None
+        self._events = None
+        for node in self._nodes.values():
+            node._plan = None
 
     def _index_data_in(self) -> dict[tuple[str, str], Connection]:
         if self._data_in is None:
@@ -630,15 +667,6 @@ class Graph:
                 (c.dst_node, c.dst_attr): c for c in self._connections if c.kind == "data"
             }
         return self._data_in
-
-    def _index_exec_out(self) -> dict[str, list[Connection]]:
-        if self._exec_out is None:
-            index: dict[str, list[Connection]] = {}
-            for c in self._connections:
-                if c.kind == "exec":
-                    index.setdefault(c.src_node, []).append(c)
-            self._exec_out = index
-        return self._exec_out
 
     def _pulls(self, conn: Connection) -> bool:
         """True when reading the destination makes the source compute or resolve (a pull)."""

@@ -14,6 +14,7 @@ from harness.errors import GraphError
 from harness.graph.attributes import Attr
 
 __all__ = [
+    "MISSING",
     "NODE_KINDS",
     "AttributeLookupError",
     "Database",
@@ -34,8 +35,27 @@ class AttributeLookupError(GraphError, AttributeError):
     """
 
 
+class _Missing:
+    """Type of :data:`MISSING`."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return "MISSING"
+
+
+#: What :meth:`NodePort.read_input` returns for a name the node has no input for.
+MISSING: Any = _Missing()
+
+
 class NodePort(Protocol):
-    """What a :class:`Database` needs from the engine for one node during one evaluation."""
+    """What a :class:`Database` needs from the engine for one node during one evaluation.
+
+    ``read_input`` and ``write_output`` are the per-tick fast paths: they check the name
+    themselves (``read_input`` returns :data:`MISSING`, ``write_output`` False, for a name the
+    node does not have, and never serve inputs whose names start with ``__``), so ``db``
+    makes one call per access and builds its error messages only on a miss.
+    """
 
     @property
     def node_path(self) -> str: ...
@@ -55,7 +75,7 @@ class NodePort(Protocol):
 
     def read_output(self, name: str) -> Any: ...
 
-    def write_output(self, name: str, value: Any) -> None: ...
+    def write_output(self, name: str, value: Any) -> bool: ...
 
     def is_connected(self, name: str) -> bool: ...
 
@@ -73,15 +93,20 @@ class _Inputs:
         object.__setattr__(self, "_port", port)
 
     def __getattr__(self, name: str) -> Any:
-        if name.startswith("__"):
+        # Only reached for names that are not slots; "_port" itself is one, and an instance
+        # whose _port is unset (copy/pickle probing) must fail with AttributeError here.
+        if name == "_port":
             raise AttributeError(name)
-        port: NodePort = object.__getattribute__(self, "_port")
-        if port.input_attr(name) is None:
+        port: NodePort = self._port
+        value = port.read_input(name)
+        if value is MISSING:
+            if name.startswith("__"):
+                raise AttributeError(name)
             known = ", ".join(port.input_names()) or "none"
             raise AttributeLookupError(
                 f"{port.node_path}: no attribute 'inputs:{name}' (inputs: {known})"
             )
-        return port.read_input(name)
+        return value
 
     def __setattr__(self, name: str, value: Any) -> None:
         port: NodePort = object.__getattribute__(self, "_port")
@@ -109,10 +134,9 @@ class _Outputs:
         return port.read_output(name)
 
     def __setattr__(self, name: str, value: Any) -> None:
-        port: NodePort = object.__getattribute__(self, "_port")
-        if port.output_attr(name) is None:
+        port: NodePort = self._port
+        if not port.write_output(name, value):
             raise self._unknown(port, name)
-        port.write_output(name, value)
 
     def __dir__(self) -> list[str]:
         port: NodePort = object.__getattribute__(self, "_port")

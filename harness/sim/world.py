@@ -191,6 +191,9 @@ class World:
         self._robots = robots
         self._workers = workers if workers is not None else WorkerDriver(model, ())
         self._rgba0 = model.geom_rgba.copy()
+        # Live views into ``data`` (its buffers never move), read by every step's divergence check.
+        self._badqacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+        self._qpos = data.qpos
         mujoco.mj_forward(model, data)
 
     # ------------------------------------------------------------------ building
@@ -246,7 +249,7 @@ class World:
             mujoco.mj_comVel(m, d)
             mujoco.mj_sensorPos(m, d)
             mujoco.mj_sensorVel(m, d)
-        if d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number or not np.isfinite(d.qpos).all():
+        if self._badqacc.number or not np.isfinite(self._qpos).all():
             raise SimulationError(f"simulation diverged at t={d.time:.4f} s (non-finite state)")
 
     def reset(self) -> None:

@@ -88,10 +88,12 @@ class ComputeOdometry(NodeType):
         inv0 = quat_conj(q0)
         lin_w, ang_w = ctx.world.prim_velocity(self._prim)
         inv = quat_conj(quat)
-        db.outputs.position = tuple(quat_rotate(inv0, pos - p0))
-        db.outputs.orientation = tuple(wxyz_to_xyzw(quat_mul(inv0, quat)))
-        db.outputs.linearVelocity = tuple(quat_rotate(inv, lin_w))
-        db.outputs.angularVelocity = tuple(quat_rotate(inv, ang_w))
+        # tolist() gives the Python floats the outputs store (what coercion would make of the
+        # numpy scalars), so the writes take the already-stored-form fast path.
+        db.outputs.position = tuple(quat_rotate(inv0, pos - p0).tolist())
+        db.outputs.orientation = tuple(wxyz_to_xyzw(quat_mul(inv0, quat)).tolist())
+        db.outputs.linearVelocity = tuple(quat_rotate(inv, lin_w).tolist())
+        db.outputs.angularVelocity = tuple(quat_rotate(inv, ang_w).tolist())
         db.outputs.globalLinearVelocity = tuple(float(v) for v in lin_w)
         return True
 

@@ -1,0 +1,196 @@
+"""Per-node evaluation plans: a node's attribute bindings, resolved once and reused every tick.
+
+Resolving ``db.inputs.x`` from scratch means finding the declaration, looking the input up in
+the graph's connection index, finding the source node and its declaration and dispatching the
+coercion on the type name. None of that changes between graph edits, so :func:`build_plan`
+does it once per node and :class:`NodePlan` keeps the answers:
+
+* every input maps to ``(full name, default, reader)``: ``reader`` is None for an input that is
+  unconnected (or an execution input) — its value is ``node._values.get(full, default)`` —
+  and otherwise a closure that pulls the upstream node when needed and converts the value;
+* every output maps to an :class:`OutputSlot` with its converter already chosen;
+* the execution fan-out of the node, as ``(exec output, target node name)`` in connection order.
+
+Invariant: a plan describes the graph as it was when the plan was built. It holds source
+*nodes* and declarations, never values: values are read from ``node._values`` /
+``node._outputs`` at read time, so running nodes never make a plan stale. Every graph edit that
+could change a plan (create or delete a node, connect, disconnect, set a value, create an
+attribute, reset) drops the plans of the whole graph (``Graph._invalidate``); the next read
+builds a fresh one. Readers therefore behave exactly like resolving the binding on every read.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from harness.errors import GraphError
+from harness.graph.attributes import EXECUTION, Attr, Converter, converter
+
+if TYPE_CHECKING:
+    from harness.graph.engine import Connection, Node
+
+__all__ = ["Evaluation", "InputEntry", "InputReader", "NodePlan", "OutputSlot", "build_plan"]
+
+
+class Evaluation:
+    """Book-keeping of one ``Graph.evaluate`` call."""
+
+    __slots__ = ("computing", "ctx", "done", "exec_stack")
+
+    def __init__(self, ctx: Any) -> None:
+        self.ctx = ctx
+        self.done: set[str] = set()
+        self.computing: set[str] = set()
+        self.exec_stack: list[str] = []
+
+
+#: Reads one connected input; the evaluation is None outside ``Graph.evaluate`` (get_value).
+InputReader = Callable[[Evaluation | None], Any]
+#: ``(full name, default, reader or None)`` of one input, see the module docstring.
+InputEntry = tuple[str, Any, InputReader | None]
+#: ``Graph._pull``: compute a data node once per evaluation.
+Pull = Callable[["Node", Evaluation], None]
+#: ``Graph._input_value``: the value of an input (used by input-to-input connections).
+ReadInput = Callable[["Node", str, Evaluation | None], Any]
+
+# Values of exactly these Python types are already in the stored form of the attribute type:
+# the matching converter would return them unchanged, so writes skip it.
+_STORED_AS: dict[str, type] = {
+    "double": float,
+    "float": float,
+    "bool": bool,
+    "string": str,
+    "token": str,
+    "path": str,
+}
+
+
+@dataclass(frozen=True, slots=True)
+class OutputSlot:
+    """One output of a planned node: where it is stored and how a written value is converted."""
+
+    full: str
+    type_name: str
+    is_execution: bool
+    stored_as: type | None
+    convert: Converter | None
+
+
+@dataclass(frozen=True, slots=True)
+class NodePlan:
+    """The resolved bindings of one node (see the module docstring for the invariant).
+
+    ``inputs`` holds every input by bare name; ``readable`` is the same minus names starting
+    with ``__``, which ``db.inputs`` never serves (Python protocol probes such as
+    ``__deepcopy__`` must get a plain AttributeError). ``connected`` holds the bare names of the
+    inputs with any incoming connection (data or execution).
+    """
+
+    inputs: Mapping[str, InputEntry]
+    readable: Mapping[str, InputEntry]
+    outputs: Mapping[str, OutputSlot]
+    connected: frozenset[str]
+    exec_out: tuple[tuple[str, str], ...]
+
+
+def build_plan(
+    node: Node,
+    nodes: Mapping[str, Node],
+    connections: tuple[Connection, ...],
+    pull: Pull,
+    read_input: ReadInput,
+) -> NodePlan:
+    """Resolve every binding of ``node`` in a graph of ``nodes`` and ``connections``."""
+    data_in = {
+        c.dst_attr: c for c in connections if c.kind == "data" and c.dst_node == node.name
+    }
+    inputs: dict[str, InputEntry] = {}
+    outputs: dict[str, OutputSlot] = {}
+    for full, attr in node.attributes().items():
+        port, _, name = full.partition(":")
+        if port == "outputs":
+            outputs[name] = _output_slot(full, attr)
+            continue
+        reader: InputReader | None = None
+        conn = data_in.get(full) if attr.type != EXECUTION else None
+        if conn is not None:
+            src = nodes[conn.src_node]
+            if conn.src_attr.startswith("inputs:"):
+                reader = _input_reader(node, full, attr, src, conn.src_attr, read_input)
+            else:
+                reader = _output_reader(node, full, attr, src, conn.src_attr, pull)
+        inputs[name] = (full, attr.default, reader)
+    readable = inputs
+    if any(name.startswith("__") for name in inputs):
+        readable = {k: v for k, v in inputs.items() if not k.startswith("__")}
+    connected = frozenset(
+        c.dst_attr.partition(":")[2] for c in connections if c.dst_node == node.name
+    )
+    exec_out = tuple(
+        (c.src_attr, c.dst_node)
+        for c in connections
+        if c.kind == "exec" and c.src_node == node.name
+    )
+    return NodePlan(inputs, readable, outputs, connected, exec_out)
+
+
+def _output_slot(full: str, attr: Attr) -> OutputSlot:
+    if attr.type == EXECUTION:
+        return OutputSlot(full, attr.type, True, None, None)
+    return OutputSlot(full, attr.type, False, _STORED_AS.get(attr.type), converter(attr.type))
+
+
+def _does_not_fit(
+    node: Node, full: str, attr: Attr, src: Node, src_full: str, err: ValueError
+) -> GraphError:
+    return GraphError(
+        f"{node.path}.{full} (type {attr.type}): value from "
+        f"{src.path}.{src_full} does not fit: {err}"
+    )
+
+
+def _output_reader(
+    node: Node, full: str, attr: Attr, src: Node, src_full: str, pull: Pull
+) -> InputReader:
+    """Reader of an input fed by ``src``'s output ``src_full``.
+
+    A data source computes first (once per evaluation: ``evaluation.done`` is checked here so a
+    memoized source costs no call). Outputs are stored coerced, so a source of the same type
+    gives its value as is; any other type is converted to the input's.
+    """
+    src_attr = src.attr(src_full)
+    same_type = src_attr is not None and src_attr.type == attr.type
+    convert = converter(attr.type)
+    pulls = src.kind == "data"
+    src_name = src.name
+
+    def read(evaluation: Evaluation | None) -> Any:
+        if pulls and evaluation is not None and src_name not in evaluation.done:
+            pull(src, evaluation)
+        raw = src._outputs[src_full]
+        if same_type:
+            return raw
+        try:
+            return convert(raw)
+        except ValueError as err:
+            raise _does_not_fit(node, full, attr, src, src_full, err) from err
+
+    return read
+
+
+def _input_reader(
+    node: Node, full: str, attr: Attr, src: Node, src_full: str, read_input: ReadInput
+) -> InputReader:
+    """Reader of an input fed by ``src``'s input ``src_full`` (resolved, then converted)."""
+    convert = converter(attr.type)
+
+    def read(evaluation: Evaluation | None) -> Any:
+        raw = read_input(src, src_full, evaluation)
+        try:
+            return convert(raw)
+        except ValueError as err:
+            raise _does_not_fit(node, full, attr, src, src_full, err) from err
+
+    return read
