@@ -17,7 +17,6 @@ import contextlib
 import dataclasses
 import hashlib
 import json
-import os
 import platform
 import shutil
 import time
@@ -30,6 +29,7 @@ from typing import Any
 import yaml
 
 from harness import __version__
+from harness.atomic import write_json_atomic
 from harness.bus import Recorder, TopicStats
 from harness.engine import Simulation
 from harness.errors import InvalidRunError, SrrError
@@ -143,12 +143,6 @@ def _topic_table(stats: dict[str, TopicStats], published: dict[str, int],
     return table
 
 
-def _write_json_atomic(path: Path, data: Any) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
-
-
 def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
                  progress: Progress | None = None, baselines: Path | None = None,
                  update_baseline: bool = False, update_reason: str = "updated with "
@@ -214,7 +208,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     if interrupted:
         summary["verdict"], summary["exit_code"] = "INTERRUPTED", 130
         summary["reasons"] = ["interrupted before the end of the scenario"]
-    _write_json_atomic(run_dir / "summary.json", summary)
+    write_json_atomic(run_dir / "summary.json", summary)
     write_junit(run_dir / "junit.xml", scenario.name, junit_cases(summary))
     try:  # last: a report that fails to render never costs the run its summary
         write_report(run_dir, summary=summary, scenario=scenario)
@@ -306,7 +300,7 @@ def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
         "differing_topics": differing,
         "digests": [r.summary["digest"] for r in runs],
     }
-    _write_json_atomic(out_dir / "determinism.json", report)
+    write_json_atomic(out_dir / "determinism.json", report)
     worst = max(r.exit_code for r in runs)
     return RepeatResult(runs, identical, tuple(differing),
                         worst if identical else max(worst, 1), out_dir)

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from harness.atomic import write_json_atomic
 from harness.errors import SrrError
 
 __all__ = ["BASELINE_VERSION", "Baseline", "BaselineError", "BaselineMetric", "baseline_path",
@@ -108,8 +109,5 @@ def save_baseline(path: Path, summary: Mapping[str, Any], *, reason: str,
         blessed_at=time.strftime("%Y-%m-%dT%H:%M:%S%z"), source_run=source_run,
     )
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(baseline.to_json(), indent=2, sort_keys=True) + "\n",
-                   encoding="utf-8")
-    os.replace(tmp, path)
+    write_json_atomic(path, baseline.to_json())
     return baseline

@@ -15,7 +15,6 @@ inline.
 from __future__ import annotations
 
 import contextlib
-import os
 import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -26,7 +25,7 @@ from jinja2 import Environment, StrictUndefined
 from markupsafe import Markup
 
 from harness import __version__
-from harness.errors import SrrError
+from harness.atomic import write_text_atomic
 from harness.frames import Frames
 from harness.report.data import RunData, load_run, metric_windows
 from harness.report.graphs import graph_diagrams
@@ -368,11 +367,5 @@ def write_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
     run_dir = Path(run_dir)
     text = render_report(run_dir, summary=summary, scenario=scenario, frames=frames)
     path = run_dir / REPORT_NAME
-    tmp = path.with_suffix(".html.tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except OSError as err:
-        tmp.unlink(missing_ok=True)
-        raise SrrError(f"{path}: cannot write the report: {err.strerror or err}") from err
+    write_text_atomic(path, text)
     return path

@@ -14,6 +14,7 @@ from urllib.parse import quote
 from jinja2 import Environment, StrictUndefined
 from markupsafe import Markup
 
+from harness.atomic import write_text_atomic
 from harness.errors import SrrError
 from harness.report.data import read_summary
 from harness.report.html import REPORT_NAME, fmt_value
@@ -91,11 +92,5 @@ def write_index(out_dir: str | Path, runs: Sequence[str | Path], *,
     text = env.from_string(INDEX).render(css=Markup(CSS), title=title, overall=overall,
                                          counts=counts, runs=rows)
     path = out / INDEX_NAME
-    tmp = path.with_suffix(".html.tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except OSError as err:
-        tmp.unlink(missing_ok=True)
-        raise SrrError(f"{path}: cannot write the index: {err.strerror or err}") from err
+    write_text_atomic(path, text)
     return path

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-import os
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
+
+from harness.atomic import write_text_atomic
 
 __all__ = ["Case", "junit_cases", "write_junit"]
 
@@ -55,6 +56,6 @@ def write_junit(path: Path, suite: str, cases: Sequence[_Case]) -> None:
             ET.SubElement(tc, "failure", message=c.detail).text = c.detail
         else:
             ET.SubElement(tc, "system-out").text = c.detail
-    tmp = path.with_suffix(".xml.tmp")
-    ET.ElementTree(root).write(tmp, encoding="utf-8", xml_declaration=True)
-    os.replace(tmp, path)
+    ET.indent(root)
+    write_text_atomic(path, '<?xml version="1.0" encoding="utf-8"?>\n'
+                      + ET.tostring(root, encoding="unicode") + "\n")
