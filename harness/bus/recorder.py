@@ -31,6 +31,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 
 from harness.bus.bus import Envelope, Qos
 from harness.bus.messages import TYPESTORE, serialize
+from harness.errors import BagError
 
 __all__ = ["Recorder", "TopicStats"]
 
@@ -103,7 +104,7 @@ class Recorder:
         self._queue: queue.Queue[tuple[_TopicState, int, bytes] | None] = queue.Queue(
             maxsize=queue_size)
         self._thread: threading.Thread | None = None
-        self._error: BaseException | None = None
+        self._error: BagError | None = None
 
     def open(self, qos_of: Callable[[str], Qos] | None = None) -> None:
         """Open the bag; ``qos_of`` gives a topic's QoS when its first message arrives."""
@@ -142,8 +143,10 @@ class Recorder:
                         st.topic, st.msgtype, typestore=TYPESTORE,
                         offered_qos_profiles=[_bag_qos(st.qos)])
                 writer.write(st.conn, stamp, data)
-            except BaseException as err:
-                self._error = err
+            except Exception as err:  # handed to the caller's thread as one clear error
+                reason = err.strerror if isinstance(err, OSError) and err.strerror else err
+                self._error = BagError(f"{self.bag_dir}: cannot record {st.topic}: {reason}")
+                self._error.__cause__ = err
                 continue
             st.count += 1
             st.bytes += len(data)
