@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-import harness.graph as og
 from harness import api
 from harness.builders import camera_tf
 from harness.cli import main
@@ -26,8 +25,10 @@ from harness.scenario.schema import (
     Scenario,
     WorldSpec,
 )
+from tests import seed001
 from tests.conftest import SCENARIOS
 from tests.e2e.bagread import decoded
+from tests.seed001 import Camera, publish_camera_tf
 
 pytestmark = pytest.mark.slow
 
@@ -149,113 +150,13 @@ def test_point_cloud_moved_by_the_published_tf_lies_on_the_floor_and_walls(
 
 # ----------------------------------------------------------------------------- seed 001 port
 
-class Camera:
-    """The bit of ``isaacsim.sensors.camera.Camera`` the helper reads."""
-
-    def __init__(self, prim_path: str) -> None:
-        self.prim_path = prim_path
-
-
-SIM: Simulation | None = None
-
-
-def is_prim_path_valid(path: str) -> bool:
-    """``isaacsim.core.utils.prims.is_prim_path_valid``: a world prim or a graph."""
-    assert SIM is not None
-    return SIM.world.has_prim(path) or og.GraphStage.current().has_graph(path)
-
-
-def set_target_prims(primPath: str, inputName: str, targetPrimPaths: list[str]) -> None:
-    """``isaacsim.core.nodes.scripts.utils.set_target_prims``."""
-    og.Controller.attribute(primPath + "." + inputName).set(targetPrimPaths)
-
-
-# Seed 001's helper as published; only the imports differ (og is harness.graph).
-def publish_camera_tf(camera: Camera):
-    camera_prim = camera.prim_path
-
-    if not is_prim_path_valid(camera_prim):
-        raise ValueError(f"Camera path '{camera_prim}' is invalid.")
-
-    try:
-        # Generate the camera_frame_id. OmniActionGraph will use the last part of
-        # the full camera prim path as the frame name, so we will extract it here
-        # and use it for the pointcloud frame_id.
-        camera_frame_id=camera_prim.split("/")[-1]
-
-        # Generate an action graph associated with camera TF publishing.
-        ros_camera_graph_path = "/CameraTFActionGraph"
-
-        # If a camera graph is not found, create a new one.
-        if not is_prim_path_valid(ros_camera_graph_path):
-            (ros_camera_graph, _, _, _) = og.Controller.edit(  # noqa: RUF059
-                {
-                    "graph_path": ros_camera_graph_path,
-                    "evaluator_name": "execution",
-                    "pipeline_stage": og.GraphPipelineStage.GRAPH_PIPELINE_STAGE_SIMULATION,
-                },
-                {
-                    og.Controller.Keys.CREATE_NODES: [
-                        ("OnTick", "omni.graph.action.OnTick"),
-                        ("IsaacClock", "isaacsim.core.nodes.IsaacReadSimulationTime"),
-                        ("RosPublisher", "isaacsim.ros2.bridge.ROS2PublishClock"),
-                    ],
-                    og.Controller.Keys.CONNECT: [
-                        ("OnTick.outputs:tick", "RosPublisher.inputs:execIn"),
-                        ("IsaacClock.outputs:simulationTime", "RosPublisher.inputs:timeStamp"),
-                    ]
-                }
-            )
-
-        # Generate 2 nodes associated with each camera: TF from world to ROS camera convention, and world frame.  # noqa: E501
-        og.Controller.edit(
-            ros_camera_graph_path,
-            {
-                og.Controller.Keys.CREATE_NODES: [
-                    ("PublishTF"+camera_frame_id, "isaacsim.ros2.bridge.ROS2PublishTransformTree"),
-                    ("PublishRawTF"+camera_frame_id+"world", "isaacsim.ros2.bridge.ROS2PublishRawTransformTree"),  # noqa: E501
-                ],
-                og.Controller.Keys.SET_VALUES: [
-                    ("PublishTF"+camera_frame_id+".inputs:topicName", "/tf"),
-                    # Note if topic_name is changed to something else besides "/tf",
-                    # it will not be captured by the ROS tf broadcaster.
-                    ("PublishRawTF"+camera_frame_id+"world.inputs:topicName", "/tf"),
-                    ("PublishRawTF"+camera_frame_id+"world.inputs:parentFrameId", camera_frame_id),
-                    ("PublishRawTF"+camera_frame_id+"world.inputs:childFrameId", camera_frame_id+"world"),  # noqa: E501
-                    # Static transform from ROS camera convention to world (+Z up, +X forward) convention:  # noqa: E501
-                    ("PublishRawTF"+camera_frame_id+"world.inputs:rotation", [0.5, -0.5, 0.5, 0.5]),
-                ],
-                og.Controller.Keys.CONNECT: [
-                    (ros_camera_graph_path+"/OnTick.outputs:tick",
-                        "PublishTF"+camera_frame_id+".inputs:execIn"),
-                    (ros_camera_graph_path+"/OnTick.outputs:tick",
-                        "PublishRawTF"+camera_frame_id+"world.inputs:execIn"),
-                    (ros_camera_graph_path+"/IsaacClock.outputs:simulationTime",
-                        "PublishTF"+camera_frame_id+".inputs:timeStamp"),
-                    (ros_camera_graph_path+"/IsaacClock.outputs:simulationTime",
-                        "PublishRawTF_"+camera_frame_id+"world.inputs:timeStamp"),
-                ],
-            },
-        )
-    except Exception as e:
-        print(e)
-
-    # Add target prims for the USD pose. All other frames are static.
-    set_target_prims(
-        primPath=ros_camera_graph_path+"/PublishTF"+camera_frame_id,
-        inputName="inputs:targetPrims",
-        targetPrimPaths=[camera_prim],
-    )
-    return
-
-
 def seed_simulation() -> Simulation:
     """The seed's scene without srr's own clock and camera TF graphs (the seed makes both)."""
-    global SIM
     sc = api.load(SCENARIOS / "camera_publishing.yaml", overrides=["clock.enabled=false"])
-    SIM = Simulation(sc)
-    SIM.stage.delete_graph(camera_tf.GRAPH_PATH)
-    return SIM
+    sim = Simulation(sc)
+    sim.stage.delete_graph(camera_tf.GRAPH_PATH)
+    seed001.extra_prims[:] = [sim.world.has_prim]  # the camera prim is a world prim here
+    return sim
 
 
 def tf_by_frames(sim: Simulation, ticks: int) -> dict[tuple[str, str], list[Any]]:
@@ -292,11 +193,11 @@ def test_seed_publish_camera_tf_verbatim_reports_its_typo_and_still_publishes_th
 def test_seed_publish_camera_tf_with_its_typo_fixed_gives_the_seed_frames() -> None:
     sim = seed_simulation()
     try:
-        source = Path(__file__).read_text()
-        start = source.index("def publish_camera_tf(")
-        end = source.index("\n\n\ndef seed_simulation")
-        fixed = source[start:end].replace('"PublishRawTF_"+', '"PublishRawTF"+')
-        namespace: dict[str, Any] = dict(globals())
+        source = Path(seed001.__file__).read_text()
+        fixed = source[source.index("def publish_camera_tf("):]
+        assert '"PublishRawTF_"+' in fixed
+        fixed = fixed.replace('"PublishRawTF_"+', '"PublishRawTF"+')
+        namespace: dict[str, Any] = dict(vars(seed001))
         exec(compile(fixed, "<seed 001 fixed>", "exec"), namespace)
         with sim.stage:
             namespace["publish_camera_tf"](Camera("/World/floating_camera"))

@@ -59,6 +59,19 @@ _UNKNOWN_COVARIANCE = -1.0  # sensor_msgs/Imu: covariance[0] = -1 means "no esti
 
 _BRIDGE = BRIDGE_INPUTS
 _EXEC_OUT = EXEC_OUT
+# What ReadLidarBeams outputs and PublishLaserScan takes in, attribute for attribute (the
+# PhysX pair is wired output → input by these names).
+_BEAMS = (
+        Attr("azimuthRange", "double[2]", (0.0, 0.0)),
+        Attr("depthRange", "double[2]", (0.0, 0.0)),
+        Attr("horizontalFov", "double", 0.0),
+        Attr("horizontalResolution", "double", 0.0),
+        Attr("intensitiesData", "float[]", ()),
+        Attr("linearDepthData", "float[]", ()),
+        Attr("numCols", "int", 0),
+        Attr("numRows", "int", 0),
+        Attr("rotationRate", "double", 0.0),
+)
 
 
 def _first(value: Any) -> str:
@@ -254,18 +267,7 @@ class ReadLidarBeams(NodeType):
 
     kind = "action"
     inputs = (Attr("execIn", "execution"), Attr("lidarPrim", "target", ()))
-    outputs = (
-        *_EXEC_OUT,
-        Attr("azimuthRange", "double[2]", (0.0, 0.0)),
-        Attr("depthRange", "double[2]", (0.0, 0.0)),
-        Attr("horizontalFov", "double", 0.0),
-        Attr("horizontalResolution", "double", 0.0),
-        Attr("intensitiesData", "float[]", ()),
-        Attr("linearDepthData", "float[]", ()),
-        Attr("numCols", "int", 0),
-        Attr("numRows", "int", 0),
-        Attr("rotationRate", "double", 0.0),
-    )
+    outputs = (*_EXEC_OUT, *_BEAMS)
 
     def initialize(self, db: Any, ctx: Any) -> None:
         prim = _first(db.inputs.lidarPrim)
@@ -298,15 +300,7 @@ class PublishLaserScan(_Publisher):
         Attr("topicName", "string", "scan"),
         Attr("frameId", "string", "sim_lidar"),
         Attr("timeStamp", "double", 0.0),
-        Attr("azimuthRange", "double[2]", (0.0, 0.0)),
-        Attr("depthRange", "double[2]", (0.0, 0.0)),
-        Attr("horizontalFov", "double", 0.0),
-        Attr("horizontalResolution", "double", 0.0),
-        Attr("intensitiesData", "float[]", ()),
-        Attr("linearDepthData", "float[]", ()),
-        Attr("numCols", "int", 0),
-        Attr("numRows", "int", 0),
-        Attr("rotationRate", "double", 0.0),
+        *_BEAMS,
     )
     outputs = _EXEC_OUT
     msgtype = "sensor_msgs/msg/LaserScan"
