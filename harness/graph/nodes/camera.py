@@ -48,7 +48,7 @@ import numpy as np
 from harness.bus.messages import header, msg_type
 from harness.errors import GraphError, SimulationError
 from harness.graph import Attr, NodeType, register
-from harness.graph.nodes.ros_bridge import aliases, frame_of, topic_of
+from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, aliases, frame_of, topic_of
 from harness.sim.prims import PrimKind
 from harness.sim.render import CameraFrame, Intrinsics, Renderer, points_from_depth
 
@@ -282,11 +282,7 @@ class CreateRenderProduct(NodeType):
 
 
 _HELPER_INPUTS = (
-    Attr("execIn", "execution"),
-    Attr("context", "uint64", 0),
-    Attr("nodeNamespace", "string", ""),
-    Attr("qosProfile", "string", ""),
-    Attr("queueSize", "uint64", 10),
+    *BRIDGE_INPUTS,
     Attr("renderProductPath", "token", ""),
     Attr("frameId", "string", ""),
     Attr("frameSkipCount", "uint", 0),

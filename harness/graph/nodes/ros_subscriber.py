@@ -29,7 +29,7 @@ from rosbags.interfaces import Nodetype
 from harness.bus.messages import TYPESTORE
 from harness.errors import GraphError
 from harness.graph import Attr, GraphStage, Node, NodeType, register
-from harness.graph.nodes.ros_bridge import topic_of
+from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, topic_of
 
 __all__ = ["MessageField", "Subscriber", "define_message_outputs", "message_fields"]
 
@@ -116,11 +116,7 @@ class Subscriber(NodeType):
 
     kind = "action"
     inputs = (
-        Attr("execIn", "execution"),
-        Attr("context", "uint64", 0),
-        Attr("nodeNamespace", "string", ""),
-        Attr("qosProfile", "string", ""),
-        Attr("queueSize", "uint64", 10),
+        *BRIDGE_INPUTS,
         Attr("messagePackage", "string", ""),
         Attr("messageSubfolder", "string", "msg"),
         Attr("messageName", "string", ""),

@@ -11,13 +11,18 @@ shapes (sphere wheels, stabilisers) 3.
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import mujoco
 
 __all__ = [
+    "BOX",
     "COLLISION_GROUP",
+    "CYLINDER",
+    "Q_CYLINDER_ALONG_Y",
+    "SPHERE",
     "VISUAL_GROUP",
     "ActuatorMode",
     "RobotBuild",
@@ -28,6 +33,12 @@ __all__ = [
 
 VISUAL_GROUP = 1
 COLLISION_GROUP = 3
+
+BOX = mujoco.mjtGeom.mjGEOM_BOX
+CYLINDER = mujoco.mjtGeom.mjGEOM_CYLINDER
+SPHERE = mujoco.mjtGeom.mjGEOM_SPHERE
+# Turns a cylinder's axis (its local z) onto the body's y axis: the axle of a wheel.
+Q_CYLINDER_ALONG_Y = (math.sqrt(0.5), math.sqrt(0.5), 0.0, 0.0)
 
 Vec3 = tuple[float, float, float]
 

@@ -31,6 +31,10 @@ from harness.scenario.schema import ForkliftControl, RobotSpec
 from harness.sim.geometry import FloatArray
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import (
+    BOX,
+    CYLINDER,
+    Q_CYLINDER_ALONG_Y,
+    SPHERE,
     ActuatorMode,
     RobotBuild,
     add_collision_geom,
@@ -78,10 +82,6 @@ _RGBA_FORK = (0.20, 0.20, 0.22, 1.0)
 _RGBA_TYRE = (0.05, 0.05, 0.05, 1.0)
 _RGBA_HIDDEN = (0.5, 0.5, 0.5, 0.3)
 
-_BOX = mujoco.mjtGeom.mjGEOM_BOX
-_CYL = mujoco.mjtGeom.mjGEOM_CYLINDER
-_SPHERE = mujoco.mjtGeom.mjGEOM_SPHERE
-_Q_CYL_ALONG_Y = (math.sqrt(0.5), math.sqrt(0.5), 0.0, 0.0)  # cylinder z-axis → body y-axis
 
 FRONT_LEFT_JOINT = "front_left_wheel_joint"
 FRONT_RIGHT_JOINT = "front_right_wheel_joint"
@@ -102,45 +102,45 @@ def _wheel_inertia(mass: float, radius: float, width: float) -> list[float]:
 
 
 def _add_wheel_shapes(body: mujoco.MjsBody, name: str, radius: float) -> None:
-    add_collision_geom(body, f"{name}/collision", _SPHERE, [radius, 0, 0], [0, 0, 0], _RGBA_HIDDEN)
-    add_visual_geom(body, f"{name}/tyre", _CYL, [radius, _WHEEL_WIDTH / 2, 0], [0, 0, 0],
-                    _RGBA_TYRE, quat=_Q_CYL_ALONG_Y)
-    add_visual_geom(body, f"{name}/hub", _CYL, [radius * 0.5, _WHEEL_WIDTH / 2 + 0.005, 0],
-                    [0, 0, 0], _RGBA_MAST, quat=_Q_CYL_ALONG_Y)
+    add_collision_geom(body, f"{name}/collision", SPHERE, [radius, 0, 0], [0, 0, 0], _RGBA_HIDDEN)
+    add_visual_geom(body, f"{name}/tyre", CYLINDER, [radius, _WHEEL_WIDTH / 2, 0], [0, 0, 0],
+                    _RGBA_TYRE, quat=Q_CYLINDER_ALONG_Y)
+    add_visual_geom(body, f"{name}/hub", CYLINDER, [radius * 0.5, _WHEEL_WIDTH / 2 + 0.005, 0],
+                    [0, 0, 0], _RGBA_MAST, quat=Q_CYLINDER_ALONG_Y)
 
 
 def _add_chassis_shapes(body: mujoco.MjsBody, n: str, length: float, robot: RobotSpec,
                         prims: PrimTable) -> None:
     half_l, half_w = length / 2, _CHASSIS_WIDTH / 2
     frame_h = _FRAME_TOP - _CLEARANCE
-    add_collision_geom(body, f"{n}/chassis", _BOX, [half_l, half_w, frame_h / 2],
+    add_collision_geom(body, f"{n}/chassis", BOX, [half_l, half_w, frame_h / 2],
                        [0, 0, _CLEARANCE + frame_h / 2], _RGBA_BODY, group=1)
-    add_visual_geom(body, f"{n}/counterweight", _BOX, [0.2, half_w + 0.01, 0.4],
+    add_visual_geom(body, f"{n}/counterweight", BOX, [0.2, half_w + 0.01, 0.4],
                     [half_l - 0.18, 0, 0.75], _RGBA_DARK)
-    add_visual_geom(body, f"{n}/seat", _BOX, [0.25, 0.25, 0.08], [0.25, 0, _FRAME_TOP + 0.08],
+    add_visual_geom(body, f"{n}/seat", BOX, [0.25, 0.25, 0.08], [0.25, 0, _FRAME_TOP + 0.08],
                     _RGBA_DARK)
     # Overhead guard: four posts and a roof.
     post_h = (_GUARD_TOP - _FRAME_TOP) / 2
     for i, x in enumerate((-half_l + 0.45, 0.55)):
         for j, y in enumerate((-half_w + 0.05, half_w - 0.05)):
-            add_visual_geom(body, f"{n}/guard_post_{i}_{j}", _BOX, [0.03, 0.03, post_h],
+            add_visual_geom(body, f"{n}/guard_post_{i}_{j}", BOX, [0.03, 0.03, post_h],
                             [x, y, _FRAME_TOP + post_h], _RGBA_DARK)
-    add_visual_geom(body, f"{n}/guard_roof", _BOX, [0.55, half_w, 0.03],
+    add_visual_geom(body, f"{n}/guard_roof", BOX, [0.55, half_w, 0.03],
                     [(-half_l + 0.45 + 0.55) / 2, 0, _GUARD_TOP + 0.03], _RGBA_DARK)
     # Mast, carriage and forks ahead of the front (-X) end.
     mast_x = -half_l - 0.06
     for j, y in enumerate((-0.35, 0.35)):
-        add_visual_geom(body, f"{n}/mast_{j}", _BOX, [0.05, 0.04, 1.1], [mast_x, y, 1.15],
+        add_visual_geom(body, f"{n}/mast_{j}", BOX, [0.05, 0.04, 1.1], [mast_x, y, 1.15],
                         _RGBA_MAST)
-    add_visual_geom(body, f"{n}/mast_cross", _BOX, [0.05, 0.39, 0.04], [mast_x, 0, 2.2],
+    add_visual_geom(body, f"{n}/mast_cross", BOX, [0.05, 0.39, 0.04], [mast_x, 0, 2.2],
                     _RGBA_MAST)
-    add_visual_geom(body, f"{n}/carriage", _BOX, [0.03, 0.45, 0.25], [mast_x - 0.09, 0, 0.35],
+    add_visual_geom(body, f"{n}/carriage", BOX, [0.03, 0.45, 0.25], [mast_x - 0.09, 0, 0.35],
                     _RGBA_FORK)
     for j, y in enumerate((-0.3, 0.3)):
-        add_visual_geom(body, f"{n}/fork_{j}", _BOX, [0.55, 0.05, 0.02],
+        add_visual_geom(body, f"{n}/fork_{j}", BOX, [0.55, 0.05, 0.02],
                         [mast_x - 0.12 - 0.55, y, 0.07], _RGBA_FORK)
     # Safety indicator: a thin disk on the guard roof, seen from overhead cameras.
-    add_visual_geom(body, f"{n}/safety_indicator", _CYL, [0.18, 0.015, 0],
+    add_visual_geom(body, f"{n}/safety_indicator", CYLINDER, [0.18, 0.015, 0],
                     [(-half_l + 0.45 + 0.55) / 2, 0, _GUARD_TOP + 0.075], INDICATOR_RGBA)
     prims.declare(indicator_prim(robot), PrimKind.GEOM, f"{n}/safety_indicator")
 
@@ -166,7 +166,7 @@ def add_forklift(spec: mujoco.MjSpec, robot: RobotSpec, control: ForkliftControl
     prims.declare(f"{prim}/body", PrimKind.BODY, f"{n}/body")
     _add_chassis_shapes(chassis, n, length, robot, prims)
     for j, y in enumerate((-(_TRACK / 2 - 0.03), _TRACK / 2 - 0.03)):
-        add_collision_geom(chassis, f"{n}/stabiliser_{j}", _SPHERE, [0.05, 0, 0],
+        add_collision_geom(chassis, f"{n}/stabiliser_{j}", SPHERE, [0.05, 0, 0],
                            [wheelbase / 2, y, 0.07], _RGBA_HIDDEN, priority=1, condim=1)
 
     links: dict[str, tuple[str, str]] = {
@@ -192,7 +192,7 @@ def add_forklift(spec: mujoco.MjSpec, robot: RobotSpec, control: ForkliftControl
                      limited=mujoco.mjtLimited.mjLIMITED_TRUE,
                      range=[-max_steer - math.radians(3), max_steer + math.radians(3)])
     for j, y in enumerate((-_WHEEL_WIDTH / 2 - 0.03, _WHEEL_WIDTH / 2 + 0.03)):
-        add_visual_geom(swivel, f"{n}/back_wheel_fork_{j}", _BOX, [0.05, 0.015, radius * 0.6],
+        add_visual_geom(swivel, f"{n}/back_wheel_fork_{j}", BOX, [0.05, 0.015, radius * 0.6],
                         [0, y, radius * 0.5], _RGBA_MAST)
     prims.declare(f"{prim}/back_wheel_swivel", PrimKind.BODY, f"{n}/back_wheel_swivel")
     links["back_wheel_swivel"] = (f"{prim}/back_wheel_swivel", f"{n}/back_wheel_swivel")

@@ -23,6 +23,10 @@ from harness.scenario.schema import DiffDriveControl, RobotSpec
 from harness.sim.geometry import FloatArray
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import (
+    BOX,
+    CYLINDER,
+    Q_CYLINDER_ALONG_Y,
+    SPHERE,
     ActuatorMode,
     RobotBuild,
     add_collision_geom,
@@ -56,10 +60,6 @@ _RGBA_TYRE = (0.05, 0.05, 0.05, 1.0)
 _RGBA_LIDAR = (0.10, 0.10, 0.12, 1.0)
 _RGBA_HIDDEN = (0.5, 0.5, 0.5, 0.3)
 
-_BOX = mujoco.mjtGeom.mjGEOM_BOX
-_CYL = mujoco.mjtGeom.mjGEOM_CYLINDER
-_SPHERE = mujoco.mjtGeom.mjGEOM_SPHERE
-_Q_CYL_ALONG_Y = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)
 
 _FIXED_LINKS = {
     "caster_back_left_link": (-0.177, 0.064, -0.004),
@@ -100,12 +100,12 @@ def add_turtlebot3(spec: mujoco.MjSpec, robot: RobotSpec, control: DiffDriveCont
     # top but stops 5 mm above the floor, and the full box is drawn as a visual.
     bottom = -BASE_LINK_HEIGHT + _FLOOR_CLEARANCE
     top = _BOX_CENTRE[2] + _BOX_HALF[2]
-    add_collision_geom(base, f"{n}/base_link/collision", _BOX,
+    add_collision_geom(base, f"{n}/base_link/collision", BOX,
                        (_BOX_HALF[0], _BOX_HALF[1], (top - bottom) / 2),
                        (_BOX_CENTRE[0], 0.0, (top + bottom) / 2), _RGBA_HIDDEN)
-    add_visual_geom(base, f"{n}/base_link/shell", _BOX, _BOX_HALF, _BOX_CENTRE, _RGBA_BODY)
+    add_visual_geom(base, f"{n}/base_link/shell", BOX, _BOX_HALF, _BOX_CENTRE, _RGBA_BODY)
     for k, z in enumerate((0.045, 0.085)):
-        add_visual_geom(base, f"{n}/base_link/plate_{k}", _BOX,
+        add_visual_geom(base, f"{n}/base_link/plate_{k}", BOX,
                         (_BOX_HALF[0] + 0.002, _BOX_HALF[1] + 0.002, 0.002),
                         (_BOX_CENTRE[0], 0.0, z), _RGBA_PLATE)
     prims.declare(f"{prim}/base_link", PrimKind.BODY, f"{n}/base_link")
@@ -120,10 +120,10 @@ def add_turtlebot3(spec: mujoco.MjSpec, robot: RobotSpec, control: DiffDriveCont
         set_inertial(wheel, _WHEEL_MASS, (side, _WHEEL_MASS / 2 * _WHEEL_RADIUS**2, side))
         wheel.add_joint(name=f"{n}/{joint}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 1, 0],
                         armature=_WHEEL_ARMATURE)
-        add_collision_geom(wheel, f"{n}/{link}/collision", _SPHERE, (_WHEEL_RADIUS, 0, 0),
+        add_collision_geom(wheel, f"{n}/{link}/collision", SPHERE, (_WHEEL_RADIUS, 0, 0),
                            (0, 0, 0), _RGBA_HIDDEN)
-        add_visual_geom(wheel, f"{n}/{link}/tyre", _CYL, (_WHEEL_RADIUS, _WHEEL_WIDTH / 2, 0),
-                        (0, 0, 0), _RGBA_TYRE, quat=_Q_CYL_ALONG_Y)
+        add_visual_geom(wheel, f"{n}/{link}/tyre", CYLINDER, (_WHEEL_RADIUS, _WHEEL_WIDTH / 2, 0),
+                        (0, 0, 0), _RGBA_TYRE, quat=Q_CYLINDER_ALONG_Y)
         act = spec.add_actuator(name=f"{n}/{joint}", target=f"{n}/{joint}",
                                 trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.set_to_velocity(kv=_WHEEL_KV)
@@ -138,11 +138,11 @@ def add_turtlebot3(spec: mujoco.MjSpec, robot: RobotSpec, control: DiffDriveCont
         body = base.add_body(name=f"{n}/{link}", pos=list(offset))
         if link.startswith("caster"):
             set_inertial(body, _CASTER_MASS, (1e-7, 1e-7, 1e-7))
-            add_collision_geom(body, f"{n}/{link}/collision", _SPHERE, (_CASTER_RADIUS, 0, 0),
+            add_collision_geom(body, f"{n}/{link}/collision", SPHERE, (_CASTER_RADIUS, 0, 0),
                                (0, 0, 0), _RGBA_HIDDEN, priority=1, condim=1)
         elif link == "base_scan":
             set_inertial(body, _LIDAR_MASS, (5e-5, 5e-5, 7e-5))
-            add_visual_geom(body, f"{n}/{link}/housing", _CYL, (0.035, 0.0165, 0),
+            add_visual_geom(body, f"{n}/{link}/housing", CYLINDER, (0.035, 0.0165, 0),
                             (0.0, 0.0, -0.004), _RGBA_LIDAR)
         prims.declare(f"{prim}/{link}", PrimKind.BODY, f"{n}/{link}")
         links[link] = (f"{prim}/{link}", f"{n}/{link}")
