@@ -39,6 +39,7 @@ from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
 from harness.scoring import Scores, check_scoring, score_run
+from harness.wiring import check_wiring
 
 __all__ = [
     "RepeatResult",
@@ -51,6 +52,7 @@ __all__ = [
     "load",
     "run_repeat",
     "run_scenario",
+    "validate",
     "versions",
 ]
 
@@ -153,6 +155,11 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         raise SrrError(f"--out {run_dir}: directory exists and is not empty")
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(scenario, source=source)
+    try:
+        warnings = check_wiring(sim.plan(), scenario, source)
+    except BaseException:
+        sim.close()
+        raise
     run_dir.mkdir(parents=True, exist_ok=True)
     (run_dir / "scenario.yaml").write_text(
         yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
@@ -188,6 +195,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         "ticks": sim.tick_index,
         "tick_hz": scenario.physics.tick_hz,
         "interrupted": interrupted,
+        "warnings": list(warnings),
         "health": [dataclasses.asdict(h) for h in scores.health],
         "metrics": [dataclasses.asdict(m) for m in scores.metrics],
         "graphs": sim.graph_paths,
@@ -218,6 +226,19 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         raise SrrError(f"{run_dir / 'report.html'}: the report could not be rendered "
                        f"({type(err).__name__}: {err}); summary.json is complete") from err
     return RunResult(run_dir, summary["verdict"], summary["exit_code"], summary)
+
+
+def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """Every check that can be made without running (``srr validate``): the scenario itself
+    (done by loading it), the scoring block, building the world and the graphs, loading and
+    setting up the systems under test, and the wiring (topics and TF). Raises the first error;
+    returns the warnings."""
+    check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
+    sim = Simulation(scenario, source=source)
+    try:
+        return check_wiring(sim.plan(), scenario, source)
+    finally:
+        sim.close()
 
 
 def baseline_name(scenario: Scenario) -> str:

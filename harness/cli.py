@@ -22,7 +22,6 @@ from harness import __version__, api
 from harness.bag import inspect_bag
 from harness.errors import SrrError
 from harness.report import write_report
-from harness.scoring import check_scoring
 
 __all__ = ["main"]
 
@@ -206,10 +205,14 @@ def _cmd_baseline(args: argparse.Namespace) -> int:
 
 def _cmd_validate(args: argparse.Namespace) -> int:
     sc = api.load(args.scenario, overrides=args.overrides)
-    check_scoring(sc, srr_gt=sc.srr_gt, source=str(args.scenario))
-    robots = ", ".join(f"{r.name} ({r.model})" for r in sc.robots if r.enabled) or "none"
+    warnings = api.validate(sc, source=str(args.scenario))
+    for w in warnings:
+        err_console.print(f"srr validate: warning: {w}", markup=False)
+    robots = ", ".join(f"{r.name} ({r.model}{', namespace /' + r.ns.strip('/') if r.ns else ''})"
+                       for r in sc.robots if r.enabled) or "none"
     out_console.print(f"{args.scenario}: ok — {sc.name}, {sc.duration:g} s, seed {sc.seed}, "
-                      f"robots: {robots}", markup=False)
+                      f"robots: {robots}" + (f", {len(warnings)} warning(s)" if warnings else ""),
+                      markup=False)
     return 0
 
 

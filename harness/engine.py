@@ -24,6 +24,7 @@ from harness.graph import GraphStage
 from harness.scenario import Scenario
 from harness.sim import World
 from harness.sut.base import SutContext, SystemUnderTest, load_sut
+from harness.wiring import Plan, plan_wiring
 
 __all__ = ["EvalContext", "Simulation"]
 
@@ -54,17 +55,25 @@ class Simulation:
         self.bus = Bus(lambda: self.time_ns)
         self.ctx = EvalContext(0, 0, self.world, self.bus, seed=scenario.seed)
         self.stage = GraphStage()
+        build = BuildContext(scenario, self.world, self.srr_gt)
         with self.stage:
-            self.graph_paths = build_all(BuildContext(scenario, self.world, self.srr_gt))
+            self.graph_paths = build_all(build)
+        self.origins = build.origins  # node path → scenario field, for the wiring checks
         self.suts: list[tuple[str, SystemUnderTest, SutContext]] = []
         for i, spec in enumerate(scenario.systems_under_test):
             if not spec.enabled:
                 continue
             where = f"{source}: systems_under_test[{i}]"
-            sut_ctx = SutContext(name=spec.name, params=spec.params, scenario=scenario,
-                                 seed=scenario.seed, field=where, bus=self.bus)
+            sut_ctx = SutContext.for_spec(spec, scenario, self.bus, where)
             self.suts.append((spec.name, load_sut(spec, where), sut_ctx))
         self._started = False
+
+    def plan(self) -> Plan:
+        """The wiring plan: what every graph node and (set-up) system under test publishes
+        and subscribes, and the TF edges the graphs publish. Starts the systems under test."""
+        if not self._started:
+            self.start()
+        return plan_wiring(self.stage, self.origins, self.suts, self.scenario, self.source)
 
     def add_tap(self, tap: Callable[[Envelope], None]) -> None:
         self.bus.add_tap(tap)

@@ -31,7 +31,12 @@ Tables (all times are simulation time in integer nanoseconds):
 * ``muted``: ``t_ns, value`` from ``/safety/is_muted`` (log time; Bool has no header).
 * ``topics``: ``name, type, count, first_ns, last_ns, max_gap_ns`` for every topic in the
   bag (log times).
-* ``tf_static``: ``parent, child, x, y, z, qx, qy, qz, qw``.
+* ``tf``: ``t_ns, log_ns, topic, tree, static, parent, child, x, y, z, qx, qy, qz, qw``: every
+  transform on a TF-tree topic (``/tf``, ``/tf_static``, ``/<ns>/tf``...; not ``/gt/*``),
+  ``tree`` its namespace (:func:`~harness.bus.endpoints.tf_tree_of`), ``static`` whether
+  the topic is a ``tf_static`` one, ``t_ns`` the header stamp.
+* ``tf_static``: ``parent, child, x, y, z, qx, qy, qz, qw``: the static rows of ``tf``, the
+  chain that places odometry in the world frame.
 
 Few-valued string columns (``name``, ``topic``, ``frame``, ``cls``) are pandas categoricals;
 they compare and filter like strings. Tables keep the bag's order (time order per topic).
@@ -41,7 +46,7 @@ from __future__ import annotations
 
 import re
 import struct
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -52,6 +57,7 @@ from rosbags.rosbag2 import Reader
 from rosbags.rosbag2.errors import ReaderError
 from rosbags.serde import SerdeError
 
+from harness.bus.endpoints import tf_tree_of
 from harness.bus.messages import TYPESTORE
 from harness.errors import BagError
 
@@ -98,6 +104,7 @@ class Frames:
     muted: pd.DataFrame
     topics: pd.DataFrame
     tf_static: pd.DataFrame
+    tf: pd.DataFrame
     start_ns: int
     end_ns: int
     message_count: int
@@ -597,29 +604,26 @@ def _track_tables(topic: str, cols: dict[str, np.ndarray], log_ns: np.ndarray,
     return frames, tracks
 
 
-def _static_table(raws: Iterable[bytes]) -> pd.DataFrame:
-    rows: dict[str, list[Any]] = {k: [] for k in
-                                  ("parent", "child", "x", "y", "z", "qx", "qy", "qz", "qw")}
-    for raw in raws:
-        try:
-            msg: Any = TYPESTORE.deserialize_cdr(raw, TF_MESSAGE)
-        except SerdeError as err:
-            raise BagError(f"/tf_static: {err}") from err
-        for tf in msg.transforms:
-            tr, rot = tf.transform.translation, tf.transform.rotation
-            for k, v in (("parent", tf.header.frame_id), ("child", tf.child_frame_id),
-                         ("x", tr.x), ("y", tr.y), ("z", tr.z), ("qx", rot.x),
-                         ("qy", rot.y), ("qz", rot.z), ("qw", rot.w)):
-                rows[k].append(v)
-    return pd.DataFrame(rows) if rows["parent"] else _empty(
-        {"parent": "str", "child": "str", **{k: "float64" for k in
-                                             ("x", "y", "z", "qx", "qy", "qz", "qw")}})
+_POSE = ("x", "y", "z", "qx", "qy", "qz", "qw")
+_TF_COLS = {"t_ns": "int64", "log_ns": "int64", "topic": "category", "tree": "category",
+            "static": "bool", "parent": "category", "child": "category",
+            **dict.fromkeys(_POSE, "float64")}
+
+
+def _tf_table(topic: str, cols: dict[str, np.ndarray], log_ns: np.ndarray) -> pd.DataFrame:
+    n = cols["msg"].size
+    tree = tf_tree_of(topic)
+    return pd.DataFrame({
+        "t_ns": _stamp(cols), "log_ns": log_ns[cols["msg"]],
+        "topic": np.full(n, topic, dtype=object), "tree": np.full(n, tree, dtype=object),
+        "static": np.full(n, topic.rsplit("/", 1)[-1] == "tf_static"),
+        "parent": cols["frame_id"], "child": cols["child_frame_id"],
+        **{k: cols[k] for k in _POSE}})
 
 
 def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = None,
                 muted_topic: str = "/safety/is_muted", clock_topic: str = "/clock",
-                static_topic: str = "/tf_static", world_frame: str = "world",
-                fast: bool = True) -> Frames:
+                world_frame: str = "world", fast: bool = True) -> Frames:
     """Read a rosbag2 directory (or a run directory holding ``bag/``) into :class:`Frames`.
 
     ``marker_topics``: the ``MarkerArray`` topics that carry tracks; None takes every topic
@@ -638,8 +642,8 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
                 keep = (
                     (c.topic == clock_topic and c.msgtype == CLOCK)
                     or (c.topic == muted_topic and c.msgtype == BOOL)
-                    or (c.topic == static_topic and c.msgtype == TF_MESSAGE)
-                    or (GT_TOPIC.match(c.topic) is not None and c.msgtype == TF_MESSAGE)
+                    or (c.msgtype == TF_MESSAGE and (tf_tree_of(c.topic) is not None
+                                                     or GT_TOPIC.match(c.topic) is not None))
                     or c.msgtype in (ODOMETRY, TWIST)
                     or (c.msgtype == MARKER_ARRAY
                         and (marker_topics is None or c.topic in marker_topics)))
@@ -675,9 +679,14 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
     topics = pd.DataFrame(topic_rows).sort_values("name", kind="stable").reset_index(
         drop=True)
 
-    static_raws = [r for cid, rs in raws.items() if wanted[cid] == static_topic
-                   and by_topic[cid].msgtype == TF_MESSAGE for r in rs]
-    tf_static = _static_table(static_raws)
+    decoded = {cid: decode_batch(raws[cid], by_topic[cid].msgtype, fast=fast)
+               for cid in sorted(wanted, key=lambda i: wanted[i])}
+    tf = _concat([_tf_table(wanted[cid], decoded[cid], log_arr[cid]) for cid in decoded
+                  if by_topic[cid].msgtype == TF_MESSAGE and tf_tree_of(wanted[cid])],
+                 _TF_COLS)
+    tf_static = pd.DataFrame({k: tf.loc[tf["static"], k].to_numpy(
+        dtype=object if k in ("parent", "child") else np.float64)
+        for k in ("parent", "child", *_POSE)})
     static: dict[str, tuple[str, _Transform]] = {}
     for row in tf_static.itertuples(index=False):
         static[str(row.child)] = (str(row.parent), (
@@ -691,11 +700,10 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
     frame_parts: list[pd.DataFrame] = []
     track_parts: list[pd.DataFrame] = []
     n_frames = 0
-    for cid in sorted(wanted, key=lambda i: wanted[i]):
+    for cid, cols in decoded.items():
         topic, msgtype = wanted[cid], by_topic[cid].msgtype
-        if topic == static_topic:
+        if msgtype == TF_MESSAGE and GT_TOPIC.match(topic) is None:
             continue
-        cols = decode_batch(raws[cid], msgtype, fast=fast)
         lg = log_arr[cid]
         if msgtype == CLOCK:
             clock = pd.DataFrame({"t_ns": _stamp(cols), "log_ns": lg[cols["msg"]]})
@@ -727,6 +735,7 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
         muted=muted,
         topics=topics,
         tf_static=tf_static,
+        tf=tf,
         start_ns=start_ns,
         end_ns=end_ns,
         message_count=int(topics["count"].sum()) if len(topics) else 0,

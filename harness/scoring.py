@@ -27,11 +27,11 @@ from harness.metrics import (
     perception_metrics,
     safety_metrics,
 )
-from harness.scenario import Scenario
+from harness.scenario import ControlScoring, RobotSpec, Scenario
 from harness.sut.zones import points_in_polygon
 
-__all__ = ["ROBOT_RADIUS", "Scores", "check_scoring", "expected_rates", "score_frames",
-           "score_run"]
+__all__ = ["ROBOT_RADIUS", "Scores", "check_scoring", "expected_rates", "odom_topic",
+           "score_frames", "score_run"]
 
 # Footprint circle radius per model (half the diagonal of the chassis), for clearance and
 # collisions against workers.
@@ -59,12 +59,12 @@ def expected_rates(sc: Scenario) -> dict[str, float]:
         if not robot.enabled:
             continue
         if robot.odometry.enabled:
-            rates[resolve_topic(robot.odometry.odom_topic, robot.namespace)] = float(hz)
+            rates[odom_topic(robot)] = float(hz)
         lidar, imu = robot.sensors.lidar, robot.sensors.imu
         if lidar is not None and lidar.enabled:
-            rates[resolve_topic(lidar.topic, robot.namespace)] = _gate_rate(hz, lidar.fps)
+            rates[resolve_topic(lidar.topic, robot.ns)] = _gate_rate(hz, lidar.fps)
         if imu is not None and imu.enabled:
-            rates[resolve_topic(imu.topic, robot.namespace)] = _gate_rate(hz, imu.fps)
+            rates[resolve_topic(imu.topic, robot.ns)] = _gate_rate(hz, imu.fps)
     for cam in sc.cameras:
         if not cam.enabled:
             continue
@@ -97,29 +97,43 @@ def _gt_names(sc: Scenario) -> list[str]:
     return names
 
 
+def odom_topic(robot: RobotSpec) -> str:
+    """The robot's odometry topic, resolved in its namespace."""
+    return resolve_topic(robot.odometry.odom_topic, robot.ns)
+
+
+def _control_fields(sc: Scenario) -> list[tuple[str, ControlScoring]]:
+    """(field path, block) of every enabled control block, in either form."""
+    c = sc.scoring.control
+    if isinstance(c, ControlScoring):
+        return [("scoring.control", c)] if c.enabled else []
+    return [(f"scoring.control[{i}]", b) for i, b in enumerate(c or ()) if b.enabled]
+
+
 def check_scoring(sc: Scenario, *, srr_gt: bool, source: str = "<scenario>") -> None:
     """Refuse a ``scoring:`` block that cannot be scored, before anything runs."""
     s = sc.scoring
-    need_gt = any(block is not None and block.enabled
-                  for block in (s.control, s.perception, s.safety))
+    file = sc.file_for("scoring", source)
+    need_gt = bool(s.control_blocks) or any(block is not None and block.enabled
+                                            for block in (s.perception, s.safety))
     if need_gt and not srr_gt:
-        raise ScenarioError(source, "scoring", "scoring needs ground truth: set srr_gt: true "
+        raise ScenarioError(file, "scoring", "scoring needs ground truth: set srr_gt: true "
                             "or run with --srr-gt")
-    robots = {r.name for r in sc.robots if r.enabled}
-    if s.control is not None and s.control.enabled:
-        if s.control.route not in sc.routes:
-            raise ScenarioError(source, "scoring.control.route",
-                                f"no route named {s.control.route!r}")
-        if s.control.robot not in robots:
-            raise ScenarioError(source, "scoring.control.robot",
-                                f"no enabled robot named {s.control.robot!r}")
+    robots = [r.name for r in sc.robots if r.enabled]
+    for where, block in _control_fields(sc):
+        if block.route not in sc.routes:
+            raise ScenarioError(file, f"{where}.route", f"no route named {block.route!r} "
+                                f"(routes: {', '.join(sorted(sc.routes)) or 'none'})")
+        if block.robot not in robots:
+            raise ScenarioError(file, f"{where}.robot", f"no enabled robot named "
+                                f"{block.robot!r} (robots: {', '.join(robots) or 'none'})")
     if s.safety is not None and s.safety.enabled:
         if sc.zones.trailer_tripwire is None or len(sc.zones.loading_roi) < 3:
-            raise ScenarioError(source, "zones", "safety scoring needs zones.loading_roi and "
-                                "zones.trailer_tripwire")
+            raise ScenarioError(sc.file_for("zones", source), "zones", "safety scoring needs "
+                                "zones.loading_roi and zones.trailer_tripwire")
         if s.safety.robot not in robots:
-            raise ScenarioError(source, "scoring.safety.robot",
-                                f"no enabled robot named {s.safety.robot!r}")
+            raise ScenarioError(file, "scoring.safety.robot", f"no enabled robot named "
+                                f"{s.safety.robot!r} (robots: {', '.join(robots) or 'none'})")
 
 
 def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
@@ -131,16 +145,17 @@ def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
     s = sc.scoring
     metrics: list[MetricResult] = []
     workers = [w for w in sc.workers if w.enabled]
-    if s.control is not None and s.control.enabled:
-        route = sc.routes[s.control.route]
-        robot = sc.robot(s.control.robot)
+    radii = {r.name: ROBOT_RADIUS[r.model] for r in sc.robots if r.enabled}
+    for block in s.control_blocks:
+        robot = sc.robot(block.robot)
         metrics += control_metrics(
-            frames, robot=robot.name, route=route.waypoints,
-            goal_tolerance=s.control.goal_tolerance,
+            frames, robot=robot.name, route=sc.routes[block.route].waypoints,
+            goal_tolerance=block.goal_tolerance,
             robot_radius=ROBOT_RADIUS[robot.model],
             worker_radius=workers[0].radius if workers else 0.25,
-            odom_topic=resolve_topic(robot.odometry.odom_topic, robot.namespace),
-            cmd_topic=resolve_topic(robot.control_spec.cmd_vel_topic, robot.namespace))
+            odom_topic=odom_topic(robot),
+            cmd_topic=resolve_topic(robot.control_spec.cmd_vel_topic, robot.ns),
+            other_robots=radii, prefix=s.control_prefix(robot.name))
     if s.perception is not None and s.perception.enabled:
         topic = s.perception.marker_topics[0] if s.perception.marker_topics else None
         scored = within_area(frames, s.perception.area) if s.perception.area else frames
@@ -158,8 +173,8 @@ def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
                for t, silence in s.health.sut_outputs.items()}
     health = health_gates(
         frames, expected_hz=expected_rates(sc), recorded=recorded, published=published,
-        gt_expected=_gt_names(sc) if srr_gt else None, robots=[r.name for r in sc.robots
-                                                               if r.enabled],
+        gt_expected=_gt_names(sc) if srr_gt else None,
+        robots={r.name: odom_topic(r) for r in sc.robots if r.enabled and r.odometry.enabled},
         outputs=outputs, duration_s=duration_s, min_fraction=s.health.rate_fraction)
     return Scores(tuple(metrics), tuple(health))
 

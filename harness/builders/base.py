@@ -2,24 +2,54 @@
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from harness.graph import GraphStage
-from harness.scenario import Scenario
+from harness.scenario import RobotSpec, Scenario
 
-__all__ = ["BuildContext", "GraphEdits", "fresh_graph", "gate_step", "gated_render_product"]
+__all__ = ["BuildContext", "GraphEdits", "NodeOrigin", "fresh_graph", "gate_step",
+           "gated_render_product"]
 
 GraphEdits = tuple[list[tuple[str, str]], list[tuple[str, str]], list[tuple[str, Any]]]
 
 
 @dataclass(frozen=True)
+class NodeOrigin:
+    """Which scenario field a node was built from (``robots[1].odometry``) and, per input,
+    which sub-field set it (``topicName`` → ``odom_topic``), so wiring errors name fields."""
+
+    field: str
+    inputs: Mapping[str, str] = dataclasses.field(default_factory=dict)
+
+    def field_for(self, input_name: str) -> str:
+        sub = self.inputs.get(input_name)
+        return f"{self.field}.{sub}" if sub else self.field
+
+
+@dataclass(frozen=True)
 class BuildContext:
-    """A builder's inputs: the resolved scenario and the built world (read for prim paths)."""
+    """A builder's inputs: the resolved scenario and the built world (read for prim paths).
+
+    ``origins`` collects, per node path, the scenario field the node was built from
+    (:meth:`annotate`); :mod:`harness.wiring` reads it to name fields in its errors."""
 
     scenario: Scenario
     world: Any
     srr_gt: bool = False
+    origins: dict[str, NodeOrigin] = dataclasses.field(default_factory=dict)
+
+    def robot_field(self, robot: RobotSpec, sub: str = "") -> str:
+        """Field path of a robot block, e.g. ``robots[1].odometry``."""
+        base = f"robots[{self.scenario.robot_index(robot.name)}]"
+        return f"{base}.{sub}" if sub else base
+
+    def annotate(self, graph_path: str, node: str, field_path: str, **inputs: str) -> None:
+        """Record that ``<graph_path>/<node>`` comes from ``field_path``; ``inputs`` maps node
+        inputs to the sub-fields that set them (``topicName="odom_topic"``)."""
+        self.origins[f"{graph_path}/{node}"] = NodeOrigin(field_path, inputs)
 
 
 def fresh_graph(path: str) -> dict[str, str]:

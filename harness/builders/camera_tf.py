@@ -58,6 +58,10 @@ def build(bc: BuildContext) -> str | None:
     for camera in cameras:
         frame = frame_of(camera.prim)
         tf, raw = f"PublishTF{frame}", f"PublishRawTF{frame}_world"
+        where = f"cameras[{bc.scenario.cameras.index(camera)}]"
+        bc.annotate(GRAPH_PATH, tf, where, targetPrims="camera_prim")
+        bc.annotate(GRAPH_PATH, raw, where, parentFrameId="camera_prim",
+                    childFrameId="camera_prim")
         nodes += [
             (tf, "isaacsim.ros2.bridge.ROS2PublishTransformTree"),
             (raw, "isaacsim.ros2.bridge.ROS2PublishRawTransformTree"),

@@ -51,9 +51,11 @@ def build(bc: BuildContext, camera: CameraSpec) -> str | None:
     keys = Controller.Keys
     nodes, connect, values = gated_render_product(bc.scenario.physics.tick_hz, camera.fps,
                                                   camera.prim, camera.resolution)
+    where = f"cameras[{bc.scenario.cameras.index(camera)}]"
     for out, topic in topic_names(camera).items():
         name, type_name, stream = HELPERS[out]
         nodes.append((name, type_name))
+        bc.annotate(path, name, where, topicName="name")
         connect += [
             ("CreateRenderProduct.outputs:execOut", f"{name}.inputs:execIn"),
             ("CreateRenderProduct.outputs:renderProductPath",

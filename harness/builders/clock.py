@@ -34,4 +34,5 @@ def build(bc: BuildContext) -> str | None:
             ("PublishClock.inputs:topicName", spec.clock_topic),
         ],
     })
+    bc.annotate(GRAPH_PATH, "PublishClock", "clock", topicName="clock_topic")
     return GRAPH_PATH

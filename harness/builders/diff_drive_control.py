@@ -51,7 +51,7 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
         ],
         keys.SET_VALUES: [
             ("SubscribeTwistDiff.inputs:topicName", c.cmd_vel_topic),
-            ("SubscribeTwistDiff.inputs:nodeNamespace", robot.namespace),
+            ("SubscribeTwistDiff.inputs:nodeNamespace", robot.ns),
             ("DiffController.inputs:maxLinearSpeed", c.max_linear_speed),
             ("DiffController.inputs:maxAngularSpeed", c.max_angular_speed),
             ("DiffController.inputs:wheelDistance", c.wheel_distance),
@@ -61,4 +61,6 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
             ("ArticulationController.inputs:jointNames", list(c.joint_names)),
         ],
     })
+    bc.annotate(path, "SubscribeTwistDiff", bc.robot_field(robot, "control"),
+                topicName="cmd_vel_topic")
     return path

@@ -100,9 +100,11 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
         ],
         keys.SET_VALUES: [
             ("SubscribeTwist.inputs:topicName", c.cmd_vel_topic),
-            ("SubscribeTwist.inputs:nodeNamespace", robot.namespace),
+            ("SubscribeTwist.inputs:nodeNamespace", robot.ns),
             ("SwivelIK.inputs:script", swivel_ik_source(c)),
             ("ArticulationController.inputs:targetPrim", [robot.prim]),
         ],
     })
+    bc.annotate(path, "SubscribeTwist", bc.robot_field(robot, "control"),
+                topicName="cmd_vel_topic")
     return path

@@ -44,14 +44,16 @@ def worker_topic(index: int) -> str:
 def build(bc: BuildContext) -> str | None:
     if not bc.srr_gt:
         return None
-    # (frame, topic, prim, robot front) of everything with a ground truth
-    targets: list[tuple[str, str, str, tuple[float, float, float]]] = []
+    # (frame, topic, prim, robot front, scenario field) of everything with a ground truth
+    targets: list[tuple[str, str, str, tuple[float, float, float], str]] = []
     for robot in bc.scenario.robots:
         if robot.enabled:
             targets.append((robot.name, robot_topic(robot.name),
-                            bc.world.base_prim(robot.name), robot_front(bc, robot)))
+                            bc.world.base_prim(robot.name), robot_front(bc, robot),
+                            bc.robot_field(robot)))
     for worker in bc.world.workers():
-        targets.append((worker.frame, worker_topic(worker.index), worker.prim, (1.0, 0.0, 0.0)))
+        targets.append((worker.frame, worker_topic(worker.index), worker.prim, (1.0, 0.0, 0.0),
+                        f"workers[{worker.index}]"))
 
     nodes: list[tuple[str, str]] = [
         ("OnPlaybackTick", "omni.graph.action.OnPlaybackTick"),
@@ -60,8 +62,9 @@ def build(bc: BuildContext) -> str | None:
     ]
     connect: list[tuple[str, str]] = []
     values: list[tuple[str, Any]] = []
-    for frame, topic, prim, front in targets:
+    for frame, topic, prim, front, where in targets:
         read, pub = f"ReadPose_{frame}", f"PublishGT_{frame}"
+        bc.annotate(GRAPH_PATH, pub, where)
         nodes += [(read, "srr.ReadPrimPose"),
                   (pub, "isaacsim.ros2.bridge.ROS2PublishRawTransformTree")]
         connect += [

@@ -2,6 +2,10 @@
 
 OnPlaybackTick ─▶ IsaacComputeOdometry ─┬▶ ROS2PublishOdometry (odom)
 ReadSimulationTime (timeStamp) ─────────┴▶ ROS2PublishRawTransformTree (tf)
+
+``odom`` resolves in the robot's namespace; the TF goes to the root namespace's ``tf`` (as
+tf2_ros broadcasters publish on ``/tf`` whatever their node's namespace), with the robot's
+frame prefix on both frame ids, so several robots share one TF tree.
 """
 
 from __future__ import annotations
@@ -27,7 +31,8 @@ def robot_front(bc: BuildContext, robot: RobotSpec) -> tuple[float, float, float
 
 
 def base_frame(bc: BuildContext, robot: RobotSpec) -> str:
-    return robot.odometry.base_frame or str(bc.world.default_base_frame(robot.name))
+    """The robot's base frame id (prefixed): ``odometry.base_frame`` or the model's."""
+    return robot.frame(robot.odometry.base_frame or str(bc.world.default_base_frame(robot.name)))
 
 
 def build(bc: BuildContext, robot: RobotSpec) -> str | None:
@@ -65,13 +70,17 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
             ("ComputeOdometry.inputs:chassisPrim", [bc.world.base_prim(robot.name)]),
             ("ComputeOdometry.inputs:robotFront", robot_front(bc, robot)),
             ("PublishOdometry.inputs:topicName", spec.odom_topic),
-            ("PublishOdometry.inputs:nodeNamespace", robot.namespace),
-            ("PublishOdometry.inputs:odomFrameId", spec.odom_frame),
+            ("PublishOdometry.inputs:nodeNamespace", robot.ns),
+            ("PublishOdometry.inputs:odomFrameId", robot.frame(spec.odom_frame)),
             ("PublishOdometry.inputs:chassisFrameId", base_frame(bc, robot)),
             ("PublishRawTFTree.inputs:topicName", spec.tf_topic),
-            ("PublishRawTFTree.inputs:nodeNamespace", robot.namespace),
-            ("PublishRawTFTree.inputs:parentFrameId", spec.odom_frame),
+            ("PublishRawTFTree.inputs:parentFrameId", robot.frame(spec.odom_frame)),
             ("PublishRawTFTree.inputs:childFrameId", base_frame(bc, robot)),
         ],
     })
+    where = bc.robot_field(robot, "odometry")
+    bc.annotate(path, "PublishOdometry", where, topicName="odom_topic",
+                odomFrameId="odom_frame", chassisFrameId="base_frame")
+    bc.annotate(path, "PublishRawTFTree", where, topicName="tf_topic",
+                parentFrameId="odom_frame", childFrameId="base_frame")
     return path

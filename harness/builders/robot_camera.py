@@ -8,7 +8,8 @@ simulation gate for the block's ``fps`` and the optional depth stream::
                                                     mounted camera      └▶ CameraHelperDepth
     OnPlaybackTick ─▶ PublishCameraTF (static; with the robot's tf_tree, frame_id ≠ the link)
 
-on ``topic``, ``info_topic`` and ``depth_topic`` (when set), in the robot's namespace.
+on ``topic``, ``info_topic`` and ``depth_topic`` (when set), in the robot's namespace; frame
+ids carry the robot's frame prefix and the camera's TF goes to the root ``tf_static``.
 
 The camera is the one the world mounts on ``sensors.camera.link`` (``<link prim>/camera``,
 looking along the link's +X). Every stream carries ``frame_id``; unless that is the link's own
@@ -46,11 +47,13 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
     keys = Controller.Keys
     nodes, connect, values = gated_render_product(bc.scenario.physics.tick_hz, spec.fps,
                                                   camera_prim, spec.resolution)
-    streams = [("CameraHelperRgb", "rgb", spec.topic),
-               ("CameraHelperInfo", "camera_info", spec.info_topic)]
+    where = bc.robot_field(robot, "sensors.camera")
+    streams = [("CameraHelperRgb", "rgb", spec.topic, "topic"),
+               ("CameraHelperInfo", "camera_info", spec.info_topic, "info_topic")]
     if spec.depth_topic:
-        streams.append(("CameraHelperDepth", "depth", spec.depth_topic))
-    for name, stream, topic in streams:
+        streams.append(("CameraHelperDepth", "depth", spec.depth_topic, "depth_topic"))
+    for name, stream, topic, topic_field in streams:
+        bc.annotate(path, name, where, topicName=topic_field)
         nodes.append((name, _HELPER))
         connect += [
             ("CreateRenderProduct.outputs:execOut", f"{name}.inputs:execIn"),
@@ -60,8 +63,8 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
         values += [
             (f"{name}.inputs:type", stream),
             (f"{name}.inputs:topicName", topic),
-            (f"{name}.inputs:nodeNamespace", robot.namespace),
-            (f"{name}.inputs:frameId", spec.frame_id),
+            (f"{name}.inputs:nodeNamespace", robot.ns),
+            (f"{name}.inputs:frameId", robot.frame(spec.frame_id)),
         ]
     if robot.tf_tree.enabled and spec.frame_id != frame_of(link_prim):
         translation, rotation = relative_pose(bc.world, link_prim, camera_prim)
@@ -75,14 +78,16 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
         ]
         values += [
             ("PublishCameraTF.inputs:topicName", robot.tf_tree.static_topic),
-            ("PublishCameraTF.inputs:nodeNamespace", robot.namespace),
             ("PublishCameraTF.inputs:staticPublisher", True),
-            ("PublishCameraTF.inputs:parentFrameId", frame_of(link_prim)),
-            ("PublishCameraTF.inputs:childFrameId", spec.frame_id),
+            ("PublishCameraTF.inputs:parentFrameId", robot.frame(frame_of(link_prim))),
+            ("PublishCameraTF.inputs:childFrameId", robot.frame(spec.frame_id)),
             ("PublishCameraTF.inputs:translation", [float(v) for v in translation]),
             ("PublishCameraTF.inputs:rotation",
              [float(v) for v in wxyz_to_xyzw([float(c) for c in rotation])]),
         ]
+        bc.annotate(path, "PublishCameraTF", bc.robot_field(robot),
+                    topicName="tf_tree.static_topic", parentFrameId="sensors.camera.link",
+                    childFrameId="sensors.camera.frame_id")
     Controller.edit(fresh_graph(path), {
         keys.CREATE_NODES: nodes,
         keys.CONNECT: connect,

@@ -12,7 +12,8 @@
                                          linAcc, angVel, orientation ─┘  ▲ timeStamp
     ReadSimTime ─────────────────────────────────────────────────────────┘
 
-Topic, frame and rate come from the sensor block; the robot's namespace applies to the topic.
+Topic, frame and rate come from the sensor block; the robot's namespace applies to the topic
+and its frame prefix to the frame id.
 The lidar prim is the site the world mounts on the block's link (``<link prim>/lidar``, e.g.
 ``/turtlebot3_waffle_pi/base_scan/lidar`` as in the seed).
 """
@@ -62,14 +63,16 @@ def build_lidar(bc: BuildContext, robot: RobotSpec) -> str | None:
         ("CreateRenderProduct.inputs:cameraPrim", [usdrt.Sdf.Path(prim)]),
         ("LidarHelper.inputs:type", spec.type),
         ("LidarHelper.inputs:topicName", spec.topic),
-        ("LidarHelper.inputs:frameId", spec.frame_id),
-        ("LidarHelper.inputs:nodeNamespace", robot.namespace),
+        ("LidarHelper.inputs:frameId", robot.frame(spec.frame_id)),
+        ("LidarHelper.inputs:nodeNamespace", robot.ns),
     ]
     Controller.edit(fresh_graph(path), {
         keys.CREATE_NODES: nodes,
         keys.CONNECT: connect,
         keys.SET_VALUES: values,
     })
+    bc.annotate(path, "LidarHelper", bc.robot_field(robot, "sensors.lidar"), topicName="topic",
+                type="type")
     return path
 
 
@@ -101,8 +104,9 @@ def build_imu(bc: BuildContext, robot: RobotSpec) -> str | None:
             ("ReadIMU.inputs:imuPrim", [usdrt.Sdf.Path(bc.world.sensor_prim(robot.name,
                                                                              "imu"))]),
             ("PublishIMU.inputs:topicName", spec.topic),
-            ("PublishIMU.inputs:frameId", spec.frame_id),
-            ("PublishIMU.inputs:nodeNamespace", robot.namespace),
+            ("PublishIMU.inputs:frameId", robot.frame(spec.frame_id)),
+            ("PublishIMU.inputs:nodeNamespace", robot.ns),
         ],
     })
+    bc.annotate(path, "PublishIMU", bc.robot_field(robot, "sensors.imu"), topicName="topic")
     return path

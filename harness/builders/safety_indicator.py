@@ -90,9 +90,11 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
             ("ROS2Subscriber.inputs:messageSubfolder", "msg"),
             ("ROS2Subscriber.inputs:messageName", "Bool"),
             ("ROS2Subscriber.inputs:topicName", spec.muted_topic),
-            ("ROS2Subscriber.inputs:nodeNamespace", robot.namespace),
+            ("ROS2Subscriber.inputs:nodeNamespace", robot.ns),
         ],
     })
+    bc.annotate(path, "ROS2Subscriber", bc.robot_field(robot, "safety_indicator"),
+                topicName="muted_topic")
     # The message type is set: the subscriber grows outputs:data, which can now be connected.
     define_message_outputs(nodes["ROS2Subscriber"])
     Controller.edit(graph, {

@@ -1,5 +1,9 @@
 """TF tree graph (/World/<name>_TfGraph): world → odom, and the robot's hand-built link tree.
 
+Both publish in the root namespace (``/tf_static``, ``/tf``, as tf2_ros broadcasters do) with
+the robot's frame prefix on its own frames (never on the world frame), so several robots form
+one tree under ``world``.
+
 * ``world → odom`` on ``/tf_static``: where odometry starts (the base pose on the first tick,
   with ``robot_front`` turned onto +X), so odometry and ground truth share one tree.
 * The TurtleBot3 tree of the seed, built by hand rather than from the articulation root so
@@ -61,26 +65,31 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
         nodes.append((name, type_name))
         connect.append(("OnPlaybackTick.outputs:tick", f"{name}.inputs:execIn"))
         connect.append(("ReadSimTime.outputs:simulationTime", f"{name}.inputs:timeStamp"))
-        values.append((f"{name}.inputs:nodeNamespace", robot.namespace))
         values.extend((f"{name}.inputs:{k}", v) for k, v in settings)
 
+    where = bc.robot_field(robot)
     if robot.odometry.enabled:
         translation, rotation = odom_origin(bc, robot)
         add("PubWorldToOdom", "isaacsim.ros2.bridge.ROS2PublishRawTransformTree", [
             ("topicName", spec.static_topic),
             ("staticPublisher", True),
             ("parentFrameId", spec.world_frame),
-            ("childFrameId", robot.odometry.odom_frame),
+            ("childFrameId", robot.frame(robot.odometry.odom_frame)),
             ("translation", translation),
             ("rotation", rotation),
         ])
+        bc.annotate(path, "PubWorldToOdom", where, topicName="tf_tree.static_topic",
+                    parentFrameId="tf_tree.world_frame", childFrameId="odometry.odom_frame")
     for name, parent, children, static in LINK_TREES[robot.model]:
         add(name, "isaacsim.ros2.bridge.ROS2PublishTransformTree", [
             ("topicName", spec.static_topic if static else spec.dynamic_topic),
             ("staticPublisher", static),
             ("parentPrim", [f"{robot.prim}/{parent}"]),
             ("targetPrims", [f"{robot.prim}/{c}" for c in children]),
+            ("frameIdPrefix", robot.frame_prefix or ""),
         ])
+        bc.annotate(path, name, f"{where}.tf_tree",
+                    topicName="static_topic" if static else "dynamic_topic")
     Controller.edit(fresh_graph(path), {
         keys.CREATE_NODES: nodes,
         keys.CONNECT: connect,

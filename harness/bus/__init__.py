@@ -1,7 +1,15 @@
 """The in-process bus, ROS 2 message helpers and the MCAP recorder."""
 
 from harness.bus.bus import TRANSIENT_LOCAL, Bus, BusError, Envelope, Publisher, Qos, TopicInfo
-from harness.bus.names import TopicNameError, resolve_topic, validate_topic
+from harness.bus.names import (
+    FrameIdError,
+    TopicNameError,
+    remap_topic,
+    resolve_topic,
+    validate_frame_id,
+    validate_namespace,
+    validate_topic,
+)
 from harness.bus.recorder import Recorder, TopicStats
 
 __all__ = [
@@ -9,12 +17,16 @@ __all__ = [
     "Bus",
     "BusError",
     "Envelope",
+    "FrameIdError",
     "Publisher",
     "Qos",
     "Recorder",
     "TopicInfo",
     "TopicNameError",
     "TopicStats",
+    "remap_topic",
     "resolve_topic",
+    "validate_frame_id",
+    "validate_namespace",
     "validate_topic",
 ]

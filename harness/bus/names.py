@@ -4,13 +4,18 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["TopicNameError", "resolve_topic", "validate_topic"]
+__all__ = ["FrameIdError", "TopicNameError", "remap_topic", "resolve_topic",
+           "validate_frame_id", "validate_namespace", "validate_topic"]
 
 _TOKEN = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
 class TopicNameError(ValueError):
     """A topic name breaks the ROS 2 naming rules."""
+
+
+class FrameIdError(ValueError):
+    """A TF frame id that tf2 would refuse or mishandle."""
 
 
 def validate_topic(name: str) -> None:
@@ -45,3 +50,35 @@ def resolve_topic(name: str, namespace: str = "") -> str:
         validate_topic(ns)
         return f"/{ns}/{name}"
     return f"/{name}"
+
+
+def validate_namespace(ns: str) -> None:
+    """Raise :class:`TopicNameError` unless ``ns`` is a valid ROS 2 namespace: empty (the
+    root), ``/``, or a topic-like name (``fleet/a``, ``/fleet/a``)."""
+    if ns in ("", "/"):
+        return
+    try:
+        validate_topic(ns)
+    except TopicNameError as err:
+        raise TopicNameError(f"namespace {err}") from None
+
+
+def validate_frame_id(frame: str) -> None:
+    """Raise :class:`FrameIdError` unless tf2 accepts ``frame`` as a frame id: not empty, no
+    leading ``/`` (tf2 refuses it), no whitespace or control characters."""
+    if not frame:
+        raise FrameIdError("frame id is empty")
+    if frame.startswith("/"):
+        raise FrameIdError(f"frame id {frame!r} starts with '/' (tf2 refuses it)")
+    if any(c.isspace() or not c.isprintable() for c in frame):
+        raise FrameIdError(f"frame id {frame!r} contains whitespace or control characters")
+
+
+def remap_topic(name: str, namespace: str, rules: dict[str, str]) -> str:
+    """Resolve ``name`` in ``namespace``, then apply remapping ``rules`` (from → to, both
+    resolved in the same namespace), as ROS 2 matches remap rules on fully qualified names."""
+    full = resolve_topic(name, namespace)
+    for src, dst in rules.items():
+        if resolve_topic(src, namespace) == full:
+            return resolve_topic(dst, namespace)
+    return full

@@ -8,10 +8,14 @@ A node type is a subclass of :class:`NodeType` with class-level ``kind``, ``inpu
 
 from __future__ import annotations
 
-from typing import Any, ClassVar, Literal, Protocol
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol
 
 from harness.errors import GraphError
 from harness.graph.attributes import Attr
+
+if TYPE_CHECKING:
+    from harness.bus.endpoints import Endpoint, TfEdge
 
 __all__ = [
     "MISSING",
@@ -205,3 +209,9 @@ class NodeType:
 
     def reset(self) -> None:
         """Forget per-node state (the engine calls it from ``GraphStage.reset``)."""
+
+    def endpoints(self, value: Callable[[str], Any]) -> Sequence[Endpoint | TfEdge]:
+        """The topics this node will publish or subscribe and the TF edges it will publish,
+        from its input values as set (``value("topicName")``; nothing is computed), so the
+        wiring can be checked before a run (:mod:`harness.wiring`). Default: none."""
+        return ()

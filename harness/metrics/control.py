@@ -15,11 +15,12 @@ Definitions
   any sample; time to goal is from the first pose sample to the first such sample (s, None
   when never reached); final distance to the goal (m).
 * Distance travelled: sum of the distances between consecutive pose samples (m).
-* Collisions: the robot's footprint is a circle of ``robot_radius`` around its reference point
-  and each worker a circle of ``worker_radius``; clearance = centre distance - both radii,
-  from time-aligned ground-truth poses. A collision is one episode of clearance < 0 with one
-  worker (entering contact counts once, however long it lasts); the windows list them. The
-  minimum clearance over the run is reported too (m; negative means contact).
+* Collisions: the robot's footprint is a circle of ``robot_radius`` around its reference point,
+  each worker a circle of ``worker_radius`` and each other robot a circle of its own radius;
+  clearance = centre distance - both radii, from time-aligned ground-truth poses. A collision
+  is one episode of clearance < 0 with one worker or robot (entering contact counts once,
+  however long it lasts); the windows list them. The minimum clearance over the run is
+  reported too (m; negative means contact).
 * ``cmd_vel`` tracking: every odometry sample at or after the first command is compared with
   the last command published at or before it (commands are held); RMS of ``cmd.vx - odom.vx``
   (m/s) and of ``cmd.wz - odom.wz`` (rad/s). Odometry twists are in the body frame, which is
@@ -31,8 +32,9 @@ Definitions
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Literal
 
 import numpy as np
@@ -160,11 +162,15 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def clearance(robot: pd.DataFrame, workers: pd.DataFrame, *, robot_radius: float,
-              worker_radius: float = 0.3, tolerance_ns: int = 8_333_333
-              ) -> list[MetricResult]:
-    """Collisions (count of contact episodes) and minimum clearance to workers (m).
+              worker_radius: float = 0.3, tolerance_ns: int = 8_333_333,
+              radii: Mapping[str, float] | None = None) -> list[MetricResult]:
+    """Collisions (count of contact episodes) and minimum clearance to workers and other
+    robots (m).
 
-    ``robot``: ``t_ns, x, y``; ``workers``: ``t_ns, name, x, y`` (ground truth)."""
+    ``robot``: ``t_ns, x, y``; ``workers``: ``t_ns, name, x, y`` (ground truth) of every
+    other object; ``radii`` gives an object's footprint radius by name (other robots),
+    ``worker_radius`` the rest's."""
+    radii = radii or {}
     if len(robot) == 0 or len(workers) == 0:
         why = "no robot ground truth" if len(robot) == 0 else "no worker ground truth"
         return [_m("control.collisions", None, "count", "lower", why),
@@ -179,7 +185,7 @@ def clearance(robot: pd.DataFrame, workers: pd.DataFrame, *, robot_radius: float
     for name, w in workers.groupby("name", sort=True, observed=True):
         al = _align(t, w[["t_ns", "x", "y"]], tolerance_ns)
         c = np.hypot(al["x"].to_numpy() - rx, al["y"].to_numpy() - ry) - robot_radius \
-            - worker_radius
+            - radii.get(str(name), worker_radius)
         if np.isfinite(c).any():
             i = int(np.nanargmin(c))
             if c[i] < best[0]:
@@ -188,9 +194,10 @@ def clearance(robot: pd.DataFrame, workers: pd.DataFrame, *, robot_radius: float
             end = t[b] if b < len(t) else t[-1] + dt
             episodes.append((t[a] / 1e9, end / 1e9))
     episodes.sort()
+    others = "".join(f", {n} circle {r} m" for n, r in sorted(radii.items()))
     return [
         _m("control.collisions", float(len(episodes)), "count", "lower",
-           f"footprint circle {robot_radius} m vs worker circle {worker_radius} m",
+           f"footprint circle {robot_radius} m vs worker circle {worker_radius} m{others}",
            tuple(episodes)),
         _m("control.min_clearance", best[0] if best[1] else None, "m", "higher",
            best[1] or "no time-aligned worker pose"),
@@ -277,12 +284,15 @@ def control_metrics(frames: Frames, *, robot: str, route: Sequence[Point],
                     goal_tolerance: float = 0.5, robot_radius: float = 1.0,
                     worker_radius: float = 0.3, worker_prefix: str = "character_",
                     front_yaw: float = 0.0, odom_topic: str | None = None,
-                    cmd_topic: str | None = None, tolerance_ns: int = 8_333_333
-                    ) -> list[MetricResult]:
+                    cmd_topic: str | None = None, tolerance_ns: int = 8_333_333,
+                    other_robots: Mapping[str, float] | None = None,
+                    prefix: str = "control.") -> list[MetricResult]:
     """Every control metric for ``robot`` following ``route`` (world-frame waypoints).
 
     The path metrics use ground truth when the run has it for the robot, else world-frame
     odometry (their detail then says so); collisions, clearance and drift need ground truth.
+    ``other_robots`` (name → footprint radius) count in collisions and clearance like workers.
+    Metric names start with ``prefix`` (``control.<robot>.`` to score several robots).
     """
     gt = robot_poses(frames, robot, source="gt", front_yaw=front_yaw)
     odom_t = odom_topic or _default_topic(frames.odom, robot, "odom")
@@ -299,9 +309,15 @@ def control_metrics(frames: Frames, *, robot: str, route: Sequence[Point],
                             "; ".join(s for s in (r.detail, "from odometry (no ground truth)")
                                       if s), r.windows) for r in out]
     g = frames.gt_poses
-    workers = g[g["name"].str.startswith(worker_prefix)]
+    others = dict(other_robots or {})
+    others.pop(robot, None)
+    names = g["name"].astype(str)
+    workers = g[names.str.startswith(worker_prefix) | names.isin(list(others))]
     out += clearance(gt, workers, robot_radius=robot_radius, worker_radius=worker_radius,
-                     tolerance_ns=tolerance_ns)
+                     tolerance_ns=tolerance_ns, radii=others)
     out += cmd_vel_tracking(frames.cmd_vel[frames.cmd_vel["topic"] == cmd_t], od)
     out += odom_drift(od_world, gt, tolerance_ns=tolerance_ns)
+    if prefix != "control.":
+        out = [dataclasses.replace(m, name=prefix + m.name.removeprefix("control."))
+               for m in out]
     return out

@@ -15,6 +15,11 @@ plain inputs to :class:`HealthResult` rows; :func:`health_gates` wires them to
 * SUT output alive: per output topic, at least ``min_count`` messages, the first within
   ``first_within_s`` of the start, and no silence longer than ``max_silence_s`` between two
   messages or between the last one and the end of the run.
+* TF tree (``tf_tree``, or ``tf_tree:<ns>`` for a namespaced ``<ns>/tf``): the recorded
+  transforms form one valid tree as tf2 needs it — every frame one parent, no frame both
+  static and dynamic, no cycle, frame ids tf2 accepts (:mod:`harness.wiring.tree`), no frame
+  published twice with the same stamp (two sources; tf2 drops the second as repeated data)
+  and no static frame given two different transforms.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ import pandas as pd
 
 from harness.frames import Frames
 from harness.metrics.types import HealthResult
+from harness.wiring.tree import Edge, roots, tree_problems
 
 __all__ = [
     "OutputSpec",
@@ -35,6 +41,7 @@ __all__ = [
     "health_gates",
     "recorded_equals_published",
     "sut_outputs_alive",
+    "tf_tree_gate",
     "topic_rates",
 ]
 
@@ -164,17 +171,54 @@ def sut_outputs_alive(topics: pd.DataFrame, outputs: Mapping[str, OutputSpec], *
     return out
 
 
-def _odom_travel(frames: Frames) -> dict[str, float]:
-    """Robot name → distance its odometry travelled, for ``/odom`` or ``/<robot>/odom``."""
+_POSE = ["x", "y", "z", "qx", "qy", "qz", "qw"]
+
+
+def tf_tree_gate(tf: pd.DataFrame) -> list[HealthResult]:
+    """``tf``: the frames' TF table (``topic, tree, static, parent, child, t_ns`` and the
+    pose). One gate per tree namespace; none when nothing was published on a TF topic."""
+    out = []
+    for tree, t in tf.groupby("tree", sort=True, observed=True):
+        edges = {Edge(str(r.parent), str(r.child), bool(r.static), str(r.topic))
+                 for r in t[["parent", "child", "static", "topic"]].drop_duplicates()
+                 .itertuples(index=False)}
+        problems = [p.detail for p in tree_problems(sorted(edges, key=_edge_key))]
+        dyn = t[~t["static"].to_numpy(bool)]
+        counts = dyn.groupby(["child", "t_ns"], observed=True).size()
+        for child, c in counts[counts > 1].groupby(level=0, observed=True):
+            t0 = int(c.index[0][1])
+            problems.append(f"frame '{child}' published {int(c.iloc[0])} times with the same "
+                            f"stamp at {len(c)} time(s), first at {t0 / 1e9:.3f} s: two "
+                            "sources (tf2 ignores the repeats)")
+        st = t[t["static"].to_numpy(bool)]
+        for child, c in st.groupby("child", observed=True):
+            # different beyond float noise (1 µm, 1e-6 of a unit quaternion)
+            distinct = len(c[_POSE].round(6).drop_duplicates())
+            if distinct > 1 and c["parent"].nunique() == 1:
+                problems.append(f"static frame '{child}' was given {distinct} different "
+                                "transforms (two sources?)")
+        name = "tf_tree" if tree == "/" else f"tf_tree:{tree}"
+        if problems:
+            out.append(HealthResult(name, False, "; ".join(problems)))
+        else:
+            frames = {e.child for e in edges} | {e.parent for e in edges}
+            rts = roots(edges)
+            out.append(HealthResult(name, True, f"{len(frames)} frames, one parent each; "
+                                    f"root{'s' if len(rts) > 1 else ''}: {', '.join(rts)}"))
+    return out
+
+
+def _edge_key(e: Edge) -> tuple[str, str, bool, str]:
+    return (e.child, e.parent, e.static, e.source)
+
+
+def _odom_travel(frames: Frames, odom_topics: Mapping[str, str]) -> dict[str, float]:
+    """Robot name → distance its odometry (``odom_topics[robot]``) travelled."""
     out = {}
-    for topic, o in frames.odom.groupby("topic", sort=True, observed=True):
-        parts = str(topic).strip("/").split("/")
+    for robot, topic in odom_topics.items():
+        o = frames.odom[frames.odom["topic"] == topic]
         x, y = o["x"].to_numpy(), o["y"].to_numpy()
-        dist = float(np.hypot(np.diff(x), np.diff(y)).sum()) if x.size > 1 else 0.0
-        if len(parts) == 2:
-            out[parts[0]] = dist
-        elif len(parts) == 1:
-            out["__single__"] = dist
+        out[robot] = float(np.hypot(np.diff(x), np.diff(y)).sum()) if x.size > 1 else 0.0
     return out
 
 
@@ -182,12 +226,14 @@ def health_gates(frames: Frames, *, expected_hz: Mapping[str, float] | None = No
                  recorded: Mapping[str, int] | None = None,
                  published: Mapping[str, int] | None = None,
                  gt_expected: Sequence[str] | None = None, gt_moving: Sequence[str] = (),
-                 robots: Sequence[str] = (), outputs: Mapping[str, OutputSpec] | None = None,
+                 robots: Mapping[str, str] | None = None,
+                 outputs: Mapping[str, OutputSpec] | None = None,
                  duration_s: float | None = None, min_fraction: float = 0.9
                  ) -> list[HealthResult]:
     """Every gate that its inputs allow. ``gt_expected`` None: no ground truth expected, no
     gate; ``recorded`` defaults to the bag's counts; ``duration_s`` to the span of the bag plus
-    one clock period. ``robots``: robot names whose odometry tells whether they moved."""
+    one clock period. ``robots``: robot name → its odometry topic, which tells whether it
+    moved."""
     if duration_s is None:
         ct = frames.clock["t_ns"].to_numpy(np.int64)
         tick = int(np.median(np.diff(ct))) if ct.size > 1 else 0
@@ -201,12 +247,10 @@ def health_gates(frames: Frames, *, expected_hz: Mapping[str, float] | None = No
             zip(frames.topics["name"], frames.topics["count"], strict=True))
         out += recorded_equals_published(rec, published)
     out += clock_monotonic(frames.clock)
+    out += tf_tree_gate(frames.tf)
     if gt_expected is not None:
-        travel = _odom_travel(frames)
-        single = travel.pop("__single__", None)
-        motion = {r: travel.get(r, single if len(robots) == 1 else None) for r in robots}
         out += gt_not_frozen(frames.gt_poses, expected=gt_expected,
-                             odom_motion_m={k: v for k, v in motion.items() if v is not None},
+                             odom_motion_m=_odom_travel(frames, robots or {}),
                              moving=gt_moving)
     if outputs:
         ct = frames.clock["t_ns"].to_numpy(np.int64)

@@ -1,12 +1,17 @@
 """The overall verdict of a run and its exit code.
 
 Order of precedence: INVALID (a health gate tripped: the scores cannot be trusted, exit 3),
-REGRESSED (a metric moved past its tolerance, exit 1), FAIL (an absolute criterion failed or
-there is no baseline to compare with, exit 1), PASS (exit 0).
+REGRESSED (a metric moved past its tolerance, exit 1), FAIL (an absolute criterion failed,
+there is no baseline to compare with, or the baseline holds none of the run's metrics, exit 1),
+UNSCORED (nothing was scored: the run was recorded but not judged, exit 1), PASS (exit 0).
+
+PASS needs something compared that held: at least one metric compared with its baseline
+value and none regressed.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -16,8 +21,10 @@ from harness.regression.compare import Comparison
 
 __all__ = ["Verdict", "absolute_failures", "decide"]
 
-VerdictName = Literal["PASS", "FAIL", "REGRESSED", "INVALID"]
-EXIT_CODES: dict[str, int] = {"PASS": 0, "FAIL": 1, "REGRESSED": 1, "INVALID": 3}
+VerdictName = Literal["PASS", "FAIL", "REGRESSED", "UNSCORED", "INVALID"]
+EXIT_CODES: dict[str, int] = {"PASS": 0, "FAIL": 1, "REGRESSED": 1, "UNSCORED": 1,
+                              "INVALID": 3}
+_GOAL = re.compile(r"^control\.(?:[^.]+\.)?goal_reached$")
 
 
 @dataclass(frozen=True)
@@ -34,8 +41,8 @@ def absolute_failures(metrics: Sequence[MetricResult]) -> list[str]:
     for m in metrics:
         if m.name == "safety.match_rate" and m.value is not None and m.value < 80.0:
             out.append(f"safety.match_rate {m.value:.1f} % is below 80 % (FAIL band)")
-        if m.name == "control.goal_reached" and m.value is not None and m.value < 0.5:
-            out.append("control.goal_reached: the robot did not reach the end of its route")
+        if _GOAL.match(m.name) and m.value is not None and m.value < 0.5:
+            out.append(f"{m.name}: the robot did not reach the end of its route")
     return out
 
 
@@ -51,6 +58,15 @@ def decide(health: Sequence[HealthResult], metrics: Sequence[MetricResult],
     failures = absolute_failures(metrics)
     if comparison is None and metrics:
         failures.append(baseline_note or "no baseline to compare with")
+    compared = [] if comparison is None else [
+        e for e in comparison.entries if e.status in ("ok", "improved", "changed")]
+    if comparison is not None and metrics and not compared:
+        failures.append(f"the baseline holds none of this run's {len(metrics)} metrics, so "
+                        "nothing was compared; bless a baseline from this configuration")
     if failures:
         return Verdict("FAIL", 1, tuple(failures))
+    if not metrics:
+        return Verdict("UNSCORED", 1, (
+            "nothing was scored: the scenario has no scoring block (control, perception or "
+            "safety), so the run was recorded but not compared with anything",))
     return Verdict("PASS", 0, ())

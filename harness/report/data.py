@@ -104,6 +104,7 @@ class ControlSeries:
     t: np.ndarray
     cte: np.ndarray
     collisions: list[Window]
+    prefix: str = "control."  # of this robot's metric names (control.<robot>. for several)
 
 
 @dataclass
@@ -161,7 +162,7 @@ class RunData:
     scenario: Scenario | None = None
     frames: Frames | None = None
     safety: SafetySeries | None = None
-    control: ControlSeries | None = None
+    control: list[ControlSeries] = field(default_factory=list)
     perception: list[PerceptionSeries] = field(default_factory=list)
     tracks: list[Track] = field(default_factory=list)
     moments: list[Moment] = field(default_factory=list)
@@ -256,7 +257,7 @@ def _tracks(sc: Scenario, frames: Frames) -> list[Track]:
         gt = robot_poses(frames, robot.name, source="gt")
         odom = pd.DataFrame()
         if robot.odometry.enabled:
-            topic = resolve_topic(robot.odometry.odom_topic, robot.namespace)
+            topic = resolve_topic(robot.odometry.odom_topic, robot.ns)
             odom = robot_poses(frames, robot.name, source="odom", odom_topic=topic)
         if len(gt) == 0 and len(odom) == 0:
             continue
@@ -332,27 +333,32 @@ def _safety(sc: Scenario, frames: Frames) -> SafetySeries | None:
                         edges)
 
 
-def _control(sc: Scenario, frames: Frames, summary: dict[str, Any]) -> ControlSeries | None:
-    c = sc.scoring.control
-    if c is None or not c.enabled or c.route not in sc.routes:
-        return None
-    try:
-        robot = sc.robot(c.robot)
-    except KeyError:
-        return None
-    poses = robot_poses(frames, robot.name, source="gt")
-    source = "ground truth"
-    if len(poses) == 0:
-        poses = robot_poses(frames, robot.name, source="odom", odom_topic=resolve_topic(
-            robot.odometry.odom_topic, robot.namespace))
-        source = "odometry"
-    if len(poses) == 0:
-        return None
-    d, _ = route_distance(poses[["x", "y"]].to_numpy(), sc.routes[c.route].waypoints)
-    coll = next((m for m in summary.get("metrics", [])
-                 if m.get("name") == "control.collisions"), None)
-    windows = [(float(a), float(b)) for a, b in (coll or {}).get("windows", [])]
-    return ControlSeries(robot.name, source, poses["t_ns"].to_numpy() / 1e9, d, windows)
+def _control(sc: Scenario, frames: Frames, summary: dict[str, Any]) -> list[ControlSeries]:
+    """One series per scored robot (``scoring.control``, one block or a list)."""
+    out = []
+    for c in sc.scoring.control_blocks:
+        if c.route not in sc.routes:
+            continue
+        try:
+            robot = sc.robot(c.robot)
+        except KeyError:
+            continue
+        poses = robot_poses(frames, robot.name, source="gt")
+        source = "ground truth"
+        if len(poses) == 0:
+            poses = robot_poses(frames, robot.name, source="odom",
+                                odom_topic=resolve_topic(robot.odometry.odom_topic, robot.ns))
+            source = "odometry"
+        if len(poses) == 0:
+            continue
+        d, _ = route_distance(poses[["x", "y"]].to_numpy(), sc.routes[c.route].waypoints)
+        prefix = sc.scoring.control_prefix(robot.name)
+        coll = next((m for m in summary.get("metrics", [])
+                     if m.get("name") == f"{prefix}collisions"), None)
+        windows = [(float(a), float(b)) for a, b in (coll or {}).get("windows", [])]
+        out.append(ControlSeries(robot.name, source, poses["t_ns"].to_numpy() / 1e9, d,
+                                 windows, prefix))
+    return out
 
 
 def _perception(sc: Scenario, frames: Frames) -> list[PerceptionSeries]:
@@ -435,7 +441,9 @@ def metric_windows(name: str, data: RunData) -> list[Window]:
     own = [(float(a), float(b)) for a, b in m.get("windows", [])]
     if own:
         return own
-    s, c = data.safety, data.control
+    s = data.safety
+    c = next((cs for cs in data.control if name.startswith(cs.prefix)), None)
+    tail = name.removeprefix(c.prefix) if c is not None else ""
     if s is not None and name.startswith("safety."):
         if name == "safety.match_rate":
             longs = [(w.start_s, w.end_s) for w in s.mismatches if w.long]
@@ -451,7 +459,7 @@ def metric_windows(name: str, data: RunData) -> list[Window]:
             return [(e.t_s, e.limit_s) for e in s.edges
                     if e.target == never[name] and e.response_s is None]
         return []
-    if c is not None and name.startswith("control.cross_track_error") and c.cte.size:
+    if c is not None and tail.startswith("cross_track_error") and c.cte.size:
         if name.endswith(".max"):
             i = int(np.argmax(c.cte))
             return [(float(c.t[i]), float(c.t[i]))]
@@ -459,7 +467,7 @@ def metric_windows(name: str, data: RunData) -> list[Window]:
                      if e.get("name") == name), None)
         level = float(base) if isinstance(base, (int, float)) else float(np.mean(c.cte))
         return _longest(_frame_runs(c.t, c.cte > level))
-    if name == "control.min_clearance":
+    if c is not None and tail == "min_clearance":
         hit = re.search(r"at ([0-9.]+) s", str(m.get("detail", "")))
         return [(float(hit.group(1)), float(hit.group(1)))] if hit else []
     if name.startswith("perception.") and data.perception:
@@ -481,7 +489,7 @@ def _moments(data: RunData) -> list[Moment]:
     """Up to :data:`MAX_MOMENTS` times, most telling first: the start of every safety
     mismatch window, every collision, then the worst control and perception moments."""
     cands: list[tuple[float, str, str]] = []
-    s, c = data.safety, data.control
+    s = data.safety
     if s is not None:
         wins = [w for w in s.mismatches if w.long] or _top_short(s.mismatches)
         for w in wins:
@@ -489,12 +497,15 @@ def _moments(data: RunData) -> list[Moment]:
                 else "under-mute (alarm, should be muted)"
             cands.append((w.start_s, f"start of {what} {w.start_s:.2f}–{w.end_s:.2f} s",
                           w.kind))
-    if c is not None:
+    several = len(data.control) > 1
+    for c in data.control:
+        who = f"{c.robot}: " if several else ""
         for a, b in c.collisions:
-            cands.append((a, f"collision {a:.2f}–{b:.2f} s", "collision"))
+            cands.append((a, f"{who}collision {a:.2f}–{b:.2f} s", "collision"))
         if c.cte.size and float(np.max(c.cte)) >= MIN_CTE_MOMENT:
             i = int(np.argmax(c.cte))
-            cands.append((float(c.t[i]), f"max cross-track error {c.cte[i]:.3f} m", "control"))
+            cands.append((float(c.t[i]), f"{who}max cross-track error {c.cte[i]:.3f} m",
+                          "control"))
     for p in data.perception:
         if p.err_v.size:
             i = int(np.argmax(p.err_v))

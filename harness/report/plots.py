@@ -282,8 +282,10 @@ def control_panel(c: ControlSeries, ax: TimeAxis, moments: Sequence[Moment],
     legend = [(f"cross-track error of {c.robot} ({c.source})", COLORS["robot"], "line")]
     if c.collisions:
         legend.append(("collision", COLORS["over"], "fill"))
-    return Panel("control", "control", "Control: cross-track error to the route",
-                 svg.render(), legend)
+    several = c.prefix != "control."
+    return Panel(f"control.{c.robot}" if several else "control", "control",
+                 f"Control ({c.robot}): cross-track error to the route" if several
+                 else "Control: cross-track error to the route", svg.render(), legend)
 
 
 def perception_panels(p: PerceptionSeries, ax: TimeAxis, moments: Sequence[Moment],
@@ -356,8 +358,8 @@ def time_panels(data: RunData, highlights: dict[str, Highlight] | None = None
     out = []
     if data.safety is not None:
         out.append(safety_panel(data.safety, ax, data.moments, hl.get("safety")))
-    if data.control is not None:
-        out.append(control_panel(data.control, ax, data.moments, hl.get("control")))
+    for c in data.control:
+        out.append(control_panel(c, ax, data.moments, hl.get("control")))
     for p in data.perception:
         out += perception_panels(p, ax, data.moments, hl.get("perception"))
     return out
@@ -479,6 +481,8 @@ def map_svg(data: RunData, *, width: float = WIDTH, max_height: float = 560.0) -
             svg.polyline(X.array(ox[::step]), Y.array(oy[::step]), class_="odom-path",
                          stroke=COLORS["odom"])
         _track(svg, X, Y, tr, COLORS["robot"], "robot-path")
+        if len(robots) > 1 and tr.x.size:  # name each robot at its end point
+            svg.text(X(tr.x[-1]) + 6, Y(tr.y[-1]) - 6, tr.name, class_="map-label robot-label")
         if s is not None and tr.name == s.robot:
             for win in s.mismatches:
                 if not win.long:
@@ -492,9 +496,8 @@ def map_svg(data: RunData, *, width: float = WIDTH, max_height: float = 560.0) -
                     px, py = tr.at(win.start_s) or (0.0, 0.0)
                     svg.circle(X(px), Y(py), 5, fill=COLORS[win.kind], class_="mismatch-point",
                                title=f"{win.kind}-mute from {win.start_s:.2f} s")
-    c = data.control
     for tr in robots:
-        if c is not None and tr.name == c.robot:
+        for c in (cs for cs in data.control if cs.robot == tr.name):
             for t0, _ in c.collisions:
                 hit = tr.at(t0)
                 if hit:
@@ -559,7 +562,7 @@ def map_legend(data: RunData) -> list[tuple[str, str, str]]:
     if data.safety is not None and any(w.long for w in data.safety.mismatches):
         kinds = {w.kind for w in data.safety.mismatches if w.long}
         out += [(f"{k}-mute", COLORS[k], "line") for k in ("over", "under") if k in kinds]
-    if data.control is not None and data.control.collisions:
+    if any(c.collisions for c in data.control):
         out.append(("collision", COLORS["collision"], "x"))
     if data.moments:
         out.append(("moment M1… (robot; square: worker)", "#111827", "dot"))

@@ -15,12 +15,13 @@ VERDICT_COLORS = {
     "REGRESSED": "#c2410c",
     "INVALID": "#6d28d9",
     "INTERRUPTED": "#475569",
+    "UNSCORED": "#a16207",
 }
 
 CSS = """
 :root { --fg:#111827; --muted:#6b7280; --line:#e5e7eb; --bg:#ffffff; --soft:#f8fafc;
   --PASS:#15803d; --FAIL:#b91c1c; --REGRESSED:#c2410c; --INVALID:#6d28d9;
-  --INTERRUPTED:#475569; }
+  --INTERRUPTED:#475569; --UNSCORED:#a16207; }
 * { box-sizing: border-box; }
 html, body { margin:0; padding:0; background:var(--bg); color:var(--fg);
   font: 14px/1.4 system-ui, -apple-system, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif; }

@@ -26,8 +26,8 @@ from harness.scenario.schema import (
     Scenario,
 )
 
-__all__ = ["apply_overrides", "load_scenario", "parse_override", "scenario_from_mapping",
-           "scenario_to_mapping", "validate_dataclass"]
+__all__ = ["apply_overrides", "load_scenario", "parse_override", "resolve_names",
+           "scenario_from_mapping", "scenario_to_mapping", "validate_dataclass"]
 
 T = typing.TypeVar("T")
 
@@ -38,15 +38,22 @@ _CONTROL_BY_MODEL: dict[str, type] = {
 
 
 class _Origins:
-    """Which file each top-level key came from (scenario file or one of its includes)."""
+    """Which file each top-level key, or each item of a list extended with ``key+``, came from
+    (the scenario file or one of its includes)."""
 
     def __init__(self, default: str) -> None:
         self.default = default
         self.by_key: dict[str, str] = {}
 
     def file_for(self, path: str) -> str:
-        top = path.split(".", 1)[0].split("[", 1)[0]
-        return self.by_key.get(top, self.default)
+        head = path.split(".", 1)[0]
+        return (self.by_key.get(head) or self.by_key.get(head.split("[", 1)[0])
+                or self.default)
+
+    def forget(self, key: str) -> None:
+        """``key`` is defined anew: drop it and its items' origins."""
+        for k in [k for k in self.by_key if k == key or k.startswith(f"{key}[")]:
+            del self.by_key[k]
 
 
 def _read_yaml(path: Path, shown: str, field: str = "") -> dict[str, Any]:
@@ -74,33 +81,93 @@ def _read_yaml(path: Path, shown: str, field: str = "") -> dict[str, Any]:
 
 
 def _expand_includes(path: Path, data: dict[str, Any], origins: _Origins) -> dict[str, Any]:
-    """Merge top-level ``include:`` files; keys in the including file win."""
+    """Merge top-level ``include:`` files in order; keys in the including file win.
+
+    A key written ``key+`` (in the scenario file or a later include) extends what is there
+    instead of replacing it: a list gets the new items appended (an item whose ``name`` is
+    already there is refused), a mapping gets the new keys (a key already there is refused).
+    """
     raw = data.pop("include", None)
+    shown = str(path)
     if raw is None:
-        return data
-    includes = [raw] if isinstance(raw, str) else raw
-    if not isinstance(includes, list) or not all(isinstance(i, str) for i in includes):
-        raise ScenarioError(str(path), "include", "expected a file name or a list of file names")
+        includes: list[Any] = []
+    else:
+        includes = [raw] if isinstance(raw, str) else raw
+        if not isinstance(includes, list) or not all(isinstance(i, str) for i in includes):
+            raise ScenarioError(shown, "include", "expected a file name or a list of file names")
     merged: dict[str, Any] = {}
     for i, rel in enumerate(includes):
         inc_path = (path.parent / rel).resolve()
+        inc_shown = str(path.parent / rel)
         field = "include" if isinstance(raw, str) else f"include[{i}]"
-        inc = _read_yaml(inc_path, str(path.parent / rel), field)
+        inc = _read_yaml(inc_path, inc_shown, field)
         if "include" in inc:
-            raise ScenarioError(str(path.parent / rel), "include", "nested includes are not "
-                                "supported")
-        if "format_version" in inc:
-            inc.pop("format_version")
+            raise ScenarioError(inc_shown, "include", "nested includes are not supported")
+        inc.pop("format_version", None)
         for key, value in inc.items():
+            if str(key).endswith("+"):
+                _extend(merged, str(key), value, inc_shown, origins)
+                continue
             if key in merged:
-                raise ScenarioError(str(path.parent / rel), key,
-                                    f"also defined in {origins.by_key[key]}")
+                raise ScenarioError(inc_shown, key, f"also defined in {origins.by_key[key]}")
             merged[key] = value
-            origins.by_key[key] = str(path.parent / rel)
+            origins.by_key[key] = inc_shown
+    for key in data:
+        if str(key).endswith("+") and str(key)[:-1] in data:
+            raise ScenarioError(shown, str(key), f"both {str(key)[:-1]!r} and {key!r} are set: "
+                                f"use {str(key)[:-1]!r} to replace the included value or "
+                                f"{key!r} to extend it")
     for key, value in data.items():
+        if str(key).endswith("+"):
+            _extend(merged, str(key), value, shown, origins)
+            continue
         merged[key] = value
-        origins.by_key.pop(key, None)
+        origins.forget(key)
     return merged
+
+
+def _extend(merged: dict[str, Any], key: str, value: Any, shown: str,
+            origins: _Origins) -> None:
+    """Apply ``key+: value`` to ``merged`` (see :func:`_expand_includes`)."""
+    base = key[:-1]
+    if base not in merged:  # nothing to extend yet: the value is the first definition
+        merged[base] = value
+        origins.by_key[base] = shown
+        return
+    old = merged[base]
+    where = origins.file_for(base)
+    if isinstance(old, list):
+        if not isinstance(value, list):
+            raise ScenarioError(shown, key, f"expected a list of items to append to {base!r}, "
+                                f"got {value!r}")
+        names = {item.get("name"): n for n, item in enumerate(old)
+                 if isinstance(item, dict) and item.get("name")}
+        for j, item in enumerate(value):
+            name = item.get("name") if isinstance(item, dict) else None
+            if name and name in names:
+                first = origins.file_for(f"{base}[{names[name]}]")
+                raise ScenarioError(shown, f"{key}[{j}].name",
+                                    f"{base} already has an item named {name!r} (from {first}); "
+                                    f"change it with --set {base}.{name}.FIELD=VALUE or replace "
+                                    f"the whole list with {base!r}")
+            if name:
+                names[name] = len(old)
+            origins.by_key.setdefault(base, where)
+            origins.by_key[f"{base}[{len(old)}]"] = shown
+            old.append(item)
+        return
+    if isinstance(old, dict):
+        if not isinstance(value, dict):
+            raise ScenarioError(shown, key, f"expected a mapping of entries to add to {base!r}, "
+                                f"got {value!r}")
+        for k, v in value.items():
+            if k in old:
+                raise ScenarioError(shown, f"{key}.{k}", f"{base} already has {k!r} (from "
+                                    f"{where}); replace the whole mapping with {base!r}")
+            old[k] = v
+        return
+    raise ScenarioError(shown, key, f"only a list or a mapping can be extended; {base!r} is "
+                        f"{old!r}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -248,6 +315,16 @@ class _Validator:
             self.fail(path, f"must be <= {hi:g}, got {raw!r}")
 
     def union(self, options: list[Any], raw: Any, path: str, meta: Mapping[str, Any]) -> Any:
+        # Try the options shaped like the value first (a list for a list, a mapping for a
+        # mapping), so the error reported is the one of the form the user meant.
+        def fits(option: Any) -> bool:
+            if isinstance(raw, list | tuple):
+                return get_origin(option) is tuple
+            if isinstance(raw, dict):
+                return dataclasses.is_dataclass(option) or get_origin(option) is dict
+            return True
+
+        options = sorted(options, key=lambda o: not fits(o))
         errors: list[ScenarioError] = []
         for option in options:
             try:
@@ -283,11 +360,13 @@ class _Validator:
         if not isinstance(raw, dict):
             self.fail(path or "(top level)", f"expected a mapping, got {raw!r}")
         hints = get_type_hints(cls)
-        fields = {f.name: f for f in dataclasses.fields(cls)}
+        fields = {f.name: f for f in dataclasses.fields(cls) if not f.metadata.get("internal")}
         for key in raw:
             if key not in fields:
                 close = _close(str(key), fields)
                 hint = f" (did you mean '{close}'?)" if close else ""
+                if str(key).endswith("+") and str(key)[:-1] in fields:
+                    hint = " (extending with '+' works for top-level keys only)"
                 self.fail(_join(path, str(key)), f"unknown field{hint}")
         kwargs: dict[str, Any] = {}
         for name, f in fields.items():
@@ -320,35 +399,179 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
         v.fail("format_version", f"unsupported version {sc.format_version} (this srr reads "
                f"{FORMAT_VERSION})")
     _check_name(v, "name", sc.name)
-    names: set[str] = set()
+    names: dict[str, int] = {}
     for i, robot in enumerate(sc.robots):
         if robot.name in names:
-            v.fail(f"robots[{i}].name", f"duplicate robot name {robot.name!r}")
-        names.add(robot.name)
+            j = names[robot.name]
+            v.fail(f"robots[{i}].name", f"duplicate robot name {robot.name!r} (also robots[{j}], "
+                   f"from {v.origins.file_for(f'robots[{j}]')})")
+        names[robot.name] = i
         _check_name(v, f"robots[{i}].name", robot.name)
-    cams: set[str] = set()
-    for i, cam in enumerate(sc.cameras):
-        if cam.name in cams:
-            v.fail(f"cameras[{i}].name", f"duplicate camera name {cam.name!r}")
-        cams.add(cam.name)
-        _check_name(v, f"cameras[{i}].name", cam.name)
-        w, h = cam.resolution
-        if not (1 <= w <= 8192 and 1 <= h <= 8192):
-            v.fail(f"cameras[{i}].resolution", f"must be within 1..8192, got {w}x{h}")
     for name, route in sc.routes.items():
         if len(route.waypoints) < 2:
             v.fail(f"routes.{name}.waypoints", "a route needs at least two waypoints")
     _check_workers_and_zones(sc, v)
     _check_topics(v, sc, "")
+    _check_frames(v, sc, "")
+    _check_robots(sc, v)
+    _check_cameras(sc, v)
+    _check_suts(sc, v)
+    _check_control_scoring(sc, v)
+
+
+def _check_robots(sc: Scenario, v: _Validator) -> None:
+    """Namespaces and frame prefixes that ROS accepts; no two enabled robots on one prim (or
+    one robot's prim inside another's)."""
+    from harness.bus.names import (
+        FrameIdError,
+        TopicNameError,
+        validate_frame_id,
+        validate_namespace,
+    )
+
+    for i, robot in enumerate(sc.robots):
+        if robot.namespace is not None:
+            try:
+                validate_namespace(robot.namespace)
+            except TopicNameError as err:
+                v.fail(f"robots[{i}].namespace", str(err))
+        if robot.frame_prefix:
+            try:
+                validate_frame_id(robot.frame_prefix)
+            except FrameIdError as err:
+                v.fail(f"robots[{i}].frame_prefix", str(err).replace("frame id", "prefix"))
+    enabled = [(i, r) for i, r in enumerate(sc.robots) if r.enabled]
+    for n, (i, robot) in enumerate(enabled):
+        for j, other in enabled[:n]:
+            if robot.prim == other.prim:
+                v.fail(f"robots[{i}].articulation_prim", f"{robot.prim} is also the prim of "
+                       f"robots[{j}] ({other.name}): two robots cannot share one prim")
+            for inner, outer, k in ((robot, other, j), (other, robot, i)):
+                if inner.prim.startswith(outer.prim.rstrip("/") + "/"):
+                    v.fail(f"robots[{i}].articulation_prim",
+                           f"{inner.prim} lies inside {outer.prim}, the prim of robots[{k}] "
+                           f"({outer.name})")
+
+
+def _check_cameras(sc: Scenario, v: _Validator) -> None:
+    """Unique names and resolutions in range; no camera on another camera's or a robot's prim."""
+    cams: dict[str, int] = {}
+    prims: dict[str, str] = {r.prim: f"robots[{i}] ({r.name})"
+                             for i, r in enumerate(sc.robots) if r.enabled}
+    for i, cam in enumerate(sc.cameras):
+        if cam.name in cams:
+            j = cams[cam.name]
+            v.fail(f"cameras[{i}].name", f"duplicate camera name {cam.name!r} (also "
+                   f"cameras[{j}], from {v.origins.file_for(f'cameras[{j}]')})")
+        cams[cam.name] = i
+        _check_name(v, f"cameras[{i}].name", cam.name)
+        w, h = cam.resolution
+        if not (1 <= w <= 8192 and 1 <= h <= 8192):
+            v.fail(f"cameras[{i}].resolution", f"must be within 1..8192, got {w}x{h}")
+        if not cam.enabled:
+            continue
+        if cam.prim in prims:
+            v.fail(f"cameras[{i}].camera_prim", f"{cam.prim} is already the prim of "
+                   f"{prims[cam.prim]}")
+        prims[cam.prim] = f"cameras[{i}] ({cam.name})"
+
+
+def _check_suts(sc: Scenario, v: _Validator) -> None:
+    """Unique names, ``module:Class`` plug-ins, a bound robot that exists, valid namespaces
+    and remapping rules."""
+    from harness.bus.names import TopicNameError, validate_namespace, validate_topic
+
+    robots = [r.name for r in sc.robots if r.enabled]
     suts: set[str] = set()
     for i, sut in enumerate(sc.systems_under_test):
+        where = f"systems_under_test[{i}]"
         if sut.name in suts:
-            v.fail(f"systems_under_test[{i}].name", f"duplicate name {sut.name!r}")
+            v.fail(f"{where}.name", f"duplicate name {sut.name!r}")
         suts.add(sut.name)
         module, sep, attr = sut.plugin.partition(":")
         if not sep or not module or not attr:
-            v.fail(f"systems_under_test[{i}].plugin",
-                   f"expected 'module:Class', got {sut.plugin!r}")
+            v.fail(f"{where}.plugin", f"expected 'module:Class', got {sut.plugin!r}")
+        if sut.robot and sut.robot not in robots:
+            close = _close(sut.robot, dict.fromkeys(robots))
+            hint = f"did you mean {close!r}? " if close else ""
+            v.fail(f"{where}.robot", f"no enabled robot named {sut.robot!r} ({hint}robots: "
+                   f"{', '.join(robots) or 'none'})")
+        if sut.namespace is not None:
+            try:
+                validate_namespace(sut.namespace)
+            except TopicNameError as err:
+                v.fail(f"{where}.namespace", str(err))
+        for src, dst in sut.remap.items():
+            for name, sub in ((src, f"{where}.remap"), (dst, f"{where}.remap.{src}")):
+                try:
+                    validate_topic(name)
+                except TopicNameError as err:
+                    v.fail(sub, str(err))
+
+
+def _check_control_scoring(sc: Scenario, v: _Validator) -> None:
+    """One control block per robot when ``scoring.control`` is a list."""
+    if not isinstance(sc.scoring.control, tuple):
+        return
+    seen: dict[str, int] = {}
+    for i, block in enumerate(sc.scoring.control):
+        if block.robot in seen:
+            v.fail(f"scoring.control[{i}].robot", f"robot {block.robot!r} is already scored by "
+                   f"scoring.control[{seen[block.robot]}]")
+        seen[block.robot] = i
+
+
+def _check_frames(v: _Validator, obj: Any, path: str) -> None:
+    """Every frame-id field (``*_frame``, ``frame_id``) must be a frame id tf2 accepts."""
+    from harness.bus.names import FrameIdError, validate_frame_id
+
+    if isinstance(obj, tuple):
+        for i, item in enumerate(obj):
+            _check_frames(v, item, f"{path}[{i}]")
+        return
+    if not dataclasses.is_dataclass(obj):
+        return
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        sub = _join(path, f.name)
+        if (f.name.endswith("_frame") or f.name == "frame_id") and isinstance(value, str):
+            try:
+                validate_frame_id(value)
+            except FrameIdError as err:
+                v.fail(sub, str(err))
+        else:
+            _check_frames(v, value, sub)
+
+
+def resolve_names(sc: Scenario) -> Scenario:
+    """Fill in the robots' namespaces and frame prefixes and the systems under test's
+    namespaces (see :class:`~harness.scenario.schema.RobotSpec`).
+
+    With more than one enabled robot, a robot without ``namespace`` gets its name, and one
+    without ``frame_prefix`` gets its namespace (or name) + ``/``, like robot_state_publisher's
+    ``frame_prefix`` in ROS 2 multi-robot launches; with one robot both stay empty, so a
+    single robot keeps the seeds' names. A prefix always ends in ``/``. A system under test
+    bound to a robot takes the robot's namespace unless it sets its own.
+    """
+    multi = sum(r.enabled for r in sc.robots) > 1
+    robots = []
+    for r in sc.robots:
+        ns = r.namespace if r.namespace is not None else (r.name if multi else "")
+        if r.frame_prefix is not None:
+            prefix = r.frame_prefix
+        else:
+            prefix = (ns.strip("/") or r.name) if multi else ""
+        if prefix and not prefix.endswith("/"):
+            prefix += "/"
+        robots.append(dataclasses.replace(r, namespace=ns, frame_prefix=prefix))
+    by_name = {r.name: r for r in robots}
+    suts = []
+    for sut in sc.systems_under_test:
+        sut_ns = sut.namespace
+        if sut_ns is None:
+            sut_ns = by_name[sut.robot].ns if sut.robot in by_name else ""
+        suts.append(dataclasses.replace(sut, namespace=sut_ns))
+    return dataclasses.replace(sc, robots=tuple(robots), systems_under_test=tuple(suts))
 
 
 def _check_workers_and_zones(sc: Scenario, v: _Validator) -> None:
@@ -428,7 +651,8 @@ def scenario_from_mapping(data: Mapping[str, Any], file: str = "<scenario>",
         v.fail("format_version", f"required field is missing (use {FORMAT_VERSION})")
     sc = v.dataclass(Scenario, dict(data), "")
     _check_semantics(sc, v)
-    return typing.cast(Scenario, sc)
+    sc = resolve_names(sc)
+    return dataclasses.replace(sc, origins=dict(orig.by_key))
 
 
 def load_scenario(path: str | Path,
@@ -451,7 +675,8 @@ def scenario_to_mapping(sc: Scenario) -> dict[str, Any]:
 
     def plain(obj: Any) -> Any:
         if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-            return {f.name: plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+            return {f.name: plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)
+                    if not f.metadata.get("internal")}
         if isinstance(obj, tuple | list):
             return [plain(x) for x in obj]
         if isinstance(obj, dict):

@@ -249,7 +249,11 @@ class RobotSpec:
     model: Literal["forklift", "turtlebot3_waffle_pi"]
     enabled: bool = True
     articulation_prim: str | None = None  # default /World/<name>
-    namespace: str = ""
+    # ROS namespace of the robot's relative topics, and the prefix of its frame ids (as
+    # robot_state_publisher's frame_prefix). None: the loader fills them in — the robot's name
+    # when the scene has more than one enabled robot, nothing when it has one.
+    namespace: str | None = None
+    frame_prefix: str | None = None
     spawn: Pose = Pose()
     control: ForkliftControl | DiffDriveControl | None = None  # None: the model's default
     odometry: OdometrySpec = OdometrySpec()
@@ -260,6 +264,15 @@ class RobotSpec:
     @property
     def prim(self) -> str:
         return self.articulation_prim or f"/World/{self.name}"
+
+    @property
+    def ns(self) -> str:
+        """The namespace the robot's relative topics resolve in ("" is the root)."""
+        return self.namespace or ""
+
+    def frame(self, name: str) -> str:
+        """The robot's frame id for ``name``: its ``frame_prefix`` + ``name``."""
+        return f"{self.frame_prefix or ''}{name}"
 
     @property
     def control_spec(self) -> ForkliftControl | DiffDriveControl:
@@ -300,11 +313,20 @@ class RouteSpec:
 
 @dataclass(frozen=True)
 class SutSpec:
-    """A system under test, loaded from a ``"module:Class"`` string."""
+    """A system under test, loaded from a ``"module:Class"`` string.
+
+    ``robot`` binds it to a robot: its relative topics resolve in that robot's namespace and
+    it gets the robot's frame prefix. ``namespace`` (None: the robot's, else the root) sets the
+    namespace directly; ``remap`` renames topics after resolution, as ROS 2 remapping rules do
+    (``{cmd_vel: /fleet/a/cmd_vel}``: keys and values resolve in the namespace).
+    """
 
     name: str
     plugin: str
     enabled: bool = True
+    robot: str = ""
+    namespace: str | None = None
+    remap: dict[str, str] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)
 
 
@@ -362,7 +384,10 @@ class ToleranceSpec:
 
 @dataclass(frozen=True)
 class ControlScoring:
-    """Score a robot's drive against a route (needs ``/gt/<robot>/tf``, i.e. ``srr_gt``)."""
+    """Score a robot's drive against a route (needs ``/gt/<robot>/tf``, i.e. ``srr_gt``).
+
+    ``scoring.control`` is one block (metrics ``control.<metric>``) or a list of blocks, one
+    per robot (metrics ``control.<robot>.<metric>``)."""
 
     enabled: bool = True
     robot: str = "forklift"
@@ -406,11 +431,23 @@ class HealthScoring:
 class ScoringSpec:
     """What to score and how much each metric may move (keys: metric names or globs)."""
 
-    control: ControlScoring | None = None
+    control: ControlScoring | tuple[ControlScoring, ...] | None = None
     perception: PerceptionScoring | None = None
     safety: SafetyScoring | None = None
     health: HealthScoring = HealthScoring()
     tolerances: dict[str, ToleranceSpec] = field(default_factory=dict)
+
+    @property
+    def control_blocks(self) -> tuple[ControlScoring, ...]:
+        """The enabled control blocks, whichever form ``control`` was written in."""
+        c = self.control
+        blocks = () if c is None else (c,) if isinstance(c, ControlScoring) else c
+        return tuple(b for b in blocks if b.enabled)
+
+    def control_prefix(self, robot: str) -> str:
+        """Metric-name prefix of a control block: ``control.`` for the single-block form,
+        ``control.<robot>.`` for the list form."""
+        return "control." if isinstance(self.control, ControlScoring) else f"control.{robot}."
 
 
 @dataclass(frozen=True)
@@ -434,6 +471,10 @@ class Scenario:
     systems_under_test: tuple[SutSpec, ...] = ()
     scoring: ScoringSpec = ScoringSpec()
     baseline: str | None = None  # which baselines/<name>.json to compare with (default: name)
+    # Which file each top-level key or list item ("robots", "robots[1]") came from, for error
+    # messages after loading. Filled by the loader; not part of the scenario's content.
+    origins: dict[str, str] = field(default_factory=dict, compare=False, repr=False,
+                                    metadata={"internal": True})
 
     @property
     def tick_ns(self) -> int:
@@ -452,3 +493,16 @@ class Scenario:
             if r.name == name:
                 return r
         raise KeyError(name)
+
+    def robot_index(self, name: str) -> int:
+        """Index of robot ``name`` in ``robots`` (for field paths such as ``robots[1]``)."""
+        for i, r in enumerate(self.robots):
+            if r.name == name:
+                return i
+        raise KeyError(name)
+
+    def file_for(self, path: str, default: str) -> str:
+        """The file the value at field ``path`` (``robots[1].odometry``) came from: the most
+        specific entry of ``origins`` (list item, then top-level key), else ``default``."""
+        head = path.split(".", 1)[0]
+        return self.origins.get(head) or self.origins.get(head.split("[", 1)[0]) or default

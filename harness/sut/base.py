@@ -13,17 +13,19 @@ Messages arrive through subscription callbacks (delivered between graph evaluati
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import zlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
-from harness.bus import Bus, Publisher, Qos, TopicNameError, resolve_topic
+from harness.bus import Bus, Publisher, Qos, TopicNameError, remap_topic
+from harness.bus.endpoints import Endpoint
 from harness.errors import PluginError, ScenarioError
-from harness.scenario import Scenario, SutSpec, validate_dataclass
+from harness.scenario import RobotSpec, Scenario, SutSpec, validate_dataclass
 
 __all__ = ["SutContext", "SystemUnderTest", "load_sut", "sut_params"]
 
@@ -31,7 +33,12 @@ __all__ = ["SutContext", "SystemUnderTest", "load_sut", "sut_params"]
 @dataclass(frozen=True)
 class SutContext:
     """What a plug-in may touch: its name and parameters, the scenario, a seeded RNG source
-    and the bus (through :meth:`publisher` and :meth:`subscribe` only)."""
+    and the bus (through :meth:`publisher` and :meth:`subscribe` only).
+
+    Relative topics resolve in ``namespace``, then ``remap`` rules apply (ROS 2 style: both
+    sides resolve in the namespace). ``robot`` is the robot the plug-in is bound to (None:
+    none); :meth:`frame` gives that robot's frame ids. ``endpoints`` records every topic the
+    plug-in advertised or subscribed, for the wiring checks."""
 
     name: str
     params: Mapping[str, Any]
@@ -40,22 +47,45 @@ class SutContext:
     field: str
     bus: Bus
     namespace: str = ""
+    remap: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    robot: RobotSpec | None = None
+    endpoints: list[Endpoint] = dataclasses.field(default_factory=list)
+
+    @classmethod
+    def for_spec(cls, spec: SutSpec, scenario: Scenario, bus: Bus, field: str) -> SutContext:
+        """The context of ``spec``: its parameters, namespace, remapping and bound robot."""
+        robot = next((r for r in scenario.robots if r.name == spec.robot), None) \
+            if spec.robot else None
+        return cls(name=spec.name, params=spec.params, scenario=scenario, seed=scenario.seed,
+                   field=field, bus=bus, namespace=spec.namespace or "", remap=spec.remap,
+                   robot=robot)
 
     def rng(self) -> np.random.Generator:
         """A generator seeded from the scenario seed and the plug-in's name."""
         return np.random.default_rng([self.seed, zlib.crc32(self.name.encode())])
 
-    def _topic(self, topic: str) -> str:
+    def frame(self, name: str) -> str:
+        """Frame id ``name`` of the bound robot (its frame prefix in front), or ``name``."""
+        return self.robot.frame(name) if self.robot is not None else name
+
+    def topic(self, name: str) -> str:
+        """The fully qualified topic a relative or absolute ``name`` resolves to here."""
         try:
-            return resolve_topic(topic, self.namespace)
+            return remap_topic(name, self.namespace, dict(self.remap))
         except TopicNameError as err:
             raise PluginError(f"{self.field}: {err}") from err
 
+    def _declare(self, kind: Literal["pub", "sub"], name: str, msgtype: str) -> str:
+        topic = self.topic(name)
+        self.endpoints.append(Endpoint(kind, name, msgtype, self.namespace, input=name,
+                                       rules=tuple(self.remap.items())))
+        return topic
+
     def publisher(self, topic: str, msgtype: str, qos: Qos | None = None) -> Publisher:
-        return self.bus.advertise(self._topic(topic), msgtype, qos)
+        return self.bus.advertise(self._declare("pub", topic, msgtype), msgtype, qos)
 
     def subscribe(self, topic: str, msgtype: str, callback: Callable[[Any], None]) -> None:
-        self.bus.subscribe(self._topic(topic), msgtype, callback)
+        self.bus.subscribe(self._declare("sub", topic, msgtype), msgtype, callback)
 
 
 class SystemUnderTest:

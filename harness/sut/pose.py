@@ -1,5 +1,6 @@
 """Where a robot is in the world, as a system under test can know it: ``odom`` composed with
-the static ``world → odom`` transform from ``/tf_static``. No ground truth involved."""
+the static transforms from the world frame to the odometry's frame (``/tf_static``). No ground
+truth involved."""
 
 from __future__ import annotations
 
@@ -12,16 +13,24 @@ from harness.sut.base import SutContext
 
 __all__ = ["OdomPose"]
 
+_Transform = tuple[np.ndarray, np.ndarray]  # translation, rotation (w, x, y, z)
+
 
 class OdomPose:
-    """Subscribes to ``odom_topic`` and ``tf_static_topic``; :meth:`pose` gives (x, y, yaw)."""
+    """Subscribes to ``odom_topic`` and ``tf_static_topic``; :meth:`pose` gives (x, y, yaw).
+
+    The odometry is placed in ``world_frame`` through the static chain from the world frame to
+    ``odom_frame`` — by default the frame the odometry messages name in their header, so a
+    robot whose frames carry a prefix (``forklift_b/odom``) needs no configuration, as with a
+    tf2 lookup."""
 
     def __init__(self, ctx: SutContext, odom_topic: str, tf_static_topic: str = "/tf_static",
-                 world_frame: str = "world", odom_frame: str = "odom") -> None:
+                 world_frame: str = "world", odom_frame: str = "") -> None:
         self.world_frame = world_frame
         self.odom_frame = odom_frame
         self.odom: Any = None
-        self.world_from_odom: tuple[np.ndarray, np.ndarray] | None = None
+        self._static: dict[str, tuple[str, _Transform]] = {}
+        self._chain: tuple[str, _Transform | None] | None = None
         ctx.subscribe(odom_topic, "nav_msgs/msg/Odometry", self._on_odom)
         ctx.subscribe(tf_static_topic, "tf2_msgs/msg/TFMessage", self._on_tf)
 
@@ -30,17 +39,38 @@ class OdomPose:
 
     def _on_tf(self, msg: Any) -> None:
         for tf in msg.transforms:
-            if tf.header.frame_id == self.world_frame and tf.child_frame_id == self.odom_frame:
-                t, r = tf.transform.translation, tf.transform.rotation
-                self.world_from_odom = (np.array([t.x, t.y, t.z]),
-                                        xyzw_to_wxyz([r.x, r.y, r.z, r.w]))
+            t, r = tf.transform.translation, tf.transform.rotation
+            self._static[tf.child_frame_id] = (tf.header.frame_id, (
+                np.array([t.x, t.y, t.z]), xyzw_to_wxyz([r.x, r.y, r.z, r.w])))
+        self._chain = None
+
+    def world_from(self, frame: str) -> _Transform | None:
+        """Pose of ``frame`` in the world frame from the static transforms, or None."""
+        if self._chain is not None and self._chain[0] == frame:
+            return self._chain[1]
+        t, q = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
+        cur, seen, found = frame, set(), True
+        while cur != self.world_frame:
+            if cur in seen or cur not in self._static:
+                found = False
+                break
+            seen.add(cur)
+            parent, (pt, pq) = self._static[cur]
+            t, q = pt + quat_rotate(pq, t), quat_mul(pq, q)
+            cur = parent
+        result = (t, q) if found else None
+        self._chain = (frame, result)
+        return result
 
     def pose(self) -> tuple[float, float, float] | None:
-        """Robot pose in the world frame, or None until odom and world → odom are known."""
-        if self.odom is None or self.world_from_odom is None:
+        """Robot pose in the world frame, or None until odom and its static chain are known."""
+        if self.odom is None:
+            return None
+        chain = self.world_from(self.odom_frame or self.odom.header.frame_id)
+        if chain is None:
             return None
         p, q = self.odom.pose.pose.position, self.odom.pose.pose.orientation
-        t0, q0 = self.world_from_odom
+        t0, q0 = chain
         pos = t0 + quat_rotate(q0, [p.x, p.y, p.z])
         yaw = quat_to_yaw(quat_mul(q0, xyzw_to_wxyz([q.x, q.y, q.z, q.w])))
         return float(pos[0]), float(pos[1]), yaw

@@ -6,6 +6,10 @@ point ``lookahead`` metres further along the route than the closest point, slows
 goal and stops within ``goal_tolerance``; after that it keeps publishing zero velocity so its
 output stays alive. With ``alarm_topic`` set it slows down and then stops while that topic
 says true (the safety monitor's alarm).
+
+Bound to a robot (``robot:`` in the scenario), its relative topics resolve in that robot's
+namespace and the odometry's own frame id finds its ``world →`` transform, so one class
+drives several robots.
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ class RouteFollowerParams:
     cmd_vel_topic: str = "cmd_vel"
     tf_static_topic: str = "/tf_static"
     world_frame: str = "world"
-    odom_frame: str = "odom"
+    odom_frame: str = ""  # "": the frame the odometry names in its header
     alarm_topic: str = ""  # e.g. /safety/alarm: slow down, then stop while it is true
     alarm_stop_after: int = 4  # commands at reduced speed before stopping
 

@@ -133,7 +133,8 @@ def test_cli_run_with_srr_gt_records_ground_truth(tmp_path: Path,
     code = main(["run", str(SCENARIO), "--srr-gt", "--duration", "2", "--out", str(out), "-q",
                  "--set", WORKERS, "--set", "scoring.control=null"])
     printed = capsys.readouterr()
-    assert code == 0, printed.err
+    assert code == 1, printed.err  # nothing scored: UNSCORED, not PASS
+    assert "verdict: UNSCORED" in printed.out
     counts: dict[str, int] = {}
     children: set[tuple[str, str]] = set()
     for topic, schema, _, msg in decoded(out):

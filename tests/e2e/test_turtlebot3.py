@@ -79,7 +79,9 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Path:
         cmd += ["--set", "robots.turtlebot3.sensors.camera.enabled=false"]
     done = subprocess.run(cmd, env=gl_env(), cwd=ROOT, capture_output=True, text=True,
                           timeout=600)
-    assert done.returncode == 0, done.stdout + done.stderr
+    # The seed scene records but scores nothing: UNSCORED, exit 1, never a silent PASS.
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "identical per-topic digests across 2 runs" in done.stdout
     return out
 
 
@@ -114,7 +116,8 @@ def test_topic_set_and_types_are_the_seeds(runs: Path,
     expected = expected_topics()
     assert {t: msgs[0][1] for t, msgs in bag.items()} == expected
     summary = json.loads((runs / "run_1" / "summary.json").read_text())
-    assert summary["verdict"] == "PASS" and summary["ticks"] == 600
+    assert summary["verdict"] == "UNSCORED" and summary["ticks"] == 600
+    assert summary["exit_code"] == 1 and "nothing was scored" in summary["reasons"][0]
     counts = {t: len(m) for t, m in bag.items()}
     assert counts["/clock"] == counts["/odom"] == counts["/imu"] == 600
     assert counts["/scan"] == 50  # 5 Hz: gate step 12

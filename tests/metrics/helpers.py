@@ -37,6 +37,9 @@ EMPTY = {
     "tf_static": {"parent": "str", "child": "str", "x": "float64", "y": "float64",
                   "z": "float64", "qx": "float64", "qy": "float64", "qz": "float64",
                   "qw": "float64"},
+    "tf": {"t_ns": "int64", "log_ns": "int64", "topic": "str", "tree": "str",
+           "static": "bool", "parent": "str", "child": "str", "x": "float64", "y": "float64",
+           "z": "float64", "qx": "float64", "qy": "float64", "qz": "float64", "qw": "float64"},
 }
 
 

@@ -290,7 +290,7 @@ def test_every_metric_on_a_synthetic_bag(tmp_path: Path) -> None:
     assert r["perception.id_switches"].value == 0
     assert r["perception.idf1"].value == pytest.approx(r["perception.f1"].value)
     gates = health_gates(f, expected_hz={"/clock": 60, "/perception/tracks": 30},
-                         gt_expected=list(f.gt_names), robots=["forklift"],
+                         gt_expected=list(f.gt_names), robots={"forklift": "/odom"},
                          outputs={"/cmd_vel": OutputSpec(first_within_s=0.1,
                                                          max_silence_s=0.1)})
     assert all(g.ok for g in gates), gates

@@ -105,7 +105,8 @@ def test_health_gates_on_frames() -> None:
     frames = make_frames(clock=clock, odom=odom, gt_poses=gt, topics=topics)
     res = health_gates(frames, expected_hz={"/clock": 60, "/cmd_vel": 20},
                        published={"/clock": 120, "/cmd_vel": 40}, gt_expected=["forklift"],
-                       robots=["forklift"], outputs={"/cmd_vel": OutputSpec(max_silence_s=0.2)})
+                       robots={"forklift": "/odom"},
+                       outputs={"/cmd_vel": OutputSpec(max_silence_s=0.2)})
     names = {r.name: r.ok for r in res}
     assert names == {"topic_rate:/clock": True, "topic_rate:/cmd_vel": True,
                      "recorded_equals_published": True, "clock_monotonic": True,

@@ -90,8 +90,9 @@ def test_series_agree_with_the_metrics(failing_run: api.RunResult, summary: dict
     for kind in ("mute", "unmute"):
         lags = [e.lag_s for e in s.edges if e.kind == kind and e.lag_s is not None]
         assert max(lags) == pytest.approx(metrics[f"safety.{kind}_lag.max"]["value"])
-    c = data.control
-    assert c is not None and c.source == "ground truth"
+    assert len(data.control) == 1
+    c = data.control[0]
+    assert c.source == "ground truth" and c.prefix == "control."
     assert c.cte.max() == pytest.approx(metrics["control.cross_track_error.max"]["value"])
     assert c.cte.mean() == pytest.approx(metrics["control.cross_track_error.mean"]["value"])
     assert [m.number for m in data.moments] == list(range(1, len(data.moments) + 1))

@@ -282,7 +282,8 @@ def test_robot_camera_publishes_color_info_depth_and_its_optical_frame(
     assert (color[0].width, color[0].height, color[0].encoding) == (32, 24, "rgb8")
     assert depth[0].encoding == "32FC1" and info[0].width == 32
     assert {m.header.frame_id for m in (color[0], info[0], depth[0])} == {"camera"}
-    statics = [t for m in taps.msgs("/tb3/tf_static") for t in m.transforms
+    # The robot's topics live in its namespace; TF stays on the root /tf_static (tf2_ros).
+    statics = [t for m in taps.msgs("/tf_static") for t in m.transforms
                if t.child_frame_id == "camera"]
     assert len(statics) == 1 and statics[0].header.frame_id == "camera_link"
     q = statics[0].transform.rotation

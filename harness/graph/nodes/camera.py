@@ -39,12 +39,13 @@ sets the cost), and at most once per camera, size and tick however many helpers 
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from harness.bus.endpoints import Endpoint, TfEdge
 from harness.bus.messages import header, msg_type
 from harness.errors import GraphError, SimulationError
 from harness.graph import Attr, NodeType, register
@@ -316,6 +317,17 @@ class _CameraPublisher(NodeType):
     def reset(self) -> None:
         self._count = 0
 
+    def endpoints(self, value: Callable[[str], Any]) -> Sequence[Endpoint | TfEdge]:
+        stream = self.stream_of(value)
+        if stream not in CAMERA_TYPES:
+            raise GraphError(f"type {stream!r} is not supported (supported: "
+                             f"{', '.join(CAMERA_TYPES)})")
+        return (Endpoint("pub", str(value("topicName")), CAMERA_TYPES[stream],
+                         str(value("nodeNamespace"))),)
+
+    def stream_of(self, value: Callable[[str], Any]) -> str:
+        raise NotImplementedError
+
     def compute(self, db: Any, ctx: Any) -> bool:
         if db.inputs.useSystemTime:
             raise GraphError(f"{db.node_path}.inputs:useSystemTime: must be false; srr "
@@ -357,6 +369,9 @@ class CameraHelper(_CameraPublisher):
     def stream(self, db: Any) -> str:
         return str(db.inputs.type)
 
+    def stream_of(self, value: Callable[[str], Any]) -> str:
+        return str(value("type"))
+
 
 @register("srr.CameraInfoHelper", aliases=aliases("CameraInfoHelper"))
 class CameraInfoHelper(_CameraPublisher):
@@ -365,4 +380,7 @@ class CameraInfoHelper(_CameraPublisher):
     inputs = (*_HELPER_INPUTS, Attr("topicName", "string", "camera_info"))
 
     def stream(self, db: Any) -> str:
+        return "camera_info"
+
+    def stream_of(self, value: Callable[[str], Any]) -> str:
         return "camera_info"

@@ -9,13 +9,14 @@ ReadSimulationTime gives it), otherwise the tick's own time.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
 from harness.bus import TopicNameError, resolve_topic
 from harness.bus.bus import Qos
+from harness.bus.endpoints import Endpoint, TfEdge
 from harness.bus.messages import clock, odometry, tf_message, transform_stamped
 from harness.errors import GraphError
 from harness.geometry import quat_conj, quat_mul, quat_rotate, wxyz_to_xyzw
@@ -84,6 +85,10 @@ class _Publisher(NodeType):
     def qos(self, db: Any) -> Qos | None:
         return None
 
+    def endpoints(self, value: Callable[[str], Any]) -> Sequence[Endpoint | TfEdge]:
+        return (Endpoint("pub", str(value("topicName")), self.msgtype,
+                         str(value("nodeNamespace"))),)
+
 
 @register("srr.PublishClock", aliases=aliases("PublishClock"))
 class PublishClock(_Publisher):
@@ -112,6 +117,10 @@ class SubscribeTwist(NodeType):
     def initialize(self, db: Any, ctx: Any) -> None:
         self._pending: list[Any] = []
         ctx.bus.subscribe(topic_of(db), "geometry_msgs/msg/Twist", self._pending.append)
+
+    def endpoints(self, value: Callable[[str], Any]) -> Sequence[Endpoint | TfEdge]:
+        return (Endpoint("sub", str(value("topicName")), "geometry_msgs/msg/Twist",
+                         str(value("nodeNamespace")), required=True),)
 
     def compute(self, db: Any, ctx: Any) -> bool:
         if not self._pending:
@@ -175,6 +184,20 @@ class _TfPublisher(_Publisher):
     def emit(self, transforms: list[Any]) -> None:
         self._pub.publish(tf_message(transforms))
 
+    def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
+        """The transforms this node publishes, as TF edges (see :meth:`endpoints`)."""
+        raise NotImplementedError
+
+    def endpoints(self, value: Callable[[str], Any]) -> Sequence[Endpoint | TfEdge]:
+        return (*super().endpoints(value), *self.edges(value))
+
+    @staticmethod
+    def edge_topic(value: Callable[[str], Any]) -> tuple[str, bool]:
+        """The resolved topic and whether its edges are static for tf2: published on a
+        ``tf_static`` topic (``staticPublisher`` on ``/tf`` only latches the publisher)."""
+        topic = resolve_topic(str(value("topicName")), str(value("nodeNamespace")))
+        return topic, topic.rsplit("/", 1)[-1] == "tf_static"
+
 
 @register("srr.PublishRawTransformTree", aliases=aliases("PublishRawTransformTree"))
 class PublishRawTransformTree(_TfPublisher):
@@ -201,6 +224,10 @@ class PublishRawTransformTree(_TfPublisher):
             return True
         self.emit([transform_stamped(stamp_of(db, ctx), parent, child, tr, rot)])
         return True
+
+    def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
+        topic, static = self.edge_topic(value)
+        return [TfEdge(str(value("parentFrameId")), str(value("childFrameId")), static, topic)]
 
 
 def frame_of(prim: str) -> str:
@@ -230,7 +257,12 @@ def relative_pose(world: Any, parent: str | None, child: str) -> tuple[np.ndarra
 @register("srr.PublishTransformTree", aliases=aliases("PublishTransformTree"))
 class PublishTransformTree(_TfPublisher):
     """Transforms of ``targetPrims`` relative to ``parentPrim`` (default: the world frame).
-    Camera prims stand for their ROS optical frames (see :func:`frame_pose`)."""
+    Camera prims stand for their ROS optical frames (see :func:`frame_pose`).
+
+    Frames are named after the prims (their last path component) with ``frameIdPrefix`` in
+    front (an srr input, like robot_state_publisher's ``frame_prefix``; empty in Isaac), so
+    several robots built from one model publish distinct frames. ``worldFrameId`` is never
+    prefixed."""
 
     inputs = (
         *BRIDGE_INPUTS,
@@ -240,8 +272,23 @@ class PublishTransformTree(_TfPublisher):
         Attr("targetPrims", "target", ()),
         Attr("staticPublisher", "bool", False),
         Attr("worldFrameId", "string", "world"),
+        Attr("frameIdPrefix", "string", ""),
     )
     outputs = EXEC_OUT
+
+    @staticmethod
+    def frames(value: Callable[[str], Any]) -> tuple[str, list[tuple[str, str]]]:
+        """The parent frame and (target prim, frame) pairs the node publishes."""
+        prefix = str(value("frameIdPrefix"))
+        parents = _paths(value("parentPrim"))
+        parent = prefix + frame_of(parents[0]) if parents else str(value("worldFrameId"))
+        return parent, [(p, prefix + frame_of(p)) for p in _paths(value("targetPrims"))]
+
+    def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
+        topic, static = self.edge_topic(value)
+        parent, children = self.frames(value)
+        return [TfEdge(parent, child, static, topic, "parentPrim", "targetPrims")
+                for _, child in children]
 
     def initialize(self, db: Any, ctx: Any) -> None:
         super().initialize(db, ctx)
@@ -252,18 +299,18 @@ class PublishTransformTree(_TfPublisher):
     def compute(self, db: Any, ctx: Any) -> bool:
         parents = _paths(db.inputs.parentPrim)
         parent = parents[0] if parents else None
-        parent_frame = frame_of(parent) if parent else db.inputs.worldFrameId
+        parent_frame, targets = self.frames(lambda name: getattr(db.inputs, name))
         poses = []
-        for prim in _paths(db.inputs.targetPrims):
+        for prim, frame in targets:
             t, q = relative_pose(ctx.world, parent, prim)
-            poses.append((prim, t, wxyz_to_xyzw(q)))
-        key = tuple((prim, tuple(np.round(t, 9)), tuple(np.round(xyzw, 9)))
-                    for prim, t, xyzw in poses)
+            poses.append((frame, t, wxyz_to_xyzw(q)))
+        key = tuple((frame, tuple(np.round(t, 9)), tuple(np.round(xyzw, 9)))
+                    for frame, t, xyzw in poses)
         if self.unchanged((parent_frame, key)):
             return True
         ns = stamp_of(db, ctx)
-        self.emit([transform_stamped(ns, parent_frame, frame_of(prim), t, xyzw)
-                   for prim, t, xyzw in poses])
+        self.emit([transform_stamped(ns, parent_frame, frame, t, xyzw)
+                   for frame, t, xyzw in poses])
         return True
 
 

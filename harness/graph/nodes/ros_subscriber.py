@@ -21,11 +21,13 @@ not used: the in-process bus delivers every message.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from functools import cache
 from typing import Any
 
 from rosbags.interfaces import Nodetype
 
+from harness.bus.endpoints import Endpoint, TfEdge
 from harness.bus.messages import TYPESTORE
 from harness.errors import GraphError
 from harness.graph import Attr, GraphStage, Node, NodeType, register
@@ -145,6 +147,12 @@ class Subscriber(NodeType):
         if self._bus is not ctx.bus:  # a reset re-initializes; subscribe once per bus
             ctx.bus.subscribe(topic, msgtype, self._pending.append)
             self._bus = ctx.bus
+
+    def endpoints(self, value: Callable[[str], Any]) -> Sequence[Endpoint | TfEdge]:
+        msgtype = _msgtype(str(value("messagePackage")), str(value("messageSubfolder")),
+                           str(value("messageName")), "inputs:messageName")
+        return (Endpoint("sub", str(value("topicName")), msgtype, str(value("nodeNamespace")),
+                         required=True),)
 
     def compute(self, db: Any, ctx: Any) -> bool:
         if not self._pending:

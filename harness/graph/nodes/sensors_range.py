@@ -21,11 +21,12 @@ node's path (:func:`harness.sim.lidar.noise_rng`). Ranges follow REP-117 (see
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
+from harness.bus.endpoints import Endpoint, TfEdge
 from harness.bus.messages import header, msg_type
 from harness.errors import GraphError
 from harness.geometry import quat_conj, quat_rotate, wxyz_to_xyzw
@@ -179,6 +180,10 @@ def _scan_time(spec_fps: float) -> float:
 
 # ----------------------------------------------------------------------------- lidar nodes
 
+def _lidar_msgtype(kind: str) -> str:
+    return "sensor_msgs/msg/LaserScan" if kind == "laser_scan" else "sensor_msgs/msg/PointCloud2"
+
+
 @register("srr.RtxLidarHelper", aliases=aliases("RtxLidarHelper"))
 class RtxLidarHelper(NodeType):
     """Casts a scan and publishes it as LaserScan or PointCloud2 (``inputs:type``).
@@ -220,10 +225,15 @@ class RtxLidarHelper(NodeType):
             prim = _render_product_prim(ctx, product, db.node_path)
         self._type = kind
         self._lidar, self._spec = _make_lidar(ctx, db.node_path, prim)
-        msgtype = ("sensor_msgs/msg/LaserScan" if kind == "laser_scan"
-                   else "sensor_msgs/msg/PointCloud2")
-        self._pub = ctx.bus.advertise(topic_of(db), msgtype, None)
+        self._pub = ctx.bus.advertise(topic_of(db), _lidar_msgtype(kind), None)
         self._count = 0
+
+    def endpoints(self, value: Callable[[str], Any]) -> Sequence[Endpoint | TfEdge]:
+        kind = str(value("type"))
+        if kind not in LIDAR_TYPES:
+            raise GraphError(f"type {kind!r} is not one of {', '.join(LIDAR_TYPES)}")
+        return (Endpoint("pub", str(value("topicName")), _lidar_msgtype(kind),
+                         str(value("nodeNamespace"))),)
 
     def compute(self, db: Any, ctx: Any) -> bool:
         if not db.inputs.enabled:

@@ -1,0 +1,126 @@
+"""The wiring plan of a built scenario: every topic each graph node and system under test will
+publish or subscribe, and every TF edge the graphs will publish, each with the scenario field
+that set it.
+
+Graph nodes declare their endpoints from their input values (:meth:`NodeType.endpoints`), so
+the plan covers any graph on the stage, built-in or not; the builders' annotations
+(:class:`~harness.builders.base.NodeOrigin`) turn a node input into a scenario field path
+(``robots[1].odometry.odom_topic``); a node without one is named by its attribute path.
+Systems under test are planned from what they advertised and subscribed in ``setup``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from harness.builders.base import NodeOrigin
+from harness.bus import TopicNameError
+from harness.bus.endpoints import TfEdge
+from harness.errors import GraphError, ScenarioError
+from harness.graph import GraphStage, Node
+from harness.scenario import Scenario
+from harness.sut.base import SutContext
+
+__all__ = ["Plan", "PlannedEdge", "PlannedTopic", "plan_wiring"]
+
+
+@dataclass(frozen=True)
+class PlannedTopic:
+    """One endpoint: ``field`` is the scenario field (or node attribute) that set its topic,
+    ``owner`` the node path or ``systems_under_test[i] (name)``."""
+
+    kind: Literal["pub", "sub"]
+    topic: str
+    msgtype: str
+    required: bool
+    field: str
+    owner: str
+    graph: bool
+
+    @property
+    def verb(self) -> str:
+        return "publishes" if self.kind == "pub" else "subscribes to"
+
+
+@dataclass(frozen=True)
+class PlannedEdge:
+    edge: TfEdge
+    parent_field: str
+    child_field: str
+    owner: str
+
+
+@dataclass(frozen=True)
+class Plan:
+    topics: tuple[PlannedTopic, ...]
+    edges: tuple[PlannedEdge, ...]
+
+    def publishers(self, topic: str) -> list[PlannedTopic]:
+        return [t for t in self.topics if t.kind == "pub" and t.topic == topic]
+
+
+def _node_field(node: Node, origin: NodeOrigin | None, input_name: str) -> str:
+    return origin.field_for(input_name) if origin else f"{node.path}.inputs:{input_name}"
+
+
+def _fail(sc: Scenario, source: str, field: str, message: str) -> ScenarioError:
+    file = source if field.startswith("/") else sc.file_for(field, source)
+    return ScenarioError(file, field, message)
+
+
+def _graph_items(stage: GraphStage, origins: Mapping[str, NodeOrigin], sc: Scenario,
+                 source: str) -> tuple[list[PlannedTopic], list[PlannedEdge]]:
+    topics: list[PlannedTopic] = []
+    edges: list[PlannedEdge] = []
+    for graph in stage.graphs():
+        for node in graph.nodes:
+            origin = origins.get(node.path)
+
+            def value(name: str, node: Node = node) -> Any:
+                return node.graph.get_value(node.name, f"inputs:{name}")
+
+            try:
+                declared = node.impl.endpoints(value)
+            except TopicNameError as err:
+                raise _fail(sc, source, _node_field(node, origin, "topicName"),
+                            str(err)) from err
+            except GraphError as err:
+                raise _fail(sc, source, origin.field if origin else node.path,
+                            str(err)) from err
+            for item in declared:
+                if isinstance(item, TfEdge):
+                    edges.append(PlannedEdge(item, _node_field(node, origin, item.parent_input),
+                                             _node_field(node, origin, item.child_input),
+                                             node.path))
+                    continue
+                field = _node_field(node, origin, item.input)
+                try:
+                    topic = item.topic
+                except TopicNameError as err:
+                    raise _fail(sc, source, field, str(err)) from err
+                topics.append(PlannedTopic(item.kind, topic, item.msgtype, item.required,
+                                           field, node.path, graph=True))
+    return topics, edges
+
+
+def _sut_items(suts: Sequence[tuple[str, Any, SutContext]], sc: Scenario) -> list[PlannedTopic]:
+    index = {s.name: i for i, s in enumerate(sc.systems_under_test)}
+    out: list[PlannedTopic] = []
+    for name, _, ctx in suts:
+        field = f"systems_under_test[{index[name]}]"
+        for ep in ctx.endpoints:
+            out.append(PlannedTopic(ep.kind, ep.topic, ep.msgtype, ep.required, field,
+                                    f"{field} ({name})", graph=False))
+    return out
+
+
+def plan_wiring(stage: GraphStage, origins: Mapping[str, NodeOrigin],
+                suts: Sequence[tuple[str, Any, SutContext]], sc: Scenario,
+                source: str = "<scenario>") -> Plan:
+    """The plan of a built simulation (graphs on ``stage``, systems under test already set
+    up). A topic name that does not resolve is a :class:`ScenarioError` naming its field."""
+    topics, edges = _graph_items(stage, origins, sc, source)
+    topics += _sut_items(suts, sc)
+    return Plan(tuple(topics), tuple(edges))
