@@ -188,6 +188,8 @@ def _print_run(res: api.RunResult) -> None:
         for m in s["metrics"]:
             mt.add_row(m["name"], _fmt(m["value"]), m["unit"])
         out_console.print(mt)
+    for w in s.get("warnings", []):
+        err_console.print(f"srr run: warning: {w}", markup=False)
     bad = [h for h in s["health"] if not h["ok"]]
     out_console.print(f"health: {len(s['health']) - len(bad)}/{len(s['health'])} gates ok",
                       markup=False)

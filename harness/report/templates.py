@@ -178,6 +178,8 @@ pre { background:var(--soft); border:1px solid var(--line); padding:8px 10px; ov
 pre.cmd { max-height:none; white-space:pre-wrap; word-break:break-all; }
 dl.kv { display:grid; grid-template-columns: 160px 1fr; gap:2px 12px; margin:4px 0; font-size:13px; }
 dl.kv dt { color:var(--muted); } dl.kv dd { margin:0; word-break:break-all; }
+.warning { border-left:4px solid #d97706; background:#fffbeb; padding:6px 10px; margin:8px 0;
+  font-size:13px; }
 .problem { border-left:4px solid #dc2626; background:#fef2f2; padding:6px 10px; margin:8px 0;
   font-size:13px; }
 .allgood { background:#f0fdf4; border-left:4px solid #16a34a; padding:6px 10px; font-size:13.5px; }
@@ -213,6 +215,7 @@ REPORT = """<!doctype html>
 </div></nav>
 <main class="wrap">
 {% for p in problems %}<div class="problem report-problem">{{ p }}</div>{% endfor %}
+{% for w in warnings %}<div class="warning wiring-warning">wiring: {{ w }}</div>{% endfor %}
 
 <section id="headline" class="headline">
 {% if headline.kind == "regressions" %}

@@ -108,10 +108,12 @@ def _cycles(edges: Sequence[Edge]) -> list[TreeProblem]:
             cur = parent.get(cur)
         if cur is None:
             continue
-        loop = path[path.index(cur):]
+        loop = path[path.index(cur):][::-1]  # parent → child order
         if reported.intersection(loop):
             continue
         reported.update(loop)
+        first = loop.index(min(loop))
+        loop = loop[first:] + loop[:first]
         ring = " → ".join([*loop, loop[0]])
         es = tuple(e for e in edges if e.child in loop and e.parent == parent[e.child])
         out.append(TreeProblem("cycle", tuple(loop), es, f"frames form a cycle: {ring} (from "

@@ -12,6 +12,7 @@ from harness.metrics.health import (
     health_gates,
     recorded_equals_published,
     sut_outputs_alive,
+    tf_tree_gate,
     topic_rates,
 )
 from tests.metrics.helpers import gt_rows, make_frames, t_ns
@@ -112,3 +113,57 @@ def test_health_gates_on_frames() -> None:
                      "recorded_equals_published": True, "clock_monotonic": True,
                      "gt_not_frozen:forklift": False, "sut_output_alive:/cmd_vel": True}
     assert health_gates(frames) == clock_monotonic(clock)  # nothing configured: clock only
+
+
+def _tf_rows(rows: list[tuple[str, str, str, int]], **pose: float) -> pd.DataFrame:
+    """(topic, parent, child, tick) → the frames' ``tf`` table."""
+    topic = [r[0] for r in rows]
+    return pd.DataFrame({
+        "t_ns": [int(t_ns(r[3])) for r in rows], "log_ns": [int(t_ns(r[3])) for r in rows],
+        "topic": topic, "tree": ["/" if t.count("/") == 1 else t.rsplit("/", 1)[0]
+                                 for t in topic],
+        "static": [t.endswith("tf_static") for t in topic],
+        "parent": [r[1] for r in rows], "child": [r[2] for r in rows],
+        **{k: [pose.get(k, 1.0 if k == "qw" else 0.0)] * len(rows)
+           for k in ("x", "y", "z", "qx", "qy", "qz", "qw")}})
+
+
+def test_tf_gate_passes_one_tree_and_names_its_root() -> None:
+    rows = [("/tf_static", "world", "a/odom", 0)] + [
+        ("/tf", "a/odom", "a/base_link", k) for k in range(5)]
+    (g,) = tf_tree_gate(_tf_rows(rows))
+    assert g.ok and g.name == "tf_tree"
+    assert g.detail == "3 frames, one parent each; root: world"
+
+
+def test_tf_gate_trips_on_a_second_parent_published_at_run_time() -> None:
+    rows = [("/tf_static", "world", "odom", 0), ("/tf", "odom", "base_link", 0),
+            ("/tf", "map", "base_link", 1)]
+    (g,) = tf_tree_gate(_tf_rows(rows))
+    assert not g.ok
+    assert "frame 'base_link' has 2 parents: 'map' from /tf; 'odom' from /tf" in g.detail
+
+
+def test_tf_gate_trips_on_two_sources_with_one_stamp() -> None:
+    rows = [("/tf", "odom", "base_link", k) for k in range(3)] * 2
+    (g,) = tf_tree_gate(_tf_rows(rows))
+    assert not g.ok
+    assert "frame 'base_link' published 2 times with the same stamp at 3 time(s)" in g.detail
+
+
+def test_tf_gate_trips_on_conflicting_static_transforms() -> None:
+    a = _tf_rows([("/tf_static", "world", "odom", 0)], x=1.0)
+    b = _tf_rows([("/tf_static", "world", "odom", 0)], x=2.0)
+    (g,) = tf_tree_gate(pd.concat([a, b], ignore_index=True))
+    assert not g.ok and "static frame 'odom' was given 2 different transforms" in g.detail
+    # float noise below a micrometre is the same transform
+    c = _tf_rows([("/tf_static", "world", "odom", 0)], x=1.0 + 1e-9)
+    (g,) = tf_tree_gate(pd.concat([a, c], ignore_index=True))
+    assert g.ok
+
+
+def test_tf_gate_checks_each_namespace_tree_apart() -> None:
+    rows = [("/tf", "odom", "base_link", 0), ("/r2/tf", "odom", "base_link", 0)]
+    gates = tf_tree_gate(_tf_rows(rows))
+    assert [(g.name, g.ok) for g in gates] == [("tf_tree", True), ("tf_tree:/r2", True)]
+    assert tf_tree_gate(_tf_rows([])) == []

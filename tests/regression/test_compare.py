@@ -97,6 +97,32 @@ def test_verdict_precedence() -> None:
     assert missed.name == "FAIL"
 
 
+def test_nothing_compared_is_never_a_pass() -> None:
+    # no scoring at all: recorded, not judged
+    unscored = decide([HealthResult("clock_monotonic", True, "ok")], [], None, "no baseline")
+    assert (unscored.name, unscored.exit_code) == ("UNSCORED", 1)
+    assert "nothing was scored" in unscored.reasons[0]
+    # a baseline that holds none of the run's metrics: an empty comparison
+    other = compare([_m("b", 1.0), _m("c", 2.0)], _baseline(a=(1.0, "m", "lower")), {})
+    assert {e.status for e in other.entries} == {"new", "missing"}
+    empty = compare([_m("b", 1.0)], _baseline(), {})
+    assert [e.status for e in empty.entries] == ["new"]
+    verdict = decide([], [_m("b", 1.0)], empty, None)
+    assert (verdict.name, verdict.exit_code) == ("FAIL", 1)
+    assert "holds none of this run's 1 metrics" in verdict.reasons[0]
+
+
+def test_goal_not_reached_fails_for_every_scored_robot() -> None:
+    metrics = [MetricResult("control.lift_a.goal_reached", 1.0, "bool", "higher", "control"),
+               MetricResult("control.lift_b.goal_reached", 0.0, "bool", "higher", "control")]
+    base = _baseline(control__lift_a__goal_reached=(1.0, "bool", "higher"),
+                     control__lift_b__goal_reached=(0.0, "bool", "higher"))
+    verdict = decide([], metrics, compare(metrics, base, {}), None)
+    assert verdict.name == "FAIL"
+    assert verdict.reasons == ("control.lift_b.goal_reached: the robot did not reach the end "
+                               "of its route",)
+
+
 def test_save_and_load_round_trip(tmp_path: Path) -> None:
     summary = {"scenario": "s", "seed": 3, "digest": "d", "versions": {"srr": "0"},
                "metrics": [{"name": "a", "value": 1.5, "unit": "m", "direction": "lower"}],
