@@ -491,7 +491,10 @@ def _check_suts(sc: Scenario, v: _Validator) -> None:
         module, sep, attr = sut.plugin.partition(":")
         if not sep or not module or not attr:
             v.fail(f"{where}.plugin", f"expected 'module:Class', got {sut.plugin!r}")
-        if sut.robot and sut.robot not in robots:
+        if sut.robot and sut.robot not in robots and sut.enabled:
+            if any(r.name == sut.robot for r in sc.robots):
+                v.fail(f"{where}.robot", f"robot {sut.robot!r} is disabled; disable this "
+                       "system under test too (enabled: false) or bind it to another robot")
             close = _close(sut.robot, dict.fromkeys(robots))
             hint = f"did you mean {close!r}? " if close else ""
             v.fail(f"{where}.robot", f"no enabled robot named {sut.robot!r} ({hint}robots: "

@@ -7,6 +7,8 @@ Errors (a :class:`~harness.errors.ScenarioError`, exit 2, naming the file and th
 * a subscription a graph needs (a control graph's ``cmd_vel``, a safety indicator's state)
   that nothing publishes while something publishes that type under the same last name (a
   namespace or a remapping away: ``/cmd_vel`` for ``/forklift_b/cmd_vel``);
+* a topic the scoring block names (health outputs and rates, perception markers, the safety
+  state) that nothing publishes, or that carries another type than the scoring reads;
 * TF: a frame id tf2 refuses, a frame with two parents, a frame published static and
   dynamic or by two sources, a cycle (see :mod:`harness.wiring.tree`).
 
@@ -19,7 +21,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 
-from harness.bus import FrameIdError, validate_frame_id
+from harness.bus import FrameIdError, resolve_topic, validate_frame_id
 from harness.bus.endpoints import tf_tree_of
 from harness.errors import ScenarioError
 from harness.scenario import Scenario
@@ -105,6 +107,36 @@ class _Checker:
                      f"for a robot nothing drives")
         return near, text
 
+    # ------------------------------------------------------------------ scoring
+    def scoring(self) -> None:
+        """Topics the scoring block names must be published by something in the scene."""
+        sc = self.sc.scoring
+        refs: list[tuple[str, str, str]] = []  # (field, topic, type or "")
+        for topic in sc.health.sut_outputs:
+            refs.append((f"scoring.health.sut_outputs.{topic}", topic, ""))
+        for topic in sc.health.expected_rates:
+            refs.append((f"scoring.health.expected_rates.{topic}", topic, ""))
+        if sc.perception is not None and sc.perception.enabled:
+            refs += [(f"scoring.perception.marker_topics[{i}]", t,
+                      "visualization_msgs/msg/MarkerArray")
+                     for i, t in enumerate(sc.perception.marker_topics)]
+        if sc.safety is not None and sc.safety.enabled:
+            refs.append(("scoring.safety.muted_topic", sc.safety.muted_topic,
+                         "std_msgs/msg/Bool"))
+        published = {t.topic: t for t in self.plan.topics if t.kind == "pub"}
+        for field, name, msgtype in refs:
+            topic = resolve_topic(name)
+            pub = published.get(topic)
+            if pub is None:
+                leaf = topic.rsplit("/", 1)[-1]
+                near = sorted(t for t in published if t.rsplit("/", 1)[-1] == leaf)
+                hint = f" (published: {', '.join(near)})" if near else ""
+                raise self.error(field, f"nothing in the scenario publishes {topic}, so it "
+                                 f"cannot be scored{hint}")
+            if msgtype and pub.msgtype != msgtype:
+                raise self.error(field, f"{topic} carries {pub.msgtype} ({pub.field}), "
+                                 f"scoring needs {msgtype}")
+
     # ------------------------------------------------------------------ TF
     def tf(self) -> None:
         groups: dict[str, list[PlannedEdge]] = defaultdict(list)
@@ -135,5 +167,6 @@ def check_wiring(plan: Plan, sc: Scenario, source: str = "<scenario>") -> tuple[
     (``file: field: message`` lines)."""
     checker = _Checker(plan, sc, source)
     checker.topics()
+    checker.scoring()
     checker.tf()
     return tuple(checker.warnings)

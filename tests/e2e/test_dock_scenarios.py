@@ -73,12 +73,27 @@ def test_degraded_variant_exits_1_naming_the_metric(variant: str, metric: str, t
     assert summary["comparison"][0]["status"] == "regressed"  # regressions first
 
 
-def test_silent_perception_makes_the_run_invalid(tmp_path: Path,
-                                                 capsys: pytest.CaptureFixture[str]) -> None:
+def test_disabled_perception_is_refused_before_running(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """The scoring reads /perception/tracks; with its publisher switched off that is known
+    before the first tick: exit 2 naming the field, no run directory."""
+    code = main(["run", str(SCENARIOS / "dock_worker_crossing.yaml"), "--out",
+                 str(tmp_path / "r"), "-q", "--set", "systems_under_test.perception.enabled=false"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "scoring.health.sut_outputs./perception/tracks: nothing in the scenario publishes " \
+           "/perception/tracks" in err
+    assert not (tmp_path / "r").exists()
+
+
+def test_a_system_under_test_that_goes_quiet_makes_the_run_invalid(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The safety monitor advertises /safety/is_muted but publishes only every 10 s: after its
+    first message it is silent for longer than the 0.5 s allowed, and the run is INVALID."""
     code, summary, _printed = _run(
         capsys, SCENARIOS / "dock_worker_crossing.yaml", tmp_path / "r", "--duration", "4",
-        "--set", "systems_under_test.perception.enabled=false")
+        "--set", "systems_under_test.safety_monitor.params.rate_hz=0.1")
     assert code == 3
     assert summary["verdict"] == "INVALID"
-    assert any("/perception/tracks" in r and "never published" in r
+    assert any("/safety/is_muted" in r and "silent for the last" in r
                for r in summary["reasons"]), summary["reasons"]

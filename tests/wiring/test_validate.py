@@ -122,6 +122,19 @@ CASES = {
         "robots[0].control.cmd_vel_topic",
         ["nothing publishes /forklift/cmd_vel", "published: /cmd_vel by systems_under_test[0]",
          "`robot: forklift`", "`control: {enabled: false}`"]),
+    # scoring reads a topic nothing publishes (the driver moved into the robot's namespace)
+    "scoring_reference": (
+        scenario(robot(FORKLIFT, "forklift"), robot(FORKLIFT, "forklift_b", y=5),
+                 suts=drive("forklift", "forklift_b"),
+                 rest="scoring: {health: {sut_outputs: {/cmd_vel: 0.5}}}\n"),
+        "scoring.health.sut_outputs./cmd_vel",
+        ["nothing in the scenario publishes /cmd_vel, so it cannot be scored",
+         "published: /forklift/cmd_vel, /forklift_b/cmd_vel"]),
+    "scoring_type": (
+        scenario(robot(FORKLIFT, "forklift"), suts=drive("forklift"),
+                 rest="srr_gt: true\nscoring: {perception: {marker_topics: [/odom]}}\n"),
+        "scoring.perception.marker_topics[0]",
+        ["/odom carries nav_msgs/msg/Odometry", "needs visualization_msgs/msg/MarkerArray"]),
     "bad_namespace": (
         scenario(robot(FORKLIFT, "a", extra="    namespace: 9lives\n")),
         "robots[0].namespace", ["'9lives'", "must not start with a digit"]),
