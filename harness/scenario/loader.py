@@ -11,7 +11,7 @@ import dataclasses
 import math
 import types
 import typing
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
@@ -411,8 +411,7 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
         if len(route.waypoints) < 2:
             v.fail(f"routes.{name}.waypoints", "a route needs at least two waypoints")
     _check_workers_and_zones(sc, v)
-    _check_topics(v, sc, "")
-    _check_frames(v, sc, "")
+    _check_names(v, sc, "")
     _check_robots(sc, v)
     _check_cameras(sc, v)
     _check_suts(sc, v)
@@ -524,28 +523,6 @@ def _check_control_scoring(sc: Scenario, v: _Validator) -> None:
         seen[block.robot] = i
 
 
-def _check_frames(v: _Validator, obj: Any, path: str) -> None:
-    """Every frame-id field (``*_frame``, ``frame_id``) must be a frame id tf2 accepts."""
-    from harness.bus.names import FrameIdError, validate_frame_id
-
-    if isinstance(obj, tuple):
-        for i, item in enumerate(obj):
-            _check_frames(v, item, f"{path}[{i}]")
-        return
-    if not dataclasses.is_dataclass(obj):
-        return
-    for f in dataclasses.fields(obj):
-        value = getattr(obj, f.name)
-        sub = _join(path, f.name)
-        if (f.name.endswith("_frame") or f.name == "frame_id") and isinstance(value, str):
-            try:
-                validate_frame_id(value)
-            except FrameIdError as err:
-                v.fail(sub, str(err))
-        else:
-            _check_frames(v, value, sub)
-
-
 def resolve_names(sc: Scenario) -> Scenario:
     """Fill in the robots' namespaces and frame prefixes and the systems under test's
     namespaces (see :class:`~harness.scenario.schema.RobotSpec`).
@@ -610,27 +587,40 @@ def _check_workers_and_zones(sc: Scenario, v: _Validator) -> None:
         v.fail("zones.trailer_tripwire.b", f"must differ from a {list(wire.a)}")
 
 
-def _check_topics(v: _Validator, obj: Any, path: str) -> None:
-    """Every field whose name ends in ``topic`` must be a valid ROS 2 topic name."""
-    from harness.bus.names import TopicNameError, validate_topic
+def _name_rule(field: str) -> Callable[[str], None] | None:
+    """The naming rule of a string field, by its name: ROS topic names for ``*topic``
+    fields, tf2 frame ids for ``*_frame`` and ``frame_id`` fields."""
+    from harness.bus.names import validate_frame_id, validate_topic
+
+    if field.endswith("topic"):
+        return validate_topic
+    if field.endswith("_frame") or field == "frame_id":
+        return validate_frame_id
+    return None
+
+
+def _check_names(v: _Validator, obj: Any, path: str) -> None:
+    """Every topic field must be a valid ROS 2 topic name and every frame field a frame id
+    tf2 accepts (see :func:`_name_rule`)."""
+    from harness.bus.names import FrameIdError, TopicNameError
 
     if isinstance(obj, tuple):
         for i, item in enumerate(obj):
-            _check_topics(v, item, f"{path}[{i}]")
+            _check_names(v, item, f"{path}[{i}]")
         return
     if not dataclasses.is_dataclass(obj):
         return
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
         sub = _join(path, f.name)
-        if f.name.endswith("topic") and isinstance(value, str):
+        rule = _name_rule(f.name)
+        if rule is not None and isinstance(value, str):
             try:
-                validate_topic(value)
-            except TopicNameError as err:
+                rule(value)
+            except (TopicNameError, FrameIdError) as err:
                 v.fail(sub, str(err))
         else:
-            _check_topics(v, value, sub)
-
+            _check_names(v, value, sub)
 
 def _check_name(v: _Validator, path: str, name: str) -> None:
     if not name or not all(c.isalnum() or c == "_" for c in name) or name[0].isdigit():
