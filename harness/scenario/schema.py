@@ -503,6 +503,7 @@ class Scenario:
 
     def file_for(self, path: str, default: str) -> str:
         """The file the value at field ``path`` (``robots[1].odometry``) came from: the most
-        specific entry of ``origins`` (list item, then top-level key), else ``default``."""
+        specific entry of ``origins`` (list item, then top-level key), else ``default`` (also
+        for a graph node's attribute path, ``/World/...``, which no origin names)."""
         head = path.split(".", 1)[0]
         return self.origins.get(head) or self.origins.get(head.split("[", 1)[0]) or default

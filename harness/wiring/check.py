@@ -19,6 +19,7 @@ and a system under test, or by two systems under test.
 
 from __future__ import annotations
 
+import re
 from collections import defaultdict
 
 from harness.bus import FrameIdError, resolve_topic, validate_frame_id
@@ -37,12 +38,10 @@ class _Checker:
         self.warnings: list[str] = []
 
     def error(self, field: str, message: str) -> ScenarioError:
-        file = self.source if field.startswith("/") else self.sc.file_for(field, self.source)
-        return ScenarioError(file, field, message)
+        return ScenarioError(self.sc.file_for(field, self.source), field, message)
 
     def warn(self, field: str, message: str) -> None:
-        file = self.source if field.startswith("/") else self.sc.file_for(field, self.source)
-        self.warnings.append(f"{file}: {field}: {message}")
+        self.warnings.append(f"{self.sc.file_for(field, self.source)}: {field}: {message}")
 
     # ------------------------------------------------------------------ topics
     def topics(self) -> None:
@@ -99,9 +98,10 @@ class _Checker:
         owners = sorted({t.owner for t in self.plan.topics
                          if t.kind == "pub" and t.topic in near})
         text = f" (published: {', '.join(near)} by {', '.join(owners)})"
-        if sub.field.startswith("robots[") and sub.graph:
-            robot = self.sc.robots[int(sub.field[7:sub.field.index("]")])]
-            block = sub.field.split(".")[1] if "." in sub.field else "control"
+        robot_field = re.match(r"robots\[(\d+)\]\.(\w+)", sub.field)
+        if robot_field and sub.graph:
+            robot = self.sc.robots[int(robot_field.group(1))]
+            block = robot_field.group(2)
             text += (f"; bind the system under test that feeds it with `robot: {robot.name}` "
                      f"(or give it this robot's namespace), or set `{block}: {{enabled: false}}` "
                      f"for a robot nothing drives")

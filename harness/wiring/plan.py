@@ -57,17 +57,13 @@ class Plan:
     topics: tuple[PlannedTopic, ...]
     edges: tuple[PlannedEdge, ...]
 
-    def publishers(self, topic: str) -> list[PlannedTopic]:
-        return [t for t in self.topics if t.kind == "pub" and t.topic == topic]
-
 
 def _node_field(node: Node, origin: NodeOrigin | None, input_name: str) -> str:
     return origin.field_for(input_name) if origin else f"{node.path}.inputs:{input_name}"
 
 
 def _fail(sc: Scenario, source: str, field: str, message: str) -> ScenarioError:
-    file = source if field.startswith("/") else sc.file_for(field, source)
-    return ScenarioError(file, field, message)
+    return ScenarioError(sc.file_for(field, source), field, message)
 
 
 def _graph_items(stage: GraphStage, origins: Mapping[str, NodeOrigin], sc: Scenario,
