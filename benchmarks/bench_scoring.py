@@ -59,7 +59,7 @@ def score(bag: Path, *, fast: bool) -> int:
     results += safety_metrics(f, tripwire=Tripwire(*TRIPWIRE, inside="right"), roi=ROI)
     gates = health_gates(
         f, expected_hz={"/clock": 60, "/odom": 60, "/perception/tracks": 30},
-        gt_expected=list(f.gt_names), robots=["forklift"],
+        gt_expected=list(f.gt_names), robots={"forklift": "/odom"},
         outputs={"/cmd_vel": OutputSpec(first_within_s=1.0, max_silence_s=0.5),
                  "/safety/is_muted": OutputSpec(first_within_s=1.0, max_silence_s=0.5)})
     assert len(results) > 30 and gates
