@@ -34,7 +34,15 @@ from harness.bus import Recorder, TopicStats
 from harness.engine import Simulation
 from harness.errors import InvalidRunError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
-from harness.regression import baseline_path, compare, decide, load_baseline, save_baseline
+from harness.regression import (
+    baseline_path,
+    comparable_config,
+    compare,
+    config_differences,
+    decide,
+    load_baseline,
+    save_baseline,
+)
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
@@ -211,7 +219,8 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
             raise InvalidRunError(f"{run_dir}: health gates tripped; an invalid run cannot "
                                   "become the baseline")
         save_baseline(baseline_path(baseline_name(scenario), bdir), summary,
-                      reason=update_reason, source_run=str(run_dir))
+                      reason=update_reason, source_run=str(run_dir),
+                      config=comparable_config(scenario_to_mapping(scenario)))
     _judge(summary, scenario, scores, bdir)
     if interrupted:
         summary["verdict"], summary["exit_code"] = "INTERRUPTED", 130
@@ -271,13 +280,16 @@ def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Pa
     cmp = compare(scores.metrics, base, scenario.scoring.tolerances) if base else None
     note = (f"no baseline at {path}: bless one with `srr baseline bless RUN_DIR --reason "
             "TEXT` or `srr run ... --update-baseline`")
-    verdict = decide(scores.health, scores.metrics, cmp, note)
+    mismatch = [] if base is None or base.config is None else config_differences(
+        base.config, scenario_to_mapping(scenario))
+    verdict = decide(scores.health, scores.metrics, cmp, note, mismatch)
     summary["verdict"], summary["exit_code"] = verdict.name, verdict.exit_code
     summary["reasons"] = list(verdict.reasons)
     summary["baseline"] = None if base is None else {
         "path": str(path), "blessed_by": base.blessed_by, "reason": base.reason,
         "blessed_at": base.blessed_at, "seed": base.seed, "digest": base.digest,
         "digest_matches": base.digest == summary["digest"],
+        "config_checked": base.config is not None, "config_differences": mismatch,
     }
     summary["comparison"] = [] if cmp is None else [dataclasses.asdict(e) for e in cmp.entries]
 
@@ -297,7 +309,8 @@ def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
     scenario = load_scenario(Path(run_dir) / "scenario.yaml")
     path = baseline_path(baseline_name(scenario),
                          baselines_dir(summary.get("scenario_file", ""), baselines))
-    save_baseline(path, summary, reason=reason, source_run=str(run_dir))
+    save_baseline(path, summary, reason=reason, source_run=str(run_dir),
+                  config=comparable_config(scenario_to_mapping(scenario)))
     return path
 
 

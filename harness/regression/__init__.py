@@ -7,6 +7,7 @@ from harness.regression.compare import (
     compare,
     tolerance_for,
 )
+from harness.regression.config import comparable_config, config_differences
 from harness.regression.store import (
     Baseline,
     BaselineError,
@@ -27,7 +28,9 @@ __all__ = [
     "Verdict",
     "absolute_failures",
     "baseline_path",
+    "comparable_config",
     "compare",
+    "config_differences",
     "decide",
     "load_baseline",
     "save_baseline",

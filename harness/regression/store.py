@@ -1,7 +1,9 @@
 """Baselines on disk: ``baselines/<scenario>.json``.
 
 A baseline holds the blessed run's metric values (with unit and direction), its per-topic
-counts and digests, the versions and seed it ran with, and who blessed it and why.
+counts and digests, the versions and seed it ran with, the comparable part of its scenario
+(:mod:`harness.regression.config`; absent in baselines blessed before it was recorded), and
+who blessed it and why.
 """
 
 from __future__ import annotations
@@ -49,6 +51,7 @@ class Baseline:
     source_run: str
     format_version: int = BASELINE_VERSION
     extra: Mapping[str, Any] = field(default_factory=dict)
+    config: Mapping[str, Any] | None = None
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
@@ -76,10 +79,16 @@ def load_baseline(path: Path) -> Baseline | None:
             reason=data.get("reason", ""), blessed_at=data.get("blessed_at", ""),
             source_run=data.get("source_run", ""),
             format_version=int(data.get("format_version", BASELINE_VERSION)),
-            extra=data.get("extra", {}),
+            extra=data.get("extra", {}), config=_mapping(data.get("config"), "config"),
         )
     except (OSError, ValueError, KeyError, TypeError) as err:
         raise BaselineError(f"{path}: not a valid baseline: {err}") from err
+
+
+def _mapping(value: Any, field: str) -> Mapping[str, Any] | None:
+    if value is not None and not isinstance(value, dict):
+        raise TypeError(f"{field}: expected a mapping, got {type(value).__name__}")
+    return value
 
 
 def who() -> str:
@@ -94,8 +103,9 @@ def who() -> str:
 
 
 def save_baseline(path: Path, summary: Mapping[str, Any], *, reason: str,
-                  source_run: str) -> Baseline:
-    """Write a baseline from a run's ``summary.json`` content (atomically)."""
+                  source_run: str, config: Mapping[str, Any] | None = None) -> Baseline:
+    """Write a baseline from a run's ``summary.json`` content (atomically); ``config`` is the
+    comparable part of the run's scenario (:func:`~harness.regression.config.comparable_config`)."""
     if not reason.strip():
         raise SrrError("--reason: say why this run becomes the baseline")
     metrics = {m["name"]: BaselineMetric(m["value"], m["unit"], m["direction"])
@@ -107,6 +117,7 @@ def save_baseline(path: Path, summary: Mapping[str, Any], *, reason: str,
         digest=summary.get("digest", ""), seed=int(summary["seed"]),
         versions=dict(summary.get("versions", {})), blessed_by=who(), reason=reason.strip(),
         blessed_at=time.strftime("%Y-%m-%dT%H:%M:%S%z"), source_run=source_run,
+        config=dict(config) if config is not None else None,
     )
     path.parent.mkdir(parents=True, exist_ok=True)
     write_json_atomic(path, baseline.to_json())

@@ -1,7 +1,9 @@
 """The overall verdict of a run and its exit code.
 
 Order of precedence: INVALID (a health gate tripped: the scores cannot be trusted, exit 3),
-REGRESSED (a metric moved past its tolerance, exit 1), FAIL (an absolute criterion failed,
+MISMATCH (the baseline was recorded with another configuration — duration, seed, physics,
+scene or scoring — so its metrics are no yardstick; exit 1), REGRESSED (a metric moved past
+its tolerance, exit 1), FAIL (an absolute criterion failed,
 there is no baseline to compare with, or the baseline holds none of the run's metrics, exit 1),
 UNSCORED (nothing was scored: the run was recorded but not judged, exit 1), PASS (exit 0).
 
@@ -19,12 +21,13 @@ from typing import Literal
 from harness.metrics.types import HealthResult, MetricResult
 from harness.regression.compare import Comparison
 
-__all__ = ["Verdict", "absolute_failures", "decide"]
+__all__ = ["GOAL_REACHED", "Verdict", "absolute_failures", "decide"]
 
-VerdictName = Literal["PASS", "FAIL", "REGRESSED", "UNSCORED", "INVALID"]
-EXIT_CODES: dict[str, int] = {"PASS": 0, "FAIL": 1, "REGRESSED": 1, "UNSCORED": 1,
-                              "INVALID": 3}
-_GOAL = re.compile(r"^control\.(?:[^.]+\.)?goal_reached$")
+VerdictName = Literal["PASS", "FAIL", "REGRESSED", "MISMATCH", "UNSCORED", "INVALID"]
+EXIT_CODES: dict[str, int] = {"PASS": 0, "FAIL": 1, "REGRESSED": 1, "MISMATCH": 1,
+                              "UNSCORED": 1, "INVALID": 3}
+#: ``control.goal_reached`` or ``control.<robot>.goal_reached``.
+GOAL_REACHED = re.compile(r"^control\.(?:[^.]+\.)?goal_reached$")
 
 
 @dataclass(frozen=True)
@@ -41,18 +44,27 @@ def absolute_failures(metrics: Sequence[MetricResult]) -> list[str]:
     for m in metrics:
         if m.name == "safety.match_rate" and m.value is not None and m.value < 80.0:
             out.append(f"safety.match_rate {m.value:.1f} % is below 80 % (FAIL band)")
-        if _GOAL.match(m.name) and m.value is not None and m.value < 0.5:
+        if GOAL_REACHED.match(m.name) and m.value is not None and m.value < 0.5:
             out.append(f"{m.name}: the robot did not reach the end of its route")
     return out
 
 
 def decide(health: Sequence[HealthResult], metrics: Sequence[MetricResult],
-           comparison: Comparison | None, baseline_note: str | None) -> Verdict:
+           comparison: Comparison | None, baseline_note: str | None,
+           mismatch: Sequence[str] = ()) -> Verdict:
     """``comparison`` is None when there is no baseline; ``baseline_note`` then says where
-    one was looked for and how to bless one."""
+    one was looked for and how to bless one. ``mismatch``: the configuration fields in which
+    the run differs from the baseline (:func:`~harness.regression.config.config_differences`);
+    any makes the verdict MISMATCH, whatever the metrics say."""
     tripped = [f"health {h.name}: {h.detail}" for h in health if not h.ok]
     if tripped:
         return Verdict("INVALID", 3, tuple(tripped))
+    if mismatch:
+        return Verdict("MISMATCH", 1, (
+            "not compared: the baseline was recorded with another configuration ("
+            + "; ".join(mismatch) + "); bless a baseline for this configuration "
+            "(--update-baseline) if the change is intended",
+            *absolute_failures(metrics)))
     if comparison is not None and comparison.regressed:
         return Verdict("REGRESSED", 1, tuple(e.describe() for e in comparison.regressions))
     failures = absolute_failures(metrics)

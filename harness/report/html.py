@@ -27,6 +27,7 @@ from markupsafe import Markup
 from harness import __version__
 from harness.atomic import write_text_atomic
 from harness.frames import Frames
+from harness.regression.verdict import GOAL_REACHED
 from harness.report.data import RunData, load_run, metric_windows
 from harness.report.graphs import graph_diagrams
 from harness.report.images import Keyframe, keyframes
@@ -87,7 +88,7 @@ def _group(name: str, data: RunData) -> str:
 
 @dataclass
 class _Headline:
-    kind: str  # regressions | failures | health | changes | none
+    kind: str  # regressions | failures | health | mismatch | changes | none
     rows: list[Any] = field(default_factory=list)
     text: str = ""
     metrics: list[str] = field(default_factory=list)
@@ -115,7 +116,8 @@ def _failing(m: dict[str, Any]) -> bool:
     v = m.get("value")
     return (m.get("verdict") == "FAIL"
             or (m.get("name") == "safety.match_rate" and v is not None and v < 80.0)
-            or (m.get("name") == "control.goal_reached" and v is not None and v < 0.5))
+            or (GOAL_REACHED.match(str(m.get("name"))) is not None and v is not None
+                and v < 0.5))
 
 
 def _metric_row(m: dict[str, Any], data: RunData) -> dict[str, Any]:
@@ -137,6 +139,9 @@ def _headline(data: RunData) -> _Headline:
         rows = [h for h in s.get("health", []) if not h.get("ok")]
         if rows:
             return _Headline("health", rows)
+    if verdict == "MISMATCH":
+        return _Headline("mismatch", list((s.get("baseline") or {}).get(
+            "config_differences", [])))
     regressed = [e for e in comparison if e.get("status") in ("regressed", "missing")]
     if regressed:
         return _Headline("regressions", [_comparison_row(e, data) for e in regressed],

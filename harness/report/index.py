@@ -24,7 +24,8 @@ __all__ = ["INDEX_NAME", "VERDICT_ORDER", "write_index"]
 
 INDEX_NAME = "index.html"
 # worst first: a run whose scores cannot be trusted, then regressions, failures, cut-short runs
-VERDICT_ORDER = ("INVALID", "REGRESSED", "FAIL", "INTERRUPTED", "UNSCORED", "PASS")
+VERDICT_ORDER = ("INVALID", "MISMATCH", "REGRESSED", "FAIL", "INTERRUPTED", "UNSCORED",
+                 "PASS")
 MAX_KEY = 3
 
 

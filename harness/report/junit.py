@@ -31,7 +31,7 @@ def junit_cases(summary: Mapping[str, Any]) -> list[Case]:
     else:
         for m in summary.get("metrics", []):
             cases.append(Case(m["name"], True, f"{m['value']} {m['unit']} (no baseline)"))
-    if summary.get("verdict") in ("FAIL", "UNSCORED"):
+    if summary.get("verdict") in ("FAIL", "UNSCORED", "MISMATCH"):
         cases.append(Case("verdict", False, "; ".join(summary.get("reasons", []))))
     return cases
 

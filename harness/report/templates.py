@@ -16,12 +16,14 @@ VERDICT_COLORS = {
     "INVALID": "#6d28d9",
     "INTERRUPTED": "#475569",
     "UNSCORED": "#a16207",
+    "MISMATCH": "#0e7490",
 }
 
 CSS = """
 :root { --fg:#111827; --muted:#6b7280; --line:#e5e7eb; --bg:#ffffff; --soft:#f8fafc;
   --PASS:#15803d; --FAIL:#b91c1c; --REGRESSED:#c2410c; --INVALID:#6d28d9;
-  --INTERRUPTED:#475569; --UNSCORED:#a16207; }
+  --INTERRUPTED:#475569; --UNSCORED:#a16207;
+  --MISMATCH:#0e7490; }
 * { box-sizing: border-box; }
 html, body { margin:0; padding:0; background:var(--bg); color:var(--fg);
   font: 14px/1.4 system-ui, -apple-system, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif; }
@@ -232,6 +234,11 @@ REPORT = """<!doctype html>
  {% for h in headline.rows %}<tr class="st-regressed"><td class="name">{{ h.name }}</td>
   <td>{{ h.detail }}</td></tr>{% endfor %}
  </tbody></table>
+{% elif headline.kind == "mismatch" %}
+ <h2>Not compared: the baseline was recorded with another configuration <span class="count">
+  ({{ headline.rows | length }} differing field(s); the metrics below are this run's alone)</span></h2>
+ <ul class="mismatch">{% for d in headline.rows %}<li><code>{{ d }}</code></li>{% endfor %}</ul>
+ <p>Bless a baseline for this configuration (<code>--update-baseline</code>) if the change is intended.</p>
 {% elif headline.kind == "changes" %}
  <h2>Changes against the baseline <span class="count">(none regressed; {{ n_compared }}
   compared)</span></h2>

@@ -1,0 +1,67 @@
+"""What a baseline must share with a run for their metrics to be comparable.
+
+A baseline is only a yardstick for runs of the same *configuration*: the same simulated scene
+(world, robots, cameras, workers, zones, routes, ground truth), the same duration, seed and
+physics settings, and the same scoring definitions. What a regression test is meant to vary
+is left out: the systems under test (a new version of a plug-in, changed parameters), the
+scenario's name and description, which baseline it names, the tolerances and the health-gate
+settings. :func:`comparable_config` is that part of a resolved scenario, as plain data;
+:func:`config_differences` names what differs, field by field.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+__all__ = ["EXCLUDED", "comparable_config", "config_differences"]
+
+#: Top-level keys, and ``scoring`` sub-keys, that do not make two configurations different.
+EXCLUDED = frozenset({"format_version", "name", "description", "baseline",
+                      "systems_under_test"})
+EXCLUDED_SCORING = frozenset({"tolerances", "health"})
+
+
+def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
+    """The comparable part of a resolved scenario mapping
+    (:func:`~harness.scenario.scenario_to_mapping`)."""
+    out = {k: v for k, v in mapping.items() if k not in EXCLUDED}
+    scoring = out.get("scoring")
+    if isinstance(scoring, Mapping):
+        out["scoring"] = {k: v for k, v in scoring.items() if k not in EXCLUDED_SCORING}
+    return out
+
+
+def _flat(value: Any, path: str, out: dict[str, Any]) -> None:
+    if isinstance(value, Mapping) and value:
+        for k in value:
+            _flat(value[k], f"{path}.{k}" if path else str(k), out)
+    elif isinstance(value, list | tuple) and value and any(
+            isinstance(v, Mapping | list | tuple) for v in value):
+        for i, v in enumerate(value):
+            _flat(v, f"{path}[{i}]", out)
+    else:
+        out[path] = list(value) if isinstance(value, tuple) else value
+
+
+def _show(value: Any) -> str:
+    return "(absent)" if value is _ABSENT else repr(value) if isinstance(value, str) \
+        else f"{value}"
+
+
+_ABSENT = object()
+
+
+def config_differences(baseline: Mapping[str, Any], run: Mapping[str, Any],
+                       limit: int = 8) -> list[str]:
+    """``field: baseline value → run value`` for every leaf that differs (sorted; at most
+    ``limit`` lines, then a count of the rest)."""
+    a: dict[str, Any] = {}
+    b: dict[str, Any] = {}
+    _flat(comparable_config(baseline), "", a)
+    _flat(comparable_config(run), "", b)
+    diffs = [f"{k}: {_show(a.get(k, _ABSENT))} → {_show(b.get(k, _ABSENT))}"
+             for k in sorted(set(a) | set(b)) if a.get(k, _ABSENT) != b.get(k, _ABSENT)]
+    if len(diffs) > limit:
+        diffs = [*diffs[:limit], f"… and {len(diffs) - limit} more"]
+    return diffs

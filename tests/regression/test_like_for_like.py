@@ -1,0 +1,94 @@
+"""A baseline is only compared with runs of its own configuration; anything else is MISMATCH
+with the differing fields named, never a silent comparison (nor a misleading REGRESSED)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from harness import api
+from harness.regression import comparable_config, config_differences
+from harness.scenario import load_scenario, scenario_to_mapping
+from tests.conftest import SCENARIOS
+
+FW = SCENARIOS / "forklift_warehouse.yaml"
+
+
+def mapping(*overrides: str) -> dict[str, object]:
+    return scenario_to_mapping(api.load(FW, overrides=list(overrides)))
+
+
+def test_what_counts_as_the_configuration() -> None:
+    base = mapping()
+    assert config_differences(base, base) == []
+    assert config_differences(base, mapping("duration=8")) == ["duration: 35.0 → 8.0"]
+    assert config_differences(base, mapping("seed=9", "physics.substeps=8")) == [
+        "physics.substeps: 4 → 8", "seed: 7 → 9"]
+    assert config_differences(base, mapping("robots.forklift.spawn.position=[-12, -2, 0]")) \
+        == ["robots[0].spawn.position: [-12.0, -3.0, 0.0] → [-12.0, -2.0, 0.0]"]
+    # what a regression test varies does not count: the systems under test, tolerances,
+    # names, health settings
+    same = mapping("systems_under_test.route_follower.params.speed=1.0", "name=other",
+                   "scoring.tolerances={control.*: {abs: 1}}",
+                   "scoring.health.rate_fraction=0.5")
+    assert config_differences(base, same) == []
+    assert "systems_under_test" not in comparable_config(base)
+    many = mapping("routes.dock_approach.waypoints=[[0, 0], [0, 1]]", "duration=1", "seed=1",
+                   "srr_gt=false", "world.wall_height=3", "physics.tick_hz=30")
+    diffs = config_differences(base, many, limit=4)
+    assert len(diffs) == 5 and diffs[-1].startswith("… and ")
+
+
+def test_a_shortened_run_is_a_mismatch_not_a_regression(tmp_path: Path) -> None:
+    res = api.run_scenario(api.load(FW, duration=2.0), source=str(FW), out=tmp_path / "r")
+    assert (res.verdict, res.exit_code) == ("MISMATCH", 1)
+    assert res.summary["reasons"][0].startswith(
+        "not compared: the baseline was recorded with another configuration (duration: "
+        "35.0 → 2.0)")
+    assert res.summary["baseline"]["config_differences"] == ["duration: 35.0 → 2.0"]
+    html = (res.run_dir / "report.html").read_text()
+    assert "Not compared: the baseline was recorded with another configuration" in html
+    assert "duration: 35.0 → 2.0" in html
+
+
+def test_a_baseline_without_a_recorded_configuration_is_still_compared(tmp_path: Path) -> None:
+    """Baselines blessed before the configuration was recorded compare as before, and the
+    summary says the configuration was not checked."""
+    bdir = tmp_path / "baselines"
+    bdir.mkdir()
+    data = json.loads((SCENARIOS.parent / "baselines" / "forklift_warehouse.json").read_text())
+    del data["config"]
+    (bdir / "forklift_warehouse.json").write_text(json.dumps(data))
+    res = api.run_scenario(api.load(FW, duration=2.0), source=str(FW), out=tmp_path / "r",
+                           baselines=bdir)
+    assert res.verdict == "REGRESSED"  # compared: 2 s do not reach the goal
+    assert res.summary["baseline"]["config_checked"] is False
+
+
+def test_blessing_records_the_configuration(tmp_path: Path) -> None:
+    sc = api.load(FW, duration=1.0)
+    res = api.run_scenario(sc, source=str(FW), out=tmp_path / "r")
+    shutil.copy(FW, tmp_path / "forklift_warehouse.yaml")
+    bdir = tmp_path / "b"
+    path = api.bless(res.run_dir, "one second", baselines=bdir)
+    stored = json.loads(path.read_text())["config"]
+    assert stored == comparable_config(scenario_to_mapping(load_scenario(
+        res.run_dir / "scenario.yaml")))
+    assert stored["duration"] == 1.0
+    again = api.run_scenario(sc, source=str(FW), out=tmp_path / "r2", baselines=bdir)
+    assert {e["status"] for e in again.summary["comparison"]} == {"ok"}  # compared, held
+    assert again.summary["baseline"]["config_differences"] == []
+    # (a one-second drive does not reach the goal: that absolute criterion still fails)
+    assert again.verdict == "FAIL" and len(again.summary["reasons"]) == 1
+
+
+@pytest.mark.parametrize("name", ["forklift_warehouse", "two_forklifts", "dock_empty",
+                                  "dock_nominal", "dock_worker_crossing",
+                                  "dock_worker_standing"])
+def test_shipped_baselines_record_their_configuration(name: str) -> None:
+    data = json.loads((SCENARIOS.parent / "baselines" / f"{name}.json").read_text())
+    assert data["config"] == comparable_config(scenario_to_mapping(
+        api.load(SCENARIOS / f"{name}.yaml")))
