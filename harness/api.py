@@ -30,9 +30,9 @@ import yaml
 
 from harness import __version__
 from harness.atomic import write_json_atomic
-from harness.bus import Recorder, TopicStats
+from harness.bus import Bus, Recorder, TopicStats
 from harness.engine import Simulation
-from harness.errors import InvalidRunError, SrrError
+from harness.errors import InvalidRunError, ScenarioError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
 from harness.regression import (
     baseline_path,
@@ -43,10 +43,13 @@ from harness.regression import (
     load_baseline,
     save_baseline,
 )
+from harness.replay import Playback, Replay
+from harness.report.data import read_summary
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
-from harness.scoring import Scores, check_scoring, score_run
+from harness.scoring import Scores, check_scoring, scenario_frames, score_frames
+from harness.sut.base import SutContext, load_suts
 from harness.wiring import check_wiring
 
 __all__ = [
@@ -58,6 +61,7 @@ __all__ = [
     "default_run_dir",
     "graph_text",
     "load",
+    "replay",
     "run_repeat",
     "run_scenario",
     "validate",
@@ -117,11 +121,11 @@ def graph_text(scenario: Scenario, fmt: str = "mermaid", source: str = "<scenari
     return stage_to_mermaid(sim.stage) if fmt == "mermaid" else stage_to_json(sim.stage)
 
 
-def default_run_dir(scenario: Scenario, root: Path = Path("reports")) -> Path:
+def default_run_dir(scenario: Scenario, root: Path = Path("reports"), suffix: str = "") -> Path:
     """``reports/<scenario>/<run id>``; the run id is the local start time plus the seed
-    (a name only: no wall-clock value goes into the recorded data)."""
+    (a name only: no wall-clock value goes into the recorded data), then ``suffix``."""
     stamp = time.strftime("%Y%m%d-%H%M%S")
-    base = root / scenario.name / f"{stamp}-s{scenario.seed}"
+    base = root / scenario.name / f"{stamp}-s{scenario.seed}{suffix}"
     candidate, n = base, 1
     while candidate.exists():
         n += 1
@@ -153,14 +157,32 @@ def _topic_table(stats: dict[str, TopicStats], published: dict[str, int],
     return table
 
 
+@dataclass(frozen=True)
+class _Loop:
+    """What the shared recording path needs from a loop: its bus, systems under test, tick
+    counter and ``run``/``close``, plus what the summary says about it."""
+
+    bus: Bus
+    suts: Sequence[tuple[str, Any, SutContext]]
+    run: Callable[[int, Progress | None], None]
+    close: Callable[[], None]
+    ticks: Callable[[], int]
+    srr_gt: bool
+    extra: dict[str, Any]
+
+
+def _prepare(run_dir: Path) -> None:
+    if run_dir.exists() and any(run_dir.iterdir()):
+        raise SrrError(f"--out {run_dir}: directory exists and is not empty")
+
+
 def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
                  progress: Progress | None = None, baselines: Path | None = None,
                  update_baseline: bool = False, update_reason: str = "updated with "
                  "--update-baseline") -> RunResult:
     """Build, run and record ``scenario``; write the run directory and return its verdict."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
-    if run_dir.exists() and any(run_dir.iterdir()):
-        raise SrrError(f"--out {run_dir}: directory exists and is not empty")
+    _prepare(run_dir)
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(scenario, source=source)
     try:
@@ -168,15 +190,40 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     except BaseException:
         sim.close()
         raise
+    loop = _Loop(sim.bus, sim.suts, sim.run, sim.close, lambda: sim.tick_index, sim.srr_gt,
+                 {"graphs": sim.graph_paths, "warnings": list(warnings),
+                  "command": reproduce_command(source, scenario, run_dir)})
+    return _record(scenario, loop, source=source, run_dir=run_dir, n_ticks=scenario.n_ticks,
+                   progress=progress, baselines=baselines, update_baseline=update_baseline,
+                   update_reason=update_reason)
+
+
+def _sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any]:
+    """Name → plug-in and the topics it publishes and subscribes (what a replay withholds)."""
+    out: dict[str, Any] = {}
+    for name, sut, ctx in suts:
+        out[name] = {
+            "plugin": f"{type(sut).__module__}:{type(sut).__qualname__}",
+            "publishes": sorted({e.topic for e in ctx.endpoints if e.kind == "pub"}),
+            "subscribes": sorted({e.topic for e in ctx.endpoints if e.kind == "sub"}),
+        }
+    return out
+
+
+def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ticks: int,
+            progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
+            update_reason: str = "") -> RunResult:
+    """Record ``loop`` into ``run_dir``, score it and write the run directory (shared by
+    :func:`run_scenario` and :func:`replay`)."""
     run_dir.mkdir(parents=True, exist_ok=True)
     (run_dir / "scenario.yaml").write_text(
         yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
     recorder = Recorder(run_dir / "bag")
-    recorder.open(sim.bus.qos)
-    sim.add_tap(recorder)
+    recorder.open(loop.bus.qos)
+    loop.bus.add_tap(recorder)
     interrupted = False
     try:
-        sim.run(scenario.n_ticks, progress)
+        loop.run(n_ticks, progress)
     except KeyboardInterrupt:
         interrupted = True
     except BaseException:
@@ -185,33 +232,35 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         shutil.rmtree(run_dir, ignore_errors=True)
         raise
     finally:
-        sim.close()
+        loop.close()
     stats = recorder.close()
-    published = sim.bus.published_counts()
-    sim_s = sim.tick_index / scenario.physics.tick_hz
+    published = loop.bus.published_counts()
+    sim_s = loop.ticks() / scenario.physics.tick_hz
     topics = _topic_table(stats, published, sim_s)
-    scores = score_run(scenario, run_dir / "bag", srr_gt=sim.srr_gt, published=published,
-                       recorded={t: st.count for t, st in stats.items()}, duration_s=sim_s,
-                       source=source)
+    frames = scenario_frames(scenario, run_dir / "bag")
+    scores = score_frames(scenario, frames, srr_gt=loop.srr_gt, published=published,
+                          recorded={t: st.count for t, st in stats.items()}, duration_s=sim_s,
+                          source=source)
     summary: dict[str, Any] = {
         "scenario": scenario.name,
         "scenario_file": source,
         "seed": scenario.seed,
-        "srr_gt": sim.srr_gt,
+        "srr_gt": loop.srr_gt,
         "duration_s": scenario.duration,
         "simulated_s": sim_s,
-        "ticks": sim.tick_index,
+        "ticks": loop.ticks(),
         "tick_hz": scenario.physics.tick_hz,
         "interrupted": interrupted,
-        "warnings": list(warnings),
+        "warnings": [],
         "health": [dataclasses.asdict(h) for h in scores.health],
         "metrics": [dataclasses.asdict(m) for m in scores.metrics],
-        "graphs": sim.graph_paths,
-        "systems_under_test": [name for name, _, _ in sim.suts],
+        "graphs": [],
+        "systems_under_test": [name for name, _, _ in loop.suts],
+        "sut_endpoints": _sut_endpoints(loop.suts),
         "topics": topics,
         "digest": combined_digest(topics),
         "versions": versions(),
-        "command": reproduce_command(source, scenario, run_dir),
+        **loop.extra,
     }
     bdir = baselines_dir(source, baselines)
     if update_baseline and not interrupted:
@@ -228,13 +277,114 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     write_json_atomic(run_dir / "summary.json", summary)
     write_junit(run_dir / "junit.xml", scenario.name, junit_cases(summary))
     try:  # last: a report that fails to render never costs the run its summary
-        write_report(run_dir, summary=summary, scenario=scenario)
+        write_report(run_dir, summary=summary, scenario=scenario, frames=frames)
     except SrrError:
         raise
     except Exception as err:
         raise SrrError(f"{run_dir / 'report.html'}: the report could not be rendered "
                        f"({type(err).__name__}: {err}); summary.json is complete") from err
     return RunResult(run_dir, summary["verdict"], summary["exit_code"], summary)
+
+
+def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence[str] = (),
+           out: Path | None = None, progress: Progress | None = None,
+           baselines: Path | None = None) -> RunResult:
+    """Open-loop replay of a recorded run (``srr replay``): its bag played back, in
+    publication order, into its systems under test — or into replacements (``suts``:
+    ``NAME=module:Class``) and changed parameters (``overrides``: ``--set`` on the systems
+    under test and the scoring). What the systems under test published is produced again;
+    everything else is the recording's bytes. The new run directory is scored and judged
+    like a run of the recorded scenario (:mod:`harness.replay`)."""
+    src = Path(run_dir)
+    summary = read_summary(src)
+    recorded = load_scenario(src / "scenario.yaml")
+    pairs = [parse_override(o) for o in overrides]
+    for text in suts:
+        name, sep, plugin = text.partition("=")
+        if not sep or not name.strip() or not plugin.strip():
+            raise ScenarioError("--sut", text, "expected NAME=module:Class")
+        if not any(s.name == name.strip() for s in recorded.systems_under_test):
+            names = ", ".join(s.name for s in recorded.systems_under_test) or "none"
+            raise ScenarioError("--sut", name, f"no system under test named {name.strip()!r} "
+                                f"in {src / 'scenario.yaml'} (names: {names})")
+        pairs.append((f"systems_under_test.{name.strip()}.plugin", plugin.strip()))
+    scenario = load_scenario(src / "scenario.yaml", pairs)
+    _check_replay_scene(recorded, scenario)
+    source = str(summary.get("scenario_file") or src / "scenario.yaml")
+    check_scoring(scenario, srr_gt=bool(summary.get("srr_gt")), source=source)
+    playback = Playback(src / "bag")
+    withheld = _recorded_outputs(summary, recorded, source)
+    rep = Replay(scenario, playback, withheld, source)
+    try:
+        rep.start()
+        withheld |= {e.topic for _, _, ctx in rep.suts for e in ctx.endpoints
+                     if e.kind == "pub"}
+        warnings = _replay_wiring(rep, playback, withheld)
+    except BaseException:
+        rep.close()
+        raise
+    out_dir = Path(out) if out is not None else default_run_dir(scenario, suffix="-replay")
+    _prepare(out_dir)
+    command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
+                        *(f"--set {o}" for o in overrides), f"--out {out_dir}"])
+    extra = {"warnings": warnings, "command": command, "replay_of": {
+        "run_dir": str(src), "digest": summary.get("digest"), "mode": "open-loop",
+        "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
+        "overrides": list(overrides), "withheld": sorted(withheld)}}
+    loop = _Loop(rep.bus, rep.suts, rep.run, rep.close, lambda: rep.tick_index,
+                 bool(summary.get("srr_gt")), extra)
+    return _record(scenario, loop, source=source, run_dir=out_dir,
+                   n_ticks=int(summary.get("ticks") or scenario.n_ticks), progress=progress,
+                   baselines=baselines)
+
+
+def _check_replay_scene(recorded: Scenario, scenario: Scenario) -> None:
+    """A replay may change the systems under test and the scoring, not the recorded scene."""
+    def scene(sc: Scenario) -> dict[str, Any]:
+        cfg = comparable_config(scenario_to_mapping(sc))
+        cfg.pop("scoring", None)
+        return cfg
+
+    diffs = config_differences(scene(recorded), scene(scenario))
+    if diffs:
+        field = diffs[0].split(":", 1)[0]
+        raise ScenarioError("--set", field, "changes the recorded scene, which an open-loop "
+                            "replay plays back as it was; a replay can change the systems "
+                            "under test and the scoring")
+
+
+def _recorded_outputs(summary: dict[str, Any], recorded: Scenario, source: str) -> set[str]:
+    """Topics the recorded run's systems under test published: from ``summary.json``, or, for
+    runs recorded before it kept them, by setting the recorded plug-ins up on a scratch bus."""
+    eps = summary.get("sut_endpoints")
+    if isinstance(eps, dict):
+        return {t for v in eps.values() if isinstance(v, dict)
+                for t in v.get("publishes", []) if isinstance(t, str)}
+    bus = Bus(lambda: 0)
+    suts = load_suts(recorded, bus, source)
+    for _, sut, ctx in suts:
+        sut.setup(ctx)
+    return {e.topic for _, _, ctx in suts for e in ctx.endpoints if e.kind == "pub"}
+
+
+def _replay_wiring(rep: Replay, playback: Playback, withheld: set[str]) -> list[str]:
+    """Types of what the systems under test read must match the recording; inputs that are
+    neither recorded nor published by another system under test are warnings."""
+    produced = {e.topic: e.msgtype for _, _, ctx in rep.suts for e in ctx.endpoints
+                if e.kind == "pub"}
+    warnings = []
+    for name, _, ctx in rep.suts:
+        for e in ctx.endpoints:
+            rec = playback.topics.get(e.topic)
+            if rec is not None and rec.msgtype != e.msgtype:
+                raise ScenarioError(ctx.field.split(": ", 1)[0], ctx.field.split(": ", 1)[-1],
+                                    f"{name} uses {e.topic} as {e.msgtype}, but the recording "
+                                    f"carries {rec.msgtype}")
+            fed = (rec is not None and e.topic not in withheld) or e.topic in produced
+            if e.kind == "sub" and not fed:
+                warnings.append(f"{ctx.field}: {name} subscribes to {e.topic}, which neither "
+                                "the recording nor another system under test provides")
+    return warnings
 
 
 def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:

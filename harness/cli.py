@@ -66,6 +66,17 @@ def _parser() -> argparse.ArgumentParser:
                      help="baselines folder (default: the project's baselines/)")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
 
+    rp = sub.add_parser("replay", help="play a recorded run back into its systems under test "
+                        "(or replacements), open loop, and score it")
+    rp.add_argument("run_dir", type=Path)
+    rp.add_argument("--sut", dest="suts", action="append", default=[],
+                    metavar="NAME=module:Class", help="replace a system under test's plug-in")
+    rp.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                    help="override a field of the systems under test or the scoring")
+    rp.add_argument("--out", type=Path, default=None)
+    rp.add_argument("--baselines", type=Path, default=None)
+    rp.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+
     val = sub.add_parser("validate", help="check a scenario file without running it")
     val.add_argument("scenario", type=Path)
     val.add_argument("--set", dest="overrides", action="append", default=[])
@@ -110,6 +121,28 @@ def _progress(quiet: bool) -> Any:
     return Progress(TextColumn("[bold]{task.description}"), BarColumn(),
                     TextColumn("{task.fields[sim]}"), TimeRemainingColumn(),
                     console=err_console, transient=True)
+
+
+def _cmd_replay(args: argparse.Namespace) -> int:
+    bar = _progress(args.quiet)
+    task: Any = None
+
+    def tick(done: int, total: int) -> None:
+        if bar is not None and (done % 15 == 0 or done == total):
+            bar.update(task, completed=done, total=total)
+
+    with _sigterm_as_interrupt():
+        if bar is not None:
+            bar.start()
+            task = bar.add_task(f"replay {args.run_dir.name}", total=None, sim="")
+        try:
+            res = api.replay(args.run_dir, suts=args.suts, overrides=args.overrides,
+                             out=args.out, progress=tick, baselines=args.baselines)
+        finally:
+            if bar is not None:
+                bar.stop()
+    _print_run(res)
+    return res.exit_code
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -165,7 +198,10 @@ def _fmt(v: Any) -> str:
 
 def _print_run(res: api.RunResult) -> None:
     s = res.summary
-    table = Table(title=f"{s['scenario']}: {s['simulated_s']:.1f} s simulated, seed {s['seed']}")
+    what = (f"open-loop replay of {s['replay_of']['run_dir']}, " if s.get("replay_of")
+            else "")
+    table = Table(title=f"{s['scenario']}: {what}{s['simulated_s']:.1f} s simulated, "
+                  f"seed {s['seed']}")
     for col in ("topic", "type", "count", "rate Hz"):
         table.add_column(col, justify="right" if col in ("count", "rate Hz") else "left")
     for name, t in s["topics"].items():
@@ -242,7 +278,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
-COMMANDS = {"run": _cmd_run, "validate": _cmd_validate, "graph": _cmd_graph,
+COMMANDS = {"run": _cmd_run, "replay": _cmd_replay, "validate": _cmd_validate, "graph": _cmd_graph,
             "inspect": _cmd_inspect, "baseline": _cmd_baseline, "report": _cmd_report}
 
 

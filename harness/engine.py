@@ -23,7 +23,7 @@ from harness.bus import Bus, Envelope
 from harness.graph import GraphStage
 from harness.scenario import Scenario
 from harness.sim import World
-from harness.sut.base import SutContext, SystemUnderTest, load_sut
+from harness.sut.base import SutContext, SystemUnderTest, load_suts
 from harness.wiring import Plan, plan_wiring
 
 __all__ = ["EvalContext", "Simulation"]
@@ -59,13 +59,8 @@ class Simulation:
         with self.stage:
             self.graph_paths = build_all(build)
         self.origins = build.origins  # node path → scenario field, for the wiring checks
-        self.suts: list[tuple[str, SystemUnderTest, SutContext]] = []
-        for i, spec in enumerate(scenario.systems_under_test):
-            if not spec.enabled:
-                continue
-            where = f"{source}: systems_under_test[{i}]"
-            sut_ctx = SutContext.for_spec(spec, scenario, self.bus, where)
-            self.suts.append((spec.name, load_sut(spec, where), sut_ctx))
+        self.suts: list[tuple[str, SystemUnderTest, SutContext]] = load_suts(
+            scenario, self.bus, source)
         self._started = False
 
     def plan(self) -> Plan:

@@ -31,7 +31,7 @@ from harness.scenario import ControlScoring, RobotSpec, Scenario
 from harness.sut.zones import points_in_polygon
 
 __all__ = ["ROBOT_RADIUS", "Scores", "check_scoring", "expected_rates", "odom_topic",
-           "score_frames", "score_run"]
+           "scenario_frames", "score_frames", "score_run"]
 
 # Footprint circle radius per model (half the diagonal of the chassis), for clearance and
 # collisions against workers.
@@ -179,14 +179,23 @@ def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
     return Scores(tuple(metrics), tuple(health))
 
 
+def scenario_frames(sc: Scenario | None, bag_dir: Path) -> Frames:
+    """The frames of a bag as ``sc``'s scoring reads them (its marker and muted topics; the
+    defaults without a scenario)."""
+    markers = None
+    muted = "/safety/is_muted"
+    if sc is not None:
+        p, s = sc.scoring.perception, sc.scoring.safety
+        if p is not None and p.marker_topics:
+            markers = [resolve_topic(t) for t in p.marker_topics]
+        if s is not None:
+            muted = resolve_topic(s.muted_topic)
+    return load_frames(bag_dir, marker_topics=markers, muted_topic=muted)
+
+
 def score_run(sc: Scenario, bag_dir: Path, *, srr_gt: bool,
               published: Mapping[str, int] | None = None,
               recorded: Mapping[str, int] | None = None, duration_s: float | None = None,
               source: str = "<scenario>") -> Scores:
-    markers = list(sc.scoring.perception.marker_topics) if sc.scoring.perception else None
-    frames = load_frames(bag_dir, marker_topics=[resolve_topic(t) for t in markers]
-                         if markers else None, muted_topic=resolve_topic(
-                             sc.scoring.safety.muted_topic) if sc.scoring.safety
-                         else "/safety/is_muted")
-    return score_frames(sc, frames, srr_gt=srr_gt, published=published, recorded=recorded,
-                        duration_s=duration_s, source=source)
+    return score_frames(sc, scenario_frames(sc, bag_dir), srr_gt=srr_gt, published=published,
+                        recorded=recorded, duration_s=duration_s, source=source)

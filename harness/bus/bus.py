@@ -36,13 +36,17 @@ TRANSIENT_LOCAL = Qos(durability="transient_local", depth=1)
 
 @dataclass(frozen=True)
 class Envelope:
-    """One published message: where, what, when (simulation ns) and its sequence number."""
+    """One published message: where, what, when (simulation ns) and its sequence number.
+
+    ``raw`` holds the CDR bytes when the message was published already serialized (a replayed
+    recording); ``msg`` is then the decoded message, or None when nobody subscribes."""
 
     topic: str
     msgtype: str
     stamp_ns: int
     seq: int
     msg: Any
+    raw: bytes | None = None
 
 
 @dataclass
@@ -108,8 +112,20 @@ class Bus:
 
     # -- traffic ------------------------------------------------------------------------------
     def publish(self, topic: str, msgtype: str, msg: Any) -> None:
-        info = self._declare(topic, msgtype, None)
-        env = Envelope(topic, msgtype, self._now_ns(), self._seq, msg)
+        self._send(self._declare(topic, msgtype, None),
+                   Envelope(topic, msgtype, self._now_ns(), self._seq, msg))
+
+    def publish_raw(self, topic: str, msgtype: str, raw: bytes,
+                    decode: Callable[[bytes, str], Any], qos: Qos | None = None) -> None:
+        """Publish an already serialized message (a replayed recording). Taps get the bytes
+        as they are; ``decode(raw, msgtype)`` runs only when something will read the message
+        (a subscriber, or a transient-local topic that may be read later)."""
+        info = self._declare(topic, msgtype, qos)
+        wanted = bool(self._subs.get(topic)) or info.qos.durability == "transient_local"
+        msg = decode(raw, msgtype) if wanted else None
+        self._send(info, Envelope(topic, msgtype, self._now_ns(), self._seq, msg, raw))
+
+    def _send(self, info: TopicInfo, env: Envelope) -> None:
         self._seq += 1
         info.published += 1
         if info.qos.durability == "transient_local":
@@ -118,7 +134,8 @@ class Bus:
                 info.latched.popleft()
         for tap in self._taps:
             tap(env)
-        self._queue.append(env)
+        if env.msg is not None or not env.raw:
+            self._queue.append(env)
 
     def spin(self) -> int:
         """Deliver queued messages in publication order (including ones published meanwhile)."""
@@ -144,6 +161,10 @@ class Bus:
 
     def published_counts(self) -> dict[str, int]:
         return {t: i.published for t, i in self._topics.items()}
+
+    def subscribed(self) -> dict[str, str]:
+        """Topic → message type of every topic something subscribes to."""
+        return {t: self._topics[t].msgtype for t, cbs in self._subs.items() if cbs}
 
 
 @dataclass(frozen=True)

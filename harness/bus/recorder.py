@@ -128,7 +128,8 @@ class Recorder:
             st = _TopicState(None, env.msgtype, self._qos_of(env.topic))
             st.topic = env.topic
             self._state[env.topic] = st
-        self._queue.put((st, env.stamp_ns, serialize(env.msg, env.msgtype)))
+        data = env.raw if env.raw is not None else serialize(env.msg, env.msgtype)
+        self._queue.put((st, env.stamp_ns, data))
 
     def _drain(self) -> None:
         writer = self._writer

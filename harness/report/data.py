@@ -23,12 +23,12 @@ import pandas as pd
 
 from harness.bus import resolve_topic
 from harness.errors import SrrError
-from harness.frames import Frames, load_frames
+from harness.frames import Frames
 from harness.metrics.control import robot_poses, route_distance
 from harness.metrics.perception import align_frames, assign
 from harness.metrics.safety import Tripwire, expected_muted
 from harness.scenario import Scenario, load_scenario
-from harness.scoring import within_area
+from harness.scoring import scenario_frames, within_area
 
 __all__ = [
     "ControlSeries",
@@ -219,7 +219,7 @@ def load_run(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
     data.scenario = scenario
     if frames is None and (run_dir / "bag" / "metadata.yaml").is_file():
         try:
-            frames = _load_frames(run_dir, scenario)
+            frames = scenario_frames(scenario, run_dir / "bag")
         except SrrError as err:
             data.problems.append(f"bag does not read back: {err}")
     elif frames is None:
@@ -232,18 +232,6 @@ def load_run(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
         data.perception = _perception(scenario, frames)
     data.moments = _moments(data)
     return data
-
-
-def _load_frames(run_dir: Path, sc: Scenario | None) -> Frames:
-    markers = None
-    muted = "/safety/is_muted"
-    if sc is not None:
-        p, s = sc.scoring.perception, sc.scoring.safety
-        if p is not None and p.marker_topics:
-            markers = [resolve_topic(t) for t in p.marker_topics]
-        if s is not None:
-            muted = resolve_topic(s.muted_topic)
-    return load_frames(run_dir / "bag", marker_topics=markers, muted_topic=muted)
 
 
 # --------------------------------------------------------------------------- series

@@ -281,6 +281,13 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
     reasons = [str(r) for r in s.get("reasons", [])]
     baseline = s.get("baseline")
     meta = [f"seed {s.get('seed', '?')}", f"{float(s.get('simulated_s') or 0):.1f} s simulated"]
+    replay_of = s.get("replay_of")
+    if isinstance(replay_of, dict):
+        replaced = ", ".join(f"{k} → {v}" for k, v in (replay_of.get("replaced") or {}).items())
+        meta.insert(0, f"open-loop replay of {replay_of.get('run_dir', '?')}"
+                    + (f" with {replaced}" if replaced else "")
+                    + (f", {len(replay_of.get('overrides') or [])} override(s)"
+                       if replay_of.get("overrides") else ""))
     if s.get("duration_s") and s.get("simulated_s") is not None and \
             abs(float(s["duration_s"]) - float(s["simulated_s"])) > 1e-6:
         meta[-1] += f" of {float(s['duration_s']):g} s"

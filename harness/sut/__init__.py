@@ -3,6 +3,6 @@
 A plug-in subclasses :class:`SystemUnderTest` and is named in a scenario as ``"module:Class"``;
 see :mod:`harness.sut.base` for the hooks and :class:`SutContext` for what it may touch."""
 
-from harness.sut.base import SutContext, SystemUnderTest, load_sut, sut_params
+from harness.sut.base import SutContext, SystemUnderTest, load_sut, load_suts, sut_params
 
-__all__ = ["SutContext", "SystemUnderTest", "load_sut", "sut_params"]
+__all__ = ["SutContext", "SystemUnderTest", "load_sut", "load_suts", "sut_params"]

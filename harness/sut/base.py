@@ -27,7 +27,7 @@ from harness.bus.endpoints import Endpoint
 from harness.errors import PluginError, ScenarioError
 from harness.scenario import RobotSpec, Scenario, SutSpec, validate_dataclass
 
-__all__ = ["SutContext", "SystemUnderTest", "load_sut", "sut_params"]
+__all__ = ["SutContext", "SystemUnderTest", "load_sut", "load_suts", "sut_params"]
 
 
 @dataclass(frozen=True)
@@ -125,3 +125,17 @@ def load_sut(spec: SutSpec, field: str) -> SystemUnderTest:
         raise PluginError(f"{field}.plugin: {spec.plugin} is not a system under test "
                           "(needs setup, step and shutdown)")
     return cls()  # type: ignore[no-any-return]
+
+
+def load_suts(scenario: Scenario, bus: Bus, source: str = "<scenario>"
+              ) -> list[tuple[str, SystemUnderTest, SutContext]]:
+    """Every enabled system under test of ``scenario``, loaded (not yet set up), with its
+    context on ``bus``: (name, plug-in, context) in scenario order."""
+    out = []
+    for i, spec in enumerate(scenario.systems_under_test):
+        if not spec.enabled:
+            continue
+        where = f"{source}: systems_under_test[{i}]"
+        out.append((spec.name, load_sut(spec, where),
+                    SutContext.for_spec(spec, scenario, bus, where)))
+    return out

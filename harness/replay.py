@@ -1,0 +1,166 @@
+"""Open-loop replay: a recorded bag played back, tick by tick, into systems under test.
+
+:class:`Playback` reads a run's MCAP in file order — the order the recorder wrote, which is the
+order the messages were published — and groups the messages by log time, which is always a
+tick's simulation time. :class:`Replay` owns the loop the way :class:`~harness.engine.Simulation`
+does, without a world or graphs: per tick ``k`` (time ``k * 1e9 // tick_hz``)
+
+1. every recorded message of that time is published again, with its recorded bytes, except
+   the topics the systems under test publish (those are produced again, live);
+2. the bus delivers; each system under test steps; the bus delivers again.
+
+That is the closed loop's order (graphs publish, deliver, step, deliver), so unchanged systems
+under test see the same messages in the same order and publish the same bytes. What the
+systems under test publish does not feed back into the scene: the replay is open loop.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
+
+from harness.bus import Bus, Qos
+from harness.bus.messages import TYPESTORE
+from harness.errors import BagError
+from harness.scenario import Scenario
+from harness.sut.base import SutContext, SystemUnderTest, load_suts
+
+__all__ = ["Playback", "RecordedTopic", "Replay"]
+
+_YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+@dataclass(frozen=True)
+class RecordedTopic:
+    topic: str
+    msgtype: str
+    qos: Qos
+
+
+def _qos(profiles: Any) -> Qos:
+    """The first offered QoS profile of a rosbag2 ``topic_metadata`` (a list of mappings in
+    metadata version 9, a YAML string in older ones)."""
+    if isinstance(profiles, str):
+        profiles = yaml.safe_load(profiles)
+    if not profiles:
+        return Qos()
+    p = profiles[0]
+    return Qos(durability="transient_local" if str(p["durability"]).lower() in (
+                   "transient_local", "1") else "volatile",
+               reliability="best_effort" if str(p["reliability"]).lower() in (
+                   "best_effort", "2") else "reliable",
+               depth=max(int(p.get("depth", 10)), 1))
+
+
+class Playback:
+    """The messages of a rosbag2 directory with one MCAP file, in publication order."""
+
+    def __init__(self, bag_dir: Path) -> None:
+        self.bag_dir = Path(bag_dir)
+        if not (self.bag_dir / "metadata.yaml").is_file():
+            raise BagError(f"{self.bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
+        meta_file = self.bag_dir / "metadata.yaml"
+        try:
+            info = yaml.load(meta_file.read_text(encoding="utf-8"), Loader=_YamlLoader)[
+                "rosbag2_bagfile_information"]
+            self.topics = {}
+            for entry in info["topics_with_message_count"]:
+                t = entry["topic_metadata"]
+                self.topics[str(t["name"])] = RecordedTopic(
+                    str(t["name"]), str(t["type"]), _qos(t.get("offered_qos_profiles")))
+            files = [self.bag_dir / str(p) for p in info["relative_file_paths"]]
+        except (OSError, KeyError, IndexError, ValueError, TypeError, UnicodeDecodeError,
+                yaml.YAMLError) as err:
+            raise BagError(f"{meta_file}: not a rosbag2 metadata file: {err}") from err
+        if len(files) != 1 or files[0].suffix != ".mcap":
+            raise BagError(f"{self.bag_dir}: expected one .mcap file, found "
+                           f"{', '.join(p.name for p in files) or 'none'}")
+        self.file = files[0]
+
+    def by_time(self) -> Iterator[tuple[int, list[tuple[str, str, bytes]]]]:
+        """(log time, [(topic, type, raw CDR), ...]) in file order, one group per log time."""
+        try:
+            with self.file.open("rb") as f:
+                reader = make_reader(f)
+                stamp: int | None = None
+                group: list[tuple[str, str, bytes]] = []
+                for _schema, channel, message in reader.iter_messages(log_time_order=False):
+                    if stamp is not None and message.log_time != stamp:
+                        if message.log_time < stamp:
+                            raise BagError(f"{self.file}: log time goes back from {stamp} to "
+                                           f"{message.log_time} ns (not an srr recording)")
+                        yield stamp, group
+                        group = []
+                    stamp = message.log_time
+                    rec = self.topics.get(channel.topic)
+                    if rec is None:
+                        raise BagError(f"{self.file}: topic {channel.topic} is not in "
+                                       "metadata.yaml")
+                    group.append((channel.topic, rec.msgtype, message.data))
+                if stamp is not None:
+                    yield stamp, group
+        except (McapError, OSError, EOFError, struct.error, ValueError) as err:
+            raise BagError(f"{self.file}: cannot read recording: {err}") from err
+
+
+def _decode(raw: bytes, msgtype: str) -> Any:
+    return TYPESTORE.deserialize_cdr(raw, msgtype)
+
+
+class Replay:
+    """The recorded run of ``playback`` played into ``scenario``'s systems under test.
+
+    ``withheld``: recorded topics not played back (what systems under test publish)."""
+
+    def __init__(self, scenario: Scenario, playback: Playback, withheld: set[str],
+                 source: str = "<scenario>") -> None:
+        self.scenario = scenario
+        self.playback = playback
+        self.withheld = withheld
+        self.tick_index = 0
+        self.time_ns = 0
+        self.bus = Bus(lambda: self.time_ns)
+        self.suts: list[tuple[str, SystemUnderTest, SutContext]] = load_suts(
+            scenario, self.bus, source)
+        self._started = False
+
+    def start(self) -> None:
+        for _, sut, ctx in self.suts:
+            sut.setup(ctx)
+        self._started = True
+
+    def run(self, n_ticks: int, progress: Callable[[int, int], None] | None = None) -> None:
+        if not self._started:
+            self.start()
+        hz = self.scenario.physics.tick_hz
+        groups = self.playback.by_time()
+        pending = next(groups, None)
+        for k in range(n_ticks):
+            self.time_ns = k * 1_000_000_000 // hz
+            if pending is not None and pending[0] < self.time_ns:
+                raise BagError(f"{self.playback.file}: messages at {pending[0]} ns fall between "
+                               f"ticks of {hz} Hz (recorded with another tick rate?)")
+            if pending is not None and pending[0] == self.time_ns:
+                for topic, msgtype, raw in pending[1]:
+                    if topic not in self.withheld:
+                        self.bus.publish_raw(topic, msgtype, raw, _decode,
+                                             self.playback.topics[topic].qos)
+                pending = next(groups, None)
+            self.bus.spin()
+            for _, sut, _ in self.suts:
+                sut.step(self.time_ns)
+            self.bus.spin()
+            self.tick_index = k + 1
+            if progress is not None:
+                progress(self.tick_index, n_ticks)
+
+    def close(self) -> None:
+        for _, sut, _ in self.suts:
+            sut.shutdown()
