@@ -43,6 +43,7 @@ from harness.regression import (
     load_baseline,
     save_baseline,
 )
+from harness.regression.reference import reference_path
 from harness.replay import Playback, Replay
 from harness.report.data import read_summary
 from harness.report.html import write_report
@@ -269,7 +270,8 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
                                   "become the baseline")
         save_baseline(baseline_path(baseline_name(scenario), bdir), summary,
                       reason=update_reason, source_run=str(run_dir),
-                      config=comparable_config(scenario_to_mapping(scenario)))
+                      config=comparable_config(scenario_to_mapping(scenario)),
+                      bag=run_dir / "bag")
     _judge(summary, scenario, scores, bdir)
     if interrupted:
         summary["verdict"], summary["exit_code"] = "INTERRUPTED", 130
@@ -440,6 +442,8 @@ def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Pa
         "blessed_at": base.blessed_at, "seed": base.seed, "digest": base.digest,
         "digest_matches": base.digest == summary["digest"],
         "config_checked": base.config is not None, "config_differences": mismatch,
+        "reference": str(reference_path(path)) if base.reference
+        and reference_path(path).is_file() else None,
     }
     summary["comparison"] = [] if cmp is None else [dataclasses.asdict(e) for e in cmp.entries]
 
@@ -460,7 +464,8 @@ def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
     path = baseline_path(baseline_name(scenario),
                          baselines_dir(summary.get("scenario_file", ""), baselines))
     save_baseline(path, summary, reason=reason, source_run=str(run_dir),
-                  config=comparable_config(scenario_to_mapping(scenario)))
+                  config=comparable_config(scenario_to_mapping(scenario)),
+                  bag=Path(run_dir) / "bag")
     return path
 
 

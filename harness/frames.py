@@ -46,13 +46,15 @@ from __future__ import annotations
 
 import re
 import struct
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
 from rosbags.rosbag2 import Reader
 from rosbags.rosbag2.errors import ReaderError
 from rosbags.serde import SerdeError
@@ -621,10 +623,56 @@ def _tf_table(topic: str, cols: dict[str, np.ndarray], log_ns: np.ndarray) -> pd
         **{k: cols[k] for k in _POSE}})
 
 
+@dataclass(frozen=True)
+class _Conn:
+    id: int
+    topic: str
+    msgtype: str
+
+
+class _McapFile:
+    """A plain MCAP file (a baseline's reference recording) read like a rosbag2 directory:
+    ``connections``, ``messages()`` as (connection, log time, raw CDR), start and end."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.connections: list[_Conn] = []
+        self.start_time, self.end_time = 2**63 - 1, 0
+
+    def __enter__(self) -> _McapFile:
+        with self.path.open("rb") as f:
+            summary = make_reader(f).get_summary()
+        if summary is None:
+            raise ValueError("no summary section (not a finished MCAP file)")
+        self.connections = [_Conn(c.id, c.topic, summary.schemas[c.schema_id].name)
+                            for c in summary.channels.values()]
+        if summary.statistics is not None and summary.statistics.message_count:
+            self.start_time = summary.statistics.message_start_time
+            # exclusive, as rosbags reports a bag's end: after the last message
+            self.end_time = summary.statistics.message_end_time + 1
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def messages(self) -> Iterator[tuple[_Conn, int, bytes]]:
+        by_id = {c.id: c for c in self.connections}
+        with self.path.open("rb") as f:
+            for _schema, channel, message in make_reader(f).iter_messages(
+                    log_time_order=False):
+                yield by_id[channel.id], message.log_time, message.data
+
+
+def _open_bag(path: Path) -> Any:
+    """A rosbags Reader for a rosbag2 directory, or :class:`_McapFile` for a ``.mcap``."""
+    return _McapFile(path) if path.is_file() else Reader(path)
+
+
 def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = None,
                 muted_topic: str = "/safety/is_muted", clock_topic: str = "/clock",
                 world_frame: str = "world", fast: bool = True) -> Frames:
-    """Read a rosbag2 directory (or a run directory holding ``bag/``) into :class:`Frames`.
+    """Read a rosbag2 directory (or a run directory holding ``bag/``, or a plain ``.mcap``
+    file such as a baseline's reference recording) into :class:`Frames`.
 
     ``marker_topics``: the ``MarkerArray`` topics that carry tracks; None takes every topic
     of that type. Raises :class:`BagError` for a missing, truncated or undecodable bag.
@@ -632,10 +680,10 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
     p = Path(bag_dir)
     if (p / "bag" / "metadata.yaml").exists():
         p = p / "bag"
-    if not (p / "metadata.yaml").exists():
+    if not p.is_file() and not (p / "metadata.yaml").exists():
         raise BagError(f"{bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
     try:
-        with Reader(p) as reader:
+        with _open_bag(p) as reader:
             conns = list(reader.connections)
             wanted: dict[int, str] = {}
             for c in conns:
@@ -657,7 +705,8 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
                 if cid in wanted:
                     raws[cid].append(raw)
             start_ns, end_ns = int(reader.start_time), int(reader.end_time)
-    except (ReaderError, OSError, KeyError, ValueError, EOFError, struct.error) as err:
+    except (ReaderError, McapError, OSError, KeyError, ValueError, EOFError,
+            struct.error) as err:
         raise BagError(f"{bag_dir}: cannot read bag: {err}") from err
     if start_ns > end_ns:  # empty bag: rosbags reports (max, 0)
         start_ns = end_ns = 0

@@ -13,12 +13,13 @@ import json
 import os
 import time
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from harness.atomic import write_json_atomic
 from harness.errors import SrrError
+from harness.regression.reference import reference_path, write_reference
 
 __all__ = ["BASELINE_VERSION", "Baseline", "BaselineError", "BaselineMetric", "baseline_path",
            "load_baseline", "save_baseline"]
@@ -52,6 +53,7 @@ class Baseline:
     format_version: int = BASELINE_VERSION
     extra: Mapping[str, Any] = field(default_factory=dict)
     config: Mapping[str, Any] | None = None
+    reference: Mapping[str, Any] | None = None  # file, bytes, per-topic counts
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
@@ -80,6 +82,7 @@ def load_baseline(path: Path) -> Baseline | None:
             source_run=data.get("source_run", ""),
             format_version=int(data.get("format_version", BASELINE_VERSION)),
             extra=data.get("extra", {}), config=_mapping(data.get("config"), "config"),
+            reference=_mapping(data.get("reference"), "reference"),
         )
     except (OSError, ValueError, KeyError, TypeError) as err:
         raise BaselineError(f"{path}: not a valid baseline: {err}") from err
@@ -103,9 +106,12 @@ def who() -> str:
 
 
 def save_baseline(path: Path, summary: Mapping[str, Any], *, reason: str,
-                  source_run: str, config: Mapping[str, Any] | None = None) -> Baseline:
+                  source_run: str, config: Mapping[str, Any] | None = None,
+                  bag: Path | None = None) -> Baseline:
     """Write a baseline from a run's ``summary.json`` content (atomically); ``config`` is the
-    comparable part of the run's scenario (:func:`~harness.regression.config.comparable_config`)."""
+    comparable part of the run's scenario (:func:`~harness.regression.config.comparable_config`);
+    ``bag``: the run's bag, whose small topics become the reference recording next to the
+    JSON (:mod:`harness.regression.reference`; without it an old reference is removed)."""
     if not reason.strip():
         raise SrrError("--reason: say why this run becomes the baseline")
     metrics = {m["name"]: BaselineMetric(m["value"], m["unit"], m["direction"])
@@ -120,5 +126,12 @@ def save_baseline(path: Path, summary: Mapping[str, Any], *, reason: str,
         config=dict(config) if config is not None else None,
     )
     path.parent.mkdir(parents=True, exist_ok=True)
+    ref_path = reference_path(path)
+    if bag is not None:
+        info = write_reference(bag, ref_path)
+        baseline = replace(baseline, reference={"file": ref_path.name, "bytes": info.bytes,
+                                                "topics": info.counts})
+    else:
+        ref_path.unlink(missing_ok=True)
     write_json_atomic(path, baseline.to_json())
     return baseline

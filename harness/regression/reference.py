@@ -1,0 +1,86 @@
+"""A baseline's reference recording: the blessed run's small, non-image topics in one MCAP.
+
+Blessing writes ``baselines/<name>.mcap`` next to ``<name>.json``: ground truth
+(``/gt/*/tf``), odometry, velocity commands, Bool states (``/safety/is_muted``), tracked
+objects (MarkerArray), ``/clock`` and ``/tf_static`` — everything the report overlays as the
+baseline's trajectories and time series — copied byte for byte with their schemas and log
+times, in zstd-compressed chunks. Images, point clouds, scans, IMU and the dynamic ``/tf`` are
+left out (they are the bulk and the overlays do not need them). It is a plain MCAP file:
+Foxglove opens it, and :func:`harness.frames.load_frames` reads it like a bag.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
+
+from harness.errors import BagError
+
+__all__ = ["KEPT_TYPES", "ReferenceInfo", "kept", "reference_path", "write_reference"]
+
+KEPT_TYPES = frozenset({
+    "rosgraph_msgs/msg/Clock", "nav_msgs/msg/Odometry", "geometry_msgs/msg/Twist",
+    "std_msgs/msg/Bool", "visualization_msgs/msg/MarkerArray",
+})
+
+
+@dataclass(frozen=True)
+class ReferenceInfo:
+    path: Path
+    bytes: int
+    counts: dict[str, int]
+
+
+def kept(topic: str, msgtype: str) -> bool:
+    """Whether a topic goes into the reference recording."""
+    if msgtype == "tf2_msgs/msg/TFMessage":
+        return topic.startswith("/gt/") or topic.rsplit("/", 1)[-1] == "tf_static"
+    return msgtype in KEPT_TYPES
+
+
+def reference_path(baseline_json: Path) -> Path:
+    """``baselines/<name>.mcap`` for ``baselines/<name>.json``."""
+    return baseline_json.with_suffix(".mcap")
+
+
+def write_reference(bag_dir: Path, path: Path) -> ReferenceInfo:
+    """Copy the kept topics of the run's bag (rosbag2 directory with one MCAP) to ``path``,
+    atomically (a temporary file renamed into place)."""
+    mcaps = sorted(Path(bag_dir).glob("*.mcap"))
+    if len(mcaps) != 1:
+        raise BagError(f"{bag_dir}: expected one .mcap file to take the reference recording "
+                       f"from, found {len(mcaps)}")
+    tmp = path.with_name(path.name + ".tmp")
+    counts: dict[str, int] = {}
+    try:
+        with mcaps[0].open("rb") as src, tmp.open("wb") as dst:
+            writer = Writer(dst, compression=CompressionType.ZSTD, chunk_size=1 << 20)
+            writer.start(profile="ros2", library="srr reference recording")
+            schemas: dict[int, int] = {}
+            channels: dict[int, int] = {}
+            for schema, channel, message in make_reader(src).iter_messages(
+                    log_time_order=False):
+                if schema is None or not kept(channel.topic, schema.name):
+                    continue
+                if channel.id not in channels:
+                    if schema.id not in schemas:
+                        schemas[schema.id] = writer.register_schema(
+                            schema.name, schema.encoding, schema.data)
+                    channels[channel.id] = writer.register_channel(
+                        channel.topic, channel.message_encoding, schemas[schema.id],
+                        dict(channel.metadata))
+                writer.add_message(channels[channel.id], message.log_time, message.data,
+                                   message.publish_time, message.sequence)
+                counts[channel.topic] = counts.get(channel.topic, 0) + 1
+            writer.finish()  # type: ignore[no-untyped-call]  # mcap leaves it unannotated
+        os.replace(tmp, path)
+    except (McapError, OSError, EOFError, ValueError) as err:
+        tmp.unlink(missing_ok=True)
+        raise BagError(f"{mcaps[0]}: cannot write the reference recording {path}: {err}") \
+            from err
+    return ReferenceInfo(path, path.stat().st_size, dict(sorted(counts.items())))
