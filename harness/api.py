@@ -16,7 +16,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import hashlib
-import json
 import platform
 import shutil
 import time
@@ -32,7 +31,7 @@ from harness import __version__
 from harness.atomic import write_json_atomic
 from harness.bus import Bus, Recorder, TopicStats
 from harness.engine import Simulation
-from harness.errors import InvalidRunError, ScenarioError, SrrError
+from harness.errors import BagError, InvalidRunError, ScenarioError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
 from harness.regression import (
     baseline_path,
@@ -45,11 +44,11 @@ from harness.regression import (
 )
 from harness.regression.reference import reference_path
 from harness.replay import Playback, Replay
-from harness.report.data import read_summary
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
 from harness.scoring import Scores, check_scoring, scenario_frames, score_frames
+from harness.summary import read_summary
 from harness.sut.base import SutContext, load_suts
 from harness.wiring import check_wiring
 
@@ -63,6 +62,7 @@ __all__ = [
     "graph_text",
     "load",
     "replay",
+    "report",
     "run_repeat",
     "run_scenario",
     "validate",
@@ -234,14 +234,18 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
         raise
     finally:
         loop.close()
-    stats = recorder.close()
-    published = loop.bus.published_counts()
-    sim_s = loop.ticks() / scenario.physics.tick_hz
-    topics = _topic_table(stats, published, sim_s)
-    frames = scenario_frames(scenario, run_dir / "bag")
-    scores = score_frames(scenario, frames, srr_gt=loop.srr_gt, published=published,
-                          recorded={t: st.count for t, st in stats.items()}, duration_s=sim_s,
-                          source=source)
+    try:  # until summary.json exists the directory is half-written: an error removes it
+        stats = recorder.close()
+        published = loop.bus.published_counts()
+        sim_s = loop.ticks() / scenario.physics.tick_hz
+        topics = _topic_table(stats, published, sim_s)
+        frames = scenario_frames(scenario, run_dir / "bag")
+        scores = score_frames(scenario, frames, srr_gt=loop.srr_gt, published=published,
+                              recorded={t: st.count for t, st in stats.items()},
+                              duration_s=sim_s, source=source)
+    except BaseException:
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise
     summary: dict[str, Any] = {
         "scenario": scenario.name,
         "scenario_file": source,
@@ -389,6 +393,19 @@ def _replay_wiring(rep: Replay, playback: Playback, withheld: set[str]) -> list[
     return warnings
 
 
+def report(run_dir: str | Path) -> Path:
+    """Re-render a run directory's ``report.html`` (``srr report``). Unlike the lenient
+    renderer, which notes what it could not read, this refuses a run directory whose
+    summary, scenario or bag does not read back (SrrError, exit 2) and writes nothing then."""
+    run = Path(run_dir)
+    summary = read_summary(run)
+    scenario = load_scenario(run / "scenario.yaml")
+    if not (run / "bag" / "metadata.yaml").is_file():
+        raise BagError(f"{run / 'bag'}: metadata.yaml: missing (not a rosbag2 directory)")
+    frames = scenario_frames(scenario, run / "bag")
+    return write_report(run, summary=summary, scenario=scenario, frames=frames)
+
+
 def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     """Every check that can be made without running (``srr validate``): the scenario itself
     (done by loading it), the scoring block, building the world and the graphs, loading and
@@ -450,13 +467,7 @@ def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Pa
 
 def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
     """Make a finished run the baseline of its scenario (``srr baseline bless``)."""
-    summary_file = Path(run_dir) / "summary.json"
-    if not summary_file.exists():
-        raise SrrError(f"{run_dir}: summary.json: missing (not a finished run directory)")
-    try:
-        summary = json.loads(summary_file.read_text(encoding="utf-8"))
-    except ValueError as err:
-        raise SrrError(f"{summary_file}: not valid JSON: {err}") from err
+    summary = read_summary(run_dir)
     if summary.get("verdict") == "INVALID" or summary.get("interrupted"):
         raise InvalidRunError(f"{run_dir}: the run is {summary.get('verdict', 'invalid')}; "
                               "only a valid, complete run can become the baseline")

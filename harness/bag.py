@@ -2,16 +2,26 @@
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 
 import yaml
+import zstandard
+from mcap.exceptions import McapError
 from rosbags.rosbag2 import Reader
 from rosbags.rosbag2.errors import ReaderError
 
-from harness.errors import BagError
+from harness.errors import BagError, reason
 
-__all__ = ["BagInfo", "BagTopic", "inspect_bag"]
+__all__ = ["BAG_READ_ERRORS", "BagInfo", "BagTopic", "inspect_bag"]
+
+#: What the bag readers (rosbags, mcap and the decompressors under them) raise on a damaged,
+#: truncated or foreign file. Every reader in srr turns these into one BagError line.
+BAG_READ_ERRORS: tuple[type[BaseException], ...] = (
+    ReaderError, McapError, OSError, EOFError, struct.error, ValueError, KeyError, IndexError,
+    TypeError, AttributeError, AssertionError, zstandard.ZstdError, RuntimeError,
+    yaml.YAMLError)
 
 
 @dataclass(frozen=True)
@@ -58,6 +68,5 @@ def inspect_bag(path: str | Path) -> BagInfo:
             return BagInfo(p, storage,
                            sum(counts.values()), reader.start_time, reader.end_time,
                            tuple(sorted(topics, key=lambda t: t.name)))
-    except (ReaderError, OSError, KeyError, ValueError, TypeError, EOFError,
-            yaml.YAMLError) as err:
-        raise BagError(f"{path}: cannot read bag: {err}") from err
+    except BAG_READ_ERRORS as err:
+        raise BagError(f"{path}: cannot read bag: {reason(err)}") from err

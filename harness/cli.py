@@ -21,7 +21,6 @@ from rich.table import Table
 from harness import __version__, api
 from harness.bag import inspect_bag
 from harness.errors import SrrError
-from harness.report import write_report
 
 __all__ = ["main"]
 
@@ -273,7 +272,7 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    path = write_report(args.run_dir)
+    path = api.report(args.run_dir)
     out_console.print(str(path), markup=False)
     return 0
 

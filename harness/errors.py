@@ -14,6 +14,7 @@ __all__ = [
     "ScenarioError",
     "SimulationError",
     "SrrError",
+    "reason",
 ]
 
 
@@ -59,3 +60,13 @@ class InvalidRunError(SrrError):
     """A health gate tripped, so the run's scores cannot be trusted."""
 
     exit_code = 3
+
+
+def reason(err: BaseException) -> str:
+    """What went wrong, for a one-line message: the exception's text, or its kind when it
+    has none (some readers raise bare ``EndOfFile()``)."""
+    text = str(err).strip()
+    name = type(err).__name__
+    if not text:
+        return {"EndOfFile": "unexpected end of file (truncated)"}.get(name, name)
+    return text if len(text) < 200 else text[:197] + "..."

@@ -53,15 +53,14 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from rosbags.rosbag2 import Reader
-from rosbags.rosbag2.errors import ReaderError
 from rosbags.serde import SerdeError
 
+from harness.bag import BAG_READ_ERRORS
 from harness.bus.endpoints import tf_tree_of
 from harness.bus.messages import TYPESTORE
-from harness.errors import BagError
+from harness.errors import BagError, reason
 
 __all__ = [
     "CLOCK",
@@ -705,9 +704,8 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
                 if cid in wanted:
                     raws[cid].append(raw)
             start_ns, end_ns = int(reader.start_time), int(reader.end_time)
-    except (ReaderError, McapError, OSError, KeyError, ValueError, EOFError,
-            struct.error) as err:
-        raise BagError(f"{bag_dir}: cannot read bag: {err}") from err
+    except BAG_READ_ERRORS as err:
+        raise BagError(f"{bag_dir}: cannot read bag: {reason(err)}") from err
     if start_ns > end_ns:  # empty bag: rosbags reports (max, 0)
         start_ns = end_ns = 0
 

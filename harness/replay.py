@@ -16,19 +16,19 @@ systems under test publish does not feed back into the scene: the replay is open
 
 from __future__ import annotations
 
-import struct
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import yaml
-from mcap.exceptions import McapError
 from mcap.reader import make_reader
+from rosbags.serde import SerdeError
 
+from harness.bag import BAG_READ_ERRORS
 from harness.bus import Bus, Qos
 from harness.bus.messages import TYPESTORE
-from harness.errors import BagError
+from harness.errors import BagError, reason
 from harness.scenario import Scenario
 from harness.sut.base import SutContext, SystemUnderTest, load_suts
 
@@ -78,7 +78,7 @@ class Playback:
             files = [self.bag_dir / str(p) for p in info["relative_file_paths"]]
         except (OSError, KeyError, IndexError, ValueError, TypeError, UnicodeDecodeError,
                 yaml.YAMLError) as err:
-            raise BagError(f"{meta_file}: not a rosbag2 metadata file: {err}") from err
+            raise BagError(f"{meta_file}: not a rosbag2 metadata file: {reason(err)}") from err
         if len(files) != 1 or files[0].suffix != ".mcap":
             raise BagError(f"{self.bag_dir}: expected one .mcap file, found "
                            f"{', '.join(p.name for p in files) or 'none'}")
@@ -106,12 +106,23 @@ class Playback:
                     group.append((channel.topic, rec.msgtype, message.data))
                 if stamp is not None:
                     yield stamp, group
-        except (McapError, OSError, EOFError, struct.error, ValueError) as err:
-            raise BagError(f"{self.file}: cannot read recording: {err}") from err
+        except BAG_READ_ERRORS as err:
+            raise BagError(f"{self.file}: cannot read recording: {reason(err)}") from err
 
 
-def _decode(raw: bytes, msgtype: str) -> Any:
-    return TYPESTORE.deserialize_cdr(raw, msgtype)
+_DECODE_ERRORS: tuple[type[BaseException], ...] = (SerdeError, *BAG_READ_ERRORS)
+
+
+def _decoder(file: Path, now_ns: Callable[[], int]) -> Callable[[bytes, str], Any]:
+    """``deserialize_cdr`` that reports a message the recording holds but cannot decode as
+    one BagError line naming the file, the type and the time."""
+    def decode(raw: bytes, msgtype: str) -> Any:
+        try:
+            return TYPESTORE.deserialize_cdr(raw, msgtype)
+        except _DECODE_ERRORS as err:
+            raise BagError(f"{file}: a {msgtype} message at {now_ns() / 1e9:.3f} s does not "
+                           f"decode: {reason(err)}") from err
+    return decode
 
 
 class Replay:
@@ -141,6 +152,7 @@ class Replay:
             self.start()
         hz = self.scenario.physics.tick_hz
         groups = self.playback.by_time()
+        decode = _decoder(self.playback.file, lambda: self.time_ns)
         pending = next(groups, None)
         for k in range(n_ticks):
             self.time_ns = k * 1_000_000_000 // hz
@@ -150,7 +162,7 @@ class Replay:
             if pending is not None and pending[0] == self.time_ns:
                 for topic, msgtype, raw in pending[1]:
                     if topic not in self.withheld:
-                        self.bus.publish_raw(topic, msgtype, raw, _decode,
+                        self.bus.publish_raw(topic, msgtype, raw, decode,
                                              self.playback.topics[topic].qos)
                 pending = next(groups, None)
             self.bus.spin()

@@ -15,11 +15,11 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
-from harness.errors import BagError
+from harness.bag import BAG_READ_ERRORS
+from harness.errors import BagError, reason
 
 __all__ = ["KEPT_TYPES", "ReferenceInfo", "kept", "reference_path", "write_reference"]
 
@@ -79,8 +79,8 @@ def write_reference(bag_dir: Path, path: Path) -> ReferenceInfo:
                 counts[channel.topic] = counts.get(channel.topic, 0) + 1
             writer.finish()  # type: ignore[no-untyped-call]  # mcap leaves it unannotated
         os.replace(tmp, path)
-    except (McapError, OSError, EOFError, ValueError) as err:
+    except BAG_READ_ERRORS as err:
         tmp.unlink(missing_ok=True)
-        raise BagError(f"{mcaps[0]}: cannot write the reference recording {path}: {err}") \
+        raise BagError(f"{mcaps[0]}: cannot write the reference recording {path}: {reason(err)}") \
             from err
     return ReferenceInfo(path, path.stat().st_size, dict(sorted(counts.items())))

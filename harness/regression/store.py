@@ -72,8 +72,18 @@ def load_baseline(path: Path) -> Baseline | None:
         return None
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-        metrics = {k: BaselineMetric(v["value"], v["unit"], v["direction"])
-                   for k, v in data["metrics"].items()}
+        if not isinstance(data, dict):
+            raise TypeError(f"expected a JSON object, got {type(data).__name__}")
+        if not isinstance(data.get("metrics"), dict):
+            raise TypeError("metrics: expected a mapping of metric name → value, unit, "
+                            "direction")
+        metrics = {k: _metric(k, v) for k, v in data["metrics"].items()}
+        if not isinstance(data.get("topics", {}), dict):
+            raise TypeError("topics: expected a mapping")
+        if not isinstance(data.get("scenario"), str):
+            raise TypeError("scenario: expected a string")
+        if isinstance(data.get("seed"), bool) or not isinstance(data.get("seed"), int):
+            raise TypeError(f"seed: expected an integer, got {data.get('seed')!r}")
         return Baseline(
             scenario=data["scenario"], metrics=metrics, topics=data.get("topics", {}),
             digest=data.get("digest", ""), seed=int(data["seed"]),
@@ -86,6 +96,16 @@ def load_baseline(path: Path) -> Baseline | None:
         )
     except (OSError, ValueError, KeyError, TypeError) as err:
         raise BaselineError(f"{path}: not a valid baseline: {err}") from err
+
+
+def _metric(name: str, v: Any) -> BaselineMetric:
+    value = v.get("value") if isinstance(v, dict) else None
+    if (not isinstance(v, dict) or isinstance(value, bool)
+            or not (value is None or isinstance(value, int | float))
+            or not isinstance(v.get("unit"), str) or not isinstance(v.get("direction"), str)):
+        raise TypeError(f"metrics.{name}: expected value (a number or null), unit and "
+                        f"direction, got {v!r:.60}")
+    return BaselineMetric(None if value is None else float(value), v["unit"], v["direction"])
 
 
 def _mapping(value: Any, field: str) -> Mapping[str, Any] | None:

@@ -10,7 +10,6 @@ is what was scored: the expected mute state comes from
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from collections.abc import Sequence
@@ -29,6 +28,7 @@ from harness.metrics.perception import align_frames, assign
 from harness.metrics.safety import Tripwire, expected_muted
 from harness.scenario import Scenario, load_scenario
 from harness.scoring import scenario_frames, within_area
+from harness.summary import read_summary
 
 __all__ = [
     "ControlSeries",
@@ -183,22 +183,6 @@ class RunData:
 
 
 # --------------------------------------------------------------------------- loading
-
-
-def read_summary(run_dir: Path) -> dict[str, Any]:
-    """The run's ``summary.json``; :class:`SrrError` (exit 2) when it is not a run directory."""
-    path = Path(run_dir) / "summary.json"
-    if not Path(run_dir).is_dir():
-        raise SrrError(f"{run_dir}: not a run directory (no such directory)")
-    if not path.is_file():
-        raise SrrError(f"{run_dir}: not a run directory (summary.json missing)")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (ValueError, UnicodeDecodeError) as err:
-        raise SrrError(f"{path}: not valid JSON: {err}") from err
-    if not isinstance(data, dict) or "verdict" not in data:
-        raise SrrError(f"{path}: verdict: missing (not an srr run summary)")
-    return data
 
 
 def load_run(run_dir: str | Path, *, summary: dict[str, Any] | None = None,

@@ -16,9 +16,9 @@ from markupsafe import Markup
 
 from harness.atomic import write_text_atomic
 from harness.errors import SrrError
-from harness.report.data import read_summary
 from harness.report.html import REPORT_NAME, fmt_value
 from harness.report.templates import CSS, INDEX
+from harness.summary import read_summary
 
 __all__ = ["INDEX_NAME", "VERDICT_ORDER", "write_index"]
 

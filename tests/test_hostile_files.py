@@ -1,0 +1,163 @@
+"""Hostile files for every command that reads one: damaged MCAP files and bag directories,
+run directories with a missing or malformed ``summary.json``, baselines with wrong types.
+
+Every case ends in exit 2 with one line naming the file and what is wrong, or — for damage a
+reader cannot detect (a flipped bit inside a number) — in an ordinary result; never a
+traceback, and never something written that looks like a valid result.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from harness import api
+from harness.cli import main
+from tests.conftest import SCENARIOS
+
+FW = SCENARIOS / "forklift_warehouse.yaml"
+Damage = Callable[[bytes], bytes]
+
+
+@pytest.fixture(scope="module")
+def good_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("hostile") / "run"
+    api.run_scenario(api.load(FW, duration=0.5), source=str(FW), out=out)
+    return out
+
+
+def truncate(at: float) -> Damage:
+    return lambda data: data[: int(len(data) * at)]
+
+
+def flip(where: list[tuple[float, int]]) -> Damage:
+    def apply(data: bytes) -> bytes:
+        b = bytearray(data)
+        for pos, bit in where:
+            i = min(int(len(b) * pos), len(b) - 1)
+            b[i] ^= 1 << bit
+        return bytes(b)
+    return apply
+
+
+damages = st.one_of(
+    st.floats(0.0, 0.999).map(truncate),
+    st.lists(st.tuples(st.floats(0.0, 1.0), st.integers(0, 7)), min_size=1,
+             max_size=8).map(flip),
+    st.binary(max_size=2000).map(lambda junk: (lambda _data: junk)),
+    st.just(lambda _data: b""),
+    st.just(lambda _data: b'{"not": "an mcap"}\n'),
+)
+
+
+def copy_run(good: Path, tmp: Path) -> Path:
+    run = tmp / "run"
+    if run.exists():
+        shutil.rmtree(run)
+    shutil.copytree(good, run)
+    return run
+
+
+def cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str]:
+    code = main(list(argv))
+    return code, capsys.readouterr().err.strip()
+
+
+def one_clean_line(code: int, err: str, command: str) -> None:
+    assert code in (0, 1, 2, 3), (code, err)
+    if code == 2:
+        assert len(err.splitlines()) == 1 and err.startswith(f"srr {command}: "), err
+        assert "Traceback" not in err
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(damage=damages, command=st.sampled_from(["inspect", "report", "replay", "bless"]))
+def test_damaged_mcap(good_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                      damage: Damage, command: str) -> None:
+    run = copy_run(good_run, tmp_path)
+    (mcap,) = (run / "bag").glob("*.mcap")
+    original = mcap.read_bytes()
+    mcap.write_bytes(damage(original))
+    report_before = (run / "report.html").read_bytes()
+    out, bdir = tmp_path / "out", tmp_path / "baselines"
+    shutil.rmtree(out, ignore_errors=True)
+    shutil.rmtree(bdir, ignore_errors=True)
+    argv = {"inspect": ["inspect", str(run / "bag")], "report": ["report", str(run)],
+            "replay": ["replay", str(run), "--out", str(out), "-q"],
+            "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
+                      str(bdir)]}[command]
+    code, err = cli(capsys, *argv)
+    one_clean_line(code, err, argv[0])
+    if code == 2:
+        assert not out.exists()
+        assert (run / "report.html").read_bytes() == report_before
+        assert not list(bdir.glob("*.json")) if bdir.exists() else True
+    if mcap.read_bytes() != original and len(mcap.read_bytes()) < len(original) * 0.999:
+        assert code == 2, err  # a shortened file is always noticed
+
+
+SUMMARIES = ["", "{", "[]", "null", '{"verdict": 3}', '{"scenario": "x"}',
+             '{"verdict": "PASS", "topics": 5}', '{"verdict": "PASS", "seed": "abc", '
+             '"scenario": "forklift_warehouse", "metrics": "none"}']
+
+
+@pytest.mark.parametrize("text", SUMMARIES)
+@pytest.mark.parametrize("command", ["report", "replay", "bless"])
+def test_malformed_summary(good_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                           text: str, command: str) -> None:
+    run = copy_run(good_run, tmp_path)
+    (run / "summary.json").write_text(text)
+    before = (run / "report.html").read_bytes()
+    argv = {"report": ["report", str(run)],
+            "replay": ["replay", str(run), "--out", str(tmp_path / "out"), "-q"],
+            "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
+                      str(tmp_path / "b")]}[command]
+    code, err = cli(capsys, *argv)
+    assert code == 2, err
+    one_clean_line(code, err, argv[0])
+    assert "summary.json" in err, err
+    assert not (tmp_path / "out").exists() and not (tmp_path / "b").exists()
+    assert (run / "report.html").read_bytes() == before
+
+
+def test_missing_summary_and_missing_bag(good_run: Path, tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    run = copy_run(good_run, tmp_path)
+    (run / "summary.json").unlink()
+    for argv in (["report", str(run)], ["replay", str(run), "-q"]):
+        code, err = cli(capsys, *argv)
+        assert code == 2 and "summary.json" in err, err
+    run = copy_run(good_run, tmp_path)
+    shutil.rmtree(run / "bag")
+    for argv in (["report", str(run)], ["replay", str(run), "-q"], ["inspect", str(run)]):
+        code, err = cli(capsys, *argv)
+        assert code == 2 and "metadata.yaml: missing" in err, err
+
+
+@pytest.mark.parametrize("edit", [
+    lambda d: d.update(metrics=[1, 2]),
+    lambda d: d.update(seed="abc"),
+    lambda d: d["metrics"][next(iter(d["metrics"]))].update(value="high"),
+    lambda d: d.update(config=[1]),
+    lambda d: d.pop("scenario"),
+])
+def test_baselines_with_wrong_types(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                    edit: Callable[[dict[str, object]], None]) -> None:
+    bdir = tmp_path / "b"
+    bdir.mkdir()
+    data = json.loads((SCENARIOS.parent / "baselines" / "forklift_warehouse.json").read_text())
+    edit(data)
+    (bdir / "forklift_warehouse.json").write_text(json.dumps(data))
+    code, err = cli(capsys, "run", str(FW), "--duration", "0.5", "--baselines", str(bdir),
+                    "--out", str(tmp_path / "r"), "-q")
+    assert code == 2, err
+    assert err.startswith(f"srr run: {bdir / 'forklift_warehouse.json'}: not a valid baseline"), err
+    assert len(err.splitlines()) == 1
+    assert not (tmp_path / "r" / "summary.json").exists()
