@@ -35,6 +35,7 @@ from harness.atomic import write_json_atomic
 from harness.bus import Recorder, TopicStats
 from harness.bus.bagfile import ChunkPolicy
 from harness.bus.recover import RecoveredBag, recover_bag
+from harness.diskspace import MB, DiskGuard, FreeSpace, check_free_space, disk_free
 from harness.engine import Simulation
 from harness.errors import InvalidRunError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
@@ -155,12 +156,18 @@ def _topic_table(stats: dict[str, TopicStats], published: dict[str, int],
 def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
                  progress: Progress | None = None, baselines: Path | None = None,
                  update_baseline: bool = False, update_reason: str = "updated with "
-                 "--update-baseline") -> RunResult:
-    """Build, run and record ``scenario``; write the run directory and return its verdict."""
+                 "--update-baseline", free_space: FreeSpace = disk_free) -> RunResult:
+    """Build, run and record ``scenario``; write the run directory and return its verdict.
+
+    ``free_space`` measures the free bytes on a path's filesystem (``shutil.disk_usage`` by
+    default): the run refuses to start (:class:`~harness.errors.DiskSpaceError`) when it is
+    below the estimated bag size plus ``recording.min_free_mb``, and stops at a tick boundary,
+    INVALID, when it falls below ``recording.min_free_mb`` during the run."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
     if run_dir.exists() and any(run_dir.iterdir()):
         raise SrrError(f"--out {run_dir}: directory exists and is not empty")
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
+    check_free_space(scenario, run_dir, free_space)
     sim = Simulation(scenario, source=source)
     try:
         warnings = check_wiring(sim.plan(), scenario, source)
@@ -174,13 +181,24 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
     rec = scenario.recording
     recorder = Recorder(run_dir / "bag", chunks=ChunkPolicy(
-        max_bytes=round(rec.chunk_mb * 1_000_000), max_span_ns=round(rec.chunk_s * 1e9),
+        max_bytes=round(rec.chunk_mb * MB), max_span_ns=round(rec.chunk_s * 1e9),
         fsync=rec.fsync))
+    guard = DiskGuard(run_dir, round(rec.min_free_mb * MB), free_space,
+                      every_ticks=scenario.physics.tick_hz)
     interrupted = False
+    stopped: str | None = None
     try:
         recorder.open(sim.bus.qos)
         sim.add_tap(recorder)
-        sim.run(scenario.n_ticks, progress)
+        for _ in range(scenario.n_ticks):
+            sim.step_tick()
+            if progress is not None:
+                progress(sim.tick_index, scenario.n_ticks)
+            low = guard.poll(sim.tick_index, recorder.bytes_serialized)
+            if low is not None:
+                stopped = (f"{low}: the run was stopped after "
+                           f"{sim.tick_index / scenario.physics.tick_hz:g} s of simulated time")
+                break
     except KeyboardInterrupt:
         interrupted = True
     except BaseException:
@@ -198,6 +216,9 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     scores = score_run(scenario, run_dir / "bag", srr_gt=sim.srr_gt, published=published,
                        recorded={t: st.count for t, st in stats.items()}, duration_s=sim_s,
                        source=source)
+    if stopped is not None:
+        scores = dataclasses.replace(
+            scores, health=(*scores.health, HealthResult("disk_space", False, stopped)))
     summary: dict[str, Any] = {
         "scenario": scenario.name,
         "scenario_file": source,
@@ -208,6 +229,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         "ticks": sim.tick_index,
         "tick_hz": scenario.physics.tick_hz,
         "interrupted": interrupted,
+        "stopped": stopped,
         "warnings": list(warnings),
         "health": [dataclasses.asdict(h) for h in scores.health],
         "metrics": [dataclasses.asdict(m) for m in scores.metrics],
@@ -434,6 +456,7 @@ def _recovered_summary(run_dir: Path, scenario: Scenario, bag: RecoveredBag,
         "recovery": {"bag": bag.status, "phase": phase, "chunks_kept": bag.chunks,
                      "messages_kept": kept, "dropped_bytes": bag.dropped_bytes,
                      "damaged_file": None if bag.damaged is None else bag.damaged.name},
+        "stopped": None,
         "warnings": [],
         "health": [dataclasses.asdict(h) for h in health],
         "metrics": [],

@@ -64,6 +64,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="why, recorded in the baseline (with --update-baseline)")
     run.add_argument("--baselines", type=Path, default=None,
                      help="baselines folder (default: the project's baselines/)")
+    run.add_argument("--min-free-mb", type=float, default=None, metavar="MB",
+                     help="free disk space to keep: refuse to start below the estimated bag "
+                     "size plus this, stop the run below it (recording.min_free_mb)")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
 
     val = sub.add_parser("validate", help="check a scenario file without running it")
@@ -116,8 +119,11 @@ def _progress(quiet: bool) -> Any:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    overrides = list(args.overrides)
+    if args.min_free_mb is not None:
+        overrides.append(f"recording.min_free_mb={args.min_free_mb!r}")
     scenario = api.load(args.scenario, seed=args.seed, duration=args.duration,
-                        srr_gt=args.srr_gt, overrides=args.overrides)
+                        srr_gt=args.srr_gt, overrides=overrides)
     if args.update_baseline and args.repeat != 1:
         raise SrrError("--update-baseline: bless one run, not a --repeat series")
     bar = _progress(args.quiet)

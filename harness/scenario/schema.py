@@ -85,17 +85,20 @@ class PhysicsSpec:
 
 @dataclass(frozen=True)
 class RecordingSpec:
-    """``recording:`` block: how the bag is written.
+    """``recording:`` block: how the bag is written and the disk-space guard.
 
     A chunk of the MCAP file is closed (written and flushed) when it holds ``chunk_mb`` MB or
     spans ``chunk_s`` seconds of simulated time, whichever comes first: that bounds what a
     crash can lose. ``fsync`` also forces each closed chunk to the disk (only power loss needs
-    it). MB are 10^6 bytes.
+    it). A run refuses to start when the free space is below its estimated bag size plus
+    ``min_free_mb``, and stops at a tick boundary (INVALID, exit 3) when free space falls below
+    ``min_free_mb`` while it runs. MB are 10^6 bytes.
     """
 
     chunk_mb: float = num(8.0, 0.0, 4096.0, lo_open=True)
     chunk_s: float = num(1.0, 0.0, 3600.0, lo_open=True)
     fsync: bool = False
+    min_free_mb: float = num(256.0, 0.0, 1e9)
 
 
 @dataclass(frozen=True)
