@@ -12,8 +12,9 @@ objects. Then, side by side in one process, alternating, best of ``--repeats``:
 * bare rosbags: the same with ``rosbags.rosbag2.Writer`` (MCAP storage), the writer srr used
   before it wrote MCAP itself;
 * srr Recorder: ``Recorder.write`` for each message (serialize on the caller's thread, write,
-  hash and close chunks on its background thread), then ``close``; its counts are checked
-  against the message count (zero drops).
+  hash and close chunks on its background thread; default chunks, 8 MB / 1 s), then
+  ``close``; its counts are checked against the message count (zero drops);
+* with fsync: the same with ``recording.fsync: true`` (each closed chunk forced to disk).
 
     python benchmarks/bench_recorder.py [--scenario scenarios/camera_publishing.yaml ...]
                                         [--duration 3] [--repeats 5]
@@ -41,6 +42,7 @@ sys.path.insert(0, str(ROOT))
 
 from harness import api  # noqa: E402
 from harness.bus import Envelope, Recorder  # noqa: E402
+from harness.bus.bagfile import ChunkPolicy  # noqa: E402
 from harness.bus.messages import TYPESTORE, serialize  # noqa: E402
 
 Msg = tuple[str, str, int, Any]  # topic, type, log time, message object
@@ -92,8 +94,8 @@ def bare_rosbags(msgs: list[Msg], out: Path) -> int:
     return len(msgs)
 
 
-def recorder(msgs: list[Msg], out: Path) -> int:
-    rec = Recorder(out / "srr")
+def recorder(msgs: list[Msg], out: Path, fsync: bool = False) -> int:
+    rec = Recorder(out / "srr", chunks=ChunkPolicy(fsync=fsync))
     rec.open()
     for seq, (topic, msgtype, stamp, msg) in enumerate(msgs):
         rec.write(Envelope(topic, msgtype, stamp, seq, msg))
@@ -130,7 +132,8 @@ def main() -> None:
         nbytes = sum(len(serialize(m, t)) for _, t, _, m in msgs)
         results: dict[str, float] = {}
         contenders = [("bare mcap", bare_mcap), ("bare rosbags", bare_rosbags),
-                      ("srr Recorder", recorder)]
+                      ("srr Recorder", recorder),
+                      ("  with fsync", lambda m, o: recorder(m, o, fsync=True))]
         for _ in range(args.repeats):  # alternate so drift hits every contender alike
             for name, fn in contenders:
                 best(fn, msgs, 1, results, name)
