@@ -177,10 +177,10 @@ def _scan(path: Path, visit: Callable[[_Scan, list[Any]], None]) -> _Scan:
                     raise BagError(f"{path}: corrupt, not cut short: {bad}, but chunks after "
                                    "it are whole; not recovered")
                 scan.chunks += 1
-                visit(scan, inner)
+                _visit(path, visit, scan, inner)
             elif isinstance(rec, Message | Schema | Channel):
                 if bad is None:
-                    visit(scan, [rec])
+                    _visit(path, visit, scan, [rec])
             elif isinstance(rec, Footer):
                 scan.finished = True
     if bad is not None and (scan.finished or finished_file):
@@ -189,6 +189,14 @@ def _scan(path: Path, visit: Callable[[_Scan, list[Any]], None]) -> _Scan:
     if scan.finished:
         _check_summary(path, scan)
     return scan
+
+
+def _visit(path: Path, visit: Callable[[_Scan, list[Any]], None], scan: _Scan,
+           records: list[Any]) -> None:
+    try:
+        visit(scan, records)
+    except BagError as err:
+        raise BagError(f"{path}: {err}") from err
 
 
 def _describe(err: BaseException) -> str:

@@ -203,3 +203,20 @@ def test_not_a_bag_directory(tmp_path: Path, capsys: pytest.CaptureFixture[str],
     assert main(["recover", str(bag)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and str(bag) in err
+
+
+def test_a_message_on_an_undefined_channel_is_refused(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    from mcap.writer import CompressionType, Writer
+
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    with (bag / "bag.mcap").open("wb") as f:
+        w = Writer(f, compression=CompressionType.NONE)
+        w.start(profile="ros2")
+        w.add_message(7, 0, b"\x00\x01\x00\x00", 0)  # channel 7 was never registered
+        w.flush()  # cut short: no summary, no footer
+    assert main(["recover", str(bag)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and str(bag / "bag.mcap") in err and "channel 7" in err
+    assert sorted(p.name for p in bag.iterdir()) == ["bag.mcap"]

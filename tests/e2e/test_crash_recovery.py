@@ -163,6 +163,9 @@ def test_kill_then_recover(reference: Path, tmp_path: Path, capsys: pytest.Captu
 
     assert main(["recover", str(out / "bag")]) == 0  # a second recover has nothing to do
     assert "nothing to recover" in capsys.readouterr().out
+    if moment == "mid-run":  # the recovered run renders its report, INVALID
+        assert main(["report", str(out)]) == 0
+        assert "INVALID" in (out / "report.html").read_text()
 
 
 def test_chunk_settings_of_the_scenario_reach_the_recorder(tmp_path: Path) -> None:
