@@ -9,6 +9,8 @@ that every published message was recorded, and writes the run directory:
                     per-topic count/rate/bytes/sha256, versions, seed, command to reproduce
     junit.xml       health gates and metric comparisons as test cases, for CI systems
     report.html     the reviewer's page (harness.report), written last
+    incomplete.json only while the run has not finished (harness.runmarker): a killed run
+                    keeps it, and ``recover`` turns such a directory back into a valid one
 """
 
 from __future__ import annotations
@@ -27,12 +29,16 @@ from typing import Any
 
 import yaml
 
-from harness import __version__
+from harness import __version__, runmarker
 from harness.atomic import write_json_atomic
 from harness.bus import Bus, Recorder, TopicStats
+from harness.bus.bagfile import ChunkPolicy
+from harness.bus.recover import RecoveredBag, recover_bag
+from harness.diskspace import MB, DiskGuard, FreeSpace, check_free_space, disk_free
 from harness.engine import Simulation
 from harness.errors import BagError, InvalidRunError, ScenarioError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
+from harness.metrics.types import HealthResult
 from harness.regression import (
     baseline_path,
     comparable_config,
@@ -53,6 +59,7 @@ from harness.sut.base import SutContext, load_suts
 from harness.wiring import check_wiring
 
 __all__ = [
+    "RecoverResult",
     "RepeatResult",
     "RunResult",
     "baselines_dir",
@@ -61,6 +68,7 @@ __all__ = [
     "default_run_dir",
     "graph_text",
     "load",
+    "recover",
     "replay",
     "report",
     "run_repeat",
@@ -165,7 +173,7 @@ class _Loop:
 
     bus: Bus
     suts: Sequence[tuple[str, Any, SutContext]]
-    run: Callable[[int, Progress | None], None]
+    step: Callable[[], None]  # one tick
     close: Callable[[], None]
     ticks: Callable[[], int]
     srr_gt: bool
@@ -180,10 +188,16 @@ def _prepare(run_dir: Path) -> None:
 def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
                  progress: Progress | None = None, baselines: Path | None = None,
                  update_baseline: bool = False, update_reason: str = "updated with "
-                 "--update-baseline") -> RunResult:
-    """Build, run and record ``scenario``; write the run directory and return its verdict."""
+                 "--update-baseline", free_space: FreeSpace = disk_free) -> RunResult:
+    """Build, run and record ``scenario``; write the run directory and return its verdict.
+
+    ``free_space`` measures the free bytes on a path's filesystem (``shutil.disk_usage`` by
+    default): the run refuses to start (:class:`~harness.errors.DiskSpaceError`) when it is
+    below the estimated bag size plus ``recording.min_free_mb``, and stops at a tick boundary,
+    INVALID, when it falls below ``recording.min_free_mb`` during the run."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
     _prepare(run_dir)
+    check_free_space(scenario, run_dir, free_space)
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(scenario, source=source)
     try:
@@ -191,12 +205,12 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     except BaseException:
         sim.close()
         raise
-    loop = _Loop(sim.bus, sim.suts, sim.run, sim.close, lambda: sim.tick_index, sim.srr_gt,
-                 {"graphs": sim.graph_paths, "warnings": list(warnings),
-                  "command": reproduce_command(source, scenario, run_dir)})
+    loop = _Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
+                 sim.srr_gt, {"graphs": sim.graph_paths, "warnings": list(warnings),
+                              "command": reproduce_command(source, scenario, run_dir)})
     return _record(scenario, loop, source=source, run_dir=run_dir, n_ticks=scenario.n_ticks,
                    progress=progress, baselines=baselines, update_baseline=update_baseline,
-                   update_reason=update_reason)
+                   update_reason=update_reason, free_space=free_space)
 
 
 def _sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any]:
@@ -213,18 +227,35 @@ def _sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any
 
 def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ticks: int,
             progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
-            update_reason: str = "") -> RunResult:
+            update_reason: str = "", free_space: FreeSpace = disk_free) -> RunResult:
     """Record ``loop`` into ``run_dir``, score it and write the run directory (shared by
-    :func:`run_scenario` and :func:`replay`)."""
+    :func:`run_scenario` and :func:`replay`). Until ``summary.json`` is written the directory
+    holds ``incomplete.json`` (:mod:`harness.runmarker`), so a killed run never looks done."""
     run_dir.mkdir(parents=True, exist_ok=True)
+    command = str(loop.extra.get("command", ""))
+    runmarker.mark(run_dir, "recording", scenario_file=source, command=command)
     (run_dir / "scenario.yaml").write_text(
         yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
-    recorder = Recorder(run_dir / "bag")
-    recorder.open(loop.bus.qos)
-    loop.bus.add_tap(recorder)
+    rec = scenario.recording
+    recorder = Recorder(run_dir / "bag", chunks=ChunkPolicy(
+        max_bytes=round(rec.chunk_mb * MB), max_span_ns=round(rec.chunk_s * 1e9),
+        fsync=rec.fsync))
+    guard = DiskGuard(run_dir, round(rec.min_free_mb * MB), free_space,
+                      every_ticks=scenario.physics.tick_hz)
     interrupted = False
+    stopped: str | None = None
     try:
-        loop.run(n_ticks, progress)
+        recorder.open(loop.bus.qos)
+        loop.bus.add_tap(recorder)
+        for _ in range(n_ticks):
+            loop.step()
+            if progress is not None:
+                progress(loop.ticks(), n_ticks)
+            low = guard.poll(loop.ticks(), recorder.bytes_serialized)
+            if low is not None:
+                stopped = (f"{low}: the run was stopped after "
+                           f"{loop.ticks() / scenario.physics.tick_hz:g} s of simulated time")
+                break
     except KeyboardInterrupt:
         interrupted = True
     except BaseException:
@@ -234,6 +265,7 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
         raise
     finally:
         loop.close()
+    runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
     try:  # until summary.json exists the directory is half-written: an error removes it
         stats = recorder.close()
         published = loop.bus.published_counts()
@@ -246,6 +278,9 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     except BaseException:
         shutil.rmtree(run_dir, ignore_errors=True)
         raise
+    if stopped is not None:
+        scores = dataclasses.replace(
+            scores, health=(*scores.health, HealthResult("disk_space", False, stopped)))
     summary: dict[str, Any] = {
         "scenario": scenario.name,
         "scenario_file": source,
@@ -256,6 +291,7 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
         "ticks": loop.ticks(),
         "tick_hz": scenario.physics.tick_hz,
         "interrupted": interrupted,
+        "stopped": stopped,
         "warnings": [],
         "health": [dataclasses.asdict(h) for h in scores.health],
         "metrics": [dataclasses.asdict(m) for m in scores.metrics],
@@ -280,8 +316,9 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     if interrupted:
         summary["verdict"], summary["exit_code"] = "INTERRUPTED", 130
         summary["reasons"] = ["interrupted before the end of the scenario"]
-    write_json_atomic(run_dir / "summary.json", summary)
     write_junit(run_dir / "junit.xml", scenario.name, junit_cases(summary))
+    write_json_atomic(run_dir / "summary.json", summary)  # the run is complete from here on
+    runmarker.clear(run_dir)
     try:  # last: a report that fails to render never costs the run its summary
         write_report(run_dir, summary=summary, scenario=scenario, frames=frames)
     except SrrError:
@@ -331,13 +368,14 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         raise
     out_dir = Path(out) if out is not None else default_run_dir(scenario, suffix="-replay")
     _prepare(out_dir)
+    check_free_space(scenario, out_dir, disk_free)
     command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
                         *(f"--set {o}" for o in overrides), f"--out {out_dir}"])
     extra = {"warnings": warnings, "command": command, "replay_of": {
         "run_dir": str(src), "digest": summary.get("digest"), "mode": "open-loop",
         "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
         "overrides": list(overrides), "withheld": sorted(withheld)}}
-    loop = _Loop(rep.bus, rep.suts, rep.run, rep.close, lambda: rep.tick_index,
+    loop = _Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
                  bool(summary.get("srr_gt")), extra)
     return _record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.get("ticks") or scenario.n_ticks), progress=progress,
@@ -504,3 +542,115 @@ def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
     worst = max(r.exit_code for r in runs)
     return RepeatResult(runs, identical, tuple(differing),
                         worst if identical else max(worst, 1), out_dir)
+
+
+@dataclass(frozen=True)
+class RecoverResult:
+    """What :func:`recover` did. ``bag.status`` says what happened to the bag (``valid``,
+    ``metadata`` or ``rebuilt``); ``run_dir`` is None for a bare bag directory; ``summary``
+    is the summary written for a run that had not finished (None when nothing was written);
+    ``phase`` is how far the killed run had got (from its ``incomplete.json``)."""
+
+    bag: RecoveredBag
+    run_dir: Path | None
+    summary: dict[str, Any] | None
+    phase: str | None
+
+    @property
+    def changed(self) -> bool:
+        return self.bag.status != "valid" or self.summary is not None
+
+
+def _run_dir_of(path: Path) -> Path | None:
+    """The run directory ``path`` is, or whose ``bag/`` it is (one with a scenario.yaml)."""
+    for cand in (path, path.parent):
+        if (cand / "bag").is_dir() and (cand / "scenario.yaml").is_file():
+            return cand
+    return None
+
+
+def recover(path: str | Path) -> RecoverResult:
+    """``srr recover``: make a run directory (or a bag directory) left by a killed run valid.
+
+    The bag's MCAP file is rebuilt from its complete chunks when it was cut short
+    (:func:`harness.bus.recover.recover_bag`; the original is kept as ``*.mcap.damaged``). A
+    run directory that has no summary, or still holds ``incomplete.json``, or whose bag had to
+    be rebuilt, gets a ``summary.json`` (and ``junit.xml``) marked ``recovered: true`` with
+    verdict INVALID: per-topic counts and digests of what was kept, no scores (the run did not
+    finish, so nothing is compared with the baseline). A finished run with a valid bag is left
+    as it is. Raises :class:`~harness.errors.BagError` (nothing written) when the bag cannot
+    be recovered."""
+    p = Path(path)
+    run_dir = _run_dir_of(p.parent if p.is_file() else p)
+    marker = runmarker.read(run_dir) if run_dir is not None else None
+    scenario = load_scenario(run_dir / "scenario.yaml") if run_dir is not None else None
+    bag = recover_bag(p)
+    if run_dir is None or scenario is None:
+        return RecoverResult(bag, None, None, None)
+    phase = None if marker is None else str(marker.get("phase", "unknown"))
+    has_summary = (run_dir / "summary.json").is_file()
+    if bag.status == "valid" and has_summary:
+        runmarker.clear(run_dir)  # killed after the summary was written: the run is complete
+        return RecoverResult(bag, run_dir, None, phase)
+    summary = _recovered_summary(run_dir, scenario, bag, marker or {}, phase)
+    write_junit(run_dir / "junit.xml", scenario.name, junit_cases(summary))
+    write_json_atomic(run_dir / "summary.json", summary)
+    runmarker.clear(run_dir)
+    return RecoverResult(bag, run_dir, summary, phase)
+
+
+def _recovered_summary(run_dir: Path, scenario: Scenario, bag: RecoveredBag,
+                       marker: dict[str, Any], phase: str | None) -> dict[str, Any]:
+    hz = scenario.physics.tick_hz
+    last = max((t.last_ns for t in bag.topics.values() if t.last_ns is not None), default=None)
+    # Stamps are tick * 1e9 // hz, so the last kept tick is ceil(last * hz / 1e9).
+    ticks = 0 if last is None else -(-last * hz // 1_000_000_000) + 1
+    sim_s = ticks / hz
+    topics = _topic_table(bag.topics, {}, sim_s)
+    for t in topics.values():
+        t["published"] = None  # unknown: the run did not finish
+    kept = sum(t.count for t in bag.topics.values())
+    dropped = (f"; the {bag.dropped_bytes} bytes after them, an incomplete chunk, were "
+               "dropped" if bag.dropped_bytes else "")
+    what = {"rebuilt": f"the bag was rebuilt from its {bag.chunks} complete chunks "
+                       f"({kept} messages, {sim_s:g} s of simulated time{dropped}; the "
+                       f"original is kept as {bag.damaged.name if bag.damaged else '?'})",
+            "metadata": f"the bag's MCAP file was complete ({kept} messages); its "
+                        "metadata.yaml was rewritten",
+            "valid": f"the bag was complete ({kept} messages)"}[bag.status]
+    when = {"recording": "during the tick loop", "finalizing": "while finalizing (after the "
+            "tick loop)"}.get(phase or "", "before it wrote its summary")
+    detail = (f"the run was killed {when}; recovered with srr recover: {what}; scores were "
+              "not computed")
+    health = [HealthResult("recording_complete", False, detail)]
+    return {
+        "scenario": scenario.name,
+        "scenario_file": marker.get("scenario_file", ""),
+        "seed": scenario.seed,
+        "srr_gt": scenario.srr_gt,
+        "duration_s": scenario.duration,
+        "simulated_s": sim_s,
+        "ticks": ticks,
+        "tick_hz": scenario.physics.tick_hz,
+        "interrupted": True,
+        "recovered": True,
+        "recovery": {"bag": bag.status, "phase": phase, "chunks_kept": bag.chunks,
+                     "messages_kept": kept, "dropped_bytes": bag.dropped_bytes,
+                     "damaged_file": None if bag.damaged is None else bag.damaged.name},
+        "stopped": None,
+        "warnings": [],
+        "health": [dataclasses.asdict(h) for h in health],
+        "metrics": [],
+        "graphs": [],
+        "systems_under_test": [s.name for s in scenario.systems_under_test if s.enabled],
+        "topics": topics,
+        "digest": combined_digest(topics),
+        "versions": versions(),
+        "command": marker.get("command") or reproduce_command(
+            marker.get("scenario_file", str(run_dir / "scenario.yaml")), scenario, run_dir),
+        "verdict": "INVALID",
+        "exit_code": 3,
+        "reasons": [f"health recording_complete: {detail}"],
+        "baseline": None,
+        "comparison": [],
+    }

@@ -51,6 +51,9 @@ def inspect_bag(path: str | Path) -> BagInfo:
     if not p.exists():
         raise BagError(f"{path}: no such bag directory")
     if not (p / "metadata.yaml").exists():
+        if any(p.glob("*.mcap")):
+            raise BagError(f"{path}: metadata.yaml: missing (the recording did not finish; "
+                           "`srr recover` rebuilds the bag)")
         raise BagError(f"{path}: metadata.yaml: missing (not a rosbag2 directory)")
     try:
         with Reader(p) as reader:

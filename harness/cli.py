@@ -63,6 +63,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="why, recorded in the baseline (with --update-baseline)")
     run.add_argument("--baselines", type=Path, default=None,
                      help="baselines folder (default: the project's baselines/)")
+    run.add_argument("--min-free-mb", type=float, default=None, metavar="MB",
+                     help="free disk space to keep: refuse to start below the estimated bag "
+                     "size plus this, stop the run below it (recording.min_free_mb)")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
 
     rp = sub.add_parser("replay", help="play a recorded run back into its systems under test "
@@ -87,6 +90,9 @@ def _parser() -> argparse.ArgumentParser:
 
     ins = sub.add_parser("inspect", help="list the topics of a recorded bag")
     ins.add_argument("bag", type=Path)
+
+    rec = sub.add_parser("recover", help="make a killed run's bag (and run directory) valid")
+    rec.add_argument("bag", type=Path, help="a run directory or its bag/")
 
     rep = sub.add_parser("report", help="(re-)render a run directory's report.html")
     rep.add_argument("run_dir", type=Path)
@@ -145,8 +151,11 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    overrides = list(args.overrides)
+    if args.min_free_mb is not None:
+        overrides.append(f"recording.min_free_mb={args.min_free_mb!r}")
     scenario = api.load(args.scenario, seed=args.seed, duration=args.duration,
-                        srr_gt=args.srr_gt, overrides=args.overrides)
+                        srr_gt=args.srr_gt, overrides=overrides)
     if args.update_baseline and args.repeat != 1:
         raise SrrError("--update-baseline: bless one run, not a --repeat series")
     bar = _progress(args.quiet)
@@ -271,14 +280,52 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_recover(args: argparse.Namespace) -> int:
+    res = api.recover(args.bag)
+    bag = res.bag
+    kept = sum(t.count for t in bag.topics.values())
+    if bag.status == "valid" and not res.changed:
+        out_console.print(f"{bag.mcap}: valid ({kept} messages in {bag.chunks} chunks): "
+                          "nothing to recover", markup=False)
+        return 0
+    table = Table(title=f"{bag.bag_dir}: kept per topic")
+    for col in ("topic", "type", "kept", "durability"):
+        table.add_column(col, justify="right" if col == "kept" else "left")
+    for t in bag.topics.values():
+        table.add_row(t.topic, t.msgtype, str(t.count), t.durability)
+    out_console.print(table)
+    if bag.status == "rebuilt":
+        last = max((t.last_ns or 0 for t in bag.topics.values()), default=0)
+        dropped = (f"; dropped the {bag.dropped_bytes} bytes after them (an incomplete chunk)"
+                   if bag.dropped_bytes else "")
+        out_console.print(f"rebuilt {bag.mcap.name} from {bag.chunks} complete chunks "
+                          f"({kept} messages, the last at {last / 1e9:.3f} s){dropped}; the "
+                          f"original is kept as {bag.damaged.name if bag.damaged else '?'}",
+                          markup=False)
+    elif bag.status == "metadata":
+        out_console.print(f"{bag.mcap.name} was complete ({kept} messages); rewrote "
+                          "metadata.yaml", markup=False)
+    else:
+        out_console.print(f"{bag.mcap.name} was complete ({kept} messages)", markup=False)
+    if res.summary is not None and res.run_dir is not None:
+        out_console.print(f"{res.run_dir / 'summary.json'}: recovered, verdict "
+                          f"{res.summary['verdict']} (killed while "
+                          f"{res.phase or 'running'}; not scored)", markup=False)
+    elif res.run_dir is not None:
+        out_console.print(f"{res.run_dir}: the run had finished; its summary is kept",
+                          markup=False)
+    return 0
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     path = api.report(args.run_dir)
     out_console.print(str(path), markup=False)
     return 0
 
 
-COMMANDS = {"run": _cmd_run, "replay": _cmd_replay, "validate": _cmd_validate, "graph": _cmd_graph,
-            "inspect": _cmd_inspect, "baseline": _cmd_baseline, "report": _cmd_report}
+COMMANDS = {"run": _cmd_run, "replay": _cmd_replay, "validate": _cmd_validate,
+            "graph": _cmd_graph, "inspect": _cmd_inspect, "baseline": _cmd_baseline,
+            "report": _cmd_report, "recover": _cmd_recover}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 __all__ = [
     "BagError",
+    "DiskSpaceError",
     "GraphError",
     "InvalidRunError",
     "PluginError",
@@ -54,6 +55,10 @@ class SimulationError(SrrError):
 
 class BagError(SrrError):
     """A recorded bag is missing, truncated or corrupt."""
+
+
+class DiskSpaceError(SrrError):
+    """Not enough free disk space to start a run (its estimated bag size plus the margin)."""
 
 
 class InvalidRunError(SrrError):

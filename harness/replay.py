@@ -140,38 +140,40 @@ class Replay:
         self.bus = Bus(lambda: self.time_ns)
         self.suts: list[tuple[str, SystemUnderTest, SutContext]] = load_suts(
             scenario, self.bus, source)
+        self._groups: Iterator[tuple[int, list[tuple[str, str, bytes]]]] = iter(())
+        self._decode = _decoder(playback.file, lambda: self.time_ns)
+        self._pending: tuple[int, list[tuple[str, str, bytes]]] | None = None
         self._started = False
 
     def start(self) -> None:
         for _, sut, ctx in self.suts:
             sut.setup(ctx)
+        self._groups = self.playback.by_time()
+        self._pending = next(self._groups, None)
         self._started = True
 
-    def run(self, n_ticks: int, progress: Callable[[int, int], None] | None = None) -> None:
+    def step_tick(self) -> None:
+        """One tick: the recorded messages of its time, delivery, the systems under test."""
         if not self._started:
             self.start()
         hz = self.scenario.physics.tick_hz
-        groups = self.playback.by_time()
-        decode = _decoder(self.playback.file, lambda: self.time_ns)
-        pending = next(groups, None)
-        for k in range(n_ticks):
-            self.time_ns = k * 1_000_000_000 // hz
-            if pending is not None and pending[0] < self.time_ns:
-                raise BagError(f"{self.playback.file}: messages at {pending[0]} ns fall between "
-                               f"ticks of {hz} Hz (recorded with another tick rate?)")
-            if pending is not None and pending[0] == self.time_ns:
-                for topic, msgtype, raw in pending[1]:
-                    if topic not in self.withheld:
-                        self.bus.publish_raw(topic, msgtype, raw, decode,
-                                             self.playback.topics[topic].qos)
-                pending = next(groups, None)
-            self.bus.spin()
-            for _, sut, _ in self.suts:
-                sut.step(self.time_ns)
-            self.bus.spin()
-            self.tick_index = k + 1
-            if progress is not None:
-                progress(self.tick_index, n_ticks)
+        k = self.tick_index
+        self.time_ns = k * 1_000_000_000 // hz
+        pending = self._pending
+        if pending is not None and pending[0] < self.time_ns:
+            raise BagError(f"{self.playback.file}: messages at {pending[0]} ns fall between "
+                           f"ticks of {hz} Hz (recorded with another tick rate?)")
+        if pending is not None and pending[0] == self.time_ns:
+            for topic, msgtype, raw in pending[1]:
+                if topic not in self.withheld:
+                    self.bus.publish_raw(topic, msgtype, raw, self._decode,
+                                         self.playback.topics[topic].qos)
+            self._pending = next(self._groups, None)
+        self.bus.spin()
+        for _, sut, _ in self.suts:
+            sut.step(self.time_ns)
+        self.bus.spin()
+        self.tick_index = k + 1
 
     def close(self) -> None:
         for _, sut, _ in self.suts:

@@ -1,9 +1,10 @@
 """Record every message on the bus to a rosbag2 directory (MCAP storage, CDR).
 
 The recorder is a bus tap: it sees each message at publish time, serializes it with the
-rosbags typestore and writes it with the simulation time as log time. It keeps, per topic, the
-count, byte total and a SHA-256 digest over ``(log time, payload)`` so two runs can be compared
-without reading the bags back.
+rosbags typestore and writes it with the simulation time as log time, through
+:class:`~harness.bus.bagfile.McapBagWriter` (bounded chunks: a crash loses at most the chunk
+being filled). It keeps, per topic, the count, byte total and a SHA-256 digest over
+``(log time, payload)`` so two runs can be compared without reading the bags back.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import yaml
 from rosbags.interfaces import (
     Qos as BagQos,
 )
@@ -27,13 +29,21 @@ from rosbags.interfaces import (
     QosReliability,
     QosTime,
 )
-from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2.metadata import dump_qos_v9
 
+from harness.bus.bagfile import (
+    ChunkPolicy,
+    McapBagWriter,
+    TopicMeta,
+    bag_metadata,
+    dump_metadata,
+    write_metadata,
+)
 from harness.bus.bus import Envelope, Qos
 from harness.bus.messages import TYPESTORE, serialize
 from harness.errors import BagError
 
-__all__ = ["Recorder", "TopicStats"]
+__all__ = ["Recorder", "TopicStats", "digest_update", "topic_meta"]
 
 
 @dataclass(frozen=True)
@@ -50,13 +60,19 @@ class TopicStats:
     durability: str
 
 
+def digest_update(h: Any, stamp_ns: int, data: bytes) -> None:
+    """Feed one message into a topic's digest: ``(log time, length, payload)``."""
+    h.update(struct.pack("<qI", stamp_ns, len(data)))
+    h.update(data)
+
+
 class _TopicState:
-    __slots__ = ("bytes", "conn", "count", "digest", "first_ns", "last_ns", "msgtype", "qos",
+    __slots__ = ("bytes", "channel", "count", "digest", "first_ns", "last_ns", "msgtype", "qos",
                  "topic")
 
-    def __init__(self, conn: Any, msgtype: str, qos: Qos) -> None:
-        self.topic = ""
-        self.conn = conn
+    def __init__(self, topic: str, msgtype: str, qos: Qos) -> None:
+        self.topic = topic
+        self.channel: int | None = None
         self.msgtype = msgtype
         self.qos = qos
         self.count = 0
@@ -83,11 +99,21 @@ def _bag_qos(qos: Qos) -> BagQos:
     )
 
 
+def topic_meta(topic: str, msgtype: str, qos: Qos) -> TopicMeta:
+    """A topic's rosbag2 description from the typestore (message definition, RIHS01 hash) and
+    its offered QoS (one profile, as ``ros2 bag record`` stores it)."""
+    msgdef, _ = TYPESTORE.generate_msgdef(msgtype, ros_version=2)
+    profiles = yaml.safe_dump(dump_qos_v9([_bag_qos(qos)]), default_flow_style=False,
+                              sort_keys=True).strip()
+    return TopicMeta(topic, msgtype, msgdef.encode(), profiles, TYPESTORE.hash_rihs01(msgtype))
+
+
 class Recorder:
     """Writes a rosbag2 (version 9, MCAP) directory at ``bag_dir``.
 
     Call :meth:`open` with the bus's QoS look-up (so transient-local topics are marked so in
-    ``metadata.yaml``), feed it envelopes, then :meth:`close`.
+    ``metadata.yaml``), feed it envelopes, then :meth:`close`. ``chunks`` bounds what a crash
+    can lose (see :class:`~harness.bus.bagfile.ChunkPolicy`).
 
     Messages are serialized on the caller's thread (the message objects are not shared
     further); writing to MCAP and hashing run on one background thread, in publication order,
@@ -96,22 +122,34 @@ class Recorder:
     error on the writer thread is raised again by the next :meth:`write` or by :meth:`close`.
     """
 
-    def __init__(self, bag_dir: Path, *, queue_size: int = 64) -> None:
+    def __init__(self, bag_dir: Path, *, queue_size: int = 64,
+                 chunks: ChunkPolicy | None = None) -> None:
         self.bag_dir = Path(bag_dir)
+        self.chunks = chunks or ChunkPolicy()
+        # Serialized bytes handed to the writer so far (read on the caller's thread, e.g. by a
+        # disk-space guard).
+        self.bytes_serialized = 0
         self._qos_of: Callable[[str], Qos] = lambda topic: Qos()
-        self._writer: Writer | None = None
+        self._writer: McapBagWriter | None = None
         self._state: dict[str, _TopicState] = {}
         self._queue: queue.Queue[tuple[_TopicState, int, bytes] | None] = queue.Queue(
             maxsize=queue_size)
         self._thread: threading.Thread | None = None
         self._error: BagError | None = None
 
+    @property
+    def mcap_path(self) -> Path:
+        return self.bag_dir / f"{self.bag_dir.name}.mcap"
+
     def open(self, qos_of: Callable[[str], Qos] | None = None) -> None:
         """Open the bag; ``qos_of`` gives a topic's QoS when its first message arrives."""
         if qos_of is not None:
             self._qos_of = qos_of
-        self._writer = Writer(self.bag_dir, version=9, storage_plugin=StoragePlugin.MCAP)
-        self._writer.open()
+        try:
+            self.bag_dir.mkdir(parents=True)
+            self._writer = McapBagWriter(self.mcap_path, self.chunks)
+        except OSError as err:
+            raise BagError(f"{self.bag_dir}: cannot record: {err.strerror or err}") from err
         self._thread = threading.Thread(target=self._drain, name="srr-recorder", daemon=True)
         self._thread.start()
 
@@ -125,11 +163,16 @@ class Recorder:
             raise self._error
         st = self._state.get(env.topic)
         if st is None:
-            st = _TopicState(None, env.msgtype, self._qos_of(env.topic))
-            st.topic = env.topic
-            self._state[env.topic] = st
+            st = self._state[env.topic] = _TopicState(env.topic, env.msgtype,
+                                                      self._qos_of(env.topic))
         data = env.raw if env.raw is not None else serialize(env.msg, env.msgtype)
+        self.bytes_serialized += len(data)
         self._queue.put((st, env.stamp_ns, data))
+
+    def _fail(self, what: str, err: Exception) -> None:
+        reason = err.strerror if isinstance(err, OSError) and err.strerror else err
+        self._error = BagError(f"{self.bag_dir}: cannot record {what}: {reason}")
+        self._error.__cause__ = err
 
     def _drain(self) -> None:
         writer = self._writer
@@ -139,33 +182,41 @@ class Recorder:
                 continue  # keep draining so producers never block on a dead writer
             st, stamp, data = item
             try:
-                if st.conn is None:
-                    st.conn = writer.add_connection(
-                        st.topic, st.msgtype, typestore=TYPESTORE,
-                        offered_qos_profiles=[_bag_qos(st.qos)])
-                writer.write(st.conn, stamp, data)
+                if st.channel is None:
+                    st.channel = writer.add_topic(topic_meta(st.topic, st.msgtype, st.qos))
+                writer.write(st.channel, stamp, data)
             except Exception as err:  # handed to the caller's thread as one clear error
-                reason = err.strerror if isinstance(err, OSError) and err.strerror else err
-                self._error = BagError(f"{self.bag_dir}: cannot record {st.topic}: {reason}")
-                self._error.__cause__ = err
+                self._fail(st.topic, err)
                 continue
             st.count += 1
             st.bytes += len(data)
-            st.digest.update(struct.pack("<qI", stamp, len(data)))
-            st.digest.update(data)
+            digest_update(st.digest, stamp, data)
             if st.first_ns is None:
                 st.first_ns = stamp
             st.last_ns = stamp
 
     def close(self) -> dict[str, TopicStats]:
-        """Flush the queue, close the bag, return per-topic statistics."""
+        """Flush the queue, close the bag (summary, footer, ``metadata.yaml``), return
+        per-topic statistics."""
         if self._thread is not None:
             self._queue.put(None)
             self._thread.join()
             self._thread = None
-        if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+        writer, self._writer = self._writer, None
+        if writer is not None:
+            if self._error is not None:
+                writer.abort()
+            else:
+                info = bag_metadata(writer.path.name, list(zip(writer.topics, writer.counts,
+                                                               strict=True)),
+                                    writer.start_ns, writer.end_ns)
+                try:
+                    writer.finish(dump_metadata(info))
+                except Exception as err:
+                    writer.abort()
+                    self._fail("the bag's index", err)
+                else:
+                    write_metadata(self.bag_dir, info)
         if self._error is not None:
             raise self._error
         return self.stats()

@@ -28,6 +28,7 @@ __all__ = [
     "PerceptionScoring",
     "PhysicsSpec",
     "Pose",
+    "RecordingSpec",
     "ReverseLogic",
     "RobotCameraSpec",
     "RobotSpec",
@@ -80,6 +81,24 @@ class PhysicsSpec:
     substeps: int = num(4, 1, 100)
     integrator: Literal["implicitfast", "euler", "rk4", "implicit"] = "implicitfast"
     solver_iterations: int = num(50, 1, 1000)
+
+
+@dataclass(frozen=True)
+class RecordingSpec:
+    """``recording:`` block: how the bag is written and the disk-space guard.
+
+    A chunk of the MCAP file is closed (written and flushed) when it holds ``chunk_mb`` MB or
+    spans ``chunk_s`` seconds of simulated time, whichever comes first: that bounds what a
+    crash can lose. ``fsync`` also forces each closed chunk to the disk (only power loss needs
+    it). A run refuses to start when the free space is below its estimated bag size plus
+    ``min_free_mb``, and stops at a tick boundary (INVALID, exit 3) when free space falls below
+    ``min_free_mb`` while it runs. MB are 10^6 bytes.
+    """
+
+    chunk_mb: float = num(8.0, 0.0, 4096.0, lo_open=True)
+    chunk_s: float = num(1.0, 0.0, 3600.0, lo_open=True)
+    fsync: bool = False
+    min_free_mb: float = num(256.0, 0.0, 1e9)
 
 
 @dataclass(frozen=True)
@@ -470,6 +489,7 @@ class Scenario:
     zones: ZonesSpec = ZonesSpec()
     systems_under_test: tuple[SutSpec, ...] = ()
     scoring: ScoringSpec = ScoringSpec()
+    recording: RecordingSpec = RecordingSpec()
     baseline: str | None = None  # which baselines/<name>.json to compare with (default: name)
     # Which file each top-level key or list item ("robots", "robots[1]") came from, for error
     # messages after loading. Filled by the loader; not part of the scenario's content.

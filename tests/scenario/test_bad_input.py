@@ -38,9 +38,12 @@ def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str]:
         (GOOD + "clock: {clock_topic: 'bad//topic'}\n", "clock.clock_topic", "'//'"),
         (GOOD.replace("format_version: 1", "format_version: 99"), "format_version",
          "unsupported version"),
+        (GOOD + "recording: {chunk_s: 0}\n", "recording.chunk_s", "must be > 0"),
+        (GOOD + "recording: {chunk_sec: 1}\n", "recording.chunk_sec", "did you mean"),
     ],
     ids=["empty", "yaml-syntax", "misspelt-key", "text-for-number", "negative-duration",
-         "unknown-model", "missing-include", "bad-name", "bad-topic", "format-version"],
+         "unknown-model", "missing-include", "bad-name", "bad-topic", "format-version",
+         "zero-chunk-span", "misspelt-recording-key"],
 )
 def test_bad_scenario_is_one_line_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                          text: str, field: str, words: str) -> None:

@@ -1,0 +1,44 @@
+"""The in-progress marker of a run directory: ``incomplete.json``.
+
+A run writes it before anything else and removes it right after ``summary.json`` is in place,
+so a directory that holds it is a run that did not finish (it is still going, or it was
+killed). It says how far the run got (``phase``: ``recording`` during the tick loop,
+``finalizing`` from the end of the tick loop until the summary is written), the scenario file
+and the command that reproduces the run; ``srr recover`` reads it. It holds no wall-clock
+time.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Literal
+
+from harness.atomic import write_json_atomic
+
+__all__ = ["MARKER", "Phase", "clear", "mark", "read"]
+
+MARKER = "incomplete.json"
+Phase = Literal["recording", "finalizing"]
+
+
+def mark(run_dir: Path, phase: Phase, **info: Any) -> None:
+    """Write (atomically) or update the marker."""
+    write_json_atomic(Path(run_dir) / MARKER, {"phase": phase, **info})
+
+
+def read(run_dir: Path) -> dict[str, Any] | None:
+    """The marker's content; None when there is none. It is renamed into place, so a crash
+    never leaves half of one; one that is not a JSON object reads as ``{"phase": "unknown"}``."""
+    path = Path(run_dir) / MARKER
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError):
+        return {"phase": "unknown"}
+    return data if isinstance(data, dict) else {"phase": "unknown"}
+
+
+def clear(run_dir: Path) -> None:
+    (Path(run_dir) / MARKER).unlink(missing_ok=True)

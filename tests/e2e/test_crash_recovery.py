@@ -1,0 +1,188 @@
+"""SIGKILL a real `srr run` at three moments, then `srr recover`: the bag is read whole by the
+independent reader and holds every complete chunk (at most the last one is lost).
+
+A run is deterministic, so an uninterrupted reference run of the same scenario writes the
+same MCAP bytes: a killed run's file must be a byte prefix of the reference file, and the
+recovered bag must hold exactly the reference's messages of the chunks that were on disk.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from mcap.reader import make_reader
+
+from harness import api, runmarker
+from harness.bag import inspect_bag
+from harness.bus.recorder import digest_update
+from harness.cli import main
+
+from .bagread import decoded, mcap_file
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENARIO = ROOT / "scenarios" / "forklift_warehouse.yaml"
+DURATION = 12.0
+OVERRIDES = ["recording.chunk_s=0.25"]  # 48 chunks: fine-grained enough to see what is lost
+
+Raw = list[tuple[str, int, bytes]]
+
+
+def raw(path: Path) -> Raw:
+    with path.open("rb") as f:
+        return [(c.topic, m.log_time, m.data) for _, c, m in make_reader(f).iter_messages()]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    sc = api.load(SCENARIO, duration=DURATION, overrides=OVERRIDES)
+    res = api.run_scenario(sc, source=str(SCENARIO), out=tmp_path_factory.mktemp("ref") / "r")
+    assert not (res.run_dir / runmarker.MARKER).exists()  # a finished run has no marker
+    return res.run_dir
+
+
+def run_and_kill(out: Path, moment: Callable[[Path], bool]) -> None:
+    """Start `srr run` in a process, SIGKILL it as soon as ``moment(out)`` holds."""
+    cmd = [sys.executable, "-m", "harness.cli", "run", str(SCENARIO), "--duration",
+           str(DURATION), *(a for o in OVERRIDES for a in ("--set", o)), "--out", str(out),
+           "-q"]
+    proc = subprocess.Popen(cmd, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    try:
+        while not moment(out):
+            assert proc.poll() is None, "the run ended before the moment to kill it came"
+            assert time.monotonic() < deadline, "the moment to kill the run never came"
+            time.sleep(0.001)
+        proc.send_signal(signal.SIGKILL)
+    finally:
+        proc.kill()
+        proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+
+
+def bag_size(out: Path) -> int:
+    try:
+        return (out / "bag" / "bag.mcap").stat().st_size
+    except FileNotFoundError:
+        return 0
+
+
+def phase(out: Path) -> str | None:
+    marker = runmarker.read(out) if out.is_dir() else None
+    return None if marker is None else str(marker["phase"])
+
+
+def early(out: Path) -> bool:
+    return bag_size(out) > 0  # the file exists and holds its header (flushed on open)
+
+
+def mid_run(ref_size: int) -> Callable[[Path], bool]:
+    return lambda out: phase(out) == "recording" and bag_size(out) >= 0.4 * ref_size
+
+
+def finalizing(out: Path) -> bool:
+    return phase(out) == "finalizing"  # the tick loop is over; closing, scoring, summary
+
+
+@pytest.mark.parametrize("moment", ["early", "mid-run", "finalizing"])
+def test_kill_then_recover(reference: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                           moment: str) -> None:
+    ref_file = mcap_file(reference)
+    ref_bytes = ref_file.read_bytes()
+    ref_msgs = raw(ref_file)
+    with ref_file.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    chunks = summary.chunk_indexes
+    assert len(chunks) == 48
+
+    out = tmp_path / "run"
+    run_and_kill(out, {"early": early, "mid-run": mid_run(len(ref_bytes)),
+                       "finalizing": finalizing}[moment])
+    killed_phase = phase(out)
+    assert killed_phase == ("finalizing" if moment == "finalizing" else "recording")
+    assert not (out / "summary.json").exists()  # a killed run does not look finished
+    on_disk = (out / "bag" / "bag.mcap").read_bytes()
+    assert ref_bytes.startswith(on_disk)  # what was written is the reference's prefix
+    complete = [c for c in chunks if c.chunk_start_offset + c.chunk_length <= len(on_disk)]
+    if moment == "mid-run":
+        assert 0.35 * len(chunks) <= len(complete) < len(chunks)
+
+    assert main(["recover", str(out)]) == 0
+    printed = capsys.readouterr().out
+
+    bag = out / "bag"
+    got = raw(mcap_file(out))
+    n = sum(1 for _, t, _ in ref_msgs if complete and t <= complete[-1].message_end_time)
+    assert got == ref_msgs[: len(got)]  # the reference's messages, in order
+    assert len(got) >= n  # every complete chunk was kept
+    assert sum(1 for _ in decoded(out)) == len(got)  # the independent reader reads it whole
+    assert inspect_bag(out).message_count == len(got)  # and so does rosbags
+    counts = Counter(t for t, _, _ in got)
+    if moment == "finalizing":
+        # Everything was published: at most the last chunk may be missing.
+        last = chunks[-1]
+        in_last = Counter(t for t, ts, _ in ref_msgs if ts >= last.message_start_time)
+        for topic, total in Counter(t for t, _, _ in ref_msgs).items():
+            assert counts[topic] >= total - in_last[topic], topic
+    if len(on_disk) < len(ref_bytes):
+        assert (bag / "bag.mcap.damaged").read_bytes() == on_disk
+        assert "rebuilt bag.mcap" in printed and "bag.mcap.damaged" in printed
+    else:  # killed after the bag was closed: the file is left as it was
+        assert mcap_file(out).read_bytes() == ref_bytes
+        assert not (bag / "bag.mcap.damaged").exists()
+    for topic, count in counts.items():
+        assert f"{topic} " in printed and f" {count} " in printed
+
+    s = json.loads((out / "summary.json").read_text())
+    assert not (out / runmarker.MARKER).exists()
+    if s.get("recovered"):
+        assert s["verdict"] == "INVALID" and s["exit_code"] == 3
+        assert s["recovery"]["phase"] == killed_phase
+        assert "recovered with srr recover" in s["reasons"][0]
+        assert {t: v["count"] for t, v in s["topics"].items()} == dict(counts)
+        for topic, v in s["topics"].items():  # the digest of exactly what was kept
+            h = hashlib.sha256()
+            for t, stamp, payload in got:
+                if t == topic:
+                    digest_update(h, stamp, payload)
+            assert v["sha256"] == h.hexdigest()
+        assert "<failure" in (out / "junit.xml").read_text()
+    else:  # killed in the instant between the summary and the marker's removal
+        assert moment == "finalizing" and s["verdict"] == "PASS"
+
+    assert main(["recover", str(out / "bag")]) == 0  # a second recover has nothing to do
+    assert "nothing to recover" in capsys.readouterr().out
+    if moment == "mid-run":  # the recovered run renders its report, INVALID
+        assert main(["report", str(out)]) == 0
+        assert "INVALID" in (out / "report.html").read_text()
+
+
+def test_chunk_settings_of_the_scenario_reach_the_recorder(tmp_path: Path) -> None:
+    sc = api.load(SCENARIO, duration=2.0,
+                  overrides=["recording.chunk_mb=0.02", "recording.chunk_s=60"])
+    res = api.run_scenario(sc, source=str(SCENARIO), out=tmp_path / "r")
+    with mcap_file(res.run_dir).open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    sizes = [c.uncompressed_size for c in summary.chunk_indexes]
+    assert len(sizes) >= 6 and max(sizes) < 20_000 + 1_000  # ~140 kB in chunks of 20 kB
+
+
+def test_inspect_on_a_killed_bag_points_to_recover(tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    (bag / "bag.mcap").write_bytes(b"\x89MCAP0\r\n")
+    assert main(["inspect", str(bag)]) == 2
+    assert "srr recover" in capsys.readouterr().err
