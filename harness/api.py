@@ -31,6 +31,8 @@ import yaml
 from harness import __version__
 from harness.atomic import write_json_atomic
 from harness.bus import Recorder, TopicStats
+from harness.diff import DiffResult, Tolerance
+from harness.diff import diff_runs as _diff_runs
 from harness.engine import Simulation
 from harness.errors import InvalidRunError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
@@ -48,6 +50,7 @@ __all__ = [
     "bless",
     "build_graphs",
     "default_run_dir",
+    "diff_runs",
     "graph_text",
     "load",
     "run_repeat",
@@ -325,3 +328,14 @@ def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
     worst = max(r.exit_code for r in runs)
     return RepeatResult(runs, identical, tuple(differing),
                         worst if identical else max(worst, 1), out_dir)
+
+
+def diff_runs(a: str | Path, b: str | Path, *,
+              tolerances: Sequence[Tolerance | str] = ()) -> DiffResult:
+    """Compare two run directories (``srr diff A B``): per topic counts, digests, the first
+    divergence and per-field differences against ``tolerances``
+    (``TOPIC_GLOB[:FIELD_GLOB]=ABS[,REL]`` strings or :class:`Tolerance`), and both runs'
+    metrics side by side. ``result.exit_code`` is 0 when the recorded data are equal within
+    tolerance, 1 when not; bad input raises :class:`SrrError` (exit 2)."""
+    return _diff_runs(a, b, tolerances=tolerances)
+
