@@ -57,6 +57,7 @@ __all__ = [
     "run_scenario",
     "validate",
     "versions",
+    "write_diff",
 ]
 
 Progress = Callable[[int, int], None]
@@ -339,3 +340,11 @@ def diff_runs(a: str | Path, b: str | Path, *,
     tolerance, 1 when not; bad input raises :class:`SrrError` (exit 2)."""
     return _diff_runs(a, b, tolerances=tolerances)
 
+
+def write_diff(result: DiffResult, path: str | Path) -> Path:
+    """Write the one-page HTML view of ``result`` (``srr diff --html FILE``): both runs'
+    trajectories on one map, their time series overlaid, metric deltas, the topic table and
+    camera keyframes side by side at the first divergence and the worst moments."""
+    from harness.diff.html import write_diff as _write
+
+    return _write(result, path)

@@ -93,6 +93,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="numeric differences within max(ABS, REL*|A|) count as equal, e.g. "
                      "'/odom:pose.pose.position.*=0.01,0.05' (repeatable; no field glob: "
                      "every field of the topic)")
+    dif.add_argument("--html", type=Path, default=None, help="write a one-page view of both runs")
     dif.add_argument("--json", type=Path, default=None, help="write the result as JSON")
 
     base = sub.add_parser("baseline", help="manage baselines")
@@ -321,7 +322,7 @@ def _print_diff(r: DiffResult) -> None:
     if first is not None:
         out_console.print(f"first divergence: {first.describe()}", markup=False)
     labels = {"identical": "identical", "within_tolerance": "within tolerance",
-              "differs": "differ", "only_in_a": "only in A", "only_in_b": "only in B"}
+              "differs": "different", "only_in_a": "only in A", "only_in_b": "only in B"}
     counts = {label: sum(t.status == s for t in r.topics) for s, label in labels.items()}
     parts = [f"{n} {label}" for label, n in counts.items() if n]
     out_console.print(f"verdict: {r.verdict.replace('_', ' ')} ({len(r.topics)} topics: "
@@ -330,12 +331,15 @@ def _print_diff(r: DiffResult) -> None:
 
 
 def _cmd_diff(args: argparse.Namespace) -> int:
+    _writable("--html", args.html)
     _writable("--json", args.json)
     result = api.diff_runs(args.run_a, args.run_b, tolerances=args.tolerances)
     _print_diff(result)
     if args.json is not None:
         write_json_atomic(args.json, result.to_dict())
         out_console.print(f"json: {args.json}", markup=False)
+    if args.html is not None:
+        out_console.print(f"html: {api.write_diff(result, args.html)}", markup=False)
     return result.exit_code
 
 

@@ -5,10 +5,13 @@
 * :mod:`harness.diff.topics`: both bags read once, messages paired by index per topic;
 * :mod:`harness.diff.fields`: two decoded messages walked field by field;
 * :mod:`harness.diff.tolerance`: ``--tolerance TOPIC_GLOB[:FIELD_GLOB]=ABS[,REL]``;
-* :mod:`harness.diff.metrics`: both runs' metrics through the baseline comparison engine.
+* :mod:`harness.diff.metrics`: both runs' metrics through the baseline comparison engine;
+* :func:`render_diff` / :func:`write_diff` (:mod:`harness.diff.html`): the page.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 from harness.diff.core import diff_runs
 from harness.diff.result import (
@@ -33,4 +36,14 @@ __all__ = [
     "Worst",
     "diff_runs",
     "parse_tolerance",
+    "render_diff",
+    "write_diff",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in ("render_diff", "write_diff"):
+        from harness.diff import html
+
+        return getattr(html, name)
+    raise AttributeError(f"module 'harness.diff' has no attribute {name!r}")

@@ -1,5 +1,5 @@
 """``srr diff`` on real runs: identical runs, runs whose seed changes the data, tolerances,
-counts and topic sets that differ, and what is not a pair of runs (exit 2, nothing written)."""
+counts and topic sets that differ, and what is not a pair of runs (exit 2)."""
 
 from __future__ import annotations
 
@@ -179,9 +179,9 @@ def test_bad_runs_exit_2_with_one_line_and_no_page(
         names: str) -> None:
     good = runs.get("same_a")
     bad = _corrupt(good, tmp_path / "bad", how)
-    page = tmp_path / "diff.json"
+    page = tmp_path / "diff.html"
     for args in ([str(good), str(bad)], [str(bad), str(good)]):
-        assert main(["diff", *args, "--json", str(page)]) == 2
+        assert main(["diff", *args, "--html", str(page)]) == 2
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and err.startswith("srr diff: ")
         assert names in err and str(bad) in err and "Traceback" not in err
@@ -191,18 +191,18 @@ def test_bad_runs_exit_2_with_one_line_and_no_page(
 @pytest.mark.parametrize("spec", ["/odom", "/odom=x", "/odom:=1", "/odom=1,2,3", "/odom=-1"])
 def test_bad_tolerance_exits_2_naming_the_option(
         runs: Runs, tmp_path: Path, capsys: pytest.CaptureFixture[str], spec: str) -> None:
-    page = tmp_path / "diff.json"
+    page = tmp_path / "diff.html"
     code = main(["diff", str(runs.get("same_a")), str(runs.get("same_b")), "--tolerance", spec,
-                 "--json", str(page)])
+                 "--html", str(page)])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1
     assert err.startswith(f"srr diff: --tolerance {spec!r}: ") and not page.exists()
 
 
-def test_output_into_a_missing_directory_exits_2(runs: Runs, tmp_path: Path,
-                                                 capsys: pytest.CaptureFixture[str]) -> None:
-    target = tmp_path / "no" / "such" / "diff.json"
-    assert main(["diff", str(runs.get("same_a")), str(runs.get("same_b")), "--json",
+def test_html_into_a_missing_directory_exits_2(runs: Runs, tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    target = tmp_path / "no" / "such" / "diff.html"
+    assert main(["diff", str(runs.get("same_a")), str(runs.get("same_b")), "--html",
                  str(target)]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("srr diff: --json ") and "does not exist" in err
+    assert err.startswith("srr diff: --html ") and "does not exist" in err
