@@ -18,7 +18,8 @@ import hashlib
 import math
 import struct
 from collections import deque
-from collections.abc import Iterator, Sequence
+from collections.abc import Generator, Sequence
+from contextlib import closing
 from pathlib import Path
 from typing import Any
 
@@ -135,42 +136,54 @@ class _Topic:
 
     def array(self, path: str, a: np.ndarray, b: np.ndarray) -> None:
         f = self._field(path + "[*]")
+        a, b = a.reshape(-1), b.reshape(-1)
         n = int(a.size)
         f.values += n
-        if a.dtype == b.dtype and a.dtype.kind != "f" and np.array_equal(a, b):
-            return
-        a64, b64 = as_float(a), as_float(b)
-        diff = ~((a64 == b64) | (np.isnan(a64) & np.isnan(b64)))
-        nd = int(np.count_nonzero(diff))
-        if nd == 0:
-            return
-        with np.errstate(invalid="ignore", over="ignore"):
-            d = np.abs(b64 - a64)
-            d[~diff] = 0.0
-            d[np.isnan(d)] = math.inf
-            f.sum_sq += float(np.dot(d, d))
+        # only the elements that differ are looked at (an image pair differs in a few %)
+        if a.dtype.kind in "biu" and b.dtype.kind in "biu":  # pixels, counts: exact
+            size = max(a.dtype.itemsize, b.dtype.itemsize)
+            wide = np.int16 if size == 1 else np.int32 if size == 2 else np.int64
+            di = np.subtract(b, a, dtype=wide)
+            nz = np.flatnonzero(di)
+            if nz.size == 0:
+                return
+            dv = np.abs(di[nz].astype(np.float64))
+        else:
+            a64, b64 = as_float(a), as_float(b)
+            nz = np.flatnonzero(a64 != b64)
+            nz = nz[~(np.isnan(a64[nz]) & np.isnan(b64[nz]))]
+            if nz.size == 0:
+                return
+            with np.errstate(invalid="ignore", over="ignore"):
+                dv = np.abs(b64[nz] - a64[nz])
+            dv[np.isnan(dv)] = math.inf
+        nd = int(nz.size)
+        with np.errstate(over="ignore"):
+            f.sum_sq += float(np.dot(dv, dv))
         f.differ += nd
-        k = int(np.argmax(d))
-        self._hit(f, float(d[k]))
+        k = int(np.argmax(dv))
+        self._hit(f, float(dv[k]))
         tol = f.tol
         if tol is None:
-            beyond = diff
+            beyond = np.ones(nd, dtype=bool)
         else:
-            allowed = np.full(n, tol.abs)
+            allowed = np.full(nd, tol.abs)
             if tol.rel:
-                fin = np.isfinite(a64)
-                allowed[fin] = np.maximum(tol.abs, tol.rel * np.abs(a64[fin]))
-            beyond = diff & ~(d <= allowed + 1e-12)
+                av = as_float(a[nz])
+                fin = np.isfinite(av)
+                allowed[fin] = np.maximum(tol.abs, tol.rel * np.abs(av[fin]))
+            beyond = ~(dv <= allowed + 1e-12)
         nb = int(np.count_nonzero(beyond))
         f.beyond += nb
         self._values += nd
-        first = int(np.argmax(diff))
-        summary = f"{nd} of {n} values differ, max |Δ| {_num(float(d[k]))}"
-        self._note(f"{path}[{first}]", f"{_num(a64[first])} vs {_num(b64[first])} ({summary})",
-                   False)
+        summary = f"{nd} of {n} values differ, max |Δ| {_num(float(dv[k]))}"
+        first = int(nz[0])
+        self._note(f"{path}[{first}]",
+                   f"{_num(float(a[first]))} vs {_num(float(b[first]))} ({summary})", False)
         if nb:
-            j = int(np.argmax(beyond))
-            self._note(f"{path}[{j}]", f"{_num(a64[j])} vs {_num(b64[j])} ({summary})", True)
+            j = int(nz[int(np.argmax(beyond))])
+            self._note(f"{path}[{j}]",
+                       f"{_num(float(a[j]))} vs {_num(float(b[j]))} ({summary})", True)
 
     def mismatch(self, path: str, detail: str) -> None:
         self.mism[path] = self.mism.get(path, 0) + 1
@@ -273,36 +286,54 @@ class _Topic:
                          self.time_shifts, self.worst, self.tolerances)
 
 
-def message_stream(bag: Path) -> Iterator[tuple[str, str, int, bytes]]:
-    """``(topic, type, log time, payload)`` of every message of a rosbag2 directory, in the
-    reader's order; read errors become :class:`BagError` naming the bag."""
+def message_stream(bag: Path
+                   ) -> tuple[dict[str, str], Generator[tuple[str, str, int, bytes], None, None]]:
+    """The topics of a rosbag2 directory (name → type) and an iterator of ``(topic, type,
+    log time, payload)`` over every message, in the reader's order, which closes the bag when
+    exhausted. Read errors (when opening or later) become :class:`BagError` naming the
+    bag."""
     try:
-        with Reader(bag) as reader:
+        reader = Reader(bag)
+        reader.open()
+    except _READ_ERRORS as err:
+        raise BagError(f"{bag}: cannot read bag: {err}") from err
+    types = {c.topic: c.msgtype for c in reader.connections}
+
+    def messages() -> Generator[tuple[str, str, int, bytes], None, None]:
+        try:
             for conn, ns, raw in reader.messages():
                 yield conn.topic, conn.msgtype, int(ns), bytes(raw)
-    except _READ_ERRORS as err:
-        raise BagError(f"{bag}: cannot read bag: {err}") from err
+        except _READ_ERRORS as err:
+            raise BagError(f"{bag}: cannot read bag: {err}") from err
+        finally:
+            reader.close()
 
-
-def _topic_types(bag: Path) -> dict[str, str]:
-    try:
-        with Reader(bag) as reader:
-            return {c.topic: c.msgtype for c in reader.connections}
-    except _READ_ERRORS as err:
-        raise BagError(f"{bag}: cannot read bag: {err}") from err
+    return types, messages()
 
 
 def diff_bags(bag_a: Path, bag_b: Path, tolerances: Sequence[Tolerance] = ()
               ) -> tuple[TopicDiff, ...]:
     """Every topic of either bag compared (sorted by name)."""
     bags = (Path(bag_a), Path(bag_b))
-    types = (_topic_types(bags[0]), _topic_types(bags[1]))
+    (types_a, stream_a) = message_stream(bags[0])
+    try:
+        (types_b, stream_b) = message_stream(bags[1])
+    except BagError:
+        stream_a.close()
+        raise
+    with closing(stream_a), closing(stream_b):
+        return _diff_streams(bags, (types_a, types_b), (stream_a, stream_b), tolerances)
+
+
+def _diff_streams(bags: tuple[Path, Path], types: tuple[dict[str, str], dict[str, str]],
+                  streams: tuple[Generator[tuple[str, str, int, bytes], None, None],
+                                 Generator[tuple[str, str, int, bytes], None, None]],
+                  tolerances: Sequence[Tolerance]) -> tuple[TopicDiff, ...]:
     topics: dict[str, _Topic] = {}
     for side in (0, 1):
         for name, msgtype in types[side].items():
             t = topics.setdefault(name, _Topic(name, tolerances))
             t.types[side] = msgtype
-    streams = (message_stream(bags[0]), message_stream(bags[1]))
     heads: list[Any] = [next(streams[0], None), next(streams[1], None)]
     while heads[0] is not None or heads[1] is not None:
         side = 0 if heads[1] is None or (heads[0] is not None

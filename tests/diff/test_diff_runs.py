@@ -206,3 +206,31 @@ def test_html_into_a_missing_directory_exits_2(runs: Runs, tmp_path: Path,
                  str(target)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("srr diff: --html ") and "does not exist" in err
+
+
+def test_camera_images_compare_pixel_bytes(runs: Runs) -> None:
+    a, b = runs.get("dock_11"), runs.get("dock_12")
+    topic = "/dock_cam_left_rgb"
+
+    def images(run: Path) -> list[np.ndarray]:
+        return [np.frombuffer(bytes(m.data), dtype=np.uint8) for t, _, _, m in decoded(run)
+                if t == topic]
+
+    ia, ib = images(a), images(b)
+    assert len(ia) == len(ib) > 0
+    deltas = [np.abs(x.astype(int) - y.astype(int)) for x, y in zip(ia, ib, strict=True)]
+    differ = [int(np.count_nonzero(d)) for d in deltas]
+    assert any(differ)  # the worker walks at another speed in front of the cameras
+    r = api.diff_runs(a, b)
+    t = next(t for t in r.topics if t.name == topic)
+    (f,) = t.fields
+    assert f.path == "data[*]" and f.differ == sum(differ)
+    assert f.values == sum(d.size for d, n in zip(deltas, differ, strict=True) if n)
+    assert f.max_abs == max(int(d.max()) for d in deltas)
+    first = next(i for i, n in enumerate(differ) if n)
+    assert t.first is not None and t.first.index == first
+    assert t.first.path == f"data[{int(np.flatnonzero(deltas[first])[0])}]"
+    assert t.worst is not None and t.worst.values == max(differ)
+    # every pixel byte may move by 255: the camera topics are then equal within tolerance
+    r = api.diff_runs(a, b, tolerances=["/dock_cam_*_rgb:data*=255"])
+    assert {t.name: t.status for t in r.topics}[topic] == "within_tolerance"
