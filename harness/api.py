@@ -34,6 +34,8 @@ from harness.atomic import write_json_atomic
 from harness.bus import Bus, Recorder, TopicStats
 from harness.bus.bagfile import ChunkPolicy
 from harness.bus.recover import RecoveredBag, recover_bag
+from harness.diff import DiffResult, Tolerance
+from harness.diff import diff_runs as _diff_runs
 from harness.diskspace import MB, DiskGuard, FreeSpace, check_free_space, disk_free
 from harness.engine import Simulation
 from harness.errors import BagError, InvalidRunError, ScenarioError, SrrError
@@ -66,6 +68,7 @@ __all__ = [
     "bless",
     "build_graphs",
     "default_run_dir",
+    "diff_runs",
     "graph_text",
     "load",
     "recover",
@@ -75,6 +78,7 @@ __all__ = [
     "run_scenario",
     "validate",
     "versions",
+    "write_diff",
 ]
 
 Progress = Callable[[int, int], None]
@@ -654,3 +658,20 @@ def _recovered_summary(run_dir: Path, scenario: Scenario, bag: RecoveredBag,
         "baseline": None,
         "comparison": [],
     }
+def diff_runs(a: str | Path, b: str | Path, *,
+              tolerances: Sequence[Tolerance | str] = ()) -> DiffResult:
+    """Compare two run directories (``srr diff A B``): per topic counts, digests, the first
+    divergence and per-field differences against ``tolerances``
+    (``TOPIC_GLOB[:FIELD_GLOB]=ABS[,REL]`` strings or :class:`Tolerance`), and both runs'
+    metrics side by side. ``result.exit_code`` is 0 when the recorded data are equal within
+    tolerance, 1 when not; bad input raises :class:`SrrError` (exit 2)."""
+    return _diff_runs(a, b, tolerances=tolerances)
+
+
+def write_diff(result: DiffResult, path: str | Path) -> Path:
+    """Write the one-page HTML view of ``result`` (``srr diff --html FILE``): both runs'
+    trajectories on one map, their time series overlaid, metric deltas, the topic table and
+    camera keyframes side by side at the first divergence and the worst moments."""
+    from harness.diff.html import write_diff as _write
+
+    return _write(result, path)

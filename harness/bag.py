@@ -20,8 +20,8 @@ __all__ = ["BAG_READ_ERRORS", "BagInfo", "BagTopic", "inspect_bag"]
 #: truncated or foreign file. Every reader in srr turns these into one BagError line.
 BAG_READ_ERRORS: tuple[type[BaseException], ...] = (
     ReaderError, McapError, OSError, EOFError, struct.error, ValueError, KeyError, IndexError,
-    TypeError, AttributeError, AssertionError, zstandard.ZstdError, RuntimeError,
-    yaml.YAMLError)
+    TypeError, AttributeError, AssertionError, OverflowError, MemoryError,
+    zstandard.ZstdError, RuntimeError, yaml.YAMLError)
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,8 @@
 """``srr`` command line: a thin layer over :mod:`harness.api`.
 
-Exit codes: 0 pass; 1 fail, regression or non-deterministic repeat; 2 bad input (one line
-naming the file and the field, never a traceback); 3 invalid run; 130 interrupted.
+Exit codes: 0 pass (``diff``: equal within tolerance); 1 fail, regression, non-deterministic
+repeat (``diff``: the runs differ); 2 bad input (one line naming the file and the field,
+never a traceback); 3 invalid run; 130 interrupted.
 """
 
 from __future__ import annotations
@@ -19,7 +20,9 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 from harness import __version__, api
+from harness.atomic import write_json_atomic
 from harness.bag import inspect_bag
+from harness.diff import DiffResult
 from harness.errors import SrrError
 
 __all__ = ["main"]
@@ -96,6 +99,18 @@ def _parser() -> argparse.ArgumentParser:
 
     rep = sub.add_parser("report", help="(re-)render a run directory's report.html")
     rep.add_argument("run_dir", type=Path)
+
+    dif = sub.add_parser("diff", help="compare two runs: recorded topics, first divergence, "
+                         "metrics side by side")
+    dif.add_argument("run_a", type=Path, help="baseline run directory")
+    dif.add_argument("run_b", type=Path, help="candidate run directory")
+    dif.add_argument("--tolerance", dest="tolerances", action="append", default=[],
+                     metavar="TOPIC_GLOB[:FIELD_GLOB]=ABS[,REL]",
+                     help="numeric differences within max(ABS, REL*|A|) count as equal, e.g. "
+                     "'/odom:pose.pose.position.*=0.01,0.05' (repeatable; no field glob: "
+                     "every field of the topic)")
+    dif.add_argument("--html", type=Path, default=None, help="write a one-page view of both runs")
+    dif.add_argument("--json", type=Path, default=None, help="write the result as JSON")
 
     base = sub.add_parser("baseline", help="manage baselines")
     base_sub = base.add_subparsers(dest="baseline_command", required=True, parser_class=_Parser)
@@ -323,9 +338,95 @@ def _cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _writable(option: str, path: Path | None) -> None:
+    if path is not None and not path.parent.is_dir():
+        raise SrrError(f"{option} {path}: directory {path.parent} does not exist")
+    if path is not None and path.is_dir():
+        raise SrrError(f"{option} {path}: is a directory, expected a file name")
+
+
+_STATUS_STYLE = {"differs": "bold red", "only_in_a": "bold red", "only_in_b": "bold red",
+                 "within_tolerance": "yellow", "regressed": "bold red", "missing": "bold red",
+                 "improved": "green"}
+
+
+def _print_diff(r: DiffResult) -> None:
+    for label, run in (("A", r.a), ("B", r.b)):
+        sim = f"{run.simulated_s:.1f} s" if run.simulated_s is not None else "?"
+        out_console.print(f"{label}: {run.path}  ({run.scenario}, seed {run.seed}, {sim}, "
+                          f"{run.verdict})", markup=False)
+    table = Table(title="recorded topics (messages paired by index)")
+    for col in ("topic", "type", "A", "B", "status", "differ", "first divergence"):
+        table.add_column(col, justify="right" if col in ("A", "B", "differ") else "left")
+    for t in r.topics:
+        d = t.first_beyond or t.first
+        where = "" if d is None else f"#{d.index} @{d.t_ns / 1e9:.3f} s {d.path}"
+        table.add_row(t.name, t.msgtype.replace("/msg/", "/"), str(t.count_a), str(t.count_b),
+                      t.status, str(t.messages_differ), where,
+                      style=_STATUS_STYLE.get(t.status, ""))
+    out_console.print(table)
+    fields = [(t, f) for t in r.topics for f in t.fields]
+    if fields:
+        ft = Table(title="numeric differences |B − A| over the messages that differ")
+        for col in ("topic", "field", "values", "differ", "beyond", "max |Δ|", "RMS", "at",
+                    "tolerance"):
+            ft.add_column(col, justify="right" if col in ("values", "differ", "beyond",
+                                                          "max |Δ|", "RMS", "at") else "left")
+        shown = [(t, f) for t in r.topics for f in t.fields[:3]][:30]  # worst first per topic
+        for t, f in shown:
+            ft.add_row(t.name, f.path, str(f.values), str(f.differ), str(f.beyond),
+                       f"{f.max_abs:.4g}",
+                       f"{f.rms:.4g}", f"#{f.at_index} @{f.at_ns / 1e9:.3f} s",
+                       f.tolerance.describe() if f.tolerance else "none",
+                       style="" if f.within else "red")
+        out_console.print(ft)
+        if len(fields) > len(shown):
+            out_console.print(f"  … {len(fields) - len(shown)} more field(s) differ "
+                              "(--json or --html for all)", markup=False)
+    moved = [m for m in r.metrics if m.status != "ok"]
+    if moved:
+        mt = Table(title="metrics that moved (A = baseline; informative, not part of the exit "
+                   "code)")
+        for col in ("metric", "A", "B", "delta", "tolerance", "status", "better"):
+            mt.add_column(col)
+        for m in moved:
+            mt.add_row(m.name, f"{_fmt(m.value_a)} {m.unit}", f"{_fmt(m.value_b)} {m.unit}",
+                       _fmt(m.delta), f"±{m.tolerance:.3g}", m.status, m.better or "—",
+                       style=_STATUS_STYLE.get(m.status, ""))
+        out_console.print(mt)
+    if r.metrics:
+        out_console.print(f"metrics: {len(r.metrics) - len(moved)}/{len(r.metrics)} within "
+                          "tolerance", markup=False)
+    for note in r.notes:
+        err_console.print(f"srr diff: note: {note}", markup=False)
+    first = r.first_divergence
+    if first is not None:
+        out_console.print(f"first divergence: {first.describe()}", markup=False)
+    labels = {"identical": "identical", "within_tolerance": "within tolerance",
+              "differs": "different", "only_in_a": "only in A", "only_in_b": "only in B"}
+    counts = {label: sum(t.status == s for t in r.topics) for s, label in labels.items()}
+    parts = [f"{n} {label}" for label, n in counts.items() if n]
+    out_console.print(f"verdict: {r.verdict.replace('_', ' ')} ({len(r.topics)} topics: "
+                      f"{', '.join(parts)})",
+                      markup=False)
+
+
+def _cmd_diff(args: argparse.Namespace) -> int:
+    _writable("--html", args.html)
+    _writable("--json", args.json)
+    result = api.diff_runs(args.run_a, args.run_b, tolerances=args.tolerances)
+    _print_diff(result)
+    if args.json is not None:
+        write_json_atomic(args.json, result.to_dict())
+        out_console.print(f"json: {args.json}", markup=False)
+    if args.html is not None:
+        out_console.print(f"html: {api.write_diff(result, args.html)}", markup=False)
+    return result.exit_code
+
+
 COMMANDS = {"run": _cmd_run, "replay": _cmd_replay, "validate": _cmd_validate,
             "graph": _cmd_graph, "inspect": _cmd_inspect, "baseline": _cmd_baseline,
-            "report": _cmd_report, "recover": _cmd_recover}
+            "report": _cmd_report, "recover": _cmd_recover, "diff": _cmd_diff}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -333,7 +434,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return COMMANDS[args.command](args)
     except SrrError as err:
-        err_console.print(f"srr {args.command}: {err}", markup=False)
+        one_line = " ".join(part.strip() for part in str(err).splitlines() if part.strip())
+        err_console.print(f"srr {args.command}: {one_line}", markup=False)
         return err.exit_code
     except KeyboardInterrupt:
         err_console.print(f"srr {args.command}: interrupted", markup=False)

@@ -70,7 +70,7 @@ class InvalidRunError(SrrError):
 def reason(err: BaseException) -> str:
     """What went wrong, for a one-line message: the exception's text, or its kind when it
     has none (some readers raise bare ``EndOfFile()``)."""
-    text = str(err).strip()
+    text = next((line.strip() for line in str(err).splitlines() if line.strip()), "")
     name = type(err).__name__
     if not text:
         return {"EndOfFile": "unexpected end of file (truncated)"}.get(name, name)

@@ -2,7 +2,8 @@
 run directories with a missing or malformed ``summary.json``, baselines with wrong types.
 
 Every case ends in exit 2 with one line naming the file and what is wrong, or — for damage a
-reader cannot detect (a flipped bit inside a number) — in an ordinary result; never a
+reader cannot detect (a flipped bit in an unchecked field) — in an ordinary result, or, for
+``recover``, in a rebuilt bag when the damage is a cut like a crash leaves; never a
 traceback, and never something written that looks like a valid result.
 """
 
@@ -78,7 +79,8 @@ def one_clean_line(code: int, err: str, command: str) -> None:
 
 @settings(max_examples=40, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(damage=damages, command=st.sampled_from(["inspect", "report", "replay", "bless"]))
+@given(damage=damages, command=st.sampled_from(["inspect", "report", "replay", "bless",
+                                                "diff", "recover"]))
 def test_damaged_mcap(good_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
                       damage: Damage, command: str) -> None:
     run = copy_run(good_run, tmp_path)
@@ -89,17 +91,26 @@ def test_damaged_mcap(good_run: Path, tmp_path: Path, capsys: pytest.CaptureFixt
     out, bdir = tmp_path / "out", tmp_path / "baselines"
     shutil.rmtree(out, ignore_errors=True)
     shutil.rmtree(bdir, ignore_errors=True)
+    (tmp_path / "d.html").unlink(missing_ok=True)  # examples share tmp_path
     argv = {"inspect": ["inspect", str(run / "bag")], "report": ["report", str(run)],
             "replay": ["replay", str(run), "--out", str(out), "-q"],
             "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
-                      str(bdir)]}[command]
+                      str(bdir)],
+            "diff": ["diff", str(good_run), str(run), "--html", str(tmp_path / "d.html")],
+            "recover": ["recover", str(run)]}[command]
+    damaged = mcap.read_bytes()
     code, err = cli(capsys, *argv)
     one_clean_line(code, err, argv[0])
     if code == 2:
-        assert not out.exists()
+        assert not out.exists() and not (tmp_path / "d.html").exists()
         assert (run / "report.html").read_bytes() == report_before
         assert not list(bdir.glob("*.json")) if bdir.exists() else True
-    if mcap.read_bytes() != original and len(mcap.read_bytes()) < len(original) * 0.999:
+        assert mcap.read_bytes() == damaged  # recover leaves what it refuses untouched
+    shortened = damaged != original and len(damaged) < len(original) * 0.999
+    if command == "recover" and code == 0 and shortened:
+        # a crash-like cut is what recover is for: the result reads back whole
+        assert api.recover(run).bag.status == "valid"
+    elif shortened:
         assert code == 2, err  # a shortened file is always noticed
 
 

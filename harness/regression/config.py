@@ -5,7 +5,8 @@ A baseline is only a yardstick for runs of the same *configuration*: the same si
 physics settings, and the same scoring definitions. What a regression test is meant to vary
 is left out: the systems under test (a new version of a plug-in, changed parameters), the
 scenario's name and description, which baseline it names, the tolerances and the health-gate
-settings, and how the bag is written (``recording``: chunking, fsync, the disk guard). :func:`comparable_config` is that part of a resolved scenario, as plain data;
+settings, and how the bag is written (``recording``: chunking, fsync, the disk guard).
+:func:`comparable_config` is that part of a resolved scenario, as plain data;
 :func:`config_differences` names what differs, field by field.
 """
 

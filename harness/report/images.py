@@ -18,7 +18,8 @@ from rosbags.rosbag2 import Reader
 
 from harness.bus.messages import TYPESTORE
 
-__all__ = ["IMAGE_TYPE", "Keyframe", "data_uri", "encode_png", "image_array", "keyframes"]
+__all__ = ["IMAGE_TYPE", "Keyframe", "data_uri", "encode_png", "image_array", "keyframes",
+           "nearest_images"]
 
 IMAGE_TYPE = "sensor_msgs/msg/Image"
 MAX_WIDTH = 320  # keyframes wider than this are shrunk by an integer factor
@@ -88,14 +89,18 @@ def image_array(msg: object) -> np.ndarray | None:
     return a[::factor, ::factor] if factor > 1 else a
 
 
-def keyframes(bag_dir: Path, targets_ns: Sequence[int], *, max_gap_ns: dict[str, int]
-              | None = None, topics: Sequence[str] | None = None) -> dict[int, list[Keyframe]]:
-    """For each target time, the nearest colour image of every image topic of the bag.
+def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
+                   max_gap_ns: dict[str, int] | None = None,
+                   topics: Sequence[str] | None = None
+                   ) -> dict[int, list[tuple[str, int, np.ndarray]]]:
+    """For each target time, ``(topic, log time, pixels)`` of the nearest colour image of
+    every image topic of the bag (pixels as :func:`image_array` gives them).
 
     ``max_gap_ns``: topic → largest gap between its messages (the search window around a
     target is that gap); ``topics`` restricts the image topics. Depth and other non-colour
-    images are skipped. Returns target → keyframes sorted by topic."""
-    out: dict[int, list[Keyframe]] = {t: [] for t in targets_ns}
+    images are skipped. Only the windows around the targets are read. Returns target → list
+    sorted by topic."""
+    out: dict[int, list[tuple[str, int, np.ndarray]]] = {t: [] for t in targets_ns}
     if not targets_ns:
         return out
     gaps = max_gap_ns or {}
@@ -120,6 +125,14 @@ def keyframes(bag_dir: Path, targets_ns: Sequence[int], *, max_gap_ns: dict[str,
                 if pixels is None:
                     non_color.add(conn.topic)
                     continue
-                out[target].append(Keyframe(conn.topic, best[0], target, pixels.shape[1],
-                                            pixels.shape[0], encode_png(pixels)))
+                out[target].append((conn.topic, best[0], pixels))
     return out
+
+
+def keyframes(bag_dir: Path, targets_ns: Sequence[int], *, max_gap_ns: dict[str, int]
+              | None = None, topics: Sequence[str] | None = None) -> dict[int, list[Keyframe]]:
+    """For each target time, the nearest colour image of every image topic of the bag, as a
+    PNG keyframe (see :func:`nearest_images`). Returns target → keyframes sorted by topic."""
+    found = nearest_images(bag_dir, targets_ns, max_gap_ns=max_gap_ns, topics=topics)
+    return {target: [Keyframe(topic, ts, target, px.shape[1], px.shape[0], encode_png(px))
+                     for topic, ts, px in frames] for target, frames in found.items()}

@@ -4,6 +4,10 @@ top-down map of the run.
 Every time-series panel has the same width and margins, so panels stacked in the page line up
 second for second. Panels mark the run's numbered moments (M1, M2, …) and can highlight the
 windows of a metric under review.
+
+The panels and the map draw one run, or several runs overlaid (``srr diff``): pass a sequence
+of ``(series, RunStyle)`` pairs instead of one series (``(RunData, RunStyle)`` pairs for the
+map and :func:`time_panels`). One run is drawn exactly as the per-run report always drew it.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import numpy as np
 
@@ -26,9 +31,12 @@ from harness.report.svg import Scale, Svg, decimate, nice_ticks, tick_label
 from harness.scenario import Scenario
 
 __all__ = [
+    "BASELINE",
+    "CANDIDATE",
     "COLORS",
     "Highlight",
     "Panel",
+    "RunStyle",
     "TimeAxis",
     "control_panel",
     "map_legend",
@@ -64,6 +72,33 @@ COLORS = {
     "moment": "#6b7280",
     "collision": "#111827",
 }
+
+
+@dataclass(frozen=True)
+class RunStyle:
+    """How one of several runs drawn in one figure looks: ``key`` gives the CSS class
+    ``run-<key>``, ``label`` names the run in legends and tooltips, ``color`` is its robot and
+    its series, ``color2`` its workers and ground-truth objects."""
+
+    key: str
+    label: str
+    color: str
+    color2: str
+
+
+BASELINE = RunStyle("a", "baseline (A)", "#2563eb", "#92400e")
+CANDIDATE = RunStyle("b", "candidate (B)", "#ea580c", "#be185d")
+
+_S = TypeVar("_S")
+
+
+def _layers(x: _S | Sequence[tuple[_S, RunStyle]]) -> list[tuple[_S, RunStyle | None]]:
+    """One series (style None: the per-run look) or several with their styles."""
+    if isinstance(x, (list, tuple)):
+        if not x:
+            raise ValueError("no series to draw")
+        return [(item, style) for item, style in x]
+    return [(x, None)]  # type: ignore[list-item]
 
 
 @dataclass(frozen=True)
@@ -153,10 +188,15 @@ def _lane(svg: Svg, ax: TimeAxis, y: float, h: float, label: str, runs: Sequence
 # --------------------------------------------------------------------------- safety
 
 
-def safety_panel(s: SafetySeries, ax: TimeAxis, moments: Sequence[Moment],
-                 hl: Highlight | None = None) -> Panel:
+def safety_panel(s: SafetySeries | Sequence[tuple[SafetySeries, RunStyle]], ax: TimeAxis,
+                 moments: Sequence[Moment], hl: Highlight | None = None) -> Panel:
     """Lanes: forklift in trailer, worker in ROI, expected and actual muted state; mismatch
-    windows shaded; every expected edge marked with the reaction lag to it."""
+    windows shaded; every expected edge marked with the reaction lag to it. Several runs:
+    worker in ROI, expected and actual muted per run (see :func:`_safety_overlay`)."""
+    layers = _layers(s)
+    if layers[0][1] is not None:
+        return _safety_overlay([(x, st) for x, st in layers if st is not None], ax, moments, hl)
+    s = layers[0][0]
     lane_h, gap = 24.0, 10.0
     n_lanes = 4
     lag_row = 30.0
@@ -227,6 +267,43 @@ def safety_panel(s: SafetySeries, ax: TimeAxis, moments: Sequence[Moment],
                                 (f"{s.robot} in trailer", COLORS["inside"], "fill")], note)
 
 
+def _safety_overlay(layers: Sequence[tuple[SafetySeries, RunStyle]], ax: TimeAxis,
+                    moments: Sequence[Moment], hl: Highlight | None) -> Panel:
+    """Per run, three lanes (worker in ROI, expected muted, actual muted in the run's colour)
+    with the run's mismatch windows shaded across them; reaction lags are in the metric
+    table."""
+    lane_h, gap, block_gap = 20.0, 6.0, 12.0
+    block = 3 * (lane_h + gap)
+    top = TOP
+    bottom = top + len(layers) * (block + block_gap)
+    svg = Svg(WIDTH, bottom + BOTTOM, label="expected vs actual muted state of each run")
+    ax.frame(svg, top, bottom, moments)
+    for k, (s, st) in enumerate(layers):
+        y0 = top + 4 + k * (block + block_gap)
+        for w in s.mismatches:
+            x0, x1 = ax.x(w.start_s), ax.x(w.end_s)
+            svg.rect(x0, y0 - 2, max(x1 - x0, 1.0), block, fill=COLORS[w.kind],
+                     opacity="0.28" if w.long else "0.12",
+                     class_=f"mismatch mismatch-{w.kind} run-{st.key}",
+                     title=f"{st.label}: {w.kind}-mute {w.start_s:.2f}–{w.end_s:.2f} s")
+        lanes = [("worker in loading ROI", _bool_runs(s.t, s.worker_in_roi, s.end_s),
+                  COLORS["roi"]),
+                 ("expected muted", _bool_runs(s.t, s.expected, s.end_s), COLORS["muted"]),
+                 ("actual muted", _bool_runs(s.msg_t, s.msg_v, s.end_s), st.color)]
+        for i, (label, runs, color) in enumerate(lanes):
+            _lane(svg, ax, y0 + i * (lane_h + gap), lane_h, label, runs, color, st.label)
+    ax.highlight(svg, top, bottom, hl)
+    legend = [("expected muted", COLORS["muted"], "fill")]
+    legend += [(f"{st.label}: actual muted", st.color, "fill") for _, st in layers]
+    legend += [("over-mute (muted, should alarm)", COLORS["over"], "fill"),
+               ("under-mute (alarm, should be muted)", COLORS["under"], "fill"),
+               ("worker in ROI", COLORS["roi"], "fill")]
+    note = (f"strong shading: mismatches ≥ {layers[0][0].min_window_s:g} s (the scored "
+            "windows), per run")
+    return Panel("safety", "safety", "Safety: expected vs actual muted state of each run",
+                 svg.render(), legend, note)
+
+
 # --------------------------------------------------------------------------- line panels
 
 
@@ -255,32 +332,51 @@ def _value_ticks(hi: float) -> list[float]:
     return ticks
 
 
-def control_panel(c: ControlSeries, ax: TimeAxis, moments: Sequence[Moment],
-                  hl: Highlight | None = None) -> Panel:
-    """Cross-track error to the route over time, its maximum marked, collisions shaded."""
+def _prefix(st: RunStyle | None, text: str) -> str:
+    return text if st is None else f"{st.label}: {text}"
+
+
+def _series_class(st: RunStyle | None, cls: str = "series") -> str:
+    return cls if st is None else f"{cls} run-{st.key}"
+
+
+def control_panel(c: ControlSeries | Sequence[tuple[ControlSeries, RunStyle]], ax: TimeAxis,
+                  moments: Sequence[Moment], hl: Highlight | None = None) -> Panel:
+    """Cross-track error to the route over time, its maximum marked, collisions shaded;
+    several runs overlaid in their colours."""
+    layers = _layers(c)
+    c = layers[0][0]
     plot_h = 150.0
     top, bottom = TOP, TOP + plot_h
     svg = Svg(WIDTH, bottom + BOTTOM, label="cross-track error over time")
-    hi = float(np.nanmax(c.cte)) if c.cte.size else 1.0
+    peaks = [float(np.nanmax(s.cte)) for s, _ in layers if s.cte.size]
+    hi = max(peaks) if peaks else 1.0
     ticks = _value_ticks(max(hi, 0.01))
     y = Scale(0.0, max(ticks[-1], hi * 1.08), bottom, top)
     _y_axis(svg, y, ticks, "cross-track (m)")
     ax.frame(svg, top, bottom, moments)
-    for a, b in c.collisions:
-        svg.rect(ax.x(a), top, max(ax.x(b) - ax.x(a), 2.0), plot_h, fill=COLORS["over"],
-                 opacity="0.25", title=f"collision {a:.2f}–{b:.2f} s")
-    xs, vs = decimate(c.t, c.cte, int(WIDTH))
-    svg.polyline(ax.x.array(xs), y.array(vs), stroke=COLORS["robot"], stroke_width="1.6",
-                 class_="series")
-    if c.cte.size:
-        i = int(np.argmax(c.cte))
-        px, py = ax.x(c.t[i]), y(c.cte[i])
-        svg.circle(px, py, 4, fill=COLORS["robot"], stroke="#fff", stroke_width="1.5")
-        _point_label(svg, px, py - 6 if py > top + 14 else py + 14,
-                     f"max {c.cte[i]:.3f} m at {c.t[i]:.2f} s")
+    for s, st in layers:
+        for a, b in s.collisions:
+            svg.rect(ax.x(a), top, max(ax.x(b) - ax.x(a), 2.0), plot_h, fill=COLORS["over"],
+                     opacity="0.25", title=_prefix(st, f"collision {a:.2f}–{b:.2f} s"))
+    for k, (s, st) in enumerate(layers):
+        color = COLORS["robot"] if st is None else st.color
+        xs, vs = decimate(s.t, s.cte, int(WIDTH))
+        svg.polyline(ax.x.array(xs), y.array(vs), stroke=color, stroke_width="1.6",
+                     class_=_series_class(st))
+        if s.cte.size:
+            i = int(np.argmax(s.cte))
+            px, py = ax.x(s.t[i]), y(s.cte[i])
+            svg.circle(px, py, 4, fill=color, stroke="#fff", stroke_width="1.5")
+            _point_label(svg, px, (py - 6 if py > top + 14 else py + 14) + 14 * k,
+                         _prefix(st, f"max {s.cte[i]:.3f} m at {s.t[i]:.2f} s"))
     ax.highlight(svg, top, bottom, hl)
-    legend = [(f"cross-track error of {c.robot} ({c.source})", COLORS["robot"], "line")]
-    if c.collisions:
+    if layers[0][1] is None:
+        legend = [(f"cross-track error of {c.robot} ({c.source})", COLORS["robot"], "line")]
+    else:
+        legend = [(f"{st.label}: cross-track error of {s.robot} ({s.source})", st.color, "line")
+                  for s, st in layers if st is not None]
+    if any(s.collisions for s, _ in layers):
         legend.append(("collision", COLORS["over"], "fill"))
     several = c.prefix != "control."
     return Panel(f"control.{c.robot}" if several else "control", "control",
@@ -288,80 +384,130 @@ def control_panel(c: ControlSeries, ax: TimeAxis, moments: Sequence[Moment],
                  else "Control: cross-track error to the route", svg.render(), legend)
 
 
-def perception_panels(p: PerceptionSeries, ax: TimeAxis, moments: Sequence[Moment],
+def perception_panels(p: PerceptionSeries | Sequence[tuple[PerceptionSeries, RunStyle]],
+                      ax: TimeAxis, moments: Sequence[Moment],
                       hl: Highlight | None = None) -> list[Panel]:
-    """Position error of matched tracks (misses marked) and tracks vs ground-truth objects."""
+    """Position error of matched tracks (misses marked) and tracks vs ground-truth objects;
+    several runs overlaid in their colours (misses then show in the counts only)."""
+    layers = _layers(p)
+    single = layers[0][1] is None
+    p = layers[0][0]
     out = []
     plot_h = 120.0
     top, bottom = TOP, TOP + plot_h
     svg = Svg(WIDTH, bottom + BOTTOM, label=f"{p.cls} position error over time")
-    hi = float(np.max(p.err_v)) if p.err_v.size else p.gate
+    peaks = [float(np.max(s.err_v)) for s, _ in layers if s.err_v.size]
+    hi = max(peaks) if peaks else p.gate
     ticks = _value_ticks(max(hi, 0.05))
     y = Scale(0.0, max(ticks[-1], hi * 1.08), bottom, top)
     _y_axis(svg, y, ticks, "error (m)")
     ax.frame(svg, top, bottom, moments)
-    dt = float(np.median(np.diff(p.frame_t))) if p.frame_t.size > 1 else 0.0
-    for a, b in _bool_runs(p.frame_t, p.n_missed > 0, float(p.frame_t[-1]) + dt
-                           if p.frame_t.size else 0.0):
-        svg.rect(ax.x(a), top - 5, max(ax.x(b) - ax.x(a), 2.0), 5, fill=COLORS["miss"],
-                 title=f"frames with a missed object {a:.2f}–{b:.2f} s")
-    stride = max(1, p.err_t.size // MAX_POINTS)  # long runs: thin the scatter evenly
-    keep = np.zeros(p.err_t.size, dtype=bool)
-    keep[::stride] = True
-    if p.err_v.size:
-        keep[int(np.argmax(p.err_v))] = True
-    for t, v in zip(p.err_t[keep], p.err_v[keep], strict=True):
-        svg.circle(ax.x(t), y(v), 2.2, fill=COLORS["error"],
-                   title=f"{t:.2f} s: {v:.3f} m")
-    if p.err_v.size:
-        i = int(np.argmax(p.err_v))
-        px, py = ax.x(p.err_t[i]), y(p.err_v[i])
-        svg.circle(px, py, 4.5, fill="none", stroke=COLORS["error"], stroke_width="1.5")
-        _point_label(svg, px, py + 4 if py > top + 10 else py + 14,
-                     f"max {p.err_v[i]:.3f} m at {p.err_t[i]:.2f} s")
+    if single:
+        dt = float(np.median(np.diff(p.frame_t))) if p.frame_t.size > 1 else 0.0
+        for a, b in _bool_runs(p.frame_t, p.n_missed > 0, float(p.frame_t[-1]) + dt
+                               if p.frame_t.size else 0.0):
+            svg.rect(ax.x(a), top - 5, max(ax.x(b) - ax.x(a), 2.0), 5, fill=COLORS["miss"],
+                     title=f"frames with a missed object {a:.2f}–{b:.2f} s")
+    for s, st in layers:
+        stride = max(1, s.err_t.size // MAX_POINTS)  # long runs: thin the scatter evenly
+        keep = np.zeros(s.err_t.size, dtype=bool)
+        keep[::stride] = True
+        if s.err_v.size:
+            keep[int(np.argmax(s.err_v))] = True
+        color = COLORS["error"] if st is None else st.color
+        for t, v in zip(s.err_t[keep], s.err_v[keep], strict=True):
+            svg.circle(ax.x(t), y(v), 2.2, fill=color,
+                       title=_prefix(st, f"{t:.2f} s: {v:.3f} m"))
+    for k, (s, st) in enumerate(layers):
+        if s.err_v.size:
+            color = COLORS["error"] if st is None else st.color
+            i = int(np.argmax(s.err_v))
+            px, py = ax.x(s.err_t[i]), y(s.err_v[i])
+            svg.circle(px, py, 4.5, fill="none", stroke=color, stroke_width="1.5")
+            _point_label(svg, px, (py + 4 if py > top + 10 else py + 14) + 14 * k,
+                         _prefix(st, f"max {s.err_v[i]:.3f} m at {s.err_t[i]:.2f} s"))
     ax.highlight(svg, top, bottom, hl)
+    legend = [("matched track error", COLORS["error"], "dot"),
+              ("frames with a missed object", COLORS["miss"], "fill")] if single else [
+        (f"{st.label}: matched track error", st.color, "dot") for _, st in layers
+        if st is not None]
     out.append(Panel(f"perception.{p.cls}.error", "perception",
                      f"Perception ({p.cls}): position error of matched tracks", svg.render(),
-                     [("matched track error", COLORS["error"], "dot"),
-                      ("frames with a missed object", COLORS["miss"], "fill")],
+                     legend,
                      f"per frame, objects and {p.cls} tracks paired within the {p.gate:g} m "
                      f"gate (minimum total distance); topic {p.topic}"))
     svg = Svg(WIDTH, TOP + 80 + BOTTOM, label=f"{p.cls} track count over time")
     top, bottom = TOP, TOP + 80.0
-    hi_n = int(max(p.n_tracks.max(initial=0), p.n_objects.max(initial=0), 1))
+    hi_n = int(max(max(max(s.n_tracks.max(initial=0), s.n_objects.max(initial=0))
+                       for s, _ in layers), 1))
     ticks = [float(v) for v in range(0, hi_n + 1, max(1, math.ceil(hi_n / 4)))]
     y = Scale(0.0, max(hi_n + 0.3, 1.0), bottom, top)
     _y_axis(svg, y, ticks, "count")
     ax.frame(svg, top, bottom, moments)
-    if p.frame_t.size:
-        end = ax.end_s
-        for series, color, cls in ((p.n_objects, COLORS["objects"], "series dashed"),
-                                   (p.n_tracks, COLORS["tracks"], "series")):
-            xs = np.repeat(np.append(p.frame_t, end), 2)[1:-1]
-            vs = np.repeat(series.astype(np.float64), 2)
-            xs, vs = decimate(xs, vs, int(WIDTH))
-            svg.polyline(ax.x.array(xs), y.array(vs), stroke=color, stroke_width="1.6",
-                         class_=cls)
+    lines: list[tuple[PerceptionSeries, np.ndarray, str, str]] = []
+    if single:
+        lines = [(p, p.n_objects, COLORS["objects"], "series dashed"),
+                 (p, p.n_tracks, COLORS["tracks"], "series")]
+        legend = [(f"{p.cls} tracks", COLORS["tracks"], "line"),
+                  ("ground-truth objects", COLORS["objects"], "dashed")]
+    else:
+        legend = []
+        for s, st in layers:
+            assert st is not None
+            lines.append((s, s.n_objects, st.color2, _series_class(st, "series dashed")))
+            legend.append((f"{st.label}: ground-truth objects", st.color2, "dashed"))
+        for s, st in layers:
+            assert st is not None
+            lines.append((s, s.n_tracks, st.color, _series_class(st)))
+            legend.append((f"{st.label}: {s.cls} tracks", st.color, "line"))
+    end = ax.end_s
+    for s, series, color, cls in lines:
+        if not s.frame_t.size:
+            continue
+        xs = np.repeat(np.append(s.frame_t, end), 2)[1:-1]
+        vs = np.repeat(series.astype(np.float64), 2)
+        xs, vs = decimate(xs, vs, int(WIDTH))
+        svg.polyline(ax.x.array(xs), y.array(vs), stroke=color, stroke_width="1.6",
+                     class_=cls)
     ax.highlight(svg, top, bottom, hl)
     out.append(Panel(f"perception.{p.cls}.count", "perception",
                      f"Perception ({p.cls}): tracks vs ground-truth objects in the area",
-                     svg.render(), [(f"{p.cls} tracks", COLORS["tracks"], "line"),
-                                    ("ground-truth objects", COLORS["objects"], "dashed")]))
+                     svg.render(), legend))
     return out
 
 
-def time_panels(data: RunData, highlights: dict[str, Highlight] | None = None
-                ) -> list[Panel]:
-    """Every panel whose data exist, in order safety, control, perception."""
-    ax = TimeAxis(data.end_s)
+def time_panels(data: RunData | Sequence[tuple[RunData, RunStyle]],
+                highlights: dict[str, Highlight] | None = None,
+                moments: Sequence[Moment] | None = None) -> list[Panel]:
+    """Every panel whose data exist, in order safety, control, perception. Several runs: one
+    panel per robot and class that any of them has, with every run that has it overlaid, on
+    a time axis long enough for the longest run; ``moments`` replace the runs' own."""
+    layers = _layers(data)
     hl = highlights or {}
-    out = []
-    if data.safety is not None:
-        out.append(safety_panel(data.safety, ax, data.moments, hl.get("safety")))
-    for c in data.control:
-        out.append(control_panel(c, ax, data.moments, hl.get("control")))
-    for p in data.perception:
-        out += perception_panels(p, ax, data.moments, hl.get("perception"))
+    out: list[Panel] = []
+    if layers[0][1] is None:
+        data = layers[0][0]
+        ax = TimeAxis(data.end_s)
+        ms = data.moments if moments is None else moments
+        if data.safety is not None:
+            out.append(safety_panel(data.safety, ax, ms, hl.get("safety")))
+        for c in data.control:
+            out.append(control_panel(c, ax, ms, hl.get("control")))
+        for p in data.perception:
+            out += perception_panels(p, ax, ms, hl.get("perception"))
+        return out
+    runs = [(d, st) for d, st in layers if st is not None]
+    ax = TimeAxis(max(d.end_s for d, _ in runs))
+    ms = list(moments or ())
+    safety = [(d.safety, st) for d, st in runs if d.safety is not None]
+    if safety:
+        out.append(safety_panel(safety, ax, ms, hl.get("safety")))
+    for robot in dict.fromkeys(c.robot for d, _ in runs for c in d.control):
+        out.append(control_panel([(c, st) for d, st in runs for c in d.control
+                                  if c.robot == robot], ax, ms, hl.get("control")))
+    for cls in dict.fromkeys(p.cls for d, _ in runs for p in d.perception):
+        out += perception_panels([(p, st) for d, st in runs for p in d.perception
+                                  if p.cls == cls], ax, ms, hl.get("perception"))
     return out
 
 
@@ -381,9 +527,17 @@ def _trailer(sc: Scenario) -> list[tuple[float, float]]:
                 d.position[0], d.position[1], d.yaw_deg)
 
 
-def map_svg(data: RunData, *, width: float = WIDTH, max_height: float = 560.0) -> str:
+def map_svg(data: RunData | Sequence[tuple[RunData, RunStyle]], *, width: float = WIDTH,
+            max_height: float = 560.0, moments: Sequence[Moment] | None = None) -> str:
     """Top-down view: walls, shelves, trailer, routes, zones, cameras, trajectories (ground
-    truth solid, odometry dashed), workers' paths, collisions and the numbered moments."""
+    truth solid, odometry dashed), workers' paths, collisions and the numbered moments.
+
+    Several runs: the scene of the first, every run's robots and workers in its colours
+    (class ``robot-path run-<key>``), collisions; odometry and mismatch segments are left to
+    the per-run reports. ``moments`` (default: the first run's) sit on the first run's
+    robot."""
+    layers = _layers(data)
+    data = layers[0][0]
     sc = data.scenario
     if sc is None:
         return ""
@@ -394,7 +548,7 @@ def map_svg(data: RunData, *, width: float = WIDTH, max_height: float = 560.0) -
     for x, y in trailer:
         xs.append(x)
         ys.append(y)
-    for tr in data.tracks:
+    for tr in (t for d, _ in layers for t in d.tracks):
         if tr.x.size:
             xs += [float(np.nanmin(tr.x)), float(np.nanmax(tr.x))]
             ys += [float(np.nanmin(tr.y)), float(np.nanmax(tr.y))]
@@ -405,7 +559,8 @@ def map_svg(data: RunData, *, width: float = WIDTH, max_height: float = 560.0) -
     h = pad_t + pad_b + k * (y1 - y0)
     X = Scale(x0, x1, pad_l, pad_l + k * (x1 - x0))
     Y = Scale(y0, y1, pad_t + k * (y1 - y0), pad_t)
-    svg = Svg(w, h, label="top-down map of the run", class_="plot map")
+    svg = Svg(w, h, label="top-down map of the run" if len(layers) == 1
+              else "top-down map of the runs", class_="plot map")
 
     def poly(pts: Sequence[tuple[float, float]], **attrs: object) -> None:
         svg.polygon([X(p[0]) for p in pts], [Y(p[1]) for p in pts], **attrs)
@@ -467,45 +622,13 @@ def map_svg(data: RunData, *, width: float = WIDTH, max_height: float = 560.0) -
                      title=f"camera {cam.name}")
             svg.text(X(cx) - 8, Y(cy) + 3, cam.name, class_="map-label cam-label",
                      text_anchor="end")
+    for run, st in layers:
+        _map_run(svg, X, Y, run, st, planned=run is data)
     robots = [t for t in data.tracks if t.kind == "robot"]
     workers = [t for t in data.tracks if t.kind == "worker"]
-    for tr in workers:
-        if tr.planned:
-            line(list(tr.planned), class_="worker-plan", title=f"{tr.name} planned route")
-        _track(svg, X, Y, tr, COLORS["worker"], "worker-path")
-    s = data.safety
-    for tr in robots:
-        if tr.odom_x is not None and tr.odom_y is not None:
-            ox, oy = tr.odom_x, tr.odom_y
-            step = max(1, ox.size // 1500)
-            svg.polyline(X.array(ox[::step]), Y.array(oy[::step]), class_="odom-path",
-                         stroke=COLORS["odom"])
-        _track(svg, X, Y, tr, COLORS["robot"], "robot-path")
-        if len(robots) > 1 and tr.x.size:  # name each robot at its end point
-            svg.text(X(tr.x[-1]) + 6, Y(tr.y[-1]) - 6, tr.name, class_="map-label robot-label")
-        if s is not None and tr.name == s.robot:
-            for win in s.mismatches:
-                if not win.long:
-                    continue
-                sel = (tr.t >= win.start_s) & (tr.t <= win.end_s)
-                if sel.sum() >= 1:
-                    svg.polyline(X.array(tr.x[sel]), Y.array(tr.y[sel]),
-                                 class_=f"mismatch-path mismatch-{win.kind}",
-                                 stroke=COLORS[win.kind],
-                                 title=f"{win.kind}-mute {win.start_s:.2f}–{win.end_s:.2f} s")
-                    px, py = tr.at(win.start_s) or (0.0, 0.0)
-                    svg.circle(X(px), Y(py), 5, fill=COLORS[win.kind], class_="mismatch-point",
-                               title=f"{win.kind}-mute from {win.start_s:.2f} s")
-    for tr in robots:
-        for c in (cs for cs in data.control if cs.robot == tr.name):
-            for t0, _ in c.collisions:
-                hit = tr.at(t0)
-                if hit:
-                    svg.path(f"M{X(hit[0]) - 6:.1f},{Y(hit[1]) - 6:.1f}l12,12m0,-12l-12,12",
-                             class_="collision", title=f"collision at {t0:.2f} s")
     focus = robots[0] if robots else None
     placed: list[tuple[float, float]] = []
-    for m in data.moments:
+    for m in (data.moments if moments is None else moments):
         if focus is None:
             break
         pos = focus.at(m.t_s)
@@ -535,11 +658,63 @@ def map_svg(data: RunData, *, width: float = WIDTH, max_height: float = 560.0) -
     return svg.render()
 
 
-def map_legend(data: RunData) -> list[tuple[str, str, str]]:
-    """(label, colour, style) of what :func:`map_svg` draws for this run."""
+def _map_run(svg: Svg, X: Scale, Y: Scale, data: RunData, st: RunStyle | None, *,
+             planned: bool) -> None:
+    """One run's workers, robots and collisions on the map; ``st`` None: the per-run look
+    (with odometry and mismatch segments)."""
+    robots = [t for t in data.tracks if t.kind == "robot"]
+    workers = [t for t in data.tracks if t.kind == "worker"]
+    run_cls = "" if st is None else f" run-{st.key}"
+    for tr in workers:
+        if tr.planned and planned:
+            a = np.asarray(list(tr.planned), dtype=np.float64).reshape(-1, 2)
+            svg.polyline(X.array(a[:, 0]), Y.array(a[:, 1]), class_="worker-plan",
+                         title=f"{tr.name} planned route")
+        _track(svg, X, Y, tr, COLORS["worker"] if st is None else st.color2,
+               "worker-path" + run_cls, st)
+    s = data.safety
+    for tr in robots:
+        if st is None and tr.odom_x is not None and tr.odom_y is not None:
+            ox, oy = tr.odom_x, tr.odom_y
+            step = max(1, ox.size // 1500)
+            svg.polyline(X.array(ox[::step]), Y.array(oy[::step]), class_="odom-path",
+                         stroke=COLORS["odom"])
+        _track(svg, X, Y, tr, COLORS["robot"] if st is None else st.color,
+               "robot-path" + run_cls, st)
+        if len(robots) > 1 and tr.x.size:  # name each robot at its end point
+            svg.text(X(tr.x[-1]) + 6, Y(tr.y[-1]) - 6, tr.name, class_="map-label robot-label")
+        if st is None and s is not None and tr.name == s.robot:
+            for win in s.mismatches:
+                if not win.long:
+                    continue
+                sel = (tr.t >= win.start_s) & (tr.t <= win.end_s)
+                if sel.sum() >= 1:
+                    svg.polyline(X.array(tr.x[sel]), Y.array(tr.y[sel]),
+                                 class_=f"mismatch-path mismatch-{win.kind}",
+                                 stroke=COLORS[win.kind],
+                                 title=f"{win.kind}-mute {win.start_s:.2f}–{win.end_s:.2f} s")
+                    px, py = tr.at(win.start_s) or (0.0, 0.0)
+                    svg.circle(X(px), Y(py), 5, fill=COLORS[win.kind], class_="mismatch-point",
+                               title=f"{win.kind}-mute from {win.start_s:.2f} s")
+    for tr in robots:
+        for c in (cs for cs in data.control if cs.robot == tr.name):
+            for t0, _ in c.collisions:
+                hit = tr.at(t0)
+                if hit:
+                    svg.path(f"M{X(hit[0]) - 6:.1f},{Y(hit[1]) - 6:.1f}l12,12m0,-12l-12,12",
+                             class_="collision", title=_prefix(st, f"collision at {t0:.2f} s"))
+
+
+def map_legend(data: RunData | Sequence[tuple[RunData, RunStyle]]
+               ) -> list[tuple[str, str, str]]:
+    """(label, colour, style) of what :func:`map_svg` draws for this run (or these runs)."""
+    layers = _layers(data)
+    data = layers[0][0]
     sc = data.scenario
     if sc is None:
         return []
+    if layers[0][1] is not None:
+        return _overlay_legend([(d, st) for d, st in layers if st is not None])
     robots = [t for t in data.tracks if t.kind == "robot"]
     out = []
     for source in sorted({t.source for t in robots}):
@@ -569,13 +744,36 @@ def map_legend(data: RunData) -> list[tuple[str, str, str]]:
     return out
 
 
-def _track(svg: Svg, X: Scale, Y: Scale, tr: Track, color: str, cls: str) -> None:
+def _overlay_legend(layers: Sequence[tuple[RunData, RunStyle]]) -> list[tuple[str, str, str]]:
+    sc = layers[0][0].scenario
+    assert sc is not None
+    out = []
+    for d, st in layers:
+        for source in sorted({t.source for t in d.tracks if t.kind == "robot"}):
+            out.append((f"{st.label}: robot ({source})", st.color, "line"))
+        if any(t.kind == "worker" for t in d.tracks):
+            out.append((f"{st.label}: worker (ground truth)", st.color2, "line"))
+    if sc.routes:
+        out.append(("route", COLORS["route"], "line"))
+    if len(sc.zones.loading_roi) >= 3:
+        out.append(("loading ROI", COLORS["roi"], "fill"))
+    if sc.zones.trailer_tripwire is not None:
+        out.append(("trailer tripwire (tick: inside)", COLORS["over"], "dashed"))
+    if sc.cameras:
+        out.append(("camera", "#111827", "tri"))
+    if any(c.collisions for d, _ in layers for c in d.control):
+        out.append(("collision", COLORS["collision"], "x"))
+    return out
+
+
+def _track(svg: Svg, X: Scale, Y: Scale, tr: Track, color: str, cls: str,
+           st: RunStyle | None = None) -> None:
     if tr.x.size == 0:
         return
     step = max(1, tr.x.size // 1500)
     svg.polyline(X.array(tr.x[::step]), Y.array(tr.y[::step]), class_=cls, stroke=color,
-                 title=f"{tr.name} ({tr.source})")
+                 title=_prefix(st, f"{tr.name} ({tr.source})"))
     svg.circle(X(tr.x[0]), Y(tr.y[0]), 4, fill="#fff", stroke=color, stroke_width="2",
-               title=f"{tr.name} start")
+               title=_prefix(st, f"{tr.name} start"))
     svg.rect(X(tr.x[-1]) - 3.5, Y(tr.y[-1]) - 3.5, 7, 7, fill=color,
-             title=f"{tr.name} end")
+             title=_prefix(st, f"{tr.name} end"))

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
 from collections.abc import Sequence
 from pathlib import Path
 
-__all__ = ["CHROMIUM_FLAGS", "VIEWPORT", "chromium_path", "run_chromium"]
+__all__ = ["CHROMIUM_FLAGS", "VIEWPORT", "chromium_path", "page_requests", "run_chromium"]
 
 CHROMIUM_FLAGS = [
     "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -40,3 +41,18 @@ def run_chromium(binary: str, tmp: Path, url: str, extra: Sequence[str]) -> str:
     if proc.returncode != 0:
         raise AssertionError(f"chromium exited {proc.returncode}: {proc.stderr[-2000:]}")
     return proc.stdout
+
+
+def page_requests(netlog: Path) -> list[str]:
+    """URLs the page itself asked for, from a ``--log-net-log`` file (the browser's own
+    background traffic, e.g. update checks, has no file:// isolation key and is left out)."""
+    log = json.loads(netlog.read_text(encoding="utf-8"))
+    start = log["constants"]["logEventTypes"]["URL_REQUEST_START_JOB"]
+    out = []
+    for e in log["events"]:
+        p = e.get("params") or {}
+        if e["type"] == start and "file://" in str(p.get("network_isolation_key", "")):
+            url = str(p.get("url", ""))
+            if not url.startswith(("file:", "data:")):
+                out.append(url)
+    return out

@@ -12,7 +12,7 @@ import pytest
 
 from harness import api
 from harness.report.templates import VERDICT_COLORS
-from tests.report.browser import VIEWPORT, run_chromium
+from tests.report.browser import VIEWPORT, page_requests, run_chromium
 from tests.report.pngread import read_png
 
 pytestmark = pytest.mark.slow
@@ -45,21 +45,6 @@ PROBE = """<script>
 </script>"""
 
 
-def _page_requests(netlog: Path) -> list[str]:
-    """URLs the page itself asked for (the browser's own background traffic, e.g. update
-    checks, has no file:// isolation key and is left out)."""
-    log = json.loads(netlog.read_text(encoding="utf-8"))
-    start = log["constants"]["logEventTypes"]["URL_REQUEST_START_JOB"]
-    out = []
-    for e in log["events"]:
-        p = e.get("params") or {}
-        if e["type"] == start and "file://" in str(p.get("network_isolation_key", "")):
-            url = str(p.get("url", ""))
-            if not url.startswith(("file:", "data:")):
-                out.append(url)
-    return out
-
-
 def test_netlog_catches_page_requests(chromium: str, tmp_path: Path) -> None:
     """The request detector below is not vacuous: a page with remote references trips it."""
     page = tmp_path / "remote.html"
@@ -67,7 +52,7 @@ def test_netlog_catches_page_requests(chromium: str, tmp_path: Path) -> None:
                     '<link rel="stylesheet" href="http://fonts.example.org/a.css">')
     run_chromium(chromium, tmp_path, page.as_uri(),
                  ["--dump-dom", f"--log-net-log={tmp_path / 'net.json'}"])
-    seen = _page_requests(tmp_path / "net.json")
+    seen = page_requests(tmp_path / "net.json")
     assert any("cdn.example.org" in u for u in seen)
     assert any("fonts.example.org" in u for u in seen)
 
@@ -77,7 +62,7 @@ def test_renders_fully_offline_without_requests(chromium: str, failing_run: api.
     report = failing_run.run_dir / "report.html"
     dom = run_chromium(chromium, tmp_path, report.as_uri(),
                        ["--dump-dom", f"--log-net-log={tmp_path / 'net.json'}"])
-    assert _page_requests(tmp_path / "net.json") == []
+    assert page_requests(tmp_path / "net.json") == []
     assert 'data-verdict="REGRESSED"' in dom and ">REGRESSED<" in dom
     for e in summary["comparison"]:  # every metric has its row in the full table
         assert f'data-metric="{e["name"]}"' in dom
