@@ -167,6 +167,9 @@ class RunData:
     tracks: list[Track] = field(default_factory=list)
     moments: list[Moment] = field(default_factory=list)
     problems: list[str] = field(default_factory=list)
+    # The baseline's reference recording, read like a run (same scenario: like for like),
+    # for the report's "against the baseline" overlays; None without one.
+    reference: RunData | None = None
 
     @property
     def end_s(self) -> float:
@@ -210,12 +213,41 @@ def load_run(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
         data.problems.append("bag/metadata.yaml: missing (no recorded data to plot)")
     data.frames = frames
     if scenario is not None and frames is not None:
-        data.tracks = _tracks(scenario, frames)
-        data.safety = _safety(scenario, frames)
-        data.control = _control(scenario, frames, summary)
-        data.perception = _perception(scenario, frames)
+        _series(data, scenario, frames)
+        data.reference = _reference(data, scenario)
     data.moments = _moments(data)
     return data
+
+
+def _series(data: RunData, scenario: Scenario, frames: Frames) -> None:
+    data.tracks = _tracks(scenario, frames)
+    data.safety = _safety(scenario, frames)
+    data.control = _control(scenario, frames, data.summary)
+    data.perception = _perception(scenario, frames)
+
+
+def _reference(data: RunData, scenario: Scenario) -> RunData | None:
+    """The baseline's reference recording as a run of the same scenario, when the run was
+    compared like for like with a baseline that has one (``summary.baseline.reference``)."""
+    base = data.summary.get("baseline")
+    if not isinstance(base, dict) or not base.get("reference") or base.get(
+            "config_differences"):
+        return None
+    path = Path(str(base["reference"]))
+    if not path.is_file():
+        data.problems.append(f"the baseline's reference recording {path} is gone: no overlay")
+        return None
+    try:
+        frames = scenario_frames(scenario, path)
+    except SrrError as err:
+        data.problems.append(f"the baseline's reference recording does not read: {err}")
+        return None
+    metrics = [{"name": e["name"], "value": e.get("baseline"), "windows": []}
+               for e in data.summary.get("comparison", []) if isinstance(e, dict)]
+    ref = RunData(path, {"metrics": metrics, "simulated_s": data.summary.get("simulated_s")},
+                  "", scenario, frames)
+    _series(ref, scenario, frames)
+    return ref
 
 
 # --------------------------------------------------------------------------- series

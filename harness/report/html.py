@@ -31,7 +31,14 @@ from harness.regression.verdict import GOAL_REACHED
 from harness.report.data import RunData, load_run, metric_windows
 from harness.report.graphs import graph_diagrams
 from harness.report.images import Keyframe, keyframes
-from harness.report.plots import Highlight, Panel, map_legend, map_svg, time_panels
+from harness.report.plots import (
+    Highlight,
+    Panel,
+    RunStyle,
+    map_legend,
+    map_svg,
+    time_panels,
+)
 from harness.report.templates import CSS, MACROS, REPORT
 from harness.scenario import Scenario
 
@@ -234,6 +241,23 @@ def _panel_ctx(p: Panel, hl: dict[str, Highlight]) -> dict[str, Any]:
             "legend": p.legend, "note": p.note, "highlight": h.label if h else ""}
 
 
+#: The two runs of the "against the baseline" section.
+REFERENCE_STYLE = RunStyle("a", "baseline", "#2563eb", "#92400e")
+THIS_RUN_STYLE = RunStyle("b", "this run", "#ea580c", "#be185d")
+
+
+def _against(data: RunData) -> dict[str, Any] | None:
+    """Both runs on one map and overlaid time series, the baseline drawn from its reference
+    recording (None when there is none to compare with)."""
+    ref = data.reference
+    if ref is None or not ref.tracks or not data.tracks:
+        return None
+    pair = [(ref, REFERENCE_STYLE), (data, THIS_RUN_STYLE)]
+    return {"map_svg": Markup(map_svg(pair)), "map_legend": map_legend(pair),
+            "panels": [_panel_ctx(p, {}) for p in time_panels(pair)],
+            "file": ref.run_dir.name}
+
+
 def _exact_command(data: RunData) -> str:
     """Re-run from the resolved scenario of the run directory: includes, defaults and every
     ``--set`` override are already in it."""
@@ -306,6 +330,9 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
         toc.append(("focus", "In time"))
     if data.scenario is not None and data.tracks:
         toc.append(("map", "Map"))
+    against = _against(data)
+    if against:
+        toc.append(("against", "Against the baseline"))
     if kf_rows:
         toc.append(("cameras", "Cameras"))
     if others:
@@ -350,6 +377,7 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
         "n_compared": len(s.get("comparison") or []),
         "focus_panels": [_panel_ctx(p, hl) for p in focus],
         "other_panels": [_panel_ctx(p, hl) for p in others],
+        "against": against,
         "map_svg": Markup(map_svg(data)) if data.tracks else "",
         "map_legend": map_legend(data) if data.tracks else [],
         "moments": data.moments,

@@ -266,6 +266,17 @@ REPORT = """<!doctype html>
 </section>
 {% endif %}
 
+{% if against %}
+<section id="against">
+ <h2>Against the baseline <span class="count">(the baseline drawn from its reference recording
+  {{ against.file }}; same scenario, same time axis)</span></h2>
+ <div class="legend">{% for label, color, style in against.map_legend %}<span class="key"><i
+  class="{{ style }}" style="{% if style == 'dashed' %}border-color{% else %}background{% endif %}:{{ color }}{% if style == 'fill' %};opacity:.35{% endif %}"></i>{{ label }}</span>{% endfor %}</div>
+ {{ against.map_svg }}
+ {% for p in against.panels %}{{ panel(p) }}{% endfor %}
+</section>
+{% endif %}
+
 {% if keyframes %}
 <section id="cameras">
  <h2>Camera keyframes <span class="count">(nearest recorded image to each moment)</span></h2>

@@ -67,7 +67,9 @@ def test_renders_fully_offline_without_requests(chromium: str, failing_run: api.
     for e in summary["comparison"]:  # every metric has its row in the full table
         assert f'data-metric="{e["name"]}"' in dom
     assert len(re.findall(r'<svg class="plot"', dom)) >= 4  # safety, control, perception x2
-    assert len(re.findall(r'<svg class="plot map"', dom)) == 1
+    # the run's own map, and both runs on one map against the baseline's reference recording
+    assert len(re.findall(r'<svg class="plot map"', dom)) == 2
+    assert 'id="against"' in dom
     assert len(re.findall(r'<svg class="graph-svg"', dom)) == len(summary["graphs"])
     images = re.findall(r'<img src="data:image/png;base64,', dom)
     assert len(images) >= 2

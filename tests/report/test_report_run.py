@@ -196,3 +196,25 @@ def test_summary_is_kept_when_the_report_fails(tmp_path: Path,
     with pytest.raises(SrrError, match=r"report\.html.*boom"):
         api.run_scenario(sc, out=tmp_path / "r")
     assert json.loads((tmp_path / "r" / "summary.json").read_text())["verdict"]
+
+
+def test_the_report_overlays_the_baseline_from_its_reference_recording(
+        failing_run: api.RunResult, tmp_path: Path) -> None:
+    """The baseline was blessed with a reference recording; the regressed run's report draws
+    both runs on one map and overlays their time series, without the baseline's run dir."""
+    ref = Path(failing_run.summary["baseline"]["reference"])
+    assert ref.suffix == ".mcap" and ref.is_file()
+    html = (failing_run.run_dir / "report.html").read_text(encoding="utf-8")
+    section = html[html.index('<section id="against">'):]
+    section = section[:section.index("</section>")]
+    assert "run-a" in section and "run-b" in section  # baseline and this run, both drawn
+    assert "baseline: robot (ground truth)" in section and "this run: robot" in section
+    assert section.count('class="panel') >= 2  # safety and control, overlaid
+    # without the reference file the report says so and draws no overlay
+    moved = tmp_path / ref.name
+    ref.rename(moved)
+    try:
+        again = render_report(failing_run.run_dir)
+    finally:
+        moved.rename(ref)
+    assert 'id="against"' not in again and "reference recording" in again and "is gone" in again
