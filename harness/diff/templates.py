@@ -122,8 +122,7 @@ DIFF = """<!doctype html>
 {% if map_svg %}
 <section id="map">
  <h2>Top-down map <span class="count">(world frame, metres; the scene of A)</span></h2>
- <div class="legend map-legend">{% for label, color, style in map_legend %}<span class="key"><i
-  class="{{ style }}" style="{% if style == 'dashed' %}border-color{% else %}background{% endif %}:{{ color }}{% if style == 'fill' %};opacity:.35{% endif %}"></i>{{ label }}</span>{% endfor %}</div>
+ <div class="legend map-legend">{{ legend_keys(map_legend, ".35") }}</div>
  {{ map_svg }}
  {% if moments %}<ol class="moments">
   {% for m in moments %}<li><b>M{{ m.number }}</b> {{ "%.2f" | format(m.t_s) }} s — {{ m.label }}</li>{% endfor %}

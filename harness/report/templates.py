@@ -257,8 +257,7 @@ REPORT = """<!doctype html>
 {% if map_svg %}
 <section id="map">
  <h2>Top-down map <span class="count">(world frame, metres)</span></h2>
- <div class="legend">{% for label, color, style in map_legend %}<span class="key"><i
-  class="{{ style }}" style="{% if style == 'dashed' %}border-color{% else %}background{% endif %}:{{ color }}{% if style == 'fill' %};opacity:.35{% endif %}"></i>{{ label }}</span>{% endfor %}</div>
+ <div class="legend">{{ legend_keys(map_legend, ".35") }}</div>
  {{ map_svg }}
  {% if moments %}<ol class="moments">
   {% for m in moments %}<li><b>M{{ m.number }}</b> {{ "%.2f" | format(m.t_s) }} s — {{ m.label }}</li>{% endfor %}
@@ -270,8 +269,7 @@ REPORT = """<!doctype html>
 <section id="against">
  <h2>Against the baseline <span class="count">(the baseline drawn from its reference recording
   {{ against.file }}; same scenario, same time axis)</span></h2>
- <div class="legend">{% for label, color, style in against.map_legend %}<span class="key"><i
-  class="{{ style }}" style="{% if style == 'dashed' %}border-color{% else %}background{% endif %}:{{ color }}{% if style == 'fill' %};opacity:.35{% endif %}"></i>{{ label }}</span>{% endfor %}</div>
+ <div class="legend">{{ legend_keys(against.map_legend, ".35") }}</div>
  {{ against.map_svg }}
  {% for p in against.panels %}{{ panel(p) }}{% endfor %}
 </section>
@@ -400,12 +398,16 @@ MACROS = """
 {% endfor %}</tbody></table>
 {%- endmacro %}
 
+{% macro legend_keys(items, fill_opacity) -%}
+{% for label, color, style in items %}<span class="key"><i class="{{ style }}"
+ style="{% if style == 'dashed' %}border-color{% else %}background{% endif %}:{{ color }}{% if style == 'fill' %};opacity:{{ fill_opacity }}{% endif %}"></i>{{ label }}</span>{% endfor %}
+{%- endmacro %}
+
 {% macro panel(p) -%}
 <figure class="panel" id="panel-{{ p.key }}" data-group="{{ p.group }}">
  <figcaption>{{ p.title }}{% if p.highlight %}<span class="hl-name">dashed outline:
   {{ p.highlight }}</span>{% endif %}</figcaption>
- <div class="legend">{% for label, color, style in p.legend %}<span class="key"><i
-  class="{{ style }}" style="{% if style == 'dashed' %}border-color{% else %}background{% endif %}:{{ color }}{% if style == 'fill' %};opacity:.6{% endif %}"></i>{{ label }}</span>{% endfor %}
+ <div class="legend">{{ legend_keys(p.legend, ".6") }}
   {% if p.note %}<span class="note">{{ p.note }}</span>{% endif %}</div>
  {{ p.svg }}
 </figure>

@@ -16,7 +16,6 @@ from pathlib import Path
 import pytest
 
 from harness import api
-from tests.report.browser import chromium_path
 
 ROOT = Path(__file__).resolve().parents[2]
 FORKLIFT = ROOT / "scenarios" / "forklift_warehouse.yaml"
@@ -58,12 +57,3 @@ class Runs:
 @pytest.fixture(scope="session")
 def runs(tmp_path_factory: pytest.TempPathFactory) -> Runs:
     return Runs(tmp_path_factory.mktemp("diff-runs"))
-
-
-@pytest.fixture(scope="session")
-def chromium() -> str:
-    path = chromium_path()
-    if path is None:
-        pytest.skip("headless Chromium not installed (/usr/bin/chromium missing): "
-                    "apt-get install -y chromium, or set SRR_CHROMIUM")
-    return path

@@ -15,7 +15,6 @@ from pathlib import Path
 import pytest
 
 from harness import api
-from tests.report.browser import chromium_path
 
 ROOT = Path(__file__).resolve().parents[2]
 SLOW_REACTION = ROOT / "scenarios" / "regressions" / "dock_worker_crossing_slow_reaction.yaml"
@@ -42,12 +41,3 @@ def failing_run(tmp_path_factory: pytest.TempPathFactory) -> api.RunResult:
 @pytest.fixture(scope="session")
 def summary(failing_run: api.RunResult) -> dict:
     return json.loads((failing_run.run_dir / "summary.json").read_text())
-
-
-@pytest.fixture(scope="session")
-def chromium() -> str:
-    path = chromium_path()
-    if path is None:
-        pytest.skip("headless Chromium not installed (/usr/bin/chromium missing): "
-                    "apt-get install -y chromium, or set SRR_CHROMIUM")
-    return path
