@@ -78,8 +78,10 @@ def _parser() -> argparse.ArgumentParser:
                     metavar="NAME=module:Class", help="replace a system under test's plug-in")
     rp.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                     help="override a field of the systems under test or the scoring")
-    rp.add_argument("--out", type=Path, default=None)
-    rp.add_argument("--baselines", type=Path, default=None)
+    rp.add_argument("--out", type=Path, default=None,
+                    help="run directory (default reports/<scenario>/<run id>-replay)")
+    rp.add_argument("--baselines", type=Path, default=None,
+                    help="baselines folder (default: the project's baselines/)")
     rp.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
 
     val = sub.add_parser("validate", help="check a scenario file without running it")
