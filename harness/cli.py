@@ -8,10 +8,8 @@ never a traceback); 3 invalid run; 130 interrupted.
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -24,6 +22,7 @@ from harness.atomic import write_json_atomic
 from harness.bag import inspect_bag
 from harness.diff import DiffResult
 from harness.errors import SrrError
+from harness.interrupt import sigterm_as_interrupt
 
 __all__ = ["main"]
 
@@ -123,20 +122,6 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-@contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM finalizes the bag like Ctrl-C does."""
-
-    def handler(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
 def _progress(quiet: bool) -> Any:
     if quiet or (not err_console.is_terminal and not sys.stderr.isatty()):
         return None
@@ -153,7 +138,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         if bar is not None and (done % 15 == 0 or done == total):
             bar.update(task, completed=done, total=total)
 
-    with _sigterm_as_interrupt():
+    with sigterm_as_interrupt():
         if bar is not None:
             bar.start()
             task = bar.add_task(f"replay {args.run_dir.name}", total=None, sim="")
@@ -183,7 +168,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             bar.update(task, completed=done, total=total,
                        sim=f"{done / scenario.physics.tick_hz:6.1f} s sim")
 
-    with _sigterm_as_interrupt():
+    with sigterm_as_interrupt():
         if bar is not None:
             bar.start()
             task = bar.add_task(scenario.name, total=scenario.n_ticks, sim="")

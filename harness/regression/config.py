@@ -5,7 +5,8 @@ A baseline is only a yardstick for runs of the same *configuration*: the same si
 physics settings, and the same scoring definitions. What a regression test is meant to vary
 is left out: the systems under test (a new version of a plug-in, changed parameters), the
 scenario's name and description, which baseline it names, the tolerances and the health-gate
-settings, and how the bag is written (``recording``: chunking, fsync, the disk guard).
+settings, how the bag is written (``recording``: chunking, fsync, the disk guard) and the sweep a
+suite may expand the scenario into (``sweep``: each point is its own configuration).
 :func:`comparable_config` is that part of a resolved scenario, as plain data;
 :func:`config_differences` names what differs, field by field.
 """
@@ -19,7 +20,7 @@ __all__ = ["EXCLUDED", "comparable_config", "config_differences"]
 
 #: Top-level keys, and ``scoring`` sub-keys, that do not make two configurations different.
 EXCLUDED = frozenset({"format_version", "name", "description", "baseline",
-                      "systems_under_test", "recording"})
+                      "systems_under_test", "recording", "sweep"})
 EXCLUDED_SCORING = frozenset({"tolerances", "health"})
 
 

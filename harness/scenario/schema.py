@@ -491,6 +491,9 @@ class Scenario:
     scoring: ScoringSpec = ScoringSpec()
     recording: RecordingSpec = RecordingSpec()
     baseline: str | None = None  # which baselines/<name>.json to compare with (default: name)
+    # Parameters ``srr suite`` sweeps: ``--set`` path → list of values or {from, to, step}
+    # (checked by harness.suite.sweep; ``srr run`` runs the scenario as written).
+    sweep: dict[str, Any] = field(default_factory=dict)
     # Which file each top-level key or list item ("robots", "robots[1]") came from, for error
     # messages after loading. Filled by the loader; not part of the scenario's content.
     origins: dict[str, str] = field(default_factory=dict, compare=False, repr=False,

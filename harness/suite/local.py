@@ -1,0 +1,148 @@
+"""Runs in parallel worker processes on this machine: one fresh ``python -m
+harness.suite.worker`` per run, at most ``jobs`` at a time.
+
+A fresh process per run isolates what one run can break: a segfault, an out-of-memory kill or
+a hang costs that run (INVALID, with the signal or the timeout as the reason), never the
+suite. A run past its timeout gets SIGTERM (it finalizes its bag and summary), then SIGKILL
+after ``grace_s``. Ctrl-C (or SIGTERM to the suite) stops the runs the same way and keeps every
+finished one. Worker output goes to ``OUT/logs/<run id>.log``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO
+
+from harness.suite.events import Event, Listener, log_path, not_started
+from harness.suite.plan import RunSpec
+from harness.suite.results import RunOutcome, crash_reason, outcome_of
+
+__all__ = ["LocalExecutor"]
+
+
+@dataclass
+class _Running:
+    spec: RunSpec
+    proc: subprocess.Popen[bytes]
+    log: IO[bytes]
+    t0: float
+    kill_at: float | None = None  # set once SIGTERM was sent
+    timed_out: bool = False
+
+
+def _last_line(path: Path) -> str | None:
+    try:
+        lines = [x.strip() for x in path.read_text(encoding="utf-8", errors="replace")
+                 .splitlines() if x.strip()]
+    except OSError:
+        return None
+    return lines[-1] if lines else None
+
+
+class LocalExecutor:
+    name = "local"
+
+    def __init__(self, jobs: int, *, baselines: Path | None = None, grace_s: float = 10.0,
+                 poll_s: float = 0.05) -> None:
+        self.jobs = max(1, jobs)
+        self.baselines = baselines
+        self.grace_s = grace_s
+        self.poll_s = poll_s
+
+    def _start(self, spec: RunSpec, out_root: Path) -> _Running:
+        job = {**spec.job(), "out_root": str(out_root),
+               "baselines": None if self.baselines is None else str(self.baselines)}
+        log_file = log_path(out_root, spec)
+        log_file.parent.mkdir(parents=True, exist_ok=True)
+        log = log_file.open("wb")
+        env = dict(os.environ)
+        # the worker imports plug-ins ("module:Class") from here, like `srr run` does
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (os.getcwd(), env.get("PYTHONPATH"))
+                                            if p)
+        proc = subprocess.Popen([sys.executable, "-m", "harness.suite.worker", json.dumps(job)],
+                                stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                                env=env, start_new_session=True)
+        return _Running(spec, proc, log, time.monotonic())
+
+    @staticmethod
+    def _signal(r: _Running, sig: signal.Signals) -> None:
+        try:
+            os.killpg(r.proc.pid, sig)
+        except ProcessLookupError:
+            pass
+
+    def _stop(self, r: _Running, now: float) -> None:
+        if r.kill_at is None:
+            self._signal(r, signal.SIGTERM)
+            r.kill_at = now + self.grace_s
+        elif now >= r.kill_at:
+            self._signal(r, signal.SIGKILL)
+
+    def _outcome(self, r: _Running, out_root: Path) -> RunOutcome:
+        r.log.close()
+        code = r.proc.returncode
+        wall = time.monotonic() - r.t0
+        log = log_path(out_root, r.spec)
+        crash = crash_reason(code) if code < 0 and not r.timed_out else None
+        error = _last_line(log) if code == 2 else None
+        return outcome_of(r.spec, out_root, exit_code=code, error=error, wall_s=wall,
+                          timed_out=r.timed_out, crash=crash, log=log)
+
+    def run(self, specs: Sequence[RunSpec], out_root: Path,
+            listen: Listener) -> tuple[list[RunOutcome], bool]:
+        pending = deque(specs)
+        running: list[_Running] = []
+        done: dict[str, RunOutcome] = {}
+        interrupted = False
+        try:
+            while pending or running:
+                while pending and len(running) < self.jobs:
+                    r = self._start(pending.popleft(), out_root)
+                    running.append(r)
+                    listen(Event("start", r.spec, where=f"pid {r.proc.pid}"))
+                now = time.monotonic()
+                for r in list(running):
+                    if r.proc.poll() is not None:
+                        running.remove(r)
+                        done[r.spec.id] = self._outcome(r, out_root)
+                        listen(Event("finish", r.spec, done[r.spec.id]))
+                    elif r.spec.timeout_s is not None and (
+                            r.timed_out or now - r.t0 > r.spec.timeout_s):
+                        r.timed_out = True
+                        self._stop(r, now)
+                time.sleep(self.poll_s)
+        except KeyboardInterrupt:
+            interrupted = True
+            self._drain(running, out_root, done, listen)
+        for spec in specs:
+            if spec.id not in done:
+                done[spec.id] = not_started(spec)
+        return [done[s.id] for s in specs], interrupted
+
+    def _drain(self, running: list[_Running], out_root: Path, done: dict[str, RunOutcome],
+               listen: Listener) -> None:
+        """Stop what runs (SIGTERM, then SIGKILL after the grace period), keep what they
+        leave. A second Ctrl-C here is ignored: the point is to leave valid files."""
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            while running:
+                now = time.monotonic()
+                for r in list(running):
+                    if r.proc.poll() is not None:
+                        running.remove(r)
+                        done[r.spec.id] = self._outcome(r, out_root)
+                        listen(Event("finish", r.spec, done[r.spec.id]))
+                    else:
+                        self._stop(r, now)
+                time.sleep(self.poll_s)
+        finally:
+            signal.signal(signal.SIGINT, previous)

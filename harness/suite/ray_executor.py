@@ -1,0 +1,218 @@
+"""Runs as Ray tasks on a real Ray cluster: an existing one (``address``: ``auto``,
+``ray://host:10001`` or ``host:6379``), else a local cluster started here and stopped at the
+end.
+
+Each run is one task (``num_cpus=1``; runs that render also ask for ``gpu_share`` of a GPU
+when the cluster has GPUs) in a fresh worker process (``max_calls=1``) with no retries, so a
+segfault or an out-of-memory kill shows up as that run's ``WorkerCrashedError`` /
+``OutOfMemoryError`` (INVALID with the reason), never the suite's. A run past its timeout is
+cancelled (``ray.cancel``: first as an interrupt, so it finalizes, then forced after
+``grace_s``).
+
+With an existing cluster the project folder (the current directory: scenarios, baselines,
+plug-ins; not ``reports/``, ``.venv/``, ``.git/``) travels as the job's ``working_dir``, and a
+run executed on another node sends its run directory back as a tar archive; srr must be
+installed on every node. Runs on the driver's node write to the output folder directly.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import tarfile
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from harness.errors import SrrError
+from harness.suite.events import Event, Listener, not_started
+from harness.suite.plan import RunSpec
+from harness.suite.results import RunOutcome, outcome_of
+
+__all__ = ["RayExecutor"]
+
+_EXCLUDES = ["reports/", ".venv/", ".git/", "**/__pycache__/", "*.mcap"]
+
+
+def _task(job: dict[str, Any], out_root: str, baselines: str | None,
+          driver_node: str) -> dict[str, Any]:
+    """The Ray task: run one job in this worker process (see :func:`run_job`)."""
+    import ray
+
+    gpu_ids = ray.get_gpu_ids()
+    if gpu_ids:  # render on the GPU Ray assigned (EGL device index)
+        os.environ["MUJOCO_EGL_DEVICE_ID"] = str(int(float(gpu_ids[0])))
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    from harness.suite.worker import run_job
+
+    node = ray.get_runtime_context().get_node_id()
+    if node == driver_node:
+        return {**run_job(job, out_root, baselines), "archive": None, "node": node}
+    with tempfile.TemporaryDirectory(prefix="srr-ray-") as tmp:
+        res = run_job(job, tmp, baselines)
+        buf = io.BytesIO()
+        run_dir = Path(tmp) / job["run_dir"]
+        if run_dir.is_dir():
+            with tarfile.open(fileobj=buf, mode="w") as tar:
+                tar.add(run_dir, arcname=".")
+        return {**res, "archive": buf.getvalue() or None, "node": node}
+
+
+@dataclass
+class _InFlight:
+    spec: RunSpec
+    ref: Any
+    t0: float
+    cancelled_at: float | None = None
+    forced: bool = False
+    timed_out: bool = False
+
+
+class RayExecutor:
+    name = "ray"
+
+    def __init__(self, *, address: str | None = None, jobs: int | None = None,
+                 baselines: Path | None = None, gpu_share: float = 0.5,
+                 grace_s: float = 10.0, poll_s: float = 0.1) -> None:
+        if not 0 < gpu_share <= 1:
+            raise SrrError(f"--gpu-share: expected a fraction in (0, 1], got {gpu_share!r}")
+        self.address = address
+        self.jobs = jobs or 0  # 0: as many as the cluster has CPUs
+        self.baselines = baselines
+        self.gpu_share = gpu_share
+        self.grace_s = grace_s
+        self.poll_s = poll_s
+        self.cluster: dict[str, float] = {}
+
+    def _connect(self) -> bool:
+        """Start or join the cluster; True when srr started it (and must stop it)."""
+        try:
+            import ray
+        except ImportError as err:
+            raise SrrError("--executor ray: Ray is not installed (pip install 'srr[ray]')") \
+                from err
+        if ray.is_initialized():
+            return False
+        cwd = os.getcwd()
+        if self.address:
+            try:
+                ray.init(address=self.address, log_to_driver=False,
+                         runtime_env={"working_dir": cwd, "excludes": _EXCLUDES})
+            except (ConnectionError, RuntimeError, ValueError) as err:
+                raise SrrError(f"--address {self.address}: cannot join the Ray cluster "
+                               f"({type(err).__name__}: {str(err).splitlines()[0]})") from err
+            return False
+        path = os.pathsep.join(p for p in (cwd, os.environ.get("PYTHONPATH")) if p)
+        ray.init(num_cpus=self.jobs or os.cpu_count() or 1, include_dashboard=False,
+                 log_to_driver=False, runtime_env={"env_vars": {"PYTHONPATH": path}})
+        return True
+
+    def run(self, specs: Sequence[RunSpec], out_root: Path,
+            listen: Listener) -> tuple[list[RunOutcome], bool]:
+        import ray
+
+        started_here = self._connect()
+        try:
+            self.cluster = {k: float(v) for k, v in ray.cluster_resources().items()}
+            if not self.jobs:
+                self.jobs = max(1, int(self.cluster.get("CPU", 1)))
+            return self._run(ray, specs, out_root.resolve(), listen)
+        finally:
+            if started_here:
+                ray.shutdown()
+
+    def _submit(self, ray: Any, spec: RunSpec, out_root: Path, driver: str) -> _InFlight:
+        gpus = self.gpu_share if spec.renders and self.cluster.get("GPU", 0) > 0 else 0
+        remote = ray.remote(max_calls=1)(_task).options(
+            num_cpus=1, num_gpus=gpus, max_retries=0, name=f"srr:{spec.id}")
+        job = {**spec.job()}
+        ref = remote.remote(job, str(out_root),
+                            None if self.baselines is None else str(self.baselines.resolve()),
+                            driver)
+        return _InFlight(spec, ref, time.monotonic())
+
+    def _finish(self, ray: Any, f: _InFlight, out_root: Path) -> RunOutcome:
+        wall = time.monotonic() - f.t0
+        crash = error = None
+        code = 3
+        try:
+            res = ray.get(f.ref)
+            code, error = int(res["exit_code"]), res["error"]
+            if res.get("archive"):
+                dest = out_root / f.spec.run_dir
+                dest.mkdir(parents=True, exist_ok=True)
+                with tarfile.open(fileobj=io.BytesIO(res["archive"])) as tar:
+                    tar.extractall(dest, filter="data")
+        except Exception as err:  # Ray reports the task's fate as exceptions
+            kind = type(err).__name__
+            first = (str(err).strip().splitlines() or [""])[0][:300]
+            if f.timed_out:
+                pass
+            elif kind == "OutOfMemoryError":
+                crash = f"out of memory (Ray OutOfMemoryError: {first})"
+            elif kind in ("WorkerCrashedError", "TaskCancelledError", "NodeDiedError",
+                          "ActorDiedError", "LocalRayletDiedError"):
+                crash = f"the Ray worker died ({kind}: {first})"
+            else:
+                cause = getattr(err, "cause", None)
+                error = f"{kind}: {cause if cause is not None else first}"
+                code = 2
+        return outcome_of(f.spec, out_root, exit_code=code, error=error, wall_s=wall,
+                          timed_out=f.timed_out, crash=crash)
+
+    def _cancel(self, ray: Any, f: _InFlight, now: float) -> None:
+        if f.cancelled_at is None:
+            f.cancelled_at = now
+            with contextlib.suppress(Exception):
+                ray.cancel(f.ref, force=False)
+        elif not f.forced and now - f.cancelled_at >= self.grace_s:
+            f.forced = True
+            with contextlib.suppress(Exception):
+                ray.cancel(f.ref, force=True)
+
+    def _run(self, ray: Any, specs: Sequence[RunSpec], out_root: Path,
+             listen: Listener) -> tuple[list[RunOutcome], bool]:
+        driver = ray.get_runtime_context().get_node_id()
+        pending = list(specs)
+        flying: list[_InFlight] = []
+        done: dict[str, RunOutcome] = {}
+        interrupted = False
+        try:
+            while pending or flying:
+                while pending and len(flying) < self.jobs:
+                    f = self._submit(ray, pending.pop(0), out_root, driver)
+                    flying.append(f)
+                    listen(Event("start", f.spec, where="ray task"))
+                ready, _ = ray.wait([f.ref for f in flying], num_returns=1,
+                                    timeout=self.poll_s)
+                now = time.monotonic()
+                for f in list(flying):
+                    if f.ref in ready:
+                        flying.remove(f)
+                        done[f.spec.id] = self._finish(ray, f, out_root)
+                        listen(Event("finish", f.spec, done[f.spec.id]))
+                    elif f.spec.timeout_s is not None and (
+                            f.timed_out or now - f.t0 > f.spec.timeout_s):
+                        f.timed_out = True
+                        self._cancel(ray, f, now)
+        except KeyboardInterrupt:
+            interrupted = True
+            while flying:
+                now = time.monotonic()
+                for f in list(flying):
+                    self._cancel(ray, f, now)
+                ready, _ = ray.wait([f.ref for f in flying], num_returns=len(flying),
+                                    timeout=self.poll_s)
+                for f in list(flying):
+                    if f.ref in ready:
+                        flying.remove(f)
+                        done[f.spec.id] = self._finish(ray, f, out_root)
+                        listen(Event("finish", f.spec, done[f.spec.id]))
+        for spec in specs:
+            if spec.id not in done:
+                done[spec.id] = not_started(spec)
+        return [done[s.id] for s in specs], interrupted

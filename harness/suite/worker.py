@@ -1,0 +1,62 @@
+"""One run of a suite, in whatever process an executor gives it.
+
+:func:`run_job` runs a job (:meth:`RunSpec.job`) in the calling process and says how it ended;
+the local executor starts ``python -m harness.suite.worker JOB_JSON`` per run (a fresh process,
+so a crash, a leak or a hung renderer costs that run only), Ray calls :func:`run_job` in a
+task. The run directory is the only output that matters: the suite reads its
+``summary.json`` afterwards (:mod:`harness.suite.results`).
+
+Exit status of the module: the run's exit code (0, 1, 3), 2 when the run could not start (the
+reason is the last line on stderr), 130 when interrupted (SIGTERM or SIGINT).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+__all__ = ["run_job"]
+
+
+def run_job(job: Mapping[str, Any], out_root: str | Path,
+            baselines: str | None = None) -> dict[str, Any]:
+    """Run ``job`` here, writing ``out_root / job["run_dir"]``.
+
+    Returns ``{"exit_code": int, "error": str | None}``; ``error`` is the one-line reason
+    when the run could not be started or finished (an :class:`~harness.errors.SrrError`)."""
+    from harness import api
+    from harness.errors import SrrError
+    from harness.interrupt import sigterm_as_interrupt
+
+    run_dir = Path(out_root) / str(job["run_dir"])
+    try:
+        with sigterm_as_interrupt():
+            scenario = api.load(job["scenario_file"], overrides=list(job["overrides"]))
+            res = api.run_scenario(scenario, source=str(job["scenario_file"]), out=run_dir,
+                                   baselines=Path(baselines) if baselines else None)
+    except SrrError as err:
+        return {"exit_code": err.exit_code, "error": str(err)}
+    except KeyboardInterrupt:
+        return {"exit_code": 130, "error": "interrupted before the run directory was written"}
+    return {"exit_code": res.exit_code, "error": None}
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 1:
+        sys.stderr.write("usage: python -m harness.suite.worker JOB_JSON\n")
+        return 2
+    job = json.loads(argv[0])
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    result = run_job(job, job["out_root"], job.get("baselines"))
+    if result["error"]:
+        sys.stderr.write(result["error"] + "\n")
+    sys.stderr.flush()
+    return int(result["exit_code"])
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
