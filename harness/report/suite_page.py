@@ -77,10 +77,9 @@ def _href(path: Any) -> str | None:
     return quote(p.as_posix(), safe="/._-~")
 
 
-def _params_text(params: Any) -> str:
-    if not isinstance(params, Mapping) or not params:
-        return ""
-    return ", ".join(f"{k}={fmt_x(v)}" for k, v in params.items())
+def _params_text(params: Any) -> tuple[str, ...]:
+    """``path=value`` per swept parameter."""
+    return tuple(f"{k}={fmt_x(v)}" for k, v in _map(params).items())
 
 
 def _metric_order(name: str, stat: Mapping[str, Any] | None = None) -> tuple[int, str, str]:
@@ -158,7 +157,7 @@ class GroupView:
     id: str
     anchor: str
     verdict: str
-    params: str
+    params: tuple[str, ...]
     repeats: Any
     key: tuple[str, ...]
     more: int
@@ -186,6 +185,7 @@ class HistoryMetric:
     name: str
     svg: Markup
     tonight: str
+    earlier: str  # min … max over the earlier nights
     note: str
 
 
@@ -471,10 +471,14 @@ def _history_view(h: Any, groups: Sequence[GroupView],
             values = [_num(v) for v in vals]
             unit = str(_map(stats.get(name)).get("unit") or "")
             all_new = all_new and all(v is None for v in values[:-1])
+            before = [v for v in values[:-1] if v is not None]
+            earlier = "" if not before else fmt_value(min(before), unit) if min(
+                before) == max(before) else \
+                f"{fmt_value(min(before), unit)} … {fmt_value(max(before), unit)}"
             rows.append(HistoryMetric(
                 str(name), Markup(sparkline(values, labels, metric=str(name), unit=unit,
                                             tonight_verdict=g.verdict)),
-                fmt_value(values[-1], unit), _missing_note(values, labels)))
+                fmt_value(values[-1], unit), earlier, _missing_note(values, labels)))
         gv = per_group.get(g.id)
         if isinstance(gv, Sequence) and not isinstance(gv, str) and len(gv) == n:
             strip = [str(v) if v else None for v in gv]

@@ -44,7 +44,7 @@ __all__ = [
 Scalar = str | int | float | bool
 
 WIDTH, HEIGHT = 600.0, 250.0
-LEFT, RIGHT, TOP, BOTTOM = 60.0, 18.0, 22.0, 42.0
+LEFT, RIGHT, TOP, BOTTOM = 56.0, 74.0, 22.0, 42.0
 SERIES_COLORS = ("#374151", "#2563eb", "#db2777", "#0d9488", "#7c3aed", "#ea580c")
 SERIES_DASH = (None, "6 3", "2 3", "8 3 2 3")
 TOL_COLOR = "#64748b"
@@ -133,10 +133,10 @@ class Band:
     lo: float | None
     hi: float | None
 
-    def label(self) -> str:
+    def label(self, short: bool = False) -> str:
         if self.lo is not None:
             return f"{self.verdict} ≥ {self.lo:g}"
-        return f"{self.verdict} below {self.hi:g}"
+        return f"{self.verdict} {'<' if short else 'below'} {self.hi:g}"
 
 
 def fixed_bands(metric: str) -> tuple[Band, ...] | None:
@@ -257,8 +257,8 @@ def sweep_figure(metric: str, unit: str, points: Sequence[SweepPoint], axis: XAx
                      class_=f"band band-{b.verdict}", data_verdict=b.verdict,
                      data_lo="" if b.lo is None else f"{b.lo:g}",
                      data_hi="" if b.hi is None else f"{b.hi:g}", title=b.label())
-            svg.text(WIDTH - RIGHT - 4, y(b_hi) + 12, b.label(), class_="band-label",
-                     text_anchor="end")
+            svg.text(WIDTH - RIGHT + 5, (y(b_hi) + y(b_lo)) / 2 + 4, b.label(short=True),
+                     class_="band-label")
             legend.append((b.label(), BAND_COLORS[b.verdict], "fill"))
         for edge in sorted({e for b in bands for e in (b.lo, b.hi) if e is not None}):
             svg.line(LEFT, y(edge), WIDTH - RIGHT, y(edge), class_="threshold",
@@ -338,7 +338,7 @@ def sweep_figure(metric: str, unit: str, points: Sequence[SweepPoint], axis: XAx
                 svg.circle(px + (i - (n - 1) / 2) * 4.0, y(v), 3.6, class_="dot",
                            fill=verdict_color(p.verdict),
                            stroke=color if several else "#ffffff", data_group=p.group,
-                           data_x=fmt_x(p.x), data_verdict=p.verdict,
+                           data_x=fmt_x(p.x), data_value=f"{v:g}", data_verdict=p.verdict,
                            title=f"{p.group} #{rep}: {fmt_value(v, unit)} ({p.verdict})")
     seen = list(dict.fromkeys(p.verdict for p in points if p.values))
     legend[:0] = [(v, verdict_color(v), "dot") for v in seen]

@@ -191,6 +191,10 @@ dl.kv dt { color:var(--muted); } dl.kv dd { margin:0; word-break:break-all; }
 .problem { border-left:4px solid #dc2626; background:#fef2f2; padding:6px 10px; margin:8px 0;
   font-size:13px; }
 .allgood { background:#f0fdf4; border-left:4px solid #16a34a; padding:6px 10px; font-size:13.5px; }
+table.groups-table td.gid, table.groups-table td.params { font-family: ui-monospace,
+  "DejaVu Sans Mono", Menlo, Consolas, monospace; font-size:12px; word-break:break-all; }
+table.groups-table td.gid { width:22%; } table.groups-table td.params { width:16%; }
+table.groups-table td.key { min-width:320px; }
 ul.key { margin:0; padding-left:16px; }
 ul.runs { margin:0; padding:0; list-style:none; white-space:nowrap; }
 ul.runs li { margin:1px 0; }
@@ -198,7 +202,7 @@ ul.runs .problem-text { white-space:normal; color:#991b1b; font-size:12.5px; }
 .flaky { border-left:4px solid var(--FLAKY); background:#fdf2f8; padding:4px 8px; margin:4px 0;
   font-size:12.5px; }
 .flaky table { font-size:12px; width:auto; }
-details.group-stats > summary .badge { margin-right:6px; }
+details > summary .badge { margin-right:6px; }
 .sweep-grid { display:grid; grid-template-columns: repeat(2, minmax(0, 1fr)); gap:10px 14px; }
 figure.sweep-fig { margin:0; border:1px solid var(--line); border-radius:6px; padding:6px 8px; }
 figure.sweep-fig figcaption { font-weight:600; font-size:13px; }
@@ -217,6 +221,8 @@ svg .boundary { stroke:#111827; stroke-width:1.5; stroke-dasharray:3 3; }
 svg .boundary-label { font-size:10.5px; font-weight:700; fill:#111827; paint-order:stroke;
   stroke:#fff; stroke-width:3px; }
 table.history td { vertical-align:middle; }
+table.history td:first-child { width:300px; } table.history td:nth-child(2) { width:300px; }
+table.history td:nth-child(3) { width:200px; }
 svg.spark .spark-line { fill:none; stroke:#475569; stroke-width:1.4; }
 svg.spark .night { fill:#475569; }
 svg.spark .night.missing { fill:#fff; stroke:#9ca3af; stroke-width:1; }
@@ -483,14 +489,15 @@ SUITE = """<!doctype html>
   <th class="num">repeats</th><th>key regressions / reasons</th><th>runs</th></tr></thead><tbody>
  {% for g in groups %}<tr data-group="{{ g.id }}" data-verdict="{{ g.verdict }}">
   <td><span class="badge b-v-{{ g.verdict }}">{{ g.verdict }}</span></td>
-  <td class="name"><a href="#{{ g.anchor }}">{{ g.id }}</a></td>
-  <td class="mono">{{ g.params }}</td><td class="num">{{ g.repeats }}</td>
-  <td>{% if g.key %}<ul class="key">{% for k in g.key %}<li>{{ k }}</li>{% endfor %}</ul>{% endif %}
+  <td class="gid"><a href="#{{ g.anchor }}">{{ g.id }}</a></td>
+  <td class="params">{% for p in g.params %}{{ p }}{% if not loop.last %}<br>{% endif %}{% endfor %}</td>
+  <td class="num">{{ g.repeats }}</td>
+  <td class="key">{% if g.key %}<ul class="key">{% for k in g.key %}<li>{{ k }}</li>{% endfor %}</ul>{% endif %}
    {% if g.more %}<span class="note">+{{ g.more }} more</span>{% endif %}
    {% if g.flaky %}<div class="flaky">
     <b>flaky:</b> {% if g.flaky.topics %}digests differ on
      <span class="flaky-topics">{% for t in g.flaky.topics %}<code>{{ t }}</code>{% if not loop.last %}, {% endif %}{% endfor %}</span>{% else %}verdicts differ, digests agree{% endif %}
-    {% if g.flaky.compared %}<span class="note">({{ g.flaky.compared | join(" vs ") }})</span>{% endif %}
+    {% if g.flaky.compared %} <span class="note">({{ g.flaky.compared | join(" vs ") }})</span>{% endif %}
     {% if g.flaky.first_divergence %}<br>first divergence: <code class="first-divergence">{{ g.flaky.first_divergence }}</code>{% endif %}
     <table class="flaky-repeats"><tr><th>repeat</th><th>verdict</th><th>digest</th></tr>
     {% for r in g.flaky.repeats %}<tr><td>{{ r.label }}</td><td><span class="badge b-v-{{ r.verdict }}">{{ r.verdict }}</span></td>
@@ -560,7 +567,8 @@ SUITE = """<!doctype html>
   <table class="history"><tbody>
    <tr><td class="note">{{ h.strip_label }}</td><td>{{ h.strip }}</td><td></td><td></td></tr>
   {% for m in h.metrics %}<tr data-metric="{{ m.name }}"><td class="name">{{ m.name }}</td>
-   <td>{{ m.svg }}</td><td class="num">{{ m.tonight }}</td>
+   <td>{{ m.svg }}</td><td class="num">{{ m.tonight }}{% if m.earlier %}<br><span class="note">earlier
+    {{ m.earlier }}</span>{% endif %}</td>
    <td>{% if m.note %}<span class="hist-note">{{ m.note }}</span>{% endif %}</td></tr>
   {% endfor %}</tbody></table>
  </details>{% endfor %}
