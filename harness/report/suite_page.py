@@ -66,13 +66,15 @@ def _num(v: Any) -> float | None:
     return float(v) if ok else None
 
 
-def _href(path: Any) -> str | None:
+def _href(path: Any, root: Path | None) -> str | None:
     """A link to a path relative to OUT, or None for anything that is not one (absolute,
-    a URL, leaving the folder)."""
+    a URL, leaving the folder) and, with ``root`` (OUT), for a file that is not there."""
     if not isinstance(path, str) or not path or "\\" in path or ":" in path.split("/")[0]:
         return None
     p = PurePosixPath(path)
     if p.is_absolute() or ".." in p.parts:
+        return None
+    if root is not None and not (root / p).is_file():
         return None
     return quote(p.as_posix(), safe="/._-~")
 
@@ -244,7 +246,7 @@ def _key_lines(g: Mapping[str, Any]) -> list[str]:
     return lines or [str(r) for r in g.get("reasons") or []]
 
 
-def _run_cell(run_id: str, run: Mapping[str, Any] | None) -> RunCell:
+def _run_cell(run_id: str, run: Mapping[str, Any] | None, root: Path | None) -> RunCell:
     if run is None:
         return RunCell(run_id, run_id.rsplit("#", 1)[-1], "INVALID", None, None,
                        "not in the summary's runs")
@@ -254,11 +256,12 @@ def _run_cell(run_id: str, run: Mapping[str, Any] | None) -> RunCell:
         problem = f"crashed: {run['crash']}"
     elif run.get("timed_out"):
         problem = next((r for r in reasons if "timed out" in r), "timed out")
-    report = _href(run.get("report"))
+    report = _href(run.get("report"), root)
     if problem is None and report is None:
-        problem = reasons[0] if reasons else "no report was written"
+        problem = (f"{run['report']} is missing from this folder" if run.get("report")
+                   else reasons[0] if reasons else "no report was written")
     return RunCell(str(run.get("id", run_id)), run.get("repeat", "?"),
-                   _verdict(run.get("verdict")), report, _href(run.get("log")), problem)
+                   _verdict(run.get("verdict")), report, _href(run.get("log"), root), problem)
 
 
 def _flaky_view(g: Mapping[str, Any], runs: Sequence[RunCell]) -> FlakyView | None:
@@ -312,13 +315,13 @@ def _stat_rows(stats: Any) -> tuple[StatRow, ...]:
     return tuple(rows)
 
 
-def _group_view(i: int, g: Mapping[str, Any],
-                runs_by_id: Mapping[str, Mapping[str, Any]]) -> GroupView:
+def _group_view(i: int, g: Mapping[str, Any], runs_by_id: Mapping[str, Mapping[str, Any]],
+                root: Path | None) -> GroupView:
     gid = str(g.get("id", f"group {i + 1}"))
     run_ids = [str(r) for r in g.get("runs") or []]
     if not run_ids:
         run_ids = [rid for rid, r in runs_by_id.items() if r.get("group") == gid]
-    cells = tuple(_run_cell(rid, runs_by_id.get(rid)) for rid in run_ids)
+    cells = tuple(_run_cell(rid, runs_by_id.get(rid), root) for rid in run_ids)
     key = _key_lines(g)
     return GroupView(gid, f"g{i}", _verdict(g.get("verdict")), _params_text(g.get("params")),
                      g.get("repeats", len(cells)), tuple(key[:MAX_KEY]),
@@ -493,19 +496,22 @@ def _history_view(h: Any, groups: Sequence[GroupView],
     warnings = tuple(str(w) for w in h.get("warnings") or [])
     span = (f"{n} nights from {labels[0]} to tonight, {labels[-1]}; each sparkline's y range "
             "is that metric's own min … max over the nights; hollow marks at the bottom are "
-            "nights without a value")
+            "nights without a value") if n > 1 else (
+        "No earlier night was found: the history starts tonight.")
     return HistoryView(n, span, warnings, tuple(out))
 
 
 # --------------------------------------------------------------------------- page
 
 
-def render_suite_page(summary: Mapping[str, Any]) -> str:
-    """The suite page's HTML for a suite summary (format ``srr-suite/1``)."""
+def render_suite_page(summary: Mapping[str, Any], *, root: Path | None = None) -> str:
+    """The suite page's HTML for a suite summary (format ``srr-suite/1``). With ``root``
+    (the suite's output folder), a report or log that is not there gets no link and the
+    page says so."""
     raw_groups = [g for g in summary.get("groups") or [] if isinstance(g, Mapping)]
     runs_by_id = {str(r.get("id")): r for r in summary.get("runs") or []
                   if isinstance(r, Mapping)}
-    views = [_group_view(i, g, runs_by_id) for i, g in enumerate(raw_groups)]
+    views = [_group_view(i, g, runs_by_id, root) for i, g in enumerate(raw_groups)]
     views.sort(key=lambda v: _rank(v.verdict))  # stable: the runner's order within a verdict
     by_id = {str(g.get("id")): g for g in raw_groups}
     sweeps = [v for v in (_sweep_view(sw, by_id, runs_by_id)
@@ -521,9 +527,10 @@ def render_suite_page(summary: Mapping[str, Any]) -> str:
 
 
 def write_suite_page(out_dir: Path, summary: Mapping[str, Any]) -> Path:
-    """Write ``<out_dir>/index.html`` for the suite ``summary`` and return its path."""
+    """Write ``<out_dir>/index.html`` for the suite ``summary`` (whose paths are relative to
+    ``out_dir``) and return its path."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     path = out / SUITE_PAGE_NAME
-    write_text_atomic(path, render_suite_page(summary))
+    write_text_atomic(path, render_suite_page(summary, root=out))
     return path

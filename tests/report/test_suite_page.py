@@ -21,7 +21,7 @@ import pytest
 
 from harness import api
 from harness.metrics.safety import NEAR_AT, PASS_AT
-from harness.report import write_suite_page
+from harness.report import render_suite_page, write_suite_page
 from harness.report.suite_page import VERDICT_ORDER
 from harness.report.templates import VERDICT_COLORS
 from harness.suite.history import load_history
@@ -363,6 +363,17 @@ def test_interrupted_suite_says_so(suite: tuple[Path, dict, str], tmp_path: Path
     banner = _between(html, '<header class="banner', "</header>")
     assert 'class="banner v-INTERRUPTED"' in banner and 'id="interrupted"' in banner
     assert "exit code 130" in banner
+
+
+def test_page_is_deterministic_and_drops_links_to_missing_files(
+        suite: tuple[Path, dict, str], tmp_path: Path) -> None:
+    page, summary, html = suite
+    copy = json.loads(json.dumps(summary))
+    assert render_suite_page(copy, root=page.parent) == html
+    # the same summary written elsewhere: nothing it points to is there
+    other = write_suite_page(tmp_path, copy).read_text(encoding="utf-8")
+    assert not [h for h in re.findall(r'href="([^"]+)"', other) if not h.startswith("#")]
+    assert "runs/forklift_nominal/nominal/r1/report.html is missing from this folder" in other
 
 
 def test_hostile_summary_fields_do_not_break_the_page(tmp_path: Path) -> None:
