@@ -43,6 +43,8 @@ from harness.frames import Frames
 from harness.metrics.types import MetricResult
 
 __all__ = [
+    "NEAR_AT",
+    "PASS_AT",
     "Tripwire",
     "expected_muted",
     "mute_metrics",
@@ -53,6 +55,7 @@ __all__ = [
 
 Point = tuple[float, float]
 
+#: match-rate bands (%): PASS at or above PASS_AT, NEAR at or above NEAR_AT, FAIL below
 PASS_AT = 95.0
 NEAR_AT = 80.0
 

@@ -18,16 +18,19 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
+from harness.metrics.safety import NEAR_AT
 from harness.metrics.types import HealthResult, MetricResult
 from harness.regression.compare import Comparison
 
-__all__ = ["GOAL_REACHED", "Verdict", "absolute_failures", "decide"]
+__all__ = ["GOAL_REACHED", "GOAL_REACHED_AT", "Verdict", "absolute_failures", "decide"]
 
 VerdictName = Literal["PASS", "FAIL", "REGRESSED", "MISMATCH", "UNSCORED", "INVALID"]
 EXIT_CODES: dict[str, int] = {"PASS": 0, "FAIL": 1, "REGRESSED": 1, "MISMATCH": 1,
                               "UNSCORED": 1, "INVALID": 3}
 #: ``control.goal_reached`` or ``control.<robot>.goal_reached``.
 GOAL_REACHED = re.compile(r"^control\.(?:[^.]+\.)?goal_reached$")
+#: a goal-reached value below this fails the run (the metric is 1 reached, 0 not)
+GOAL_REACHED_AT = 0.5
 
 
 @dataclass(frozen=True)
@@ -42,9 +45,9 @@ def absolute_failures(metrics: Sequence[MetricResult]) -> list[str]:
     (FAIL below 80 %) and a route goal that was not reached."""
     out = []
     for m in metrics:
-        if m.name == "safety.match_rate" and m.value is not None and m.value < 80.0:
-            out.append(f"safety.match_rate {m.value:.1f} % is below 80 % (FAIL band)")
-        if GOAL_REACHED.match(m.name) and m.value is not None and m.value < 0.5:
+        if m.name == "safety.match_rate" and m.value is not None and m.value < NEAR_AT:
+            out.append(f"safety.match_rate {m.value:.1f} % is below {NEAR_AT:g} % (FAIL band)")
+        if GOAL_REACHED.match(m.name) and m.value is not None and m.value < GOAL_REACHED_AT:
             out.append(f"{m.name}: the robot did not reach the end of its route")
     return out
 

@@ -1,9 +1,10 @@
-"""Outputs for people and CI systems: the HTML report of a run, the suite index, JUnit XML.
+"""Outputs for people and CI systems: the HTML report of a run, the suite page, JUnit XML.
 
 * :func:`write_report` / :func:`render_report` (:mod:`harness.report.html`): one
   self-contained ``report.html`` per run directory (``srr report RUN_DIR``).
-* :func:`write_index` (:mod:`harness.report.index`): ``index.html`` linking the reports of
-  several runs with their verdicts (``srr suite``).
+* :func:`write_suite_page` / :func:`render_suite_page` (:mod:`harness.report.suite_page`):
+  ``OUT/index.html`` of ``srr suite`` from its ``summary.json`` — groups worst first with
+  links to every repeat's report, statistics, sweep plots and night-to-night history.
 * :mod:`harness.report.junit`: ``junit.xml``.
 
 The HTML parts are imported on first use, so reading JUnit cases stays light.
@@ -13,7 +14,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["render_report", "write_index", "write_report"]
+__all__ = ["render_report", "render_suite_page", "write_report", "write_suite_page"]
 
 
 def __getattr__(name: str) -> Any:
@@ -21,8 +22,8 @@ def __getattr__(name: str) -> Any:
         from harness.report import html
 
         return getattr(html, name)
-    if name == "write_index":
-        from harness.report.index import write_index
+    if name in ("render_suite_page", "write_suite_page"):
+        from harness.report import suite_page
 
-        return write_index
+        return getattr(suite_page, name)
     raise AttributeError(f"module 'harness.report' has no attribute {name!r}")

@@ -27,7 +27,8 @@ from markupsafe import Markup
 from harness import __version__
 from harness.atomic import write_text_atomic
 from harness.frames import Frames
-from harness.regression.verdict import GOAL_REACHED
+from harness.metrics.safety import NEAR_AT
+from harness.regression.verdict import GOAL_REACHED, GOAL_REACHED_AT
 from harness.report.data import RunData, load_run, metric_windows
 from harness.report.graphs import graph_diagrams
 from harness.report.images import Keyframe, keyframes
@@ -122,9 +123,9 @@ def _comparison_row(e: dict[str, Any], data: RunData) -> dict[str, Any]:
 def _failing(m: dict[str, Any]) -> bool:
     v = m.get("value")
     return (m.get("verdict") == "FAIL"
-            or (m.get("name") == "safety.match_rate" and v is not None and v < 80.0)
+            or (m.get("name") == "safety.match_rate" and v is not None and v < NEAR_AT)
             or (GOAL_REACHED.match(str(m.get("name"))) is not None and v is not None
-                and v < 0.5))
+                and v < GOAL_REACHED_AT))
 
 
 def _metric_row(m: dict[str, Any], data: RunData) -> dict[str, Any]:

@@ -1,4 +1,4 @@
-"""Jinja2 templates and the stylesheet of the HTML report and the suite index.
+"""Jinja2 templates and the stylesheet of the HTML report and the suite page.
 
 They live in a Python module (not loose files) so that they ship with the package whatever
 installs it. Autoescaping is on: every value is text unless wrapped in ``Markup`` (the SVGs
@@ -7,7 +7,7 @@ the report builds itself).
 
 from __future__ import annotations
 
-__all__ = ["CSS", "INDEX", "MACROS", "REPORT", "VERDICT_COLORS"]
+__all__ = ["CSS", "MACROS", "REPORT", "SUITE", "VERDICT_COLORS"]
 
 VERDICT_COLORS = {
     "PASS": "#15803d",
@@ -17,13 +17,14 @@ VERDICT_COLORS = {
     "INTERRUPTED": "#475569",
     "UNSCORED": "#a16207",
     "MISMATCH": "#0e7490",
+    "FLAKY": "#be185d",
 }
 
 CSS = """
 :root { --fg:#111827; --muted:#6b7280; --line:#e5e7eb; --bg:#ffffff; --soft:#f8fafc;
   --PASS:#15803d; --FAIL:#b91c1c; --REGRESSED:#c2410c; --INVALID:#6d28d9;
   --INTERRUPTED:#475569; --UNSCORED:#a16207;
-  --MISMATCH:#0e7490; }
+  --MISMATCH:#0e7490; --FLAKY:#be185d; }
 * { box-sizing: border-box; }
 html, body { margin:0; padding:0; background:var(--bg); color:var(--fg);
   font: 14px/1.4 system-ui, -apple-system, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif; }
@@ -36,6 +37,8 @@ code, pre, .mono { font-family: ui-monospace, "DejaVu Sans Mono", Menlo, Consola
 .banner.v-PASS { background:var(--PASS); } .banner.v-FAIL { background:var(--FAIL); }
 .banner.v-REGRESSED { background:var(--REGRESSED); } .banner.v-INVALID { background:var(--INVALID); }
 .banner.v-INTERRUPTED { background:var(--INTERRUPTED); }
+.banner.v-UNSCORED { background:var(--UNSCORED); } .banner.v-MISMATCH { background:var(--MISMATCH); }
+.banner.v-FLAKY { background:var(--FLAKY); }
 .verdict-word { font-size:30px; font-weight:800; letter-spacing:.04em; min-width:210px;
   line-height:1.1; }
 .verdict-word small { display:block; font-size:12px; font-weight:500; letter-spacing:0;
@@ -76,6 +79,9 @@ tr.st-improved td { background:#f0fdf4; }
 .b-v-REGRESSED { background:var(--REGRESSED); color:#fff; }
 .b-v-INVALID { background:var(--INVALID); color:#fff; }
 .b-v-INTERRUPTED { background:var(--INTERRUPTED); color:#fff; }
+.b-v-UNSCORED { background:var(--UNSCORED); color:#fff; }
+.b-v-MISMATCH { background:var(--MISMATCH); color:#fff; }
+.b-v-FLAKY { background:var(--FLAKY); color:#fff; }
 .headline table { font-size:13.5px; }
 .headline td, .headline th { padding:2px 8px; }
 figure.panel { margin:6px 0 10px 0; }
@@ -185,6 +191,45 @@ dl.kv dt { color:var(--muted); } dl.kv dd { margin:0; word-break:break-all; }
 .problem { border-left:4px solid #dc2626; background:#fef2f2; padding:6px 10px; margin:8px 0;
   font-size:13px; }
 .allgood { background:#f0fdf4; border-left:4px solid #16a34a; padding:6px 10px; font-size:13.5px; }
+table.groups-table td.gid, table.groups-table td.params { font-family: ui-monospace,
+  "DejaVu Sans Mono", Menlo, Consolas, monospace; font-size:12px; word-break:break-all; }
+table.groups-table td.gid { width:22%; } table.groups-table td.params { width:16%; }
+table.groups-table td.key { min-width:320px; }
+ul.key { margin:0; padding-left:16px; }
+ul.runs { margin:0; padding:0; list-style:none; white-space:nowrap; }
+ul.runs li { margin:1px 0; }
+ul.runs .problem-text { white-space:normal; color:#991b1b; font-size:12.5px; }
+.flaky { border-left:4px solid var(--FLAKY); background:#fdf2f8; padding:4px 8px; margin:4px 0;
+  font-size:12.5px; }
+.flaky table { font-size:12px; width:auto; }
+details > summary .badge { margin-right:6px; }
+.sweep-grid { display:grid; grid-template-columns: repeat(2, minmax(0, 1fr)); gap:10px 14px; }
+figure.sweep-fig { margin:0; border:1px solid var(--line); border-radius:6px; padding:6px 8px; }
+figure.sweep-fig figcaption { font-weight:600; font-size:13px; }
+figure.sweep-fig figcaption .unit { color:var(--muted); font-weight:500; }
+ul.boundaries { margin:2px 0 8px 0; padding-left:18px; font-size:13px; }
+svg .dot { stroke-width:1.2; }
+svg .mean-line { fill:none; stroke-width:1.8; }
+svg .mean { stroke:#111827; stroke-width:2; }
+svg .band-PASS { fill:#16a34a; fill-opacity:.10; } svg .band-NEAR { fill:#f59e0b; fill-opacity:.16; }
+svg .band-FAIL { fill:#dc2626; fill-opacity:.10; }
+svg .band-label { font-size:10.5px; font-weight:600; fill:#6b7280; }
+svg .threshold { stroke:#6b7280; stroke-width:1; stroke-dasharray:4 3; }
+svg .tol-band { fill:#64748b; fill-opacity:.16; stroke:none; }
+svg .baseline-line { fill:none; stroke:#64748b; stroke-width:1.2; stroke-dasharray:5 3; }
+svg .boundary { stroke:#111827; stroke-width:1.5; stroke-dasharray:3 3; }
+svg .boundary-label { font-size:10.5px; font-weight:700; fill:#111827; paint-order:stroke;
+  stroke:#fff; stroke-width:3px; }
+table.history td { vertical-align:middle; }
+table.history td:first-child { width:300px; } table.history td:nth-child(2) { width:300px; }
+table.history td:nth-child(3) { width:200px; }
+svg.spark .spark-line { fill:none; stroke:#475569; stroke-width:1.4; }
+svg.spark .night { fill:#475569; }
+svg.spark .night.missing { fill:#fff; stroke:#9ca3af; stroke-width:1; }
+svg.spark .night.tonight { stroke:#111827; stroke-width:1.5; }
+svg.spark .strip-cell { stroke:#fff; stroke-width:1; }
+svg.spark .strip-cell.tonight { stroke:#111827; stroke-width:1.5; }
+.hist-note { color:#92400e; font-size:12.5px; }
 footer { color:var(--muted); font-size:12px; padding:16px 0 28px 0; }
 """
 
@@ -414,38 +459,123 @@ MACROS = """
 {%- endmacro %}
 """
 
-INDEX = """<!doctype html>
+SUITE = """<!doctype html>
 <html lang="en">
 <head>
 <meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
-<title>{{ title }}</title>
+<title>{{ b.verdict }} · {{ b.name }} · srr suite</title>
 <style>{{ css }}</style>
 </head>
 <body>
-<header class="banner v-{{ overall }}" id="verdict" data-verdict="{{ overall }}"><div class="wrap">
- <div class="verdict-word">{{ overall }}<small>{{ runs | length }} run(s)</small></div>
- <div class="banner-main"><h1>{{ title }}</h1>
-  <p class="meta">{% for v, n in counts %}{{ n }} {{ v }}{% if not loop.last %} · {% endif %}{% endfor %}</p>
+<header class="banner v-{{ b.verdict }}" id="verdict" data-verdict="{{ b.verdict }}"><div class="wrap">
+ <div class="verdict-word">{{ b.verdict }}<small>exit code {{ b.exit_code }}</small></div>
+ <div class="banner-main"><h1>{{ b.name }}</h1>
+  <p class="meta" id="counts">{% for v, n in b.counts %}<span data-count="{{ v }}">{{ n }} {{ v }}</span>{% if not loop.last %} · {% endif %}{% endfor %}</p>
+  <p class="meta">{{ b.meta | join(" · ") }}</p>
+  {% if b.interrupted %}<div class="nobaseline" id="interrupted">Interrupted: the suite was
+   stopped before every run finished; runs that did not start are INTERRUPTED.</div>{% endif %}
  </div></div>
 </header>
+<nav class="toc"><div class="wrap">
+ <a href="#groups">Groups</a><a href="#stats">Metric statistics</a>
+ {% if sweeps %}<a href="#sweeps">Sweeps</a>{% endif %}
+ {% if history %}<a href="#history">History</a>{% endif %}
+</div></nav>
 <main class="wrap">
-<section id="runs">
- <h2>Runs <span class="count">(worst first)</span></h2>
- <table class="index-table"><thead><tr><th>verdict</th><th>scenario</th><th>key regressions / reasons</th>
-  <th class="num">sim s</th><th class="num">seed</th><th>run</th></tr></thead><tbody>
- {% for r in runs %}<tr data-verdict="{{ r.verdict }}">
-  <td><span class="badge b-v-{{ r.verdict }}">{{ r.verdict }}</span></td>
-  <td class="name">{% if r.href %}<a href="{{ r.href }}">{{ r.scenario }}</a>{% else %}{{ r.scenario }}{% endif %}</td>
-  <td>{% if r.key %}<ul style="margin:0;padding-left:16px">{% for k in r.key %}<li>{{ k }}</li>{% endfor %}</ul>{% endif %}
-   {% if r.more %}<span class="note">+{{ r.more }} more</span>{% endif %}</td>
-  <td class="num">{{ r.sim_s }}</td><td class="num">{{ r.seed }}</td>
-  <td class="mono">{% if r.href %}<a href="{{ r.href }}">{{ r.label }}</a>{% else %}{{ r.label }}{% endif %}</td>
+<section id="groups">
+ <h2>Groups <span class="count">({{ groups | length }} groups, {{ b.n_runs }} runs; worst first)</span></h2>
+ <table class="groups-table"><thead><tr><th>verdict</th><th>group</th><th>params</th>
+  <th class="num">repeats</th><th>key regressions / reasons</th><th>runs</th></tr></thead><tbody>
+ {% for g in groups %}<tr data-group="{{ g.id }}" data-verdict="{{ g.verdict }}">
+  <td><span class="badge b-v-{{ g.verdict }}">{{ g.verdict }}</span></td>
+  <td class="gid"><a href="#{{ g.anchor }}">{{ g.id }}</a></td>
+  <td class="params">{% for p in g.params %}{{ p }}{% if not loop.last %}<br>{% endif %}{% endfor %}</td>
+  <td class="num">{{ g.repeats }}</td>
+  <td class="key">{% if g.key %}<ul class="key">{% for k in g.key %}<li>{{ k }}</li>{% endfor %}</ul>{% endif %}
+   {% if g.more %}<span class="note">+{{ g.more }} more</span>{% endif %}
+   {% if g.flaky %}<div class="flaky">
+    <b>flaky:</b> {% if g.flaky.topics %}digests differ on
+     <span class="flaky-topics">{% for t in g.flaky.topics %}<code>{{ t }}</code>{% if not loop.last %}, {% endif %}{% endfor %}</span>{% else %}verdicts differ, digests agree{% endif %}
+    {% if g.flaky.compared %} <span class="note">({{ g.flaky.compared | join(" vs ") }})</span>{% endif %}
+    {% if g.flaky.first_divergence %}<br>first divergence: <code class="first-divergence">{{ g.flaky.first_divergence }}</code>{% endif %}
+    <table class="flaky-repeats"><tr><th>repeat</th><th>verdict</th><th>digest</th></tr>
+    {% for r in g.flaky.repeats %}<tr><td>{{ r.label }}</td><td><span class="badge b-v-{{ r.verdict }}">{{ r.verdict }}</span></td>
+     <td class="mono" title="{{ r.digest }}">{{ r.digest[:16] }}</td></tr>{% endfor %}
+    </table></div>{% endif %}</td>
+  <td><ul class="runs">{% for r in g.runs %}<li data-run="{{ r.id }}">
+   {% if r.report %}<a href="{{ r.report }}">#{{ r.repeat }} report</a>{% else %}#{{ r.repeat }}{% endif %}
+   <span class="badge b-v-{{ r.verdict }}">{{ r.verdict }}</span>
+   {% if r.log %}<a href="{{ r.log }}">log</a>{% endif %}
+   {% if r.problem %}<div class="problem-text">{{ r.problem }}</div>{% endif %}
+  </li>{% endfor %}</ul></td>
  </tr>{% endfor %}
  </tbody></table>
 </section>
-<footer>srr suite index · links are relative to this file · self-contained: no scripts, no
- network requests.</footer>
+
+<section id="stats">
+ <h2>Metric statistics per group <span class="count">(over the repeats that produced a value)</span></h2>
+ {% for g in groups %}<details class="group-stats" id="{{ g.anchor }}" data-group="{{ g.id }}">
+  <summary><span class="badge b-v-{{ g.verdict }}">{{ g.verdict }}</span>{{ g.id }}
+   <span class="note">({{ g.stats | length }} metrics)</span></summary>
+  {% if g.stats %}<table class="stats-table"><thead><tr><th>metric</th><th class="num">mean ± std</th>
+   <th class="num">95 % CI</th><th class="num">min / max</th><th class="num">n</th>
+   <th class="num">baseline ± tolerance</th><th>status</th></tr></thead><tbody>
+  {% for m in g.stats %}<tr class="st-{{ m.status }}" data-metric="{{ m.name }}">
+   <td class="name">{{ m.name }}</td><td class="num">{{ m.mean }}</td><td class="num">{{ m.ci }}</td>
+   <td class="num">{{ m.range }}</td><td class="num">{{ m.n }}</td><td class="num">{{ m.baseline }}</td>
+   <td>{% if m.status %}<span class="badge b-{{ m.status }}">{{ m.status }}</span>{% endif %}
+    {% if m.band %}<span class="badge b-{{ m.band }}">{{ m.band }}</span>{% endif %}
+    <span class="note">{{ m.better }}</span></td></tr>
+  {% endfor %}</tbody></table>
+  {% else %}<p class="note">No metric values: no repeat of this group produced scores.</p>{% endif %}
+ </details>{% endfor %}
+</section>
+
+{% if sweeps %}
+<section id="sweeps">
+ <h2>Sweeps <span class="count">(each metric against the swept parameter; points coloured by
+  their group's verdict)</span></h2>
+ {% for s in sweeps %}<div class="sweep" data-sweep="{{ s.name }}">
+  <h3>{{ s.name }} <span class="note">scenario {{ s.scenario }} · x: <code>{{ s.x_param }}</code>
+   {% if s.series_param %}· one line per <code>{{ s.series_param }}</code>{% endif %}
+   · {{ s.n_points }} points</span></h3>
+  {% if s.boundaries %}<ul class="boundaries">{% for t in s.boundaries %}<li>{{ t }}</li>{% endfor %}</ul>
+  {% else %}<p class="note">The verdict does not change along the sweep.</p>{% endif %}
+  {% for n in s.notes %}<p class="note">{{ n }}</p>{% endfor %}
+  <div class="sweep-grid">
+  {% for f in s.figures %}<figure class="sweep-fig" data-metric="{{ f.metric }}">
+   <figcaption>{{ f.metric }}{% if f.unit %} <span class="unit">({{ f.unit }})</span>{% endif %}</figcaption>
+   <div class="legend">{{ legend_keys(f.legend, ".5") }}</div>
+   {{ f.svg }}
+   {% if f.note %}<p class="note">{{ f.note }}</p>{% endif %}
+  </figure>{% endfor %}
+  </div></div>
+ {% endfor %}
+</section>
+{% endif %}
+
+{% if history %}
+<section id="history">
+ <h2>History <span class="count">({{ history.n_nights }} nights, oldest → tonight; the last,
+  outlined point is tonight)</span></h2>
+ <p class="note">{{ history.span }}</p>
+ {% for w in history.warnings %}<div class="warning history-warning">{{ w }}</div>{% endfor %}
+ {% for h in history.groups %}<details class="group-history" data-group="{{ h.id }}"{% if h.open %} open{% endif %}>
+  <summary><span class="badge b-v-{{ h.verdict }}">{{ h.verdict }}</span>{{ h.id }}
+   {% if h.note %}<span class="hist-note">{{ h.note }}</span>{% endif %}</summary>
+  <table class="history"><tbody>
+   <tr><td class="note">{{ h.strip_label }}</td><td>{{ h.strip }}</td><td></td><td></td></tr>
+  {% for m in h.metrics %}<tr data-metric="{{ m.name }}"><td class="name">{{ m.name }}</td>
+   <td>{{ m.svg }}</td><td class="num">{{ m.tonight }}{% if m.earlier %}<br><span class="note">earlier
+    {{ m.earlier }}</span>{% endif %}</td>
+   <td>{% if m.note %}<span class="hist-note">{{ m.note }}</span>{% endif %}</td></tr>
+  {% endfor %}</tbody></table>
+ </details>{% endfor %}
+</section>
+{% endif %}
+<footer>srr {{ srr_version }} · suite page of {{ b.name }} · links are relative to this file, so
+ the folder works as one downloaded artifact · self-contained: no scripts, no network requests.</footer>
 </main>
 </body>
 </html>

@@ -32,14 +32,19 @@ def chromium_path() -> str | None:
     return None
 
 
-def run_chromium(binary: str, tmp: Path, url: str, extra: Sequence[str]) -> str:
-    """Run Chromium once with a fresh profile; return stdout (the DOM for --dump-dom)."""
+def run_chromium(binary: str, tmp: Path, url: str, extra: Sequence[str], *,
+                 console: list[str] | None = None) -> str:
+    """Run Chromium once with a fresh profile; return stdout (the DOM for --dump-dom).
+    With ``console``, the page's console messages (errors included) are appended to it."""
     profile = tmp / f"profile-{len(list(tmp.glob('profile-*')))}"
-    cmd = [binary, *CHROMIUM_FLAGS, f"--user-data-dir={profile}",
+    logging = ["--enable-logging=stderr", "--v=0"] if console is not None else []
+    cmd = [binary, *CHROMIUM_FLAGS, *logging, f"--user-data-dir={profile}",
            f"--window-size={VIEWPORT[0]},{VIEWPORT[1]}", *extra, url]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
     if proc.returncode != 0:
         raise AssertionError(f"chromium exited {proc.returncode}: {proc.stderr[-2000:]}")
+    if console is not None:
+        console += [line for line in proc.stderr.splitlines() if ":CONSOLE" in line]
     return proc.stdout
 
 

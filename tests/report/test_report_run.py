@@ -15,7 +15,7 @@ import pytest
 from harness import api
 from harness.cli import main
 from harness.errors import SrrError
-from harness.report import render_report, write_index
+from harness.report import render_report
 from harness.report.data import load_run, metric_windows
 from harness.report.images import keyframes
 
@@ -167,22 +167,6 @@ def test_interrupted_run_renders(failing_run: api.RunResult, summary: dict) -> N
                  reasons=["interrupted before the end of the scenario"])
     html = render_report(failing_run.run_dir, summary=s)
     assert 'class="banner v-INTERRUPTED"' in html
-
-
-def test_index_links_reports_relatively(failing_run: api.RunResult, tmp_path: Path) -> None:
-    missing = tmp_path / "gone"
-    path = write_index(tmp_path / "suite", [failing_run.run_dir, missing])
-    html = path.read_text(encoding="utf-8")
-    assert path.name == "index.html"
-    hrefs = re.findall(r'href="([^"]+)"', html)
-    assert hrefs and all(not h.startswith(("/", "http")) for h in hrefs)
-    target = (path.parent / hrefs[0]).resolve()
-    assert target == (failing_run.run_dir / "report.html").resolve()
-    assert "REGRESSED" in html
-    assert re.search(r"safety\.match_rate: [0-9.]+ % vs [0-9.]+ % \(regressed\)", html)
-    assert html.index('data-verdict="INVALID"', html.index("<tbody>")) < html.index(
-        'data-verdict="REGRESSED"', html.index("<tbody>"))  # worst first
-    assert "not a run directory" in html
 
 
 def test_summary_is_kept_when_the_report_fails(tmp_path: Path,
