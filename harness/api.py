@@ -74,8 +74,10 @@ __all__ = [
     "recover",
     "replay",
     "report",
+    "run_planned_suite",
     "run_repeat",
     "run_scenario",
+    "suite",
     "validate",
     "versions",
     "write_diff",
@@ -666,6 +668,50 @@ def diff_runs(a: str | Path, b: str | Path, *,
     metrics side by side. ``result.exit_code`` is 0 when the recorded data are equal within
     tolerance, 1 when not; bad input raises :class:`SrrError` (exit 2)."""
     return _diff_runs(a, b, tolerances=tolerances)
+
+
+def suite(paths: Sequence[str | Path], *, executor: str = "local", jobs: int | None = None,
+          address: str | None = None, repeat: int | None = None, out: Path | None = None,
+          timeout_s: float | None = None, history: Path | None = None,
+          baselines: Path | None = None, gpu_share: float = 0.5,
+          bless_reason: str | None = None, listen: Any = None) -> Any:
+    """``srr suite``: check every scenario, sweep point and suite file in ``paths`` (bad input
+    raises :class:`SrrError` before anything runs), run them on ``executor`` (``local``: ``jobs``
+    worker processes, default one per CPU; ``ray``: tasks on the cluster at ``address``, else on
+    a local cluster started for the suite) and write ``out``'s ``summary.json``, ``junit.xml``
+    and ``index.html``. Returns a :class:`harness.suite.runner.SuiteResult`; ``listen`` gets
+    :class:`harness.suite.events.Event` s as runs start and finish."""
+    from harness.suite.runner import plan_suite
+
+    plan = plan_suite(paths, repeat=repeat, timeout_s=timeout_s)
+    return run_planned_suite(plan, executor=executor, jobs=jobs, address=address, out=out,
+                             history=history, baselines=baselines, gpu_share=gpu_share,
+                             bless_reason=bless_reason, listen=listen)
+
+
+def run_planned_suite(plan: Any, *, executor: str = "local", jobs: int | None = None,
+                      address: str | None = None, out: Path | None = None,
+                      history: Path | None = None, baselines: Path | None = None,
+                      gpu_share: float = 0.5, bless_reason: str | None = None,
+                      listen: Any = None) -> Any:
+    """:func:`suite` for a plan already checked (:func:`harness.suite.runner.plan_suite`)."""
+    import os
+
+    from harness.suite.local import LocalExecutor
+    from harness.suite.ray_executor import RayExecutor
+    from harness.suite.runner import run_suite
+
+    if jobs is not None and jobs < 1:
+        raise SrrError(f"--jobs: must be >= 1, got {jobs}")
+    if executor not in ("local", "ray"):
+        raise SrrError(f"--executor: expected local or ray, got {executor!r}")
+    if address is not None and executor != "ray":
+        raise SrrError("--address: only with --executor ray")
+    ex: Any = (LocalExecutor(jobs or os.cpu_count() or 1, baselines=baselines)
+               if executor == "local" else
+               RayExecutor(address=address, jobs=jobs, baselines=baselines, gpu_share=gpu_share))
+    return run_suite(plan, ex, out=out, history=history, listen=listen,
+                     bless_reason=bless_reason, baselines=baselines)
 
 
 def write_diff(result: DiffResult, path: str | Path) -> Path:

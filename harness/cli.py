@@ -101,6 +101,33 @@ def _parser() -> argparse.ArgumentParser:
     rep = sub.add_parser("report", help="(re-)render a run directory's report.html")
     rep.add_argument("run_dir", type=Path)
 
+    su = sub.add_parser("suite", help="run many scenarios (sweeps, repeats) in parallel or on "
+                        "Ray; write summary.json, junit.xml and index.html")
+    su.add_argument("paths", nargs="+", type=Path, metavar="PATH",
+                    help="scenario files, folders of them, or suite files (suite.yaml)")
+    su.add_argument("--jobs", "-j", type=int, default=None,
+                    help="runs at once (local: default one per CPU; ray: default the cluster's "
+                    "CPUs)")
+    su.add_argument("--executor", choices=("local", "ray"), default="local")
+    su.add_argument("--address", default=None,
+                    help="an existing Ray cluster (auto, HOST:6379, ray://HOST:10001); "
+                    "default: start a local one")
+    su.add_argument("--repeat", type=int, default=None,
+                    help="repeats per scenario or sweep point (a suite file's entry may say)")
+    su.add_argument("--out", type=Path, default=None,
+                    help="output folder (default reports/suite/<start time>)")
+    su.add_argument("--timeout", type=float, default=None, metavar="SEC",
+                    help="wall-clock limit per run; a run past it is stopped and INVALID")
+    su.add_argument("--history", type=Path, default=None, metavar="DIR",
+                    help="earlier suite outputs: the page shows each metric's trend")
+    su.add_argument("--baselines", type=Path, default=None)
+    su.add_argument("--gpu-share", type=float, default=0.5,
+                    help="GPU fraction a rendering run asks Ray for (default 0.5)")
+    su.add_argument("--update-baselines", action="store_true",
+                    help="bless the first repeat of every valid, non-flaky group")
+    su.add_argument("--reason", default=None, help="why (with --update-baselines)")
+    su.add_argument("--quiet", "-q", action="store_true", help="no live lines")
+
     dif = sub.add_parser("diff", help="compare two runs: recorded topics, first divergence, "
                          "metrics side by side")
     dif.add_argument("run_a", type=Path, help="baseline run directory")
@@ -411,7 +438,43 @@ def _cmd_diff(args: argparse.Namespace) -> int:
     return result.exit_code
 
 
-COMMANDS = {"run": _cmd_run, "replay": _cmd_replay, "validate": _cmd_validate,
+def _cmd_suite(args: argparse.Namespace) -> int:
+    from harness.suite.progress import SuiteProgress, groups_table
+
+    if args.update_baselines and not args.reason:
+        raise SrrError("--update-baselines: say why with --reason TEXT")
+    live = not args.quiet and out_console.is_terminal
+    holder: dict[str, Any] = {}
+
+    def listen(ev: Any) -> None:
+        holder["progress"](ev)
+
+    with sigterm_as_interrupt():
+        from harness.suite.runner import plan_suite
+
+        plan = plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout)
+        for w in plan.warnings:
+            err_console.print(f"srr suite: warning: {w}", markup=False)
+        with SuiteProgress(out_console, len(plan.runs), live=live) as progress:
+            holder["progress"] = progress
+            res = api.run_planned_suite(
+                plan, executor=args.executor, jobs=args.jobs, address=args.address,
+                out=args.out, history=args.history, baselines=args.baselines,
+                gpu_share=args.gpu_share,
+                bless_reason=args.reason if args.update_baselines else None, listen=listen)
+    s = res.summary
+    out_console.print(groups_table(res.groups, f"suite {s['name']}: {len(s['runs'])} runs on "
+                                   f"{s['executor']} × {s['jobs']} in {s['wall_s']:.1f} s"))
+    for w in (s.get("history") or {}).get("warnings", []):
+        err_console.print(f"srr suite: warning: {w}", markup=False)
+    for path in res.blessed:
+        out_console.print(f"blessed {path}", markup=False)
+    out_console.print(f"verdict: {res.verdict}", markup=False)
+    out_console.print(f"{res.out_dir / 'index.html'}", markup=False)
+    return int(res.exit_code)
+
+
+COMMANDS = {"run": _cmd_run, "suite": _cmd_suite, "replay": _cmd_replay, "validate": _cmd_validate,
             "graph": _cmd_graph, "inspect": _cmd_inspect, "baseline": _cmd_baseline,
             "report": _cmd_report, "recover": _cmd_recover, "diff": _cmd_diff}
 

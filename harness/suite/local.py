@@ -10,6 +10,7 @@ finished one. Worker output goes to ``OUT/logs/<run id>.log``.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -75,10 +76,8 @@ class LocalExecutor:
 
     @staticmethod
     def _signal(r: _Running, sig: signal.Signals) -> None:
-        try:
+        with contextlib.suppress(ProcessLookupError):
             os.killpg(r.proc.pid, sig)
-        except ProcessLookupError:
-            pass
 
     def _stop(self, r: _Running, now: float) -> None:
         if r.kill_at is None:

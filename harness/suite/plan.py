@@ -44,7 +44,7 @@ class RunSpec:
 
 def safe_file_name(text: str) -> str:
     """A run or group id as one file name (``/`` and other separators replaced)."""
-    return "".join(c if c.isalnum() or c in "_-.=,@[]#" else "_" for c in text)
+    return "".join(c if c.isalnum() or c in "_-.=,@" else "_" for c in text)
 
 
 def _point_runs(entry: Entry, point: Point, renders: bool) -> list[RunSpec]:

@@ -35,7 +35,7 @@ from harness.suite.results import RunOutcome, outcome_of
 
 __all__ = ["RayExecutor"]
 
-_EXCLUDES = ["reports/", ".venv/", ".git/", "**/__pycache__/", "*.mcap"]
+_EXCLUDES = ["reports/", ".venv/", ".git/", "**/__pycache__/"]
 
 
 def _task(job: dict[str, Any], out_root: str, baselines: str | None,
@@ -100,7 +100,7 @@ class RayExecutor:
         cwd = os.getcwd()
         if self.address:
             try:
-                ray.init(address=self.address, log_to_driver=False,
+                ray.init(address=self.address, log_to_driver=False, logging_level="ERROR",
                          runtime_env={"working_dir": cwd, "excludes": _EXCLUDES})
             except (ConnectionError, RuntimeError, ValueError) as err:
                 raise SrrError(f"--address {self.address}: cannot join the Ray cluster "
@@ -108,7 +108,7 @@ class RayExecutor:
             return False
         path = os.pathsep.join(p for p in (cwd, os.environ.get("PYTHONPATH")) if p)
         ray.init(num_cpus=self.jobs or os.cpu_count() or 1, include_dashboard=False,
-                 log_to_driver=False, runtime_env={"env_vars": {"PYTHONPATH": path}})
+                 log_to_driver=False, logging_level="ERROR", runtime_env={"env_vars": {"PYTHONPATH": path}})
         return True
 
     def run(self, specs: Sequence[RunSpec], out_root: Path,
@@ -117,7 +117,7 @@ class RayExecutor:
 
         started_here = self._connect()
         try:
-            self.cluster = {k: float(v) for k, v in ray.cluster_resources().items()}
+            self.cluster = {k: float(v) for k, v in ray.cluster_resources().items()}  # type: ignore[no-untyped-call]
             if not self.jobs:
                 self.jobs = max(1, int(self.cluster.get("CPU", 1)))
             return self._run(ray, specs, out_root.resolve(), listen)

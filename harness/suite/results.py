@@ -11,6 +11,7 @@ verdicts differ (the first divergence comes from ``srr diff``), else the repeats
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import signal
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -123,26 +124,25 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
         problem = (f"it could not run: {error}" if error else
                    f"the worker exited with status {exit_code} without writing summary.json")
     report = run_path / "report.html"
-    common = {
-        "spec": spec, "wall_s": wall_s, "timed_out": timed_out, "crash": crash,
-        "run_dir": _rel(run_path, out_root) if run_path.is_dir() else None,
-        "report": _rel(report, out_root) if report.is_file() else None,
-        "log": _rel(log, out_root) if log is not None and log.is_file() else None,
-        "digest": None if summary is None else summary.get("digest"),
-        "topics": {} if summary is None else {
-            t: str(v.get("sha256")) for t, v in summary.get("topics", {}).items()},
-    }
+    base = RunOutcome(
+        spec=spec, verdict="INVALID", exit_code=3, reasons=(), wall_s=wall_s,
+        timed_out=timed_out, crash=crash,
+        run_dir=_rel(run_path, out_root) if run_path.is_dir() else None,
+        report=_rel(report, out_root) if report.is_file() else None,
+        log=_rel(log, out_root) if log is not None and log.is_file() else None,
+        digest=None if summary is None else summary.get("digest"),
+        topics={} if summary is None else {
+            t: str(v.get("sha256")) for t, v in summary.get("topics", {}).items()})
     if problem is not None:
-        reasons = [problem] + ([salvaged] if salvaged else [])
-        return RunOutcome(verdict="INVALID", exit_code=3, reasons=tuple(reasons), **common)
+        return dataclasses.replace(base, reasons=(problem, *([salvaged] if salvaged else [])))
     assert summary is not None
     verdict = str(summary.get("verdict", "INVALID"))
     trusted = verdict not in ("INVALID", "INTERRUPTED")
-    return RunOutcome(verdict=verdict, exit_code=int(summary.get("exit_code", 3)),
-                      reasons=tuple(str(r) for r in summary.get("reasons", [])),
-                      metrics=tuple(summary.get("metrics", [])) if trusted else (),
-                      comparison=tuple(summary.get("comparison") or []) if trusted else (),
-                      **common)
+    return dataclasses.replace(
+        base, verdict=verdict, exit_code=int(summary.get("exit_code", 3)),
+        reasons=tuple(str(r) for r in summary.get("reasons", [])),
+        metrics=tuple(summary.get("metrics", [])) if trusted else (),
+        comparison=tuple(summary.get("comparison") or []) if trusted else ())
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import os
+import sys
 import zlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -110,8 +112,13 @@ def sut_params(cls: type[Any], ctx: SutContext) -> Any:
 
 
 def load_sut(spec: SutSpec, field: str) -> SystemUnderTest:
-    """Import ``spec.plugin`` (``"module:Class"``) and instantiate it."""
+    """Import ``spec.plugin`` (``"module:Class"``) and instantiate it. Modules are found on
+    the Python path and, after it, in the current directory (as ``python -m`` would), so a
+    project's own plug-ins work from its root without being installed."""
     module_name, _, attr = spec.plugin.partition(":")
+    here = os.getcwd()
+    if here not in sys.path:
+        sys.path.append(here)
     try:
         module = importlib.import_module(module_name)
     except ImportError as err:

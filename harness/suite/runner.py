@@ -1,0 +1,125 @@
+"""A whole suite: check everything, run it on an executor, judge the groups, write the
+outputs (``summary.json``, ``junit.xml``, ``index.html``)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from harness.errors import SrrError
+from harness.scenario import load_scenario, parse_override
+from harness.suite.events import Executor, Listener
+from harness.suite.outputs import FORMAT, write_outputs
+from harness.suite.plan import RunSpec, plan_runs
+from harness.suite.results import GROUP_ORDER, GroupResult, group_runs, suite_exit_code
+from harness.suite.spec import SuiteSpec, load_suite
+from harness.suite.sweep import expand
+
+__all__ = ["SuitePlan", "SuiteResult", "default_suite_dir", "plan_suite", "run_suite"]
+
+
+@dataclass(frozen=True)
+class SuitePlan:
+    spec: SuiteSpec
+    runs: tuple[RunSpec, ...]
+    warnings: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class SuiteResult:
+    out_dir: Path
+    verdict: str
+    exit_code: int
+    summary: dict[str, Any]
+    groups: tuple[GroupResult, ...]
+    blessed: tuple[Path, ...] = ()
+
+
+def default_suite_dir(root: Path = Path("reports")) -> Path:
+    """``reports/suite/<local start time>`` (a name only; nothing recorded depends on it)."""
+    base = root / "suite" / time.strftime("%Y%m%d-%H%M%S")
+    candidate, n = base, 1
+    while candidate.exists():
+        n += 1
+        candidate = base.with_name(f"{base.name}-{n}")
+    return candidate
+
+
+def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
+               timeout_s: float | None = None) -> SuitePlan:
+    """Everything ``srr validate`` checks, for every entry (its first sweep point: the world,
+    graphs, systems under test and wiring are built once), and every point's scenario loaded,
+    before anything runs."""
+    from harness import api
+
+    spec = load_suite(paths, repeat=repeat, timeout_s=timeout_s)
+    warnings: list[str] = []
+    for entry in spec.entries:
+        first = expand(entry.sweep)[0]
+        pairs = [parse_override(o) for o in entry.overrides + first.overrides()]
+        sc = load_scenario(entry.scenario_file, pairs)
+        warnings += [f"{entry.name}: {w}" for w in api.validate(sc, entry.scenario_file)]
+    return SuitePlan(spec, plan_runs(spec), tuple(warnings))
+
+
+def _sweeps(groups: Sequence[GroupResult]) -> list[dict[str, Any]]:
+    out: dict[str, dict[str, Any]] = {}
+    for g in groups:
+        s = g.runs[0].spec
+        if s.sweep:
+            sw = out.setdefault(s.entry, {"name": s.entry, "scenario": s.scenario,
+                                          "params": [p for p, _ in s.params], "groups": []})
+            sw["groups"].append(g.id)
+    return list(out.values())
+
+
+def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
+              history: Path | None = None, listen: Listener | None = None,
+              bless_reason: str | None = None, baselines: Path | None = None) -> SuiteResult:
+    """Run ``plan`` on ``executor`` into ``out`` (default :func:`default_suite_dir`).
+
+    ``history``: a folder of earlier suite outputs whose metrics the page shows as trends.
+    ``bless_reason``: make the first repeat of every group that is neither INVALID, FLAKY nor
+    interrupted its baseline (``--update-baselines``), e.g. to bless each sweep point."""
+    from harness import api
+    from harness.suite.history import load_history
+
+    if history is not None and not Path(history).is_dir():
+        raise SrrError(f"--history {history}: no such folder")
+    out_dir = Path(out) if out is not None else default_suite_dir()
+    if out_dir.exists() and any(out_dir.iterdir()):
+        raise SrrError(f"--out {out_dir}: folder exists and is not empty")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    started = datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
+    t0 = time.monotonic()
+    outcomes, interrupted = executor.run(plan.runs, out_dir, listen or (lambda e: None))
+    wall = time.monotonic() - t0
+    groups = group_runs(outcomes, out_dir)
+    ranked = sorted(groups, key=lambda g: GROUP_ORDER.index(g.verdict))
+    code = suite_exit_code(groups, interrupted)
+    verdict = "INTERRUPTED" if interrupted else (ranked[0].verdict if ranked else "INVALID")
+    counts = {v: n for v in GROUP_ORDER if (n := sum(g.verdict == v for g in groups))}
+    summary: dict[str, Any] = {
+        "format": FORMAT, "name": plan.spec.name, "started_at": started,
+        "wall_s": round(wall, 3), "executor": executor.name, "jobs": executor.jobs,
+        "address": getattr(executor, "address", None), "verdict": verdict, "exit_code": code,
+        "interrupted": interrupted, "counts": counts, "warnings": list(plan.warnings),
+        "groups": [g.to_json() for g in ranked],
+        "runs": [o.to_json() for o in outcomes],
+        "sweeps": _sweeps(groups), "history": None,
+    }
+    if history is not None:
+        summary["history"] = load_history([Path(history)], summary)
+    blessed: list[Path] = []
+    if bless_reason is not None and not interrupted:
+        for g in groups:
+            if g.verdict not in ("INVALID", "FLAKY", "INTERRUPTED") and g.runs[0].run_dir:
+                blessed.append(api.bless(out_dir / g.runs[0].run_dir, bless_reason,
+                                         baselines=baselines))
+    write_outputs(out_dir, summary, ranked)
+    return SuiteResult(out_dir, verdict, code, summary, tuple(ranked), tuple(blessed))
+
