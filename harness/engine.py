@@ -49,13 +49,13 @@ class Simulation:
         self.scenario = scenario
         self.source = source
         self.srr_gt = scenario.srr_gt if srr_gt is None else srr_gt
-        self.world = World.build(scenario)
+        self.world = World.build(scenario, source)
         self.tick_index = 0
         self.time_ns = 0
         self.bus = Bus(lambda: self.time_ns)
         self.ctx = EvalContext(0, 0, self.world, self.bus, seed=scenario.seed)
         self.stage = GraphStage()
-        build = BuildContext(scenario, self.world, self.srr_gt)
+        build = BuildContext(scenario, self.world, self.srr_gt, source)
         with self.stage:
             self.graph_paths = build_all(build)
         self.origins = build.origins  # node path → scenario field, for the wiring checks
@@ -68,7 +68,8 @@ class Simulation:
         and subscribes, and the TF edges the graphs publish. Starts the systems under test."""
         if not self._started:
             self.start()
-        return plan_wiring(self.stage, self.origins, self.suts, self.scenario, self.source)
+        return plan_wiring(self.stage, self.origins, self.suts, self.scenario, self.source,
+                           self.world)
 
     def add_tap(self, tap: Callable[[Envelope], None]) -> None:
         self.bus.add_tap(tap)

@@ -11,7 +11,9 @@ __all__ = [
     "DiskSpaceError",
     "GraphError",
     "InvalidRunError",
+    "LiveViewError",
     "PluginError",
+    "RunStopped",
     "ScenarioError",
     "SimulationError",
     "SrrError",
@@ -61,10 +63,26 @@ class DiskSpaceError(SrrError):
     """Not enough free disk space to start a run (its estimated bag size plus the margin)."""
 
 
+class LiveViewError(SrrError):
+    """The live view (``--foxglove``) cannot start: a bad address, a port in use, or the
+    foxglove-sdk package missing."""
+
+
 class InvalidRunError(SrrError):
     """A health gate tripped, so the run's scores cannot be trusted."""
 
     exit_code = 3
+
+
+class RunStopped(SrrError):
+    """Raised from inside a tick to stop the run at that tick boundary, INVALID: the health
+    gate ``gate`` trips with this message (e.g. an external ROS 2 output that never came)."""
+
+    exit_code = 3
+
+    def __init__(self, gate: str, message: str) -> None:
+        self.gate = gate
+        super().__init__(message)
 
 
 def reason(err: BaseException) -> str:

@@ -31,11 +31,17 @@ from harness.scenario import ControlScoring, RobotSpec, Scenario
 from harness.sut.zones import points_in_polygon
 
 __all__ = ["ROBOT_RADIUS", "Scores", "check_scoring", "expected_rates", "odom_topic",
-           "scenario_frames", "score_frames", "score_run"]
+           "robot_radius", "scenario_frames", "score_frames", "score_run"]
 
 # Footprint circle radius per model (half the diagonal of the chassis), for clearance and
-# collisions against workers.
+# collisions against workers; a model file's is its ``footprint_radius``.
 ROBOT_RADIUS = {"forklift": 1.23, "turtlebot3_waffle_pi": 0.21}
+
+
+def robot_radius(robot: RobotSpec) -> float:
+    """The robot's footprint circle radius (m)."""
+    model = robot.model_file
+    return model.footprint_radius if model is not None else ROBOT_RADIUS[robot.model_name]
 
 
 @dataclass(frozen=True)
@@ -61,9 +67,9 @@ def expected_rates(sc: Scenario) -> dict[str, float]:
         if robot.odometry.enabled:
             rates[odom_topic(robot)] = float(hz)
         lidar, imu = robot.sensors.lidar, robot.sensors.imu
-        if lidar is not None and lidar.enabled:
+        if lidar is not None and lidar.enabled and lidar.graph:
             rates[resolve_topic(lidar.topic, robot.ns)] = _gate_rate(hz, lidar.fps)
-        if imu is not None and imu.enabled:
+        if imu is not None and imu.enabled and imu.graph:
             rates[resolve_topic(imu.topic, robot.ns)] = _gate_rate(hz, imu.fps)
     for cam in sc.cameras:
         if not cam.enabled:
@@ -145,13 +151,13 @@ def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
     s = sc.scoring
     metrics: list[MetricResult] = []
     workers = [w for w in sc.workers if w.enabled]
-    radii = {r.name: ROBOT_RADIUS[r.model] for r in sc.robots if r.enabled}
+    radii = {r.name: robot_radius(r) for r in sc.robots if r.enabled}
     for block in s.control_blocks:
         robot = sc.robot(block.robot)
         metrics += control_metrics(
             frames, robot=robot.name, route=sc.routes[block.route].waypoints,
             goal_tolerance=block.goal_tolerance,
-            robot_radius=ROBOT_RADIUS[robot.model],
+            robot_radius=robot_radius(robot),
             worker_radius=workers[0].radius if workers else 0.25,
             odom_topic=odom_topic(robot),
             cmd_topic=resolve_topic(robot.control_spec.cmd_vel_topic, robot.ns),

@@ -3,7 +3,8 @@
 Builders are idempotent (building twice leaves one graph: an existing graph at the path is
 replaced) and return ``None`` when their block is disabled. :func:`build_all` runs them in
 the seed's order: clock first, then each enabled robot's control, odometry and TF graphs,
-then one graph per enabled fixed camera.
+then one graph per enabled fixed camera, and last the scenario's own ``graphs:`` builders
+(:mod:`harness.builders.custom`).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from harness.builders import (
     camera_tf,
     cameras,
     clock,
+    custom,
     diff_drive_control,
     forklift_control,
     ground_truth,
@@ -49,13 +51,25 @@ CAMERA_BUILDERS: tuple[Callable[[BuildContext, CameraSpec], str | None], ...] = 
 )
 
 
+def _kind(builder: Callable[..., str | None]) -> str:
+    return builder.__module__.rsplit(".", 1)[-1].replace("_", " ")
+
+
 def build_all(bc: BuildContext) -> list[str]:
     """Build every enabled graph on the current stage; returns their paths in build order."""
-    paths = [p for b in GLOBAL_BUILDERS if (p := b(bc))]
-    for robot in bc.scenario.robots:
+    taken: dict[str, str] = {}
+    for b in GLOBAL_BUILDERS:
+        if p := b(bc):
+            taken[p] = f"the built-in {_kind(b)} graph"
+    for i, robot in enumerate(bc.scenario.robots):
         if robot.enabled:
-            paths.extend(p for b in ROBOT_BUILDERS if (p := b(bc, robot)))
-    for camera in bc.scenario.cameras:
+            for rb in ROBOT_BUILDERS:
+                if p := rb(bc, robot):
+                    taken[p] = f"the built-in {_kind(rb)} graph of robots[{i}] ({robot.name})"
+    for i, camera in enumerate(bc.scenario.cameras):
         if camera.enabled:
-            paths.extend(p for b in CAMERA_BUILDERS if (p := b(bc, camera)))
-    return paths
+            for cb in CAMERA_BUILDERS:
+                if p := cb(bc, camera):
+                    taken[p] = f"the built-in camera graph of cameras[{i}] ({camera.name})"
+    builtin = list(taken)
+    return builtin + custom.build_custom(bc, taken)

@@ -33,12 +33,14 @@ class NodeOrigin:
 class BuildContext:
     """A builder's inputs: the resolved scenario and the built world (read for prim paths).
 
-    ``origins`` collects, per node path, the scenario field the node was built from
-    (:meth:`annotate`); :mod:`harness.wiring` reads it to name fields in its errors."""
+    ``source`` is the scenario file, for errors. ``origins`` collects, per node path, the
+    scenario field the node was built from (:meth:`annotate`); :mod:`harness.wiring` reads it
+    to name fields in its errors."""
 
     scenario: Scenario
     world: Any
     srr_gt: bool = False
+    source: str = "<scenario>"
     origins: dict[str, NodeOrigin] = dataclasses.field(default_factory=dict)
 
     def robot_field(self, robot: RobotSpec, sub: str = "") -> str:

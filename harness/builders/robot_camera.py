@@ -39,7 +39,7 @@ def graph_path(robot: RobotSpec) -> str:
 
 def build(bc: BuildContext, robot: RobotSpec) -> str | None:
     spec = robot.sensors.camera
-    if spec is None or not spec.enabled:
+    if spec is None or not spec.enabled or not spec.graph:
         return None
     path = graph_path(robot)
     camera_prim = bc.world.sensor_prim(robot.name, "camera")

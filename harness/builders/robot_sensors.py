@@ -39,7 +39,7 @@ def imu_graph_path(robot: RobotSpec) -> str:
 
 def build_lidar(bc: BuildContext, robot: RobotSpec) -> str | None:
     spec = robot.sensors.lidar
-    if spec is None or not spec.enabled:
+    if spec is None or not spec.enabled or not spec.graph:
         return None
     path = lidar_graph_path(robot)
     prim = bc.world.sensor_prim(robot.name, "lidar")
@@ -78,7 +78,7 @@ def build_lidar(bc: BuildContext, robot: RobotSpec) -> str | None:
 
 def build_imu(bc: BuildContext, robot: RobotSpec) -> str | None:
     spec = robot.sensors.imu
-    if spec is None or not spec.enabled:
+    if spec is None or not spec.enabled or not spec.graph:
         return None
     path = imu_graph_path(robot)
     keys = Controller.Keys

@@ -10,6 +10,10 @@ one tree under ``world``.
   the root is ``base_footprint`` and not ``world``: ``base_footprint → base_link`` and
   ``base_link → camera_link, casters, imu_link, base_scan`` on ``/tf_static``;
   ``base_link → wheels`` on ``/tf``.
+* A robot from a model file: one ``ROS2PublishTransformTree`` given the articulation root
+  (the root link's prim) as target and as parent, as Isaac Sim publishes a whole robot from
+  its root: every link relative to its parent link, named as in the model, on ``/tf``; the
+  root's own pose is odometry's ``odom → <root link>``.
 """
 
 from __future__ import annotations
@@ -80,7 +84,17 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
         ])
         bc.annotate(path, "PubWorldToOdom", where, topicName="tf_tree.static_topic",
                     parentFrameId="tf_tree.world_frame", childFrameId="odometry.odom_frame")
-    for name, parent, children, static in LINK_TREES[robot.model]:
+    if robot.model_file is not None:
+        root = bc.world.base_prim(robot.name)
+        add("PubTFArticulation", "isaacsim.ros2.bridge.ROS2PublishTransformTree", [
+            ("topicName", spec.dynamic_topic),
+            ("parentPrim", [root]),
+            ("targetPrims", [root]),
+            ("frameIdPrefix", robot.frame_prefix or ""),
+        ])
+        bc.annotate(path, "PubTFArticulation", f"{where}.tf_tree", topicName="dynamic_topic")
+    links = LINK_TREES.get(robot.model, []) if isinstance(robot.model, str) else []
+    for name, parent, children, static in links:
         add(name, "isaacsim.ros2.bridge.ROS2PublishTransformTree", [
             ("topicName", spec.static_topic if static else spec.dynamic_topic),
             ("staticPublisher", static),

@@ -1,6 +1,7 @@
 """The in-process bus, ROS 2 message helpers and the MCAP recorder."""
 
 from harness.bus.bus import TRANSIENT_LOCAL, Bus, BusError, Envelope, Publisher, Qos, TopicInfo
+from harness.bus.live import LiveConfig, LiveView
 from harness.bus.names import (
     FrameIdError,
     TopicNameError,
@@ -18,6 +19,8 @@ __all__ = [
     "BusError",
     "Envelope",
     "FrameIdError",
+    "LiveConfig",
+    "LiveView",
     "Publisher",
     "Qos",
     "Recorder",

@@ -48,12 +48,19 @@ ROSBAG2_VERSION = 9
 
 @dataclass(frozen=True)
 class ChunkPolicy:
-    """When a chunk is closed: at ``max_bytes`` of records or when the next message would make
-    it span ``max_span_ns`` of log time, whichever comes first; ``fsync`` each closed chunk."""
+    """When a chunk is closed: at ``max_bytes`` of records (before compression) or when the
+    next message would make it span ``max_span_ns`` of log time, whichever comes first;
+    ``fsync`` each closed chunk; ``compression`` of each chunk (``none``, ``zstd``, ``lz4``:
+    MCAP chunk compression, which every MCAP reader undoes; the messages are unchanged)."""
 
     max_bytes: int = 8_000_000
     max_span_ns: int = 1_000_000_000
     fsync: bool = False
+    compression: str = "none"
+
+
+_COMPRESSION = {"none": CompressionType.NONE, "zstd": CompressionType.ZSTD,
+                "lz4": CompressionType.LZ4}
 
 
 @dataclass(frozen=True)
@@ -85,7 +92,8 @@ class McapBagWriter:
         self.policy = policy
         self._file: IO[bytes] = self.path.open("xb")
         # Chunks are closed here, not by the library's size check (it only sees bytes).
-        self._mcap = Writer(self._file, chunk_size=1 << 62, compression=CompressionType.NONE)
+        self._mcap = Writer(self._file, chunk_size=1 << 62,
+                            compression=_COMPRESSION[policy.compression])
         self._mcap.start(profile="ros2",
                          library=f"srr-{__version__}; mcap-python-{version('mcap')}")
         self._schemas: dict[tuple[str, bytes], int] = {}

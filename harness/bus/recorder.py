@@ -136,6 +136,13 @@ class Recorder:
             maxsize=queue_size)
         self._thread: threading.Thread | None = None
         self._error: BagError | None = None
+        self._forward: list[Callable[[Envelope, bytes], None]] = []
+
+    def add_serialized_tap(self, tap: Callable[[Envelope, bytes], None]) -> None:
+        """Also hand each envelope with its serialized bytes to ``tap`` (on the caller's
+        thread, before the bytes are queued for writing), so a second consumer (the live view)
+        does not serialize the message again."""
+        self._forward.append(tap)
 
     @property
     def mcap_path(self) -> Path:
@@ -167,6 +174,8 @@ class Recorder:
                                                       self._qos_of(env.topic))
         data = env.raw if env.raw is not None else serialize(env.msg, env.msgtype)
         self.bytes_serialized += len(data)
+        for tap in self._forward:
+            tap(env, data)
         self._queue.put((st, env.stamp_ns, data))
 
     def _fail(self, what: str, err: Exception) -> None:

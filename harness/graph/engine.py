@@ -782,6 +782,21 @@ class GraphStage:
         self.graph(path)
         del self._graphs[path]
 
+    def adopt(self, graph: Graph) -> None:
+        """Move ``graph``, built on another stage with this stage's registry, onto this one
+        (at the end); its path must be free here. The other stage no longer has it."""
+        if graph.stage is self:
+            raise GraphError(f"{graph.path}: graph is already on this stage")
+        if graph.stage.registry is not self._registry:
+            raise GraphError(f"{graph.path}: built with another node-type registry")
+        if graph.path in self._graphs:
+            raise GraphError(f"{graph.path}: graph already exists")
+        other = graph.stage
+        if other._graphs.get(graph.path) is graph:
+            del other._graphs[graph.path]
+        graph._stage = self
+        self._graphs[graph.path] = graph
+
     def evaluate(self, ctx: Any) -> None:
         """Evaluate every graph once, in insertion order."""
         for graph in list(self._graphs.values()):

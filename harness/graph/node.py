@@ -215,3 +215,8 @@ class NodeType:
         from its input values as set (``value("topicName")``; nothing is computed), so the
         wiring can be checked before a run (:mod:`harness.wiring`). Default: none."""
         return ()
+
+    def world_edges(self, value: Callable[[str], Any], world: Any) -> Sequence[TfEdge]:
+        """TF edges the node will publish that only the built ``world`` can tell (the links
+        of an articulation root it is given), for the same wiring checks. Default: none."""
+        return ()

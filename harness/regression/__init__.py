@@ -7,7 +7,7 @@ from harness.regression.compare import (
     compare,
     tolerance_for,
 )
-from harness.regression.config import comparable_config, config_differences
+from harness.regression.config import comparable_config, config_differences, with_defaults
 from harness.regression.store import (
     Baseline,
     BaselineError,
@@ -35,4 +35,5 @@ __all__ = [
     "load_baseline",
     "save_baseline",
     "tolerance_for",
+    "with_defaults",
 ]

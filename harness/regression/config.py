@@ -8,7 +8,9 @@ scenario's name and description, which baseline it names, the tolerances and the
 settings, how the bag is written (``recording``: chunking, fsync, the disk guard) and the sweep a
 suite may expand the scenario into (``sweep``: each point is its own configuration).
 :func:`comparable_config` is that part of a resolved scenario, as plain data;
-:func:`config_differences` names what differs, field by field.
+:func:`config_differences` names what differs, field by field. A baseline blessed before srr
+gained a field has no value for it; :func:`with_defaults` gives it the field's default, so
+adding a field with a default changes no verdict.
 """
 
 from __future__ import annotations
@@ -16,11 +18,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["EXCLUDED", "comparable_config", "config_differences"]
+from harness.errors import SrrError
+from harness.scenario import FORMAT_VERSION, scenario_from_mapping, scenario_to_mapping
+
+__all__ = ["EXCLUDED", "comparable_config", "config_differences", "with_defaults"]
 
 #: Top-level keys, and ``scoring`` sub-keys, that do not make two configurations different.
 EXCLUDED = frozenset({"format_version", "name", "description", "baseline",
-                      "systems_under_test", "recording", "sweep"})
+                      "systems_under_test", "recording", "sweep", "ros2"})
 EXCLUDED_SCORING = frozenset({"tolerances", "health"})
 
 
@@ -32,6 +37,17 @@ def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
     if isinstance(scoring, Mapping):
         out["scoring"] = {k: v for k, v in scoring.items() if k not in EXCLUDED_SCORING}
     return out
+
+
+def with_defaults(config: Mapping[str, Any]) -> dict[str, Any]:
+    """A stored comparable config with every field it lacks filled with its default (read
+    through the scenario schema); as it is when it no longer validates."""
+    try:
+        sc = scenario_from_mapping({**config, "format_version": FORMAT_VERSION,
+                                    "name": "baseline"}, "<baseline config>")
+    except SrrError:
+        return dict(config)
+    return comparable_config(scenario_to_mapping(sc))
 
 
 def _flat(value: Any, path: str, out: dict[str, Any]) -> None:

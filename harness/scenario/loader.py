@@ -22,11 +22,12 @@ from harness.scenario.schema import (
     FORMAT_VERSION,
     DiffDriveControl,
     ForkliftControl,
+    GraphSpec,
     RobotSpec,
     Scenario,
 )
 
-__all__ = ["apply_overrides", "load_scenario", "parse_override", "resolve_names",
+__all__ = ["apply_overrides", "graph_name", "load_scenario", "parse_override", "resolve_names",
            "scenario_from_mapping", "scenario_to_mapping", "validate_dataclass"]
 
 T = typing.TypeVar("T")
@@ -377,9 +378,18 @@ class _Validator:
                 continue
             tp = hints[name]
             if cls is RobotSpec and name == "control":
-                tp = _CONTROL_BY_MODEL.get(raw.get("model", ""), ForkliftControl) | None
+                tp = _control_type(raw.get("model")) | None
             kwargs[name] = self.value(tp, raw[name], sub, f.metadata)
         return cls(**kwargs)
+
+
+def _control_type(model: Any) -> type:
+    """The ``control:`` block type a robot's ``model`` value calls for: by built-in name, or
+    by a model file's ``drive`` (``swivel_drive``: the forklift's block)."""
+    if isinstance(model, dict):
+        return ForkliftControl if model.get("drive") == "swivel_drive" else DiffDriveControl
+    return _CONTROL_BY_MODEL.get(model, ForkliftControl) if isinstance(model, str) \
+        else ForkliftControl
 
 
 def _join(path: str, name: str) -> str:
@@ -415,6 +425,7 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
     _check_robots(sc, v)
     _check_cameras(sc, v)
     _check_suts(sc, v)
+    _check_graphs(sc, v)
     _check_control_scoring(sc, v)
 
 
@@ -429,6 +440,13 @@ def _check_robots(sc: Scenario, v: _Validator) -> None:
     )
 
     for i, robot in enumerate(sc.robots):
+        model = robot.model_file
+        if model is not None:
+            if (model.urdf is None) == (model.mjcf is None):
+                v.fail(f"robots[{i}].model", "set exactly one of 'urdf' and 'mjcf' (the "
+                       "path of the robot's model file)")
+            if not model.path.strip():
+                v.fail(f"robots[{i}].model.{model.kind}", "must not be empty")
         if robot.namespace is not None:
             try:
                 validate_namespace(robot.namespace)
@@ -511,6 +529,38 @@ def _check_suts(sc: Scenario, v: _Validator) -> None:
                     v.fail(sub, str(err))
 
 
+def graph_name(spec: GraphSpec) -> str:
+    """A ``graphs:`` entry's name: its own, else the builder function's name, else (for a
+    function called ``build``) the module's last component."""
+    if spec.name is not None:
+        return spec.name
+    module, _, func = spec.builder.partition(":")
+    return func if func and func != "build" else module.rsplit(".", 1)[-1]
+
+
+def _check_graphs(sc: Scenario, v: _Validator) -> None:
+    """``module:function`` builders, unique names that make valid graph paths, and a robot
+    that exists and is enabled (or, left out, a scene with exactly one enabled robot)."""
+    robots = [r.name for r in sc.robots if r.enabled]
+    names: dict[str, int] = {}
+    for i, spec in enumerate(sc.graphs):
+        where = f"graphs[{i}]"
+        module, sep, func = spec.builder.partition(":")
+        if not sep or not module or not func:
+            v.fail(f"{where}.builder", f"expected 'module:function', got {spec.builder!r}")
+        name = graph_name(spec)
+        _check_name(v, f"{where}.name", name)
+        if name in names:
+            v.fail(f"{where}.name", f"duplicate graph name {name!r} (also graphs[{names[name]}]"
+                   "); give one of them another name")
+        names[name] = i
+        if spec.robot and spec.enabled and spec.robot not in robots:
+            close = _close(spec.robot, dict.fromkeys(robots))
+            hint = f"did you mean {close!r}? " if close else ""
+            v.fail(f"{where}.robot", f"no enabled robot named {spec.robot!r} ({hint}robots: "
+                   f"{', '.join(robots) or 'none'})")
+
+
 def _check_control_scoring(sc: Scenario, v: _Validator) -> None:
     """One control block per robot when ``scoring.control`` is a list."""
     if not isinstance(sc.scoring.control, tuple):
@@ -551,7 +601,12 @@ def resolve_names(sc: Scenario) -> Scenario:
         if sut_ns is None:
             sut_ns = by_name[sut.robot].ns if sut.robot in by_name else ""
         suts.append(dataclasses.replace(sut, namespace=sut_ns))
-    return dataclasses.replace(sc, robots=tuple(robots), systems_under_test=tuple(suts))
+    enabled = [r.name for r in robots if r.enabled]
+    graphs = tuple(dataclasses.replace(
+        g, name=graph_name(g), robot=g.robot or (enabled[0] if len(enabled) == 1 else ""))
+        for g in sc.graphs)
+    return dataclasses.replace(sc, robots=tuple(robots), systems_under_test=tuple(suts),
+                               graphs=graphs)
 
 
 def _check_workers_and_zones(sc: Scenario, v: _Validator) -> None:

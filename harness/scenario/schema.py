@@ -20,10 +20,13 @@ __all__ = [
     "ControlScoring",
     "DiffDriveControl",
     "DockSpec",
+    "DriveSpec",
     "ForkliftControl",
+    "GraphSpec",
     "HealthScoring",
     "ImuSpec",
     "LidarSpec",
+    "ModelFile",
     "OdometrySpec",
     "PerceptionScoring",
     "PhysicsSpec",
@@ -60,7 +63,7 @@ def _range(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
     return {"range": (lo, hi, lo_open)}
 
 
-def num(default: float, lo: float | None = None, hi: float | None = None,
+def num(default: float | None, lo: float | None = None, hi: float | None = None,
         *, lo_open: bool = False) -> Any:
     return field(default=default, metadata=_range(lo, hi, lo_open=lo_open))
 
@@ -92,13 +95,16 @@ class RecordingSpec:
     crash can lose. ``fsync`` also forces each closed chunk to the disk (only power loss needs
     it). A run refuses to start when the free space is below its estimated bag size plus
     ``min_free_mb``, and stops at a tick boundary (INVALID, exit 3) when free space falls below
-    ``min_free_mb`` while it runs. MB are 10^6 bytes.
+    ``min_free_mb`` while it runs. MB are 10^6 bytes. ``compression`` compresses each chunk
+    (MCAP chunk compression, as rosbag2's MCAP storage presets do; readers undo it and the
+    messages, their digests and the bag's metadata.yaml are the same).
     """
 
     chunk_mb: float = num(8.0, 0.0, 4096.0, lo_open=True)
     chunk_s: float = num(1.0, 0.0, 3600.0, lo_open=True)
     fsync: bool = False
     min_free_mb: float = num(256.0, 0.0, 1e9)
+    compression: Literal["none", "zstd", "lz4"] = "none"
 
 
 @dataclass(frozen=True)
@@ -213,9 +219,11 @@ class SafetyIndicatorSpec:
 
 @dataclass(frozen=True)
 class RobotCameraSpec:
-    """A camera mounted on a robot link."""
+    """A camera mounted on a robot link. ``graph: false`` mounts it (its prim exists, with
+    this ``fovy_deg``) but builds no graph: a ``graphs:`` builder publishes it."""
 
     enabled: bool = True
+    graph: bool = True
     link: str = "camera_link"
     topic: str = "camera/color"
     info_topic: str = "camera/camera_info"
@@ -228,9 +236,12 @@ class RobotCameraSpec:
 
 @dataclass(frozen=True)
 class LidarSpec:
-    """A planar lidar published as ``sensor_msgs/LaserScan``."""
+    """A planar lidar published as ``sensor_msgs/LaserScan``. ``graph: false`` mounts it
+    (beams, ranges and noise still apply) but builds no graph: a ``graphs:`` builder
+    publishes it."""
 
     enabled: bool = True
+    graph: bool = True
     link: str = "base_scan"
     topic: str = "scan"
     frame_id: str = "base_scan"
@@ -244,9 +255,11 @@ class LidarSpec:
 
 @dataclass(frozen=True)
 class ImuSpec:
-    """An IMU published as ``sensor_msgs/Imu``."""
+    """An IMU published as ``sensor_msgs/Imu``. ``graph: false`` mounts it but builds no
+    graph: a ``graphs:`` builder publishes it."""
 
     enabled: bool = True
+    graph: bool = True
     link: str = "imu_link"
     topic: str = "imu"
     frame_id: str = "imu_link"
@@ -261,11 +274,60 @@ class SensorsSpec:
 
 
 @dataclass(frozen=True)
+class DriveSpec:
+    """How srr drives one joint of a model file that has no actuator on it (``model.drives``).
+
+    The controller decides the kind: wheels and a swivel-drive's drive joint get a velocity
+    servo (``kv``), a swivel joint a position servo (``kp``, with ``kv`` as its damping).
+    Unset values are scaled from the model's mass (see :mod:`harness.sim.robots.imported`).
+    ``max_force`` limits the torque (N·m; N for a slide joint), ``armature`` adds rotor
+    inertia to the joint (kg·m²)."""
+
+    kp: float | None = num(None, 0.0, 1e9, lo_open=True)
+    kv: float | None = num(None, 0.0, 1e9, lo_open=True)
+    max_force: float | None = num(None, 0.0, 1e9, lo_open=True)
+    armature: float | None = num(None, 0.0, 1e6)
+
+
+@dataclass(frozen=True)
+class ModelFile:
+    """A robot described by a file: ``model: {urdf: PATH}`` or ``model: {mjcf: PATH}``.
+
+    Paths are relative to the scenario file the robot entry is written in, or ``package://``
+    URIs looked up in ``package_paths`` (relative to the same file), then ``SRR_PACKAGE_PATH``
+    and ``ROS_PACKAGE_PATH``. ``drive`` says which controller the ``control:`` block belongs
+    to: ``diff_drive`` (a :class:`DiffDriveControl`: wheel joint names, radius, distance) or
+    ``swivel_drive`` (a :class:`ForkliftControl`: drive and swivel joints, wheelbase).
+    ``drives``: per joint, how srr drives a controlled joint the file has no actuator on.
+    ``frictionless_links``: links whose collision shapes slide on the floor without friction
+    (ball casters, which URDF cannot describe). ``footprint_radius``: the circle the scoring
+    uses for clearance and collisions (metres)."""
+
+    urdf: str | None = None
+    mjcf: str | None = None
+    drive: Literal["diff_drive", "swivel_drive"] = "diff_drive"
+    package_paths: tuple[str, ...] = ()
+    drives: dict[str, DriveSpec] = field(default_factory=dict)
+    frictionless_links: tuple[str, ...] = ()
+    footprint_radius: float = num(0.5, 0.0, 50.0, lo_open=True)
+
+    @property
+    def kind(self) -> Literal["urdf", "mjcf"]:
+        """Which format the file is in (the loader makes sure exactly one is set)."""
+        return "urdf" if self.urdf is not None else "mjcf"
+
+    @property
+    def path(self) -> str:
+        """The file as written in the scenario."""
+        return self.urdf if self.urdf is not None else self.mjcf or ""
+
+
+@dataclass(frozen=True)
 class RobotSpec:
     """One block of the ``robots:`` list (forklift seed's robots.yaml shape)."""
 
     name: str
-    model: Literal["forklift", "turtlebot3_waffle_pi"]
+    model: Literal["forklift", "turtlebot3_waffle_pi"] | ModelFile
     enabled: bool = True
     articulation_prim: str | None = None  # default /World/<name>
     # ROS namespace of the robot's relative topics, and the prefix of its frame ids (as
@@ -294,11 +356,30 @@ class RobotSpec:
         return f"{self.frame_prefix or ''}{name}"
 
     @property
+    def model_file(self) -> ModelFile | None:
+        """The model file block, or None for a built-in model."""
+        return self.model if isinstance(self.model, ModelFile) else None
+
+    @property
+    def model_name(self) -> str:
+        """The built-in model's name, or ``urdf:PATH`` / ``mjcf:PATH`` for a model file."""
+        if isinstance(self.model, ModelFile):
+            return f"{self.model.kind}:{self.model.path}"
+        return self.model
+
+    @property
+    def swivel_drive(self) -> bool:
+        """True when the robot is driven by the forklift's swivel-drive controller."""
+        if isinstance(self.model, ModelFile):
+            return self.model.drive == "swivel_drive"
+        return self.model == "forklift"
+
+    @property
     def control_spec(self) -> ForkliftControl | DiffDriveControl:
         """The ``control:`` block, or the model's default when the scenario leaves it out."""
         if self.control is not None:
             return self.control
-        return ForkliftControl() if self.model == "forklift" else DiffDriveControl()
+        return ForkliftControl() if self.swivel_drive else DiffDriveControl()
 
 
 @dataclass(frozen=True)
@@ -350,6 +431,24 @@ class SutSpec:
 
 
 @dataclass(frozen=True)
+class GraphSpec:
+    """One entry of ``graphs:``: a builder function (``"module:function"``) run on the stage
+    at build time, after the built-in graphs (see :mod:`harness.builders.custom`).
+
+    ``name`` (default: the function's name, or the module's last component for ``build``)
+    gives the builder its predictable path ``/World/<name>Graph``; ``robot`` (default: the
+    only enabled robot) is the robot the builder's context puts first; ``params`` are
+    handed to it as they are.
+    """
+
+    builder: str
+    name: str | None = None
+    enabled: bool = True
+    robot: str = ""
+    params: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class WorkerSpec:
     """A person on foot walking a polyline ``route`` (world XY, metres) at ``speed``.
 
@@ -397,8 +496,8 @@ class ToleranceSpec:
     """How far a metric may move in its worse direction before it counts as regressed:
     ``max(abs, rel * |baseline|)``."""
 
-    abs: float | None = num(None, 0.0)  # type: ignore[arg-type]
-    rel: float | None = num(None, 0.0)  # type: ignore[arg-type]
+    abs: float | None = num(None, 0.0)
+    rel: float | None = num(None, 0.0)
 
 
 @dataclass(frozen=True)
@@ -470,6 +569,63 @@ class ScoringSpec:
 
 
 @dataclass(frozen=True)
+class Ros2QosSpec:
+    """QoS of one topic on the live ROS 2 graph (``ros2.qos``), overriding the default."""
+
+    reliability: Literal["reliable", "best_effort"] | None = None
+    durability: Literal["volatile", "transient_local"] | None = None
+    depth: int | None = num(None, 1, 10000)
+
+
+@dataclass(frozen=True)
+class Ros2OutputSpec:
+    """A topic external ROS 2 nodes publish into the run (``ros2.outputs``).
+
+    Lockstep: simulation time advances past a tick only when every output due at that tick
+    has arrived. ``rate_hz`` set: one message is due per period of simulated time (at the
+    first tick of each period). Otherwise the message type must have a ``header``, and a
+    message stamped at or after the tick's time is due at every tick."""
+
+    topic: str
+    type: str
+    rate_hz: float | None = num(None, 0.0, 10000.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class Ros2ProcessSpec:
+    """An external process that runs the nodes under test (``ros2.external``): started in
+    its own process group with the run's ROS_DOMAIN_ID before the first tick, waited for
+    until ``ready_topic`` has a publisher (or each output has one), stopped at the end
+    (SIGINT, then SIGTERM, then SIGKILL). ``use_sim_time`` appends
+    ``--ros-args -p use_sim_time:=true`` to ``cmd``."""
+
+    cmd: tuple[str, ...]
+    name: str = ""
+    ready_topic: str | None = None
+    ready_timeout: float = num(30.0, 0.0, 3600.0, lo_open=True)
+    use_sim_time: bool = True
+    env: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Ros2Spec:
+    """``ros2:`` block: a live ROS 2 graph beside the run (``srr run --ros2``).
+
+    Every recorded topic is also published there from its CDR bytes; ``outputs`` come back
+    from external nodes in lockstep (``timeout``: wall-clock seconds one tick may wait before
+    the run stops INVALID). ``domain_id`` None takes a free one per run; discovery stays on
+    localhost unless ``localhost_only`` is false."""
+
+    enabled: bool = False
+    domain_id: int | None = num(None, 0, 232)
+    localhost_only: bool = True
+    timeout: float = num(10.0, 0.0, 3600.0, lo_open=True)
+    outputs: tuple[Ros2OutputSpec, ...] = ()
+    external: tuple[Ros2ProcessSpec, ...] = ()
+    qos: dict[str, Ros2QosSpec] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class Scenario:
     """A whole scenario, resolved: includes expanded, defaults filled, overrides applied."""
 
@@ -488,8 +644,10 @@ class Scenario:
     workers: tuple[WorkerSpec, ...] = ()
     zones: ZonesSpec = ZonesSpec()
     systems_under_test: tuple[SutSpec, ...] = ()
+    graphs: tuple[GraphSpec, ...] = ()
     scoring: ScoringSpec = ScoringSpec()
     recording: RecordingSpec = RecordingSpec()
+    ros2: Ros2Spec = Ros2Spec()
     baseline: str | None = None  # which baselines/<name>.json to compare with (default: name)
     # Parameters ``srr suite`` sweeps: ``--set`` path → list of values or {from, to, step}
     # (checked by harness.suite.sweep; ``srr run`` runs the scenario as written).

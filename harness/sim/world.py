@@ -9,8 +9,12 @@ Conventions:
 
 * Physics: ``timestep = 1 / (tick_hz * substeps)``; single-threaded and deterministic — the
   same scenario and the same command sequence give bit-identical states.
-* Ground robots are spawned with their root frame on the floor (the spawn's z is ignored) and
-  the spawn's roll/pitch/yaw (degrees, extrinsic X-Y-Z).
+* Built-in ground robots are spawned with their root frame on the floor (the spawn's z is
+  ignored) and the spawn's roll/pitch/yaw (degrees, extrinsic X-Y-Z); a robot from a model
+  file has its root link's frame at the spawn pose, z included (:mod:`harness.sim.robots`).
+* Every robot is an articulation: its root link's prim (and the robot prim) is the
+  articulation root, and :meth:`World.articulation_links` lists its links' parent → child
+  prims, for transform-tree publishers given the root.
 * Poses are world-frame positions and quaternions ``(w, x, y, z)``. Camera prims use Isaac's
   world axes convention (+X forward, +Z up); see :mod:`harness.sim.cameras`.
 * After :meth:`World.step` poses, velocities and position/velocity sensors (IMU orientation
@@ -21,9 +25,11 @@ Conventions:
 from __future__ import annotations
 
 import math
+import os
 import types
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import NamedTuple
 
 import mujoco
@@ -34,7 +40,7 @@ from harness.scenario.schema import Scenario
 from harness.sim.cameras import add_fixed_camera, world_convention_quat
 from harness.sim.geometry import FloatArray, quat_from_mat, quat_from_rpy_deg
 from harness.sim.prims import PrimKind, PrimRef, PrimTable
-from harness.sim.robots import ActuatorMode, RobotBuild, add_robot
+from harness.sim.robots import ActuatorMode, ModelSource, RobotBuild, add_robot
 from harness.sim.sensors import MountedSensors, add_robot_sensors
 from harness.sim.warehouse import add_warehouse, floor_half_extent
 from harness.sim.workers import Worker, WorkerDriver, add_workers, plan_workers
@@ -81,6 +87,8 @@ class RobotInfo:
     links: Mapping[str, str]
     sensors: Mapping[str, str]
     imu_sensors: Mapping[str, tuple[int, int]]
+    # (parent link prim, child link prim) of every link but the root, in model order
+    link_tree: tuple[tuple[str, str], ...] = ()
 
 
 class ImuReading(NamedTuple):
@@ -140,6 +148,11 @@ def _resolve_robot(model: mujoco.MjModel, build: RobotBuild,
         refs.append(JointRef(plain, jid, int(model.jnt_qposadr[jid]), int(model.jnt_dofadr[jid]),
                              act, mode))
     refs.sort(key=lambda r: r.joint_id)
+    body_prim: dict[int, str] = {}
+    for link_prim, body_name in build.links.values():
+        body_prim.setdefault(lookup(mujoco.mjtObj.mjOBJ_BODY, body_name), link_prim)
+    tree = tuple((body_prim[int(model.body_parentid[b])], body_prim[b]) for b in body_ids
+                 if b != root and b in body_prim and int(model.body_parentid[b]) in body_prim)
     imu: dict[str, tuple[int, int]] = {}
     for kind, name in sensors.imu_sensors.items():
         sid = lookup(mujoco.mjtObj.mjOBJ_SENSOR, name)
@@ -150,11 +163,11 @@ def _resolve_robot(model: mujoco.MjModel, build: RobotBuild,
         root_body_id=root, body_ids=body_ids,
         joints=types.MappingProxyType({r.name: r for r in refs}),
         links=types.MappingProxyType({k: v[0] for k, v in build.links.items()}),
-        sensors=sensors.prims, imu_sensors=types.MappingProxyType(imu),
+        sensors=sensors.prims, imu_sensors=types.MappingProxyType(imu), link_tree=tree,
     )
 
 
-def _assemble(scenario: Scenario, prims: PrimTable,
+def _assemble(scenario: Scenario, prims: PrimTable, source: str, environ: Mapping[str, str],
               ) -> tuple[mujoco.MjSpec, list[tuple[RobotBuild, MountedSensors]]]:
     """The whole spec: options, warehouse, enabled robots with their sensors, fixed cameras."""
     spec = mujoco.MjSpec()
@@ -162,19 +175,27 @@ def _assemble(scenario: Scenario, prims: PrimTable,
     add_warehouse(spec, scenario.world, prims)
     builds: list[tuple[RobotBuild, MountedSensors]] = []
     seen: set[str] = set()
-    for robot in scenario.robots:
+    assets: dict[str, bytes] = {}
+    for i, robot in enumerate(scenario.robots):
         if not robot.enabled:
             continue
         if robot.name in seen:
             raise SimulationError(f"robots.{robot.name}: two robots share this name")
         seen.add(robot.name)
-        x, y, _ = robot.spawn.position
+        x, y, z = robot.spawn.position
         quat = quat_from_rpy_deg(robot.spawn.rpy_deg)
-        build = add_robot(spec, robot, (float(x), float(y), 0.0), quat, prims)
+        field = f"robots[{i}]"
+        file = scenario.file_for(field, source)
+        where = ModelSource(file, field, Path(file).parent, environ)
+        height = float(z) if robot.model_file is not None else 0.0
+        build = add_robot(spec, robot, (float(x), float(y), height), quat, prims, where)
+        assets.update(build.assets)
         builds.append((build, add_robot_sensors(spec, robot, build, prims)))
     for camera in scenario.cameras:
         if camera.enabled:
             add_fixed_camera(spec, camera, prims)
+    if assets:
+        spec.assets = assets
     return spec, builds
 
 
@@ -198,12 +219,17 @@ class World:
 
     # ------------------------------------------------------------------ building
     @classmethod
-    def build(cls, scenario: Scenario) -> World:
-        """Build the world for ``scenario`` (enabled robots and cameras only)."""
+    def build(cls, scenario: Scenario, source: str = "<scenario>",
+              environ: Mapping[str, str] | None = None) -> World:
+        """Build the world for ``scenario`` (enabled robots and cameras only). ``source`` is
+        the scenario file: robots' model files are found relative to it (or to the include
+        that holds the robot) and errors about them name it; ``environ`` (default: the
+        process environment) holds ``SRR_PACKAGE_PATH`` / ``ROS_PACKAGE_PATH``."""
         prims = PrimTable()
         workers = plan_workers(scenario)
+        env = os.environ if environ is None else environ
         try:
-            spec, builds = _assemble(scenario, prims)
+            spec, builds = _assemble(scenario, prims, source, env)
             add_workers(spec, workers, prims)
             model = spec.compile()
         except ValueError as err:  # MuJoCo refuses a spec element (e.g. a repeated name)
@@ -356,6 +382,20 @@ class World:
         if best is None:
             raise SimulationError(f"no robot at prim {robot_prim}")
         return best
+
+    def articulation_links(self, prim: str) -> tuple[tuple[str, str], ...] | None:
+        """If ``prim`` is a robot's articulation root (the robot prim or its root link's
+        prim), every link's (parent prim, child prim), the root named ``prim``; else None."""
+        ref = self._prims.get(prim)
+        if ref is None or ref.kind is not PrimKind.BODY:
+            return None
+        for info in self._robots.values():
+            if ref.id == info.root_body_id and (prim == info.prim
+                                                or prim.startswith(info.prim + "/")):
+                root = info.root_body_id
+                return tuple((prim if self._prims[p].id == root else p, c)
+                             for p, c in info.link_tree)
+        return None
 
     def robot_body_ids(self, robot_name: str) -> tuple[int, ...]:
         return self.robot(robot_name).body_ids

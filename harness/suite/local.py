@@ -26,6 +26,7 @@ from typing import IO
 from harness.suite.events import Event, Listener, log_path, not_started
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, crash_reason, outcome_of
+from harness.suite.worker import peak_rss_mb
 
 __all__ = ["LocalExecutor"]
 
@@ -38,6 +39,7 @@ class _Running:
     t0: float
     kill_at: float | None = None  # set once SIGTERM was sent
     timed_out: bool = False
+    peak_rss_mb: float | None = None
 
 
 def _last_line(path: Path) -> str | None:
@@ -94,7 +96,19 @@ class LocalExecutor:
         crash = crash_reason(code) if code < 0 and not r.timed_out else None
         error = _last_line(log) if code == 2 else None
         return outcome_of(r.spec, out_root, exit_code=code, error=error, wall_s=wall,
-                          timed_out=r.timed_out, crash=crash, log=log)
+                          timed_out=r.timed_out, crash=crash, log=log,
+                          peak_rss_mb=r.peak_rss_mb)
+
+    @staticmethod
+    def _poll(r: _Running) -> bool:
+        """Reap ``r`` if it ended (``os.wait4``: its exit status and its own peak memory)."""
+        if r.proc.returncode is None:
+            pid, status, usage = os.wait4(r.proc.pid, os.WNOHANG)
+            if pid == 0:
+                return False
+            r.proc.returncode = os.waitstatus_to_exitcode(status)
+            r.peak_rss_mb = peak_rss_mb(usage)
+        return True
 
     def run(self, specs: Sequence[RunSpec], out_root: Path,
             listen: Listener) -> tuple[list[RunOutcome], bool]:
@@ -110,11 +124,9 @@ class LocalExecutor:
                     listen(Event("start", r.spec, where=f"pid {r.proc.pid}"))
                 now = time.monotonic()
                 for r in list(running):
-                    if r.proc.poll() is not None:
-                        running.remove(r)
-                        done[r.spec.id] = self._outcome(r, out_root)
-                        listen(Event("finish", r.spec, done[r.spec.id]))
-                    elif r.spec.timeout_s is not None and (
+                    if self._reap(r, running, out_root, done, listen):
+                        continue
+                    if r.spec.timeout_s is not None and (
                             r.timed_out or now - r.t0 > r.spec.timeout_s):
                         r.timed_out = True
                         self._stop(r, now)
@@ -127,6 +139,16 @@ class LocalExecutor:
                 done[spec.id] = not_started(spec)
         return [done[s.id] for s in specs], interrupted
 
+    def _reap(self, r: _Running, running: list[_Running], out_root: Path,
+              done: dict[str, RunOutcome], listen: Listener) -> bool:
+        """If ``r`` ended: take it off ``running``, judge it and say so; whether it ended."""
+        if not self._poll(r):
+            return False
+        running.remove(r)
+        done[r.spec.id] = self._outcome(r, out_root)
+        listen(Event("finish", r.spec, done[r.spec.id]))
+        return True
+
     def _drain(self, running: list[_Running], out_root: Path, done: dict[str, RunOutcome],
                listen: Listener) -> None:
         """Stop what runs (SIGTERM, then SIGKILL after the grace period), keep what they
@@ -136,11 +158,7 @@ class LocalExecutor:
             while running:
                 now = time.monotonic()
                 for r in list(running):
-                    if r.proc.poll() is not None:
-                        running.remove(r)
-                        done[r.spec.id] = self._outcome(r, out_root)
-                        listen(Event("finish", r.spec, done[r.spec.id]))
-                    else:
+                    if not self._reap(r, running, out_root, done, listen):
                         self._stop(r, now)
                 time.sleep(self.poll_s)
         finally:

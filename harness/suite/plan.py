@@ -4,7 +4,7 @@ under the suite's output and what it asks of an executor.
 Ids: ``<entry>`` for a scenario without a sweep, ``<entry>[path=value,...]`` for a sweep
 point (the *group*); a run is ``<group>#<repeat>``. Folders: ``runs/<entry>/<point label or
 "nominal">/r<repeat>``. A sweep point is compared with its own baseline,
-``<baseline>@<label>`` (``baselines/dock_worker_crossing@workers.0.speed=1.4.json``).
+``<baseline>@<label>`` (``baselines/dock_worker_crossing@speed=1.4.json``).
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ class RunSpec:
     timeout_s: float | None
     run_dir: str  # POSIX, relative to the suite's output folder
     renders: bool  # has enabled cameras: asks Ray for a GPU share when the cluster has GPUs
+    cost: float = 0.0  # expected work, for scheduling: simulated seconds * (1 + cameras)
 
     def job(self) -> dict[str, Any]:
         """What a worker needs, as plain JSON-able data."""
@@ -47,7 +48,7 @@ def safe_file_name(text: str) -> str:
     return "".join(c if c.isalnum() or c in "_-.=,@" else "_" for c in text)
 
 
-def _point_runs(entry: Entry, point: Point, renders: bool) -> list[RunSpec]:
+def _point_runs(entry: Entry, point: Point, renders: bool, cost: float) -> list[RunSpec]:
     label = point.label
     group = f"{entry.name}[{label}]" if label else entry.name
     overrides = entry.overrides + point.overrides()
@@ -57,7 +58,8 @@ def _point_runs(entry: Entry, point: Point, renders: bool) -> list[RunSpec]:
     return [RunSpec(id=f"{group}#{k}", group=group, entry=entry.name, scenario=entry.scenario,
                     scenario_file=entry.scenario_file, overrides=overrides, params=point.params,
                     sweep=bool(label), repeat=k, repeats=entry.repeat, timeout_s=entry.timeout_s,
-                    run_dir=f"runs/{entry.name}/{folder}/r{k}", renders=renders)
+                    run_dir=f"runs/{entry.name}/{folder}/r{k}", renders=renders,
+                    cost=cost)
             for k in range(1, entry.repeat + 1)]
 
 
@@ -75,11 +77,12 @@ def plan_runs(spec: SuiteSpec) -> tuple[RunSpec, ...]:
             except ScenarioError as err:
                 if not point.params:
                     raise
+                what = f"{err.field}: {err.message}" if err.file == "--set" else str(err)
                 raise ScenarioError(entry.sweep_source, f"sweep ({point.label})",
-                                    str(err)) from None
-            renders = any(c.enabled for c in sc.cameras) or any(
+                                    what) from None
+            cameras = sum(c.enabled for c in sc.cameras) + sum(
                 r.enabled and r.sensors.camera is not None and r.sensors.camera.enabled
                 for r in sc.robots)
-            runs += _point_runs(entry, point, renders)
+            runs += _point_runs(entry, point, cameras > 0, sc.duration * (1 + cameras))
     return tuple(runs)
 

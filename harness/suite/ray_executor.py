@@ -1,6 +1,6 @@
 """Runs as Ray tasks on a real Ray cluster: an existing one (``address``: ``auto``,
-``ray://host:10001`` or ``host:6379``), else a local cluster started here and stopped at the
-end.
+``ray://host:10001`` or ``host:6379``; else ``RAY_ADDRESS``), else a local cluster started here
+and stopped at the end (never a ``ray start`` cluster that happens to run on this machine).
 
 Each run is one task (``num_cpus=1``; runs that render also ask for ``gpu_share`` of a GPU
 when the cluster has GPUs) in a fresh worker process (``max_calls=1``) with no retries, so a
@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import logging
 import os
 import tarfile
 import tempfile
@@ -89,7 +90,8 @@ class RayExecutor:
         self.cluster: dict[str, float] = {}
 
     def _connect(self) -> bool:
-        """Start or join the cluster; True when srr started it (and must stop it)."""
+        """Start or join the cluster; True when srr connected (and must disconnect: that stops
+        a cluster it started, and only leaves one it joined)."""
         try:
             import ray
         except ImportError as err:
@@ -98,31 +100,36 @@ class RayExecutor:
         if ray.is_initialized():
             return False
         cwd = os.getcwd()
+        # RAY_ADDRESS (set by `ray job submit`, or by hand) names a cluster to join, as
+        # --address does; without either, start a cluster of our own even when a `ray start`
+        # cluster runs on this machine (ray.init would otherwise join that one)
+        self.address = self.address or os.environ.get("RAY_ADDRESS") or None
         if self.address:
             try:
-                ray.init(address=self.address, log_to_driver=False, logging_level="ERROR",
+                ray.init(address=self.address, log_to_driver=False, logging_level=logging.ERROR,
                          runtime_env={"working_dir": cwd, "excludes": _EXCLUDES})
             except (ConnectionError, RuntimeError, ValueError) as err:
                 raise SrrError(f"--address {self.address}: cannot join the Ray cluster "
                                f"({type(err).__name__}: {str(err).splitlines()[0]})") from err
-            return False
+            return True
         path = os.pathsep.join(p for p in (cwd, os.environ.get("PYTHONPATH")) if p)
-        ray.init(num_cpus=self.jobs or os.cpu_count() or 1, include_dashboard=False,
-                 log_to_driver=False, logging_level="ERROR", runtime_env={"env_vars": {"PYTHONPATH": path}})
+        ray.init(address="local", num_cpus=self.jobs or os.cpu_count() or 1,
+                 include_dashboard=False, log_to_driver=False, logging_level=logging.ERROR,
+                 runtime_env={"env_vars": {"PYTHONPATH": path}})
         return True
 
     def run(self, specs: Sequence[RunSpec], out_root: Path,
             listen: Listener) -> tuple[list[RunOutcome], bool]:
         import ray
 
-        started_here = self._connect()
+        connected_here = self._connect()
         try:
             self.cluster = {k: float(v) for k, v in ray.cluster_resources().items()}  # type: ignore[no-untyped-call]
             if not self.jobs:
                 self.jobs = max(1, int(self.cluster.get("CPU", 1)))
             return self._run(ray, specs, out_root.resolve(), listen)
         finally:
-            if started_here:
+            if connected_here:
                 ray.shutdown()
 
     def _submit(self, ray: Any, spec: RunSpec, out_root: Path, driver: str) -> _InFlight:
@@ -130,6 +137,10 @@ class RayExecutor:
         remote = ray.remote(max_calls=1)(_task).options(
             num_cpus=1, num_gpus=gpus, max_retries=0, name=f"srr:{spec.id}")
         job = {**spec.job()}
+        here = Path.cwd().resolve()
+        path = Path(job["scenario_file"]).resolve()
+        if self.address and path.is_relative_to(here):  # as found in the uploaded working_dir
+            job["scenario_file"] = path.relative_to(here).as_posix()
         ref = remote.remote(job, str(out_root),
                             None if self.baselines is None else str(self.baselines.resolve()),
                             driver)
@@ -139,9 +150,10 @@ class RayExecutor:
         wall = time.monotonic() - f.t0
         crash = error = None
         code = 3
+        rss = None
         try:
             res = ray.get(f.ref)
-            code, error = int(res["exit_code"]), res["error"]
+            code, error, rss = int(res["exit_code"]), res["error"], res.get("peak_rss_mb")
             if res.get("archive"):
                 dest = out_root / f.spec.run_dir
                 dest.mkdir(parents=True, exist_ok=True)
@@ -162,7 +174,7 @@ class RayExecutor:
                 error = f"{kind}: {cause if cause is not None else first}"
                 code = 2
         return outcome_of(f.spec, out_root, exit_code=code, error=error, wall_s=wall,
-                          timed_out=f.timed_out, crash=crash)
+                          timed_out=f.timed_out, crash=crash, peak_rss_mb=rss)
 
     def _cancel(self, ray: Any, f: _InFlight, now: float) -> None:
         if f.cancelled_at is None:

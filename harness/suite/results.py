@@ -57,6 +57,7 @@ class RunOutcome:
     topics: Mapping[str, str] = field(default_factory=dict)  # topic → sha256
     metrics: tuple[Mapping[str, Any], ...] = ()  # summary["metrics"] (trusted runs only)
     comparison: tuple[Mapping[str, Any], ...] = ()
+    peak_rss_mb: float | None = None  # the worker process's peak resident memory
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -64,6 +65,7 @@ class RunOutcome:
             "scenario": self.spec.scenario, "params": dict(self.spec.params),
             "verdict": self.verdict, "exit_code": self.exit_code,
             "reasons": list(self.reasons), "wall_s": round(self.wall_s, 3),
+            "peak_rss_mb": self.peak_rss_mb,
             "run_dir": self.run_dir, "report": self.report, "log": self.log,
             "digest": self.digest, "timed_out": self.timed_out, "crash": self.crash,
             "metrics": {m["name"]: m.get("value") for m in self.metrics},
@@ -104,7 +106,7 @@ def _salvage(run_path: Path) -> str | None:
 
 def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | None,
                wall_s: float, timed_out: bool = False, crash: str | None = None,
-               log: Path | None = None) -> RunOutcome:
+               log: Path | None = None, peak_rss_mb: float | None = None) -> RunOutcome:
     """Read what run ``spec`` left under ``out_root`` and judge how it ended."""
     run_path = out_root / spec.run_dir
     problem = None
@@ -126,7 +128,7 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
     report = run_path / "report.html"
     base = RunOutcome(
         spec=spec, verdict="INVALID", exit_code=3, reasons=(), wall_s=wall_s,
-        timed_out=timed_out, crash=crash,
+        timed_out=timed_out, crash=crash, peak_rss_mb=peak_rss_mb,
         run_dir=_rel(run_path, out_root) if run_path.is_dir() else None,
         report=_rel(report, out_root) if report.is_file() else None,
         log=_rel(log, out_root) if log is not None and log.is_file() else None,

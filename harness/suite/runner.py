@@ -57,13 +57,14 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
     from harness import api
 
     spec = load_suite(paths, repeat=repeat, timeout_s=timeout_s)
+    runs = plan_runs(spec)  # every point loads: a bad sweep path names where it was declared
     warnings: list[str] = []
     for entry in spec.entries:
         first = expand(entry.sweep)[0]
         pairs = [parse_override(o) for o in entry.overrides + first.overrides()]
         sc = load_scenario(entry.scenario_file, pairs)
         warnings += [f"{entry.name}: {w}" for w in api.validate(sc, entry.scenario_file)]
-    return SuitePlan(spec, plan_runs(spec), tuple(warnings))
+    return SuitePlan(spec, runs, tuple(warnings))
 
 
 def _sweeps(groups: Sequence[GroupResult]) -> list[dict[str, Any]]:
@@ -96,7 +97,12 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
     out_dir.mkdir(parents=True, exist_ok=True)
     started = datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
     t0 = time.monotonic()
-    outcomes, interrupted = executor.run(plan.runs, out_dir, listen or (lambda e: None))
+    # the costliest runs start first (longest processing time first), so the last worker
+    # is not left alone with a long run; results are kept in plan order
+    order = sorted(plan.runs, key=lambda s: -s.cost)
+    done, interrupted = executor.run(order, out_dir, listen or (lambda e: None))
+    by_id = {o.spec.id: o for o in done}
+    outcomes = [by_id[s.id] for s in plan.runs]
     wall = time.monotonic() - t0
     groups = group_runs(outcomes, out_dir)
     ranked = sorted(groups, key=lambda g: GROUP_ORDER.index(g.verdict))

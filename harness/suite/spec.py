@@ -145,9 +145,15 @@ def _entry(raw: Any, base: Path, file: str, field: str, cli: _Defaults,
     if name is not None and (not isinstance(name, str) or not _safe_name(name)):
         raise ScenarioError(file, f"{field}.name", "expected a name of letters, digits, '_', "
                             f"'-' and '.', got {name!r}")
-    return _checked(str(scenario_file), overrides, repeat=repeat, timeout_s=timeout_s,
-                    name=name, sweep_raw=raw.get("sweep"), has_sweep="sweep" in raw,
-                    sweep_file=file, sweep_field=f"{field}.sweep", declared_in=f"{file}: {field}")
+    try:
+        return _checked(str(scenario_file), overrides, repeat=repeat, timeout_s=timeout_s,
+                        name=name, sweep_raw=raw.get("sweep"), has_sweep="sweep" in raw,
+                        sweep_file=file, sweep_field=f"{field}.sweep",
+                        declared_in=f"{file}: {field}")
+    except ScenarioError as err:
+        if err.file != "--set":
+            raise
+        raise ScenarioError(file, f"{field}.set", f"{err.field}: {err.message}") from None
 
 
 def _safe_name(name: str) -> bool:

@@ -64,8 +64,24 @@ def _show(value: Scalar) -> str:
 
 
 def point_label(params: Sequence[tuple[str, Scalar]]) -> str:
-    """``workers.0.speed=1.4,seed=3`` (empty for the nominal point)."""
-    return ",".join(f"{p}={_show(v)}" for p, v in params)
+    """``speed=1.4,seed=3`` (empty for the nominal point): each swept path by its shortest
+    tail that names it alone among the point's paths and does not start with an index
+    (``systems_under_test.safety_monitor.params.reaction_delay`` → ``reaction_delay``;
+    ``workers.0.speed`` with ``workers.1.speed`` stay whole). The summary keeps full paths."""
+    paths = [p for p, _ in params]
+    return ",".join(f"{_short(p, paths)}={_show(v)}" for p, v in params)
+
+
+def _short(path: str, paths: Sequence[str]) -> str:
+    parts = path.split(".")
+    for n in range(1, len(parts) + 1):
+        tail = parts[-n:]
+        if tail[0].isdigit():
+            continue
+        name = ".".join(tail)
+        if sum(1 for q in paths if q == name or q.endswith("." + name)) == 1:
+            return name
+    return path
 
 
 def _range(raw: Mapping[str, Any], file: str, field: str) -> tuple[Scalar, ...]:

@@ -14,20 +14,22 @@ from __future__ import annotations
 
 import json
 import os
+import resource
 import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["run_job"]
+__all__ = ["peak_rss_mb", "run_job"]
 
 
 def run_job(job: Mapping[str, Any], out_root: str | Path,
             baselines: str | None = None) -> dict[str, Any]:
     """Run ``job`` here, writing ``out_root / job["run_dir"]``.
 
-    Returns ``{"exit_code": int, "error": str | None}``; ``error`` is the one-line reason
-    when the run could not be started or finished (an :class:`~harness.errors.SrrError`)."""
+    Returns ``{"exit_code": int, "error": str | None, "peak_rss_mb": float}``; ``error`` is
+    the one-line reason when the run could not be started or finished (an
+    :class:`~harness.errors.SrrError`); ``peak_rss_mb`` this process's peak resident memory."""
     from harness import api
     from harness.errors import SrrError
     from harness.interrupt import sigterm_as_interrupt
@@ -39,10 +41,17 @@ def run_job(job: Mapping[str, Any], out_root: str | Path,
             res = api.run_scenario(scenario, source=str(job["scenario_file"]), out=run_dir,
                                    baselines=Path(baselines) if baselines else None)
     except SrrError as err:
-        return {"exit_code": err.exit_code, "error": str(err)}
+        return {"exit_code": err.exit_code, "error": str(err), "peak_rss_mb": peak_rss_mb()}
     except KeyboardInterrupt:
-        return {"exit_code": 130, "error": "interrupted before the run directory was written"}
-    return {"exit_code": res.exit_code, "error": None}
+        return {"exit_code": 130, "error": "interrupted before the run directory was written",
+                "peak_rss_mb": peak_rss_mb()}
+    return {"exit_code": res.exit_code, "error": None, "peak_rss_mb": peak_rss_mb()}
+
+
+def peak_rss_mb(usage: resource.struct_rusage | None = None) -> float:
+    """Peak resident memory in MiB of this process (or of ``usage``, a child's rusage)."""
+    ru = usage or resource.getrusage(resource.RUSAGE_SELF)
+    return round(ru.ru_maxrss / 1024.0, 1)  # Linux reports KiB
 
 
 def main(argv: list[str]) -> int:

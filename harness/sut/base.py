@@ -20,6 +20,7 @@ import sys
 import zlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any, Literal
 
 import numpy as np
@@ -29,7 +30,8 @@ from harness.bus.endpoints import Endpoint
 from harness.errors import PluginError, ScenarioError
 from harness.scenario import RobotSpec, Scenario, SutSpec, validate_dataclass
 
-__all__ = ["SutContext", "SystemUnderTest", "load_sut", "load_suts", "sut_params"]
+__all__ = ["SutContext", "SystemUnderTest", "import_project_module", "load_sut", "load_suts",
+           "sut_params"]
 
 
 @dataclass(frozen=True)
@@ -111,16 +113,23 @@ def sut_params(cls: type[Any], ctx: SutContext) -> Any:
         raise PluginError(f"{err.field}: {err.message}") from err
 
 
+def import_project_module(name: str) -> ModuleType:
+    """Import ``name`` from the Python path or, after it, the current directory (as ``python
+    -m`` would), so a project's own plug-ins and graph builders work from its root without
+    being installed. Errors are the import's own; callers name the field."""
+    here = os.getcwd()
+    if here not in sys.path:
+        sys.path.append(here)
+    return importlib.import_module(name)
+
+
 def load_sut(spec: SutSpec, field: str) -> SystemUnderTest:
     """Import ``spec.plugin`` (``"module:Class"``) and instantiate it. Modules are found on
     the Python path and, after it, in the current directory (as ``python -m`` would), so a
     project's own plug-ins work from its root without being installed."""
     module_name, _, attr = spec.plugin.partition(":")
-    here = os.getcwd()
-    if here not in sys.path:
-        sys.path.append(here)
     try:
-        module = importlib.import_module(module_name)
+        module = import_project_module(module_name)
     except ImportError as err:
         raise PluginError(f"{field}.plugin: cannot import module {module_name!r}: {err}") \
             from err

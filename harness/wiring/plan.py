@@ -67,7 +67,7 @@ def _fail(sc: Scenario, source: str, field: str, message: str) -> ScenarioError:
 
 
 def _graph_items(stage: GraphStage, origins: Mapping[str, NodeOrigin], sc: Scenario,
-                 source: str) -> tuple[list[PlannedTopic], list[PlannedEdge]]:
+                 source: str, world: Any) -> tuple[list[PlannedTopic], list[PlannedEdge]]:
     topics: list[PlannedTopic] = []
     edges: list[PlannedEdge] = []
     for graph in stage.graphs():
@@ -78,7 +78,8 @@ def _graph_items(stage: GraphStage, origins: Mapping[str, NodeOrigin], sc: Scena
                 return node.graph.get_value(node.name, f"inputs:{name}")
 
             try:
-                declared = node.impl.endpoints(value)
+                declared = [*node.impl.endpoints(value),
+                            *(node.impl.world_edges(value, world) if world is not None else ())]
             except TopicNameError as err:
                 raise _fail(sc, source, _node_field(node, origin, "topicName"),
                             str(err)) from err
@@ -114,9 +115,11 @@ def _sut_items(suts: Sequence[tuple[str, Any, SutContext]], sc: Scenario) -> lis
 
 def plan_wiring(stage: GraphStage, origins: Mapping[str, NodeOrigin],
                 suts: Sequence[tuple[str, Any, SutContext]], sc: Scenario,
-                source: str = "<scenario>") -> Plan:
+                source: str = "<scenario>", world: Any = None) -> Plan:
     """The plan of a built simulation (graphs on ``stage``, systems under test already set
-    up). A topic name that does not resolve is a :class:`ScenarioError` naming its field."""
-    topics, edges = _graph_items(stage, origins, sc, source)
+    up; with its ``world``, also the TF edges only the world can tell, such as an
+    articulation root's links). A topic name that does not resolve is a
+    :class:`ScenarioError` naming its field."""
+    topics, edges = _graph_items(stage, origins, sc, source, world)
     topics += _sut_items(suts, sc)
     return Plan(tuple(topics), tuple(edges))

@@ -7,7 +7,9 @@
 * ``001``: ``publish_camera_tf`` -- a ``/CameraTFActionGraph`` created from a config dict, then
   extended by string path with absolute connection paths.
 
-The ROS publisher types are the fakes of ``conftest.py`` (same Isaac names).
+The ROS publisher types are the fakes of ``conftest.py`` (same Isaac names). Seed 000's six
+helpers run end to end with the real node types, the bus and the recorder in
+``tests/e2e/test_seed000_graphs.py``.
 """
 
 from __future__ import annotations

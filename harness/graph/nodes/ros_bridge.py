@@ -262,7 +262,13 @@ class PublishTransformTree(_TfPublisher):
     Frames are named after the prims (their last path component) with ``frameIdPrefix`` in
     front (an srr input, like robot_state_publisher's ``frame_prefix``; empty in Isaac), so
     several robots built from one model publish distinct frames. ``worldFrameId`` is never
-    prefixed."""
+    prefixed.
+
+    A target that is a robot's articulation root (its root link's prim, or the robot prim)
+    stands for the whole robot, as in Isaac Sim: the root relative to ``parentPrim`` and
+    every other link relative to its parent link, each named after its link. A target equal
+    to ``parentPrim`` publishes no transform of its own (so ``parentPrim`` = ``targetPrims``
+    = the root publishes only the links, leaving the root's pose to odometry)."""
 
     inputs = (
         *BRIDGE_INPUTS,
@@ -282,13 +288,31 @@ class PublishTransformTree(_TfPublisher):
         prefix = str(value("frameIdPrefix"))
         parents = _paths(value("parentPrim"))
         parent = prefix + frame_of(parents[0]) if parents else str(value("worldFrameId"))
-        return parent, [(p, prefix + frame_of(p)) for p in _paths(value("targetPrims"))]
+        return parent, [(p, prefix + frame_of(p)) for p in _paths(value("targetPrims"))
+                        if not parents or p != parents[0]]
+
+    @staticmethod
+    def link_frames(value: Callable[[str], Any],
+                    world: Any) -> list[tuple[str, str, str, str]]:
+        """(parent prim, child prim, parent frame, child frame) of the links of every target
+        that is an articulation root in ``world``."""
+        prefix = str(value("frameIdPrefix"))
+        out = []
+        for target in _paths(value("targetPrims")):
+            for p, c in world.articulation_links(target) or ():
+                out.append((p, c, prefix + frame_of(p), prefix + frame_of(c)))
+        return out
 
     def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
         topic, static = self.edge_topic(value)
         parent, children = self.frames(value)
         return [TfEdge(parent, child, static, topic, "parentPrim", "targetPrims")
                 for _, child in children]
+
+    def world_edges(self, value: Callable[[str], Any], world: Any) -> list[TfEdge]:
+        topic, static = self.edge_topic(value)
+        return [TfEdge(pf, cf, static, topic, "targetPrims", "targetPrims")
+                for _, _, pf, cf in self.link_frames(value, world)]
 
     def initialize(self, db: Any, ctx: Any) -> None:
         super().initialize(db, ctx)
@@ -299,18 +323,24 @@ class PublishTransformTree(_TfPublisher):
     def compute(self, db: Any, ctx: Any) -> bool:
         parents = _paths(db.inputs.parentPrim)
         parent = parents[0] if parents else None
-        parent_frame, targets = self.frames(lambda name: getattr(db.inputs, name))
+
+        def value(name: str) -> Any:
+            return getattr(db.inputs, name)
+
+        parent_frame, targets = self.frames(value)
         poses = []
         for prim, frame in targets:
             t, q = relative_pose(ctx.world, parent, prim)
-            poses.append((frame, t, wxyz_to_xyzw(q)))
-        key = tuple((frame, tuple(np.round(t, 9)), tuple(np.round(xyzw, 9)))
-                    for frame, t, xyzw in poses)
-        if self.unchanged((parent_frame, key)):
+            poses.append((parent_frame, frame, t, wxyz_to_xyzw(q)))
+        for p, c, pf, cf in self.link_frames(value, ctx.world):
+            t, q = relative_pose(ctx.world, p, c)
+            poses.append((pf, cf, t, wxyz_to_xyzw(q)))
+        key = tuple((pf, cf, tuple(np.round(t, 9)), tuple(np.round(xyzw, 9)))
+                    for pf, cf, t, xyzw in poses)
+        if self.unchanged(key):
             return True
         ns = stamp_of(db, ctx)
-        self.emit([transform_stamped(ns, parent_frame, frame, t, xyzw)
-                   for frame, t, xyzw in poses])
+        self.emit([transform_stamped(ns, pf, cf, t, xyzw) for pf, cf, t, xyzw in poses])
         return True
 
 

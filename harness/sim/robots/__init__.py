@@ -1,4 +1,5 @@
-"""Robot models built into a MuJoCo spec, one module per model."""
+"""Robot models built into a MuJoCo spec: one module per built-in model, and robots read from
+model files (URDF, MJCF) in :mod:`.imported`."""
 
 from __future__ import annotations
 
@@ -10,15 +11,18 @@ from harness.sim.geometry import FloatArray
 from harness.sim.prims import PrimTable
 from harness.sim.robots.common import ActuatorMode, RobotBuild
 from harness.sim.robots.forklift import add_forklift
+from harness.sim.robots.imported import ModelSource, add_model_robot
 from harness.sim.robots.turtlebot3 import add_turtlebot3
 
-__all__ = ["ActuatorMode", "RobotBuild", "add_robot", "control_for"]
+__all__ = ["ActuatorMode", "ModelSource", "RobotBuild", "add_robot", "control_for"]
 
 
 def control_for(robot: RobotSpec) -> ForkliftControl | DiffDriveControl:
     """The robot's control block, or its model's default; a mismatched block is refused."""
     expected: type[ForkliftControl] | type[DiffDriveControl]
-    if robot.model == "forklift":
+    if robot.model_file is not None:
+        expected = ForkliftControl if robot.swivel_drive else DiffDriveControl
+    elif robot.model == "forklift":
         expected = ForkliftControl
     elif robot.model == "turtlebot3_waffle_pi":
         expected = DiffDriveControl
@@ -29,14 +33,17 @@ def control_for(robot: RobotSpec) -> ForkliftControl | DiffDriveControl:
     if not isinstance(robot.control, expected):
         raise SimulationError(
             f"robots.{robot.name}.control: a {type(robot.control).__name__} block does not fit "
-            f"model {robot.model!r} (expected {expected.__name__})")
+            f"model {robot.model_name!r} (expected {expected.__name__})")
     return robot.control
 
 
 def add_robot(spec: mujoco.MjSpec, robot: RobotSpec, pos: tuple[float, float, float],
-              quat: FloatArray, prims: PrimTable) -> RobotBuild:
-    """Add ``robot`` with its root frame (on the floor) at ``pos``/``quat``."""
+              quat: FloatArray, prims: PrimTable, source: ModelSource) -> RobotBuild:
+    """Add ``robot`` with its root frame at ``pos``/``quat`` (built-in models: on the floor;
+    ``source`` says where a model file's paths start and what errors name)."""
     control = control_for(robot)
+    if robot.model_file is not None:
+        return add_model_robot(spec, robot, control, pos, quat, prims, source)
     if isinstance(control, ForkliftControl):
         return add_forklift(spec, robot, control, pos, quat, prims)
     return add_turtlebot3(spec, robot, control, pos, quat, prims)

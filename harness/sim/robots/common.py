@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import enum
 import math
+import types
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 
@@ -54,9 +55,11 @@ class ActuatorMode(enum.Enum):
 class RobotBuild:
     """A robot added to a spec (MuJoCo names; ids are resolved after compilation).
 
-    ``joints``: plain joint name → MuJoCo joint name (hinges only, model order).
+    ``joints``: plain joint name → MuJoCo joint name (hinge and slide joints, model order).
     ``actuators``: plain joint name → (MuJoCo actuator name, mode).
     ``links``: link name → (prim path, MuJoCo body name); sensors mount on links.
+    ``assets``: files the robot's meshes and textures are read from, by the names the spec
+    uses (robots from model files; the world's spec compiles from memory).
     """
 
     name: str
@@ -69,6 +72,7 @@ class RobotBuild:
     joints: Mapping[str, str]
     actuators: Mapping[str, tuple[str, ActuatorMode]]
     links: Mapping[str, tuple[str, str]]
+    assets: Mapping[str, bytes] = field(default_factory=lambda: types.MappingProxyType({}))
 
 
 def add_visual_geom(body: mujoco.MjsBody, name: str, gtype: mujoco.mjtGeom,

@@ -1,0 +1,255 @@
+"""Read a robot's model file (URDF or MJCF) into a MuJoCo spec ready to attach to the world.
+
+MuJoCo parses both formats itself (``mujoco.MjSpec.from_string`` / ``from_file``); this
+module prepares what it reads and checks that the result stands on its own:
+
+* URDF: ``package://`` and relative mesh URIs are resolved (:mod:`.paths`) and written back
+  as absolute paths, and the ``<mujoco><compiler>`` extension is set so that visual geoms are
+  kept (MuJoCo drops them from URDF by default), links joined by fixed joints stay separate
+  bodies (each link keeps its name, for TF and sensor mounts) and paths are not stripped.
+  URDF joint types are read from the XML too, since a fixed joint leaves no MuJoCo joint.
+* MJCF: read with its includes; mesh, texture and height-field files are resolved against the
+  file's ``meshdir``/``texturedir``.
+* Every asset file is read once into memory and named by its content hash, so the world's
+  spec compiles from memory (several robots from one file, or files from several
+  directories, never clash) and the meshes are those MuJoCo loads: STL (binary), OBJ, MSH.
+* The model is compiled alone once: a file MuJoCo refuses is reported against the model file,
+  before the world is built. Its robot must be one tree under a single top-level body.
+
+Errors are :class:`ModelFileError` with a one-line message; the caller names the scenario
+field.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import types
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import mujoco
+
+from harness.sim.robots.common import ActuatorMode
+from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
+
+__all__ = ["JointInfo", "LoadedModel", "ModelFileError", "load_model_file"]
+
+_URDF_COMPILER = {"discardvisual": "false", "fusestatic": "false", "strippath": "false"}
+_JOINT_KINDS = {
+    mujoco.mjtJoint.mjJNT_HINGE: "hinge",
+    mujoco.mjtJoint.mjJNT_SLIDE: "slide",
+    mujoco.mjtJoint.mjJNT_BALL: "ball",
+    mujoco.mjtJoint.mjJNT_FREE: "free",
+}
+
+
+class ModelFileError(Exception):
+    """A model file that cannot be used; the message is one line."""
+
+
+@dataclass(frozen=True)
+class JointInfo:
+    """A joint of the model: MuJoCo ``kind`` (``hinge``, ``slide``, ``ball``, ``free``, or
+    ``none`` for a URDF joint MuJoCo has no joint for, e.g. ``fixed``), whether it is limited,
+    and how the file calls it (URDF type, or the MuJoCo kind)."""
+
+    name: str
+    kind: str
+    limited: bool
+    described: str
+
+    @property
+    def spins(self) -> bool:
+        """An unlimited hinge: a joint a wheel can turn on for ever."""
+        return self.kind == "hinge" and not self.limited
+
+
+@dataclass(frozen=True)
+class LoadedModel:
+    """A parsed, checked model file. ``spec`` is fresh (not attached anywhere); ``assets`` are
+    the files it needs, by the names ``spec`` uses. ``links``: body names, model order, the
+    root first. ``actuators``: joint → (actuator name, servo mode or None for another kind)
+    for the actuators the file puts on single joints. ``joint_inertia``: each 1-dof joint's
+    inertia at the reference pose (kg·m²)."""
+
+    path: Path
+    kind: Literal["urdf", "mjcf"]
+    spec: mujoco.MjSpec
+    assets: Mapping[str, bytes]
+    root: str
+    links: tuple[str, ...]
+    link_parents: Mapping[str, str]
+    joints: Mapping[str, JointInfo]
+    actuators: Mapping[str, tuple[str, ActuatorMode | None]]
+    mass: float
+    joint_inertia: Mapping[str, float]
+
+
+def _one_line(err: BaseException) -> str:
+    text = "; ".join(line.strip() for line in str(err).splitlines() if line.strip())
+    text = text.removeprefix("Error: ")
+    return text if len(text) <= 300 else text[:297] + "..."
+
+
+def _read_urdf(path: Path, packages: PackagePath) -> tuple[str, dict[str, str]]:
+    """The URDF text prepared for MuJoCo, and its joints' URDF types."""
+    try:
+        root = ET.fromstring(path.read_bytes())
+    except ET.ParseError as err:
+        raise ModelFileError(f"not well-formed XML: {err}") from err
+    except OSError as err:
+        raise ModelFileError(f"cannot read: {err}") from err
+    if root.tag != "robot":
+        raise ModelFileError(f"not a URDF file (its root element is <{root.tag}>, "
+                             "expected <robot>)")
+    types_ = {j.get("name", ""): j.get("type", "") for j in root.iter("joint")
+              if j.get("name") and j.get("type")}
+    for mesh in root.iter("mesh"):
+        uri = mesh.get("filename")
+        if not uri:
+            raise ModelFileError("a <mesh> element has no filename")
+        try:
+            file = resolve_uri(uri, path.parent, packages)
+        except ModelPathError as err:
+            raise ModelFileError(f"mesh {err}") from err
+        if not file.is_file():
+            raise ModelFileError(f"mesh {uri!r}: file not found ({file})")
+        mesh.set("filename", str(file.resolve()))
+    ext = root.find("mujoco")
+    if ext is None:
+        ext = ET.SubElement(root, "mujoco")
+    compiler = ext.find("compiler")
+    if compiler is None:
+        compiler = ET.SubElement(ext, "compiler")
+    for key, value in _URDF_COMPILER.items():
+        compiler.set(key, value)
+    return ET.tostring(root, encoding="unicode"), types_
+
+
+def _parse(path: Path, kind: Literal["urdf", "mjcf"],
+           packages: PackagePath) -> tuple[mujoco.MjSpec, dict[str, str]]:
+    if not path.exists():
+        raise ModelFileError("file not found")
+    if not path.is_file():
+        raise ModelFileError("is not a file")
+    urdf_types: dict[str, str] = {}
+    try:
+        if kind == "urdf":
+            text, urdf_types = _read_urdf(path, packages)
+            spec = mujoco.MjSpec.from_string(text)
+        else:
+            spec = mujoco.MjSpec.from_file(str(path))
+    except ValueError as err:
+        raise ModelFileError(f"MuJoCo cannot read it as {kind.upper()}: "
+                             f"{_one_line(err)}") from err
+    return spec, urdf_types
+
+
+def _take_assets(spec: mujoco.MjSpec, path: Path, packages: PackagePath) -> dict[str, bytes]:
+    """Read every asset file into memory and point the spec at it by content hash."""
+    base = Path(spec.modelfiledir) if spec.modelfiledir else path.parent
+    assets: dict[str, bytes] = {}
+    groups = (("mesh", spec.meshes, spec.meshdir), ("texture", spec.textures, spec.texturedir),
+              ("height field", spec.hfields, spec.meshdir))
+    for what, items, subdir in groups:
+        for item in items:
+            if not item.file:
+                continue
+            try:
+                file = resolve_uri(item.file, base / subdir if subdir else base, packages)
+            except ModelPathError as err:
+                raise ModelFileError(f"{what} {err}") from err
+            try:
+                data = file.read_bytes()
+            except OSError:
+                raise ModelFileError(f"{what} {item.file!r}: file not found ({file})") from None
+            key = f"srr-{hashlib.sha256(data).hexdigest()[:20]}{file.suffix.lower()}"
+            assets[key] = data
+            item.file = key
+    spec.meshdir = ""
+    spec.texturedir = ""
+    return assets
+
+
+def _servo_mode(model: mujoco.MjModel, act: int) -> ActuatorMode | None:
+    """POSITION for a position servo, VELOCITY for a velocity servo, None for anything else."""
+    gain, bias = model.actuator_gainprm[act], model.actuator_biasprm[act]
+    if (model.actuator_gaintype[act] != mujoco.mjtGain.mjGAIN_FIXED
+            or model.actuator_biastype[act] != mujoco.mjtBias.mjBIAS_AFFINE or gain[0] <= 0):
+        return None
+    if bias[1] == -gain[0] and bias[0] == 0:
+        return ActuatorMode.POSITION
+    if bias[1] == 0 and bias[2] == -gain[0] and bias[0] == 0:
+        return ActuatorMode.VELOCITY
+    return None
+
+
+def _describe(kind: str, limited: bool, urdf_type: str | None) -> str:
+    if urdf_type:
+        return urdf_type
+    return f"{'limited' if limited else 'unlimited'} {kind}" if kind in ("hinge", "slide") \
+        else kind
+
+
+def load_model_file(path: Path, kind: Literal["urdf", "mjcf"],
+                    packages: PackagePath) -> LoadedModel:
+    """Parse ``path``, bring its asset files into memory and compile it alone to check it."""
+    spec, urdf_types = _parse(path, kind, packages)
+    assets = _take_assets(spec, path, packages)
+    for i, act in enumerate(spec.actuators):  # named, so the world can find them again
+        if not act.name:
+            act.name = f"srr_actuator_{i}"
+    tops = list(spec.worldbody.bodies)
+    if not tops:
+        raise ModelFileError("has no bodies (links)")
+    if len(tops) > 1:
+        names = ", ".join(repr(b.name) for b in tops[:4])
+        raise ModelFileError(f"has {len(tops)} top-level bodies ({names}): a robot must be one "
+                             "tree under a single root link")
+    spec.assets = assets
+    try:
+        model = spec.compile()
+    except ValueError as err:
+        raise ModelFileError(f"MuJoCo cannot build it: {_one_line(err)}") from err
+
+    def name(objtype: mujoco.mjtObj, idx: int) -> str:
+        return mujoco.mj_id2name(model, objtype, idx) or ""
+
+    root_id = int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, tops[0].name))
+    links = [name(mujoco.mjtObj.mjOBJ_BODY, b) for b in range(1, model.nbody)]
+    unnamed = [i for i, n in enumerate(links) if not n]
+    if unnamed:
+        raise ModelFileError(f"body {unnamed[0] + 1} has no name: every link needs one")
+    parents = {links[b - 1]: links[int(model.body_parentid[b]) - 1]
+               for b in range(1, model.nbody) if b != root_id}
+    joints: dict[str, JointInfo] = {}
+    inertia: dict[str, float] = {}
+    for j in range(model.njnt):
+        jname = name(mujoco.mjtObj.mjOBJ_JOINT, j)
+        if not jname:
+            continue
+        jkind = _JOINT_KINDS.get(mujoco.mjtJoint(int(model.jnt_type[j])), "other")
+        limited = bool(model.jnt_limited[j])
+        joints[jname] = JointInfo(jname, jkind, limited,
+                                  _describe(jkind, limited, urdf_types.get(jname)))
+        if jkind in ("hinge", "slide"):
+            inertia[jname] = float(model.dof_M0[model.jnt_dofadr[j]])
+    for jname, utype in urdf_types.items():
+        if jname not in joints:
+            joints[jname] = JointInfo(jname, "none", False, utype)
+    actuators: dict[str, tuple[str, ActuatorMode | None]] = {}
+    for a in range(model.nu):
+        if model.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT:
+            continue
+        jname = name(mujoco.mjtObj.mjOBJ_JOINT, int(model.actuator_trnid[a, 0]))
+        aname = name(mujoco.mjtObj.mjOBJ_ACTUATOR, a)
+        if jname and jname not in actuators:
+            actuators[jname] = (aname, _servo_mode(model, a))
+    return LoadedModel(
+        path=path, kind=kind, spec=spec, assets=types.MappingProxyType(assets),
+        root=tops[0].name, links=tuple(links), link_parents=types.MappingProxyType(parents),
+        joints=types.MappingProxyType(joints), actuators=types.MappingProxyType(actuators),
+        mass=float(model.body_mass[1:].sum()), joint_inertia=types.MappingProxyType(inertia))

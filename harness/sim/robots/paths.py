@@ -1,0 +1,94 @@
+"""Where a model file and the files it names are: relative paths and ``package://`` URIs.
+
+A robot entry's model file is written relative to the scenario file that holds the entry (an
+include's robots: relative to the include). ``package://<pkg>/<path>`` URIs — the form ROS
+tools write in URDF files — are looked up the way ROS 1's ``rospack`` looks them up on
+``ROS_PACKAGE_PATH``, one level deep: in each directory of the package path, in order, the
+package is the directory itself when its name (or its ``package.xml``'s ``<name>``) is
+``<pkg>``, else its subdirectory ``<pkg>``. The package path is the model block's
+``package_paths`` (relative to the same scenario file), then ``SRR_PACKAGE_PATH``, then
+``ROS_PACKAGE_PATH`` (``os.pathsep``-separated). ``file://`` URIs are absolute paths.
+
+Pure functions of their arguments: the caller passes the environment in.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["ENV_VARS", "ModelPathError", "PackagePath", "resolve_uri"]
+
+#: Environment variables that extend the package path, in lookup order.
+ENV_VARS = ("SRR_PACKAGE_PATH", "ROS_PACKAGE_PATH")
+_PACKAGE_NAME = re.compile(r"<name>\s*([^<\s]+)\s*</name>")
+
+
+class ModelPathError(Exception):
+    """A path or URI that does not lead to a file (the message says what was tried)."""
+
+
+@dataclass(frozen=True)
+class PackagePath:
+    """The directories ``package://`` URIs are looked up in, in order."""
+
+    dirs: tuple[Path, ...]
+
+    @classmethod
+    def of(cls, base_dir: Path, package_paths: Sequence[str],
+           environ: Mapping[str, str]) -> PackagePath:
+        """``package_paths`` (relative to ``base_dir``), then the environment's."""
+        dirs = [base_dir / p for p in package_paths]
+        for var in ENV_VARS:
+            dirs += [Path(p) for p in environ.get(var, "").split(os.pathsep) if p.strip()]
+        return cls(tuple(dirs))
+
+    def find(self, package: str) -> Path | None:
+        """The directory of ``package``, or None."""
+        for d in self.dirs:
+            if d.is_dir() and (d.name == package or _declared_name(d) == package):
+                return d
+            sub = d / package
+            if sub.is_dir():
+                return sub
+        return None
+
+    def describe(self) -> str:
+        shown = ", ".join(str(d) for d in self.dirs)
+        return f"package path: {shown}" if shown else (
+            "the package path is empty: set the model's package_paths, SRR_PACKAGE_PATH or "
+            "ROS_PACKAGE_PATH")
+
+
+def _declared_name(directory: Path) -> str | None:
+    manifest = directory / "package.xml"
+    if not manifest.is_file():
+        return None
+    try:
+        found = _PACKAGE_NAME.search(manifest.read_text(encoding="utf-8", errors="replace"))
+    except OSError:
+        return None
+    return found.group(1) if found else None
+
+
+def resolve_uri(uri: str, base_dir: Path, packages: PackagePath) -> Path:
+    """The file ``uri`` names: ``package://pkg/path``, ``file:///abs/path``, an absolute path,
+    or a path relative to ``base_dir``. Raises :class:`ModelPathError` when a package is not
+    on the package path; whether the file exists is the caller's to check."""
+    text = uri.strip()
+    if text.startswith("package://"):
+        package, _, rest = text[len("package://"):].partition("/")
+        if not package or not rest:
+            raise ModelPathError(f"{uri!r} is not a package://<package>/<path> URI")
+        root = packages.find(package)
+        if root is None:
+            raise ModelPathError(f"package {package!r} of {uri!r} not found "
+                                 f"({packages.describe()})")
+        return root / rest
+    if text.startswith("file://"):
+        return Path(text[len("file://"):])
+    path = Path(text)
+    return path if path.is_absolute() else base_dir / path

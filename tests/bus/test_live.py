@@ -1,0 +1,150 @@
+"""The live view: a real foxglove-sdk server fed from a real bus, read by a real WebSocket
+client (tests/bus/foxglove_client.py); its configuration checks and its pacing."""
+
+from __future__ import annotations
+
+import socket
+import time
+from collections.abc import Callable, Iterator
+
+import pytest
+
+from harness.bus import TRANSIENT_LOCAL, Bus
+from harness.bus.live import LiveConfig, LiveView, Pacer
+from harness.bus.messages import clock, serialize, tf_message, transform_stamped
+from harness.errors import LiveViewError
+from tests.bus.foxglove_client import LiveClient
+
+TF = "tf2_msgs/msg/TFMessage"
+CLOCK = "rosgraph_msgs/msg/Clock"
+
+
+@pytest.fixture
+def view() -> Iterator[tuple[LiveView, list[str]]]:
+    notices: list[str] = []
+    v = LiveView.start(LiveConfig(port=0, wait_s=20.0), notice=notices.append)
+    try:
+        yield v, notices
+    finally:
+        v.close()
+
+
+def _until(cond: Callable[[], bool], timeout: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not cond():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.01)
+
+
+def _static(ns: int, parent: str, child: str) -> object:
+    return tf_message([transform_stamped(ns, parent, child, (1.0, 2.0, 0.0),
+                                         (0.0, 0.0, 0.0, 1.0))])
+
+
+def test_a_late_subscriber_gets_every_latched_tf_static(
+        view: tuple[LiveView, list[str]]) -> None:
+    """Three publishers share /tf_static (depth 1 each, as ROS latches per publisher): a client
+    that subscribes after all of them were published gets all three, with their bytes and
+    simulation times; a volatile topic published before it subscribed is not replayed."""
+    live, notices = view
+    now = [0]
+    bus = Bus(lambda: now[0])
+    bus.add_tap(live)
+    statics = [_static(0, "world", "odom"), _static(0, "cam_l", "cam_l_world"),
+               _static(0, "cam_r", "cam_r_world")]
+    pub = bus.advertise("/tf_static", TF, TRANSIENT_LOCAL)
+    live.advertise({"/tf": TF, "/tf_static": TF}, bus.qos)
+    for msg in statics:
+        pub.publish(msg)
+    now[0] = 5_000_000
+    bus.publish("/tf", TF, _static(now[0], "odom", "base_link"))
+
+    client = LiveClient(live.port, ["/tf", "/tf_static"]).start()  # /tf is registered first
+    _until(lambda: len(client.got.messages.get("/tf_static", [])) == 3)
+    now[0] = 6_000_000
+    late_tf = _static(now[0], "odom", "base_link")
+    bus.publish("/tf", TF, late_tf)
+    _until(lambda: len(client.got.messages.get("/tf", [])) == 1)
+    live.close()
+    got = client.join()
+    assert notices[0] == f"live view on ws://127.0.0.1:{live.port} (Foxglove: Open connection " \
+        "→ Foxglove WebSocket)"
+    assert got.messages["/tf_static"] == [(0, serialize(m, TF)) for m in statics]
+    assert got.messages["/tf"] == [(6_000_000, serialize(late_tf, TF))]
+    ch = got.channels["/tf_static"]
+    assert (ch["encoding"], ch["schemaEncoding"], ch["schemaName"]) == ("cdr", "ros2msg", TF)
+    assert "geometry_msgs/TransformStamped[] transforms" in ch["schema"]
+
+
+def test_wait_holds_until_a_client_subscribes_and_time_follows_the_simulation(
+        view: tuple[LiveView, list[str]]) -> None:
+    live, notices = view
+    now = [0]
+    bus = Bus(lambda: now[0])
+    bus.advertise("/clock", CLOCK)
+    live.advertise({t: i.msgtype for t, i in bus.topics().items()}, bus.qos)
+    bus.add_tap(live)
+    client = LiveClient(live.port, ["/clock"]).start()
+    t0 = time.monotonic()
+    assert live.wait_for_client() is True
+    assert time.monotonic() - t0 < 15.0
+    assert live.has_client
+    for k in range(5):
+        now[0] = k * 16_666_666
+        bus.publish("/clock", CLOCK, clock(now[0]))
+        live.tick()
+    _until(lambda: len(client.got.times) == 5 and len(client.got.messages.get("/clock", [])) == 5)
+    live.close()
+    got = client.join()
+    assert got.server_info["op"] == "serverInfo" and "time" in got.server_info["capabilities"]
+    assert got.times == [k * 16_666_666 for k in range(5)]
+    assert [t for t, _ in got.messages["/clock"]] == got.times
+    assert notices[-1] == "a Foxglove client is connected; running"
+
+
+def test_wait_gives_up_after_its_time_and_says_so() -> None:
+    notices: list[str] = []
+    with LiveView.start(LiveConfig(port=0, wait_s=0.2), notice=notices.append) as live:
+        t0 = time.monotonic()
+        assert live.wait_for_client() is False
+        assert 0.2 <= time.monotonic() - t0 < 5.0
+    assert notices[-2:] == [f"waiting up to 0.2 s for a Foxglove client on {live.url}",
+                            "no Foxglove client after 0.2 s; running anyway"]
+
+
+def test_a_port_in_use_is_one_clear_error() -> None:
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        with pytest.raises(LiveViewError, match=rf"cannot listen on 127\.0\.0\.1:{port}: .*in "
+                           "use.*--foxglove-port"):
+            LiveView.start(LiveConfig(port=port))
+
+
+@pytest.mark.parametrize(("kwargs", "flag"), [
+    ({"port": 65536}, "--foxglove-port"), ({"port": -1}, "--foxglove-port"),
+    ({"host": " "}, "--foxglove-host"), ({"wait_s": -1.0}, "--foxglove-wait"),
+    ({"wait_s": float("nan")}, "--foxglove-wait"), ({"rate": 0.0}, "--rate"),
+    ({"rate": float("inf")}, "--rate"),
+])
+def test_config_refuses_bad_values(kwargs: dict[str, object], flag: str) -> None:
+    with pytest.raises(LiveViewError, match=f"^{flag}: must"):
+        LiveConfig(**kwargs)  # type: ignore[arg-type]
+
+
+def test_pacer_sleeps_only_while_ahead_of_the_rate() -> None:
+    wall = [100.0]
+    slept: list[float] = []
+
+    def sleep(s: float) -> None:
+        slept.append(s)
+        wall[0] += s
+
+    pacer = Pacer(2.0, clock=lambda: wall[0], sleep=sleep)
+    pacer.start()
+    assert pacer.pace(1_000_000_000) == pytest.approx(0.5)  # 1 s sim at rate 2 is due at 0.5 s
+    wall[0] += 3.0  # the computation fell behind
+    assert pacer.pace(2_000_000_000) == 0.0
+    assert slept == [pytest.approx(0.5)]
+    assert Pacer(None).pace(10**12) == 0.0  # no rate: never sleeps

@@ -1,0 +1,167 @@
+"""`srr run --ros2` with a real external rclpy node in its own process, in lockstep.
+
+The node (tests/ros2/ext_cmd_node.py) subscribes to odometry (with use_sim_time on /clock) and
+publishes cmd_vel from each odometry message alone; the internal route follower is switched
+off, so the forklift moves only as the external node commands."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+from mcap.reader import make_reader
+
+from harness import api
+from harness.bus.messages import TYPESTORE
+from harness.errors import SrrError
+from harness.ros2.domain import lease_domain
+
+if os.environ.get("SRR_REQUIRE_ROS2") == "1":
+    import rclpy  # noqa: F401  (an ImportError here is a collection error, never a skip)
+pytest.importorskip("rclpy", reason="needs the ros2 extra: pip install -e '.[dev,ros2]'")
+
+pytestmark = [pytest.mark.ros2, pytest.mark.slow]
+
+ROOT = Path(__file__).resolve().parents[2]
+FORKLIFT = ROOT / "scenarios" / "forklift_warehouse.yaml"
+NODE = Path(__file__).with_name("ext_cmd_node.py")
+
+
+def _overrides(*node_args: str, timeout: float = 10.0) -> list[str]:
+    cmd = json.dumps([sys.executable, str(NODE), *node_args])
+    return [
+        "systems_under_test.route_follower.enabled=false",
+        "ros2.enabled=true",
+        f"ros2.timeout={timeout}",
+        "ros2.outputs=[{topic: /cmd_vel, type: geometry_msgs/msg/Twist, rate_hz: 60}]",
+        f"ros2.external=[{{name: commander, cmd: {cmd}}}]",
+    ]
+
+
+def _run(tmp: Path, name: str, *node_args: str, duration: float = 2.0,
+         timeout: float = 10.0) -> Any:
+    sc = api.load(FORKLIFT, duration=duration, overrides=_overrides(*node_args,
+                                                                    timeout=timeout))
+    return api.run_scenario(sc, source=str(FORKLIFT), out=tmp / name)
+
+
+def _messages(run_dir: Path, topic: str) -> list[tuple[int, Any]]:
+    (path,) = (run_dir / "bag").glob("*.mcap")
+    out = []
+    with path.open("rb") as f:
+        for schema, _channel, msg in make_reader(f).iter_messages(topics=[topic]):
+            out.append((msg.log_time, TYPESTORE.deserialize_cdr(msg.data, schema.name)))
+    return out
+
+
+def test_external_node_drives_the_robot_in_lockstep(tmp_path: Path) -> None:
+    a = _run(tmp_path, "a")
+    b = _run(tmp_path, "b")
+    odom = _messages(a.run_dir, "/odom")
+    cmds = _messages(a.run_dir, "/cmd_vel")
+    # the bag holds the external node's commands: one per odometry message, at its tick
+    assert len(cmds) == len(odom) == 120
+    assert [t for t, _ in cmds] == [t for t, _ in odom]
+    for (_, o), (_, c) in zip(odom, cmds, strict=True):
+        t = o.header.stamp.sec + o.header.stamp.nanosec * 1e-9
+        assert c.linear.x == pytest.approx(min(1.2, 0.3 + 0.5 * t), abs=1e-12)
+        assert c.angular.z == (0.25 if o.pose.pose.position.y < 0.0 else 0.0)
+    # ...and the robot moved as commanded: ~ the integral of the ramp over 2 s
+    x_end = odom[-1][1].pose.pose.position.x
+    assert 0.9 < abs(x_end) < 1.9
+    # two lockstep runs with the same external node: identical recordings
+    assert a.summary["digest"] == b.summary["digest"]
+    assert a.summary["verdict"] == "MISMATCH"  # 2 s against the 35 s baseline: said so
+    # the node was started with sim time in its own process group and stopped with SIGINT
+    procs = json.loads((a.run_dir / "ros2" / "processes.json").read_text(encoding="utf-8"))
+    assert procs[0]["name"] == "commander" and procs[0]["stopped_with"] == "SIGINT"
+    assert procs[0]["exit_code"] == 0
+    # tf2_msgs is built for rclpy (harness.ros2.tf2_msgs): TF is bridged too
+    assert not any("not published" in w for w in a.summary["warnings"]), a.summary["warnings"]
+
+
+def test_a_node_that_stops_publishing_makes_the_run_invalid(tmp_path: Path) -> None:
+    res = _run(tmp_path, "silent", "--silent-after", "1.0", duration=3.0, timeout=1.0)
+    assert res.verdict == "INVALID" and res.exit_code == 3
+    gate = next(h for h in res.summary["health"] if h["name"] == "ros2_lockstep")
+    assert not gate["ok"]
+    assert "/cmd_vel (geometry_msgs/msg/Twist)" in gate["detail"]
+    assert "t=1 s" in gate["detail"]
+    assert res.summary["stopped"] and (res.run_dir / "summary.json").is_file()
+    assert res.summary["ticks"] == 60  # stopped at the tick that waited in vain
+
+
+def test_an_external_process_that_dies_makes_the_run_invalid(tmp_path: Path) -> None:
+    res = _run(tmp_path, "dies", "--exit-after", "0.5", duration=3.0, timeout=30.0)
+    assert res.verdict == "INVALID"
+    gate = next(h for h in res.summary["health"] if h["name"] == "ros2_lockstep")
+    assert "external process commander exited with code 5" in gate["detail"]
+    procs = json.loads((res.run_dir / "ros2" / "processes.json").read_text(encoding="utf-8"))
+    assert procs[0]["exit_code"] == 5 and procs[0]["stopped_with"] is None
+
+
+def test_runs_take_different_domains_and_release_them() -> None:
+    a, b = lease_domain(None), lease_domain(None)
+    try:
+        assert a.domain_id != b.domain_id and 1 <= a.domain_id <= 101
+    finally:
+        a.release()
+        b.release()
+    assert lease_domain(7).domain_id == 7  # as the scenario says, not locked
+
+
+def test_external_safety_monitor_is_scored_like_the_built_in(tmp_path: Path) -> None:
+    """The dock scene with the built-in safety monitor off and an external rclpy one in its
+    place (fed by the built-in perception's /perception/tracks over ROS 2): scored with the
+    same metrics, against the same baseline as the built-in monitor. It places the odometry
+    in the world with /tf_static, received over ROS 2 (tf2_msgs built for rclpy)."""
+    dock = ROOT / "scenarios" / "dock_worker_crossing.yaml"
+    node = json.dumps([sys.executable, str(Path(__file__).with_name("ext_safety_node.py"))])
+    sc = api.load(dock, overrides=[
+        "systems_under_test.safety_monitor.enabled=false",
+        "ros2.enabled=true",
+        "ros2.outputs=[{topic: /safety/is_muted, type: std_msgs/msg/Bool, rate_hz: 5},"
+        " {topic: /safety/alarm, type: std_msgs/msg/Bool, rate_hz: 5}]",
+        f"ros2.external=[{{name: safety, cmd: {node}}}]",
+    ])
+    res = api.run_scenario(sc, source=str(dock), out=tmp_path / "dock")
+    metrics = {m["name"]: m["value"] for m in res.summary["metrics"]}
+    assert res.summary["topics"]["/safety/is_muted"]["count"] == 180  # 5 Hz for 36 s
+    assert metrics["safety.match_rate"] > 95.0  # PASS band; the built-in gets 99.1 %
+    assert metrics["safety.mute_never_engaged"] == 0
+    assert metrics["safety.mute_lag.max"] < 0.3
+    assert Path(res.summary["baseline"]["path"]).name == "dock_worker_crossing.json"
+    assert res.verdict == "PASS", res.summary["reasons"]
+
+
+@pytest.mark.parametrize(("extra", "words"), [
+    (["ros2.outputs=[{topic: /cmd_vel, type: geometry_msgs/msg/Twist}]"],
+     "ros2.outputs[0].rate_hz: geometry_msgs/msg/Twist has no header stamp"),
+    (["ros2.outputs=[{topic: /cmd_vel, type: geometry_msgs/msg/Twst, rate_hz: 20}]"],
+     "ros2.outputs[0].type: no rclpy type support for 'geometry_msgs/msg/Twst'"),
+    (["ros2.outputs=[{topic: /cmd_vel, type: geometry_msgs/msg/Twist, rate_hz: 20}]",
+      "ros2.external=[{cmd: [no-such-node-binary]}]"],
+     "ros2.external[0].cmd: 'no-such-node-binary' is not an executable"),
+])
+def test_validate_checks_the_ros2_block_before_a_run(extra: list[str], words: str) -> None:
+    sc = api.load(FORKLIFT, overrides=["systems_under_test.route_follower.enabled=false",
+                                       "ros2.enabled=true", *extra])
+    with pytest.raises(SrrError) as err:
+        api.validate(sc, str(FORKLIFT))
+    assert str(err.value) == f"{FORKLIFT}: {words}" or words in str(err.value)
+    assert str(err.value).startswith(str(FORKLIFT) + ": ros2.")
+
+
+def test_validate_counts_external_outputs_as_publishers() -> None:
+    sc = api.load(FORKLIFT, overrides=[
+        "systems_under_test.route_follower.enabled=false", "ros2.enabled=true",
+        "ros2.outputs=[{topic: /cmd_vel, type: geometry_msgs/msg/Twist, rate_hz: 20}]"])
+    warnings = api.validate(sc, str(FORKLIFT))
+    assert not any("/cmd_vel" in w for w in warnings)  # the external node publishes it
+    off = api.load(FORKLIFT, overrides=["systems_under_test.route_follower.enabled=false"])
+    with pytest.raises(SrrError, match="nothing in the scenario publishes /cmd_vel"):
+        api.validate(off, str(FORKLIFT))

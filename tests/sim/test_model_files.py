@@ -1,0 +1,296 @@
+"""Robots from model files: package:// lookup, errors that name the scenario file, the field
+and the model file, several instances of one file, the spawn pose, the articulation's links,
+and a TurtleBot3 described by a URDF driving exactly like the built-in one."""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+
+from harness import api
+from harness.cli import main
+from harness.errors import ScenarioError
+from harness.scenario import load_scenario
+from harness.sim import World
+from harness.sim.geometry import rpy_from_quat
+from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
+from tests.conftest import SCENARIOS
+from tests.e2e.bagread import decoded
+
+MODELS = SCENARIOS / "models"
+DIFFBOT = MODELS / "srr_diffbot" / "urdf" / "srr_diffbot.urdf"
+PALLET = MODELS / "pallet_truck" / "pallet_truck.xml"
+DIFFBOT_LINKS = {"base_footprint", "base_link", "left_wheel", "right_wheel", "caster_link",
+                 "lidar_link"}
+DIFF_CONTROL = {"joint_names": ["left_wheel_hinge", "right_wheel_hinge"], "wheel_radius": 0.05,
+                "wheel_distance": 0.26}
+PALLET_CONTROL = {"drive_joint": "traction_motor", "swivel_joint": "steer_hinge",
+                  "wheelbase": 1.2, "wheel_radius": 0.12,
+                  "reverse_logic": {"flip_linear_x": False, "flip_angular_z": False}}
+
+
+def diffbot(name: str = "bot", **extra: Any) -> dict[str, Any]:
+    model = {"urdf": str(DIFFBOT), "package_paths": [str(MODELS)],
+             "frictionless_links": ["caster_link"]}
+    model.update(extra.pop("model", {}))
+    return {"name": name, "model": model, "control": dict(DIFF_CONTROL), **extra}
+
+
+def pallet(name: str = "truck", **extra: Any) -> dict[str, Any]:
+    model = {"mjcf": str(PALLET), "drive": "swivel_drive", **extra.pop("model", {})}
+    return {"name": name, "model": model, "control": dict(PALLET_CONTROL), **extra}
+
+
+def write(tmp: Path, *robots: dict[str, Any]) -> Path:
+    path = tmp / "scene.yaml"
+    path.write_text(yaml.safe_dump({
+        "format_version": 1, "name": "models", "duration": 1.0,
+        "world": {"size": [12.0, 8.0], "shelves": [], "dock": {"enabled": False}},
+        "robots": list(robots)}))
+    return path
+
+
+def error_of(path: Path) -> ScenarioError:
+    with pytest.raises(ScenarioError) as info:
+        api.validate(load_scenario(path), source=str(path))
+    return info.value
+
+
+# ------------------------------------------------------------------ package:// lookup
+
+def test_package_uris_resolve_like_ros(tmp_path: Path) -> None:
+    pkg = tmp_path / "ws" / "src" / "my_robot"
+    (pkg / "meshes").mkdir(parents=True)
+    renamed = tmp_path / "checkout"
+    renamed.mkdir()
+    (renamed / "package.xml").write_text("<package><name>other_pkg</name></package>")
+    path = PackagePath.of(tmp_path, ["ws/src"], {"SRR_PACKAGE_PATH": str(renamed),
+                                                 "ROS_PACKAGE_PATH": str(pkg)})
+    assert path.dirs == (tmp_path / "ws/src", renamed, pkg)
+    assert resolve_uri("package://my_robot/meshes/a.stl", tmp_path, path) == \
+        pkg / "meshes" / "a.stl"
+    assert resolve_uri("package://other_pkg/x.obj", tmp_path, path) == renamed / "x.obj"
+    assert resolve_uri("meshes/a.stl", pkg, path) == pkg / "meshes" / "a.stl"
+    assert resolve_uri("file:///abs/a.stl", pkg, path) == Path("/abs/a.stl")
+    # the package itself on ROS_PACKAGE_PATH is found by its directory's name
+    only = PackagePath.of(tmp_path, [], {"ROS_PACKAGE_PATH": str(pkg)})
+    assert resolve_uri("package://my_robot/m.stl", tmp_path, only) == pkg / "m.stl"
+    with pytest.raises(ModelPathError, match=r"package 'nope'.*package path: "):
+        resolve_uri("package://nope/m.stl", tmp_path, path)
+    with pytest.raises(ModelPathError, match="SRR_PACKAGE_PATH or ROS_PACKAGE_PATH"):
+        resolve_uri("package://nope/m.stl", tmp_path, PackagePath(()))
+
+
+def test_meshes_found_through_the_environment(tmp_path: Path) -> None:
+    """The URDF copied elsewhere, its package:// meshes found on SRR_PACKAGE_PATH."""
+    urdf = tmp_path / "robot.urdf"
+    shutil.copy(DIFFBOT, urdf)
+    robot = diffbot()
+    robot["model"] = {"urdf": "robot.urdf"}
+    path = write(tmp_path, robot)
+    sc = load_scenario(path)
+    err = error_of(path)
+    assert err.field == "robots[0].model.urdf" and "package 'srr_diffbot'" in err.message
+    assert "SRR_PACKAGE_PATH" in err.message
+    world = World.build(sc, str(path), environ={"SRR_PACKAGE_PATH": str(MODELS)})
+    meshes = [world.model.mesh(i).name for i in range(world.model.nmesh)]
+    assert sorted(meshes) == ["bot/chassis", "bot/wheel"]  # STL and OBJ, as MuJoCo reads them
+
+
+def test_paths_are_relative_to_the_file_that_holds_the_robot(tmp_path: Path) -> None:
+    """A robot written in an include finds its model next to the include."""
+    (tmp_path / "robots" / "urdf").mkdir(parents=True)
+    shutil.copy(DIFFBOT, tmp_path / "robots" / "urdf" / "bot.urdf")
+    robot = diffbot()
+    robot["model"] = {"urdf": "urdf/bot.urdf", "package_paths": [str(MODELS)]}
+    (tmp_path / "robots" / "fleet.yaml").write_text(yaml.safe_dump({"robots": [robot]}))
+    path = tmp_path / "scene.yaml"
+    path.write_text(yaml.safe_dump({"format_version": 1, "name": "inc",
+                                    "include": ["robots/fleet.yaml"]}))
+    sc = load_scenario(path)
+    assert set(World.build(sc, str(path)).robot("bot").links) == DIFFBOT_LINKS
+    (tmp_path / "robots" / "urdf" / "bot.urdf").unlink()
+    err = error_of(path)
+    assert err.file == str(tmp_path / "robots" / "fleet.yaml")
+    assert err.field == "robots[0].model.urdf" and "robots/urdf/bot.urdf: file not found" in \
+        err.message
+
+
+# ------------------------------------------------------------------ bad input
+
+ASCII_STL = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n" \
+            "vertex 0 1 0\nendloop\nendfacet\nendsolid x\n"
+
+
+@pytest.mark.parametrize(("make", "field", "words"), [
+    (lambda t: diffbot(model={"urdf": "missing.urdf"}), "robots[0].model.urdf",
+     ["missing.urdf: file not found"]),
+    (lambda t: diffbot(model={"urdf": "broken.urdf"}), "robots[0].model.urdf",
+     ["broken.urdf: not well-formed XML"]),
+    (lambda t: pallet(model={"mjcf": "broken.xml"}), "robots[0].model.mjcf",
+     ["broken.xml: MuJoCo cannot read it as MJCF", "unrecognized element"]),
+    (lambda t: diffbot(model={"urdf": "ascii.urdf"}), "robots[0].model.urdf",
+     ["ascii.urdf: MuJoCo cannot build it", "ASCII"]),
+    (lambda t: diffbot(model={"urdf": "nomesh.urdf"}), "robots[0].model.urdf",
+     ["nomesh.urdf: mesh 'package://srr_diffbot/meshes/nope.stl': file not found"]),
+    (lambda t: pallet(model={"mjcf": "two.xml"}), "robots[0].model.mjcf",
+     ["two.xml: has 2 top-level bodies ('a', 'b')"]),
+    (lambda t: diffbot(control={**DIFF_CONTROL,
+                                "joint_names": ["left_wheel_hinge", "right_wheel_hing"]}),
+     "robots[0].control.joint_names[1]",
+     ["srr_diffbot.urdf has no joint 'right_wheel_hing'", "did you mean 'right_wheel_hinge'"]),
+    (lambda t: diffbot(control={**DIFF_CONTROL,
+                                "joint_names": ["left_wheel_hinge", "lidar_joint"]}),
+     "robots[0].control.joint_names[1]",
+     ["joint 'lidar_joint' of", "srr_diffbot.urdf is fixed", "a wheel must turn freely"]),
+    (lambda t: diffbot(control={**DIFF_CONTROL, "joint_names": ["left_wheel_hinge"]}),
+     "robots[0].control.joint_names", ["needs two wheel joints"]),
+    (lambda t: pallet(control={**PALLET_CONTROL, "drive_joint": "steer_hinge",
+                               "swivel_joint": "load_wheel_left_axle"}),
+     "robots[0].control.drive_joint", ["is limited hinge: a wheel must turn freely"]),
+    (lambda t: pallet(control={**PALLET_CONTROL, "drive_joint": "load_wheel_left_axle",
+                               "swivel_joint": "traction_motor"}),
+     "robots[0].control.swivel_joint",
+     ["has a velocity servo ('traction_servo')", "commands it by position"]),
+    (lambda t: pallet(model={"drives": {"traction_motor": {"kv": 5.0}}}),
+     "robots[0].model.drives.traction_motor", ["already has actuator 'traction_servo'"]),
+    (lambda t: diffbot(model={"drives": {"left_wheel_hing": {"kv": 1.0}}}),
+     "robots[0].model.drives.left_wheel_hing", ["did you mean 'left_wheel_hinge'"]),
+    (lambda t: diffbot(model={"frictionless_links": ["castor_link"]}),
+     "robots[0].model.frictionless_links[0]", ["no link 'castor_link'",
+                                               "did you mean 'caster_link'"]),
+    (lambda t: diffbot(sensors={"lidar": {"link": "lidar_lnk"}}), "robots[0].sensors.lidar.link",
+     ["srr_diffbot.urdf has no link 'lidar_lnk'", "did you mean 'lidar_link'"]),
+    (lambda t: diffbot(control={"joint_names": ["a", "b"], "wheelbase": 1.0}),
+     "robots[0].control.wheelbase", ["unknown field"]),
+    (lambda t: pallet(model={"urdf": "x.urdf"}), "robots[0].model",
+     ["exactly one of 'urdf' and 'mjcf'"]),
+])
+def test_bad_models_name_scenario_field_and_model_file(tmp_path: Path, make: Any, field: str,
+                                                       words: list[str]) -> None:
+    (tmp_path / "broken.urdf").write_text("<robot name='x'><link name='a'></robot>")
+    (tmp_path / "broken.xml").write_text("<mujoco><worldbody><body><bad/></body></worldbody>"
+                                         "</mujoco>")
+    (tmp_path / "flat.stl").write_text(ASCII_STL)
+    (tmp_path / "nomesh.urdf").write_text(DIFFBOT.read_text().replace(
+        "package://srr_diffbot/meshes/chassis.stl", "package://srr_diffbot/meshes/nope.stl"))
+    (tmp_path / "two.xml").write_text(
+        "<mujoco><worldbody><body name='a'><geom size='0.1'/></body>"
+        "<body name='b'><geom size='0.1'/></body></worldbody></mujoco>")
+    (tmp_path / "ascii.urdf").write_text(
+        DIFFBOT.read_text().replace("package://srr_diffbot/meshes/chassis.stl", "flat.stl"))
+    path = write(tmp_path, make(tmp_path))
+    err = error_of(path)
+    assert (err.file, err.field) == (str(path), field)
+    for word in words:
+        assert word in err.message
+    assert "\n" not in str(err)
+
+
+def test_srr_validate_answers_a_bad_joint_with_one_line_and_exit_2(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, diffbot(control={**DIFF_CONTROL,
+                                            "joint_names": ["left_wheel", "right_wheel_hinge"]}))
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert err.startswith(f"srr validate: {path}: robots[0].control.joint_names[0]: ")
+    assert f"{DIFFBOT} has no joint 'left_wheel' (did you mean 'left_wheel_hinge'" in err
+
+
+# ------------------------------------------------------------------ in the world
+
+def test_instances_of_one_file_coexist_at_their_spawn_poses(tmp_path: Path) -> None:
+    path = write(tmp_path,
+                 diffbot("bot_a", spawn={"position": [1.0, 2.0, 0.0], "rpy_deg": [0, 0, 90]}),
+                 diffbot("bot_b", spawn={"position": [-1.0, -2.0, 0.0]}),
+                 pallet("truck", spawn={"position": [-4.0, 2.0, 0.0], "rpy_deg": [0, 0, 180]},
+                        safety_indicator={"enabled": True, "indicator_prim":
+                                          "/World/truck/chassis/safety_indicator"}),
+                 {"name": "tb3", "model": "turtlebot3_waffle_pi",
+                  "spawn": {"position": [3.0, -2.0, 0.0]}})
+    sc = load_scenario(path)
+    world = World.build(sc, str(path))
+    for name, xy, yaw in (("bot_a", (1.0, 2.0), 90.0), ("bot_b", (-1.0, -2.0), 0.0),
+                          ("truck", (-4.0, 2.0), 180.0)):
+        pos, quat = world.prim_pose(world.base_prim(name))
+        assert pos == pytest.approx((*xy, 0.0), abs=1e-9)
+        assert math.degrees(rpy_from_quat(quat)[2]) % 360 == pytest.approx(yaw % 360)
+    a, b = world.robot("bot_a"), world.robot("bot_b")
+    assert set(a.links) == set(b.links) == DIFFBOT_LINKS
+    assert set(a.body_ids).isdisjoint(b.body_ids)
+    assert a.base_prim == "/World/bot_a/base_footprint" and a.default_base_frame == \
+        "base_footprint"
+    assert tuple(a.joints) == ("left_wheel_hinge", "right_wheel_hinge")
+    assert world.robot("truck").joints["steer_hinge"].mode is not None
+    # the articulation root stands for every link, by parent link
+    links = world.articulation_links("/World/bot_a/base_footprint")
+    assert links is not None and {(p.rsplit("/", 1)[1], c.rsplit("/", 1)[1])
+                                  for p, c in links} == {
+        ("base_footprint", "base_link"), ("base_link", "left_wheel"),
+        ("base_link", "right_wheel"), ("base_link", "caster_link"),
+        ("base_link", "lidar_link")}
+    assert world.articulation_links("/World/bot_a/base_link") is None  # not the root
+    # the whole scene's wiring holds: four prefixed TF trees under one world
+    api.validate(sc, source=str(path))
+    assert world.prim_ref("/World/truck/chassis/safety_indicator").kind.value == "geom"
+    # the file's own floor was not taken along; its mesh was
+    names = [world.model.geom(i).name for i in range(world.model.ngeom)]
+    assert "truck/mast" in names and "truck/floor" not in names
+
+
+def test_a_parked_file_robot_needs_no_joint_names(tmp_path: Path) -> None:
+    robot = diffbot(control={"enabled": False})
+    path = write(tmp_path, robot)
+    world = World.build(load_scenario(path), str(path))
+    assert world.model.nu == 0 and set(world.robot("bot").joints) == {"left_wheel_hinge",
+                                                                      "right_wheel_hinge"}
+
+
+def test_file_robot_rolls_forward_on_positive_wheel_rates(tmp_path: Path) -> None:
+    path = write(tmp_path, diffbot())
+    world = World.build(load_scenario(path), str(path))
+    rate = 0.3 / 0.05  # 0.3 m/s
+    for _ in range(120):  # 0.5 s of 240 Hz steps, commands held
+        world.apply_joint_commands("/World/bot", ["left_wheel_hinge", "right_wheel_hinge"],
+                                   velocities=[rate, rate])
+        world.step(1)
+    vel, _ = world.prim_velocity("/World/bot/base_footprint")
+    assert vel[0] == pytest.approx(0.3, rel=0.05) and abs(vel[1]) < 0.01
+
+
+# ------------------------------------------------------------------ built-in vs URDF
+
+def odometry(run_dir: Path) -> np.ndarray:
+    rows = []
+    for topic, _, _, msg in decoded(run_dir):
+        if topic == "/odom":
+            p, q = msg.pose.pose.position, msg.pose.pose.orientation
+            rows.append((p.x, p.y, math.atan2(2 * (q.w * q.z + q.x * q.y),
+                                              1 - 2 * (q.y * q.y + q.z * q.z)),
+                         msg.twist.twist.linear.x, msg.twist.twist.angular.z))
+    return np.asarray(rows)
+
+
+def test_turtlebot3_from_urdf_drives_like_the_built_in(tmp_path: Path) -> None:
+    """The same teleop script on the built-in TurtleBot3 and on its URDF twin: the same
+    odometry (the models are the same bodies, masses, contacts and drives)."""
+    path = SCENARIOS / "turtlebot3_urdf.yaml"
+    runs = {}
+    builtin = ["robots.turtlebot3.model=turtlebot3_waffle_pi"]
+    for label, sets in (("urdf", []), ("builtin", builtin)):
+        sc = api.load(path, overrides=sets)
+        api.run_scenario(sc, source=str(path), out=tmp_path / label)
+        runs[label] = odometry(tmp_path / label)
+    urdf, ref = runs["urdf"], runs["builtin"]
+    assert urdf.shape == ref.shape == (300, 5)
+    assert np.abs(urdf - ref).max() < 1e-6
+    x, y, yaw = ref[-1, :3]
+    assert (x, y) == pytest.approx((0.29, 0.29), abs=0.02) and yaw == pytest.approx(
+        math.pi / 2, abs=0.05)

@@ -1,0 +1,148 @@
+"""Suite files, folders and sweeps → entries and runs; every mistake names file and field."""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import pytest
+
+from harness.errors import ScenarioError, SrrError
+from harness.suite.plan import plan_runs
+from harness.suite.runner import plan_suite
+from harness.suite.spec import load_suite
+from harness.suite.stats import describe
+from harness.suite.sweep import expand, parse_sweep
+
+ROOT = Path(__file__).resolve().parents[2]
+FORKLIFT = ROOT / "scenarios" / "forklift_warehouse.yaml"
+
+
+def _suite(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "suite.yaml"
+    p.write_text(text.replace("FORKLIFT", str(FORKLIFT)), encoding="utf-8")
+    return p
+
+
+def test_sweep_values_range_and_grid() -> None:
+    params = parse_sweep({"a.b": [1, 2], "seed": {"from": 0.1, "to": 0.5, "step": 0.2}}, "f")
+    assert params[1].values == (0.1, 0.3, 0.5)  # binary noise rounded away
+    points = expand(params)
+    assert [p.label for p in points] == ["b=1,seed=0.1", "b=1,seed=0.3", "b=1,seed=0.5",
+                                         "b=2,seed=0.1", "b=2,seed=0.3", "b=2,seed=0.5"]
+    assert parse_sweep({"n": {"from": 1, "to": 7, "step": 3}}, "f")[0].values == (1, 4, 7)
+    assert points[0].overrides() == ("a.b=1", "seed=0.1")
+    assert expand(())[0].label == ""
+
+
+@pytest.mark.parametrize(("raw", "field", "words"), [
+    ({"x": []}, "sweep.x", "no values"),
+    ({"x": {"from": 0, "to": 1, "step": 0}}, "sweep.x.step", "> 0"),
+    ({"x": {"from": 2, "to": 1, "step": 1}}, "sweep.x.to", ">= from"),
+    ({"x": {"from": 0, "to": 1, "stp": 1}}, "sweep.x.stp", "unknown key"),
+    ({"x": {"from": 0, "to": 1e9, "step": 1}}, "sweep.x.step", "at most"),
+    ({"x": [1, 1]}, "sweep.x", "listed twice"),
+    ({"x": [[1]]}, "sweep.x[0]", "number, string or boolean"),
+    ({"x": 3}, "sweep.x", "list of values"),
+    ([1], "sweep", "mapping"),
+])
+def test_sweep_errors_name_the_field(raw: object, field: str, words: str) -> None:
+    with pytest.raises(ScenarioError) as err:
+        parse_sweep(raw, "s.yaml")
+    assert err.value.file == "s.yaml" and err.value.field == field
+    assert words in err.value.message
+
+
+def test_suite_file_precedence_names_and_runs(tmp_path: Path) -> None:
+    p = _suite(tmp_path, """
+suite: nightly
+defaults: {repeat: 2, timeout: 50}
+scenarios:
+  - FORKLIFT
+  - path: FORKLIFT
+    name: fast
+    repeat: 3
+    set: {duration: 4}
+    sweep: {systems_under_test.route_follower.params.speed: [1.0, 2.0]}
+""")
+    spec = load_suite([p])
+    assert spec.name == "nightly"
+    a, b = spec.entries
+    assert (a.name, a.repeat, a.timeout_s) == ("forklift_warehouse", 2, 50.0)
+    assert (b.name, b.repeat, b.overrides) == ("fast", 3, ("duration=4",))
+    assert load_suite([p], repeat=5).entries[0].repeat == 5  # the CLI beats the defaults
+    assert load_suite([p], repeat=5).entries[1].repeat == 3  # the entry beats the CLI
+    runs = plan_runs(spec)
+    assert len(runs) == 2 + 2 * 3
+    r = runs[2]
+    assert r.group == "fast[speed=1]"
+    assert r.id == r.group + "#1" and r.sweep and not r.renders
+    assert r.run_dir == "runs/fast/speed=1/r1"
+    assert "baseline='forklift_warehouse@speed=1'" \
+        in r.overrides
+    assert runs[0].run_dir == "runs/forklift_warehouse/nominal/r1"
+
+
+@pytest.mark.parametrize(("body", "field", "words"), [
+    ("scenarios: []", "scenarios", "no scenarios"),
+    ("scenarios: [{path: nowhere.yaml}]", "scenarios[0].path", "no such file"),
+    ("scenarios: [{path: FORKLIFT, repeat: 0}]", "scenarios[0].repeat", "whole number > 0"),
+    ("scenarios: [{path: FORKLIFT, timeout: -1}]", "scenarios[0].timeout", "seconds > 0"),
+    ("scenarios: [{path: FORKLIFT, colour: red}]", "scenarios[0].colour", "unknown key"),
+    ("scenarios: [{path: FORKLIFT, name: 'a/b'}]", "scenarios[0].name", "letters"),
+    ("scenarios: [FORKLIFT, FORKLIFT]", "scenarios[1]: name", "already used"),
+    ("defaults: {repeats: 2}\nscenarios: [FORKLIFT]", "defaults.repeats", "unknown key"),
+    ("scenarios: [{path: FORKLIFT, sweep: {robots.nobody.speed: [1]}}]", "sweep (", "no list"),
+    ("scenarios: [{path: FORKLIFT, set: {duration: -3}}]", "duration", ""),
+    ("scenarios: [{path: FORKLIFT, set: {robots.nobody.speed: 1}}]",
+     "scenarios[0].set: robots.nobody", "no list"),
+])
+def test_suite_file_errors(tmp_path: Path, body: str, field: str, words: str) -> None:
+    p = _suite(tmp_path, body)
+    with pytest.raises(SrrError) as err:
+        plan_suite([p])  # what `srr suite` checks before anything runs
+    assert field in str(err.value) and words in str(err.value)
+    assert "--set" not in str(err.value)  # the suite file is named, not the command line
+    assert "\n" not in str(err.value)
+
+
+def _with_includes(tmp_path: Path) -> None:
+    shutil.copytree(ROOT / "scenarios" / "forklift", tmp_path / "forklift")
+
+
+def test_folder_takes_scenarios_only(tmp_path: Path) -> None:
+    _with_includes(tmp_path)
+    (tmp_path / "a.yaml").write_text(FORKLIFT.read_text(encoding="utf-8"), encoding="utf-8")
+    (tmp_path / "fragment.yaml").write_text("robots: []\n", encoding="utf-8")
+    (tmp_path / "suite.yaml").write_text(f"scenarios: [{FORKLIFT}]\n", encoding="utf-8")
+    spec = load_suite([tmp_path])
+    assert [e.name for e in spec.entries] == ["forklift_warehouse"]
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(SrrError, match="no scenario files"):
+        load_suite([tmp_path / "empty"])
+
+
+def test_scenario_declares_its_own_sweep(tmp_path: Path) -> None:
+    _with_includes(tmp_path)
+    sc = tmp_path / "sw.yaml"
+    sc.write_text(FORKLIFT.read_text(encoding="utf-8")
+                  + "\nsweep:\n  seed: {from: 1, to: 3, step: 1}\n", encoding="utf-8")
+    runs = plan_runs(load_suite([sc]))
+    assert [r.group for r in runs] == [f"forklift_warehouse[seed={i}]" for i in (1, 2, 3)]
+    sc.write_text(FORKLIFT.read_text(encoding="utf-8") + "\nsweep: {seed: [1, -2]}\n",
+                  encoding="utf-8")
+    with pytest.raises(ScenarioError) as err:
+        plan_runs(load_suite([sc]))
+    assert str(sc) in str(err.value) and "seed=-2" in str(err.value)
+
+
+def test_stats_known_values() -> None:
+    d = describe([1.0, 2.0, 3.0])
+    assert d is not None
+    assert (d.n, d.mean, d.std, d.min, d.max) == (3, 2.0, 1.0, 1.0, 3.0)
+    assert d.ci95 is not None
+    assert math.isclose(d.ci95[1] - 2.0, 4.302652729911275 / math.sqrt(3), rel_tol=1e-9)
+    one = describe([5.0])
+    assert one is not None and one.std == 0.0 and one.ci95 is None
+    assert describe([]) is None
