@@ -21,7 +21,7 @@ import hashlib
 import platform
 import shutil
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -229,6 +229,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         raise
     loop = _Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
                  sim.srr_gt, {"graphs": sim.graph_paths, "warnings": list(warnings),
+                              "scene_files": dict(sim.world.scene_files),
                               "command": reproduce_command(source, scenario, run_dir)})
     try:
         return _record(scenario, loop, source=source, run_dir=run_dir,
@@ -374,7 +375,7 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
                                   "become the baseline")
         save_baseline(baseline_path(baseline_name(scenario), bdir), summary,
                       reason=update_reason, source_run=str(run_dir),
-                      config=comparable_config(scenario_to_mapping(scenario)),
+                      config=scene_config(scenario, summary.get("scene_files")),
                       bag=run_dir / "bag")
     _judge(summary, scenario, scores, bdir)
     if interrupted:
@@ -435,7 +436,8 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     check_free_space(scenario, out_dir, disk_free)
     command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
                         *(f"--set {o}" for o in overrides), f"--out {out_dir}"])
-    extra = {"warnings": warnings, "command": command, "replay_of": {
+    extra = {"warnings": warnings, "command": command,
+             "scene_files": dict(summary.get("scene_files") or {}), "replay_of": {
         "run_dir": str(src), "digest": summary.get("digest"), "mode": "open-loop",
         "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
         "overrides": list(overrides), "withheld": sorted(withheld)}}
@@ -543,6 +545,16 @@ def reproduce_command(source: str, scenario: Scenario, run_dir: Path) -> str:
             f"--out {run_dir}")
 
 
+def scene_config(scenario: Scenario, scene_files: Mapping[str, str] | None) -> dict[str, Any]:
+    """The comparable configuration of a run: the scenario's comparable part plus, when the
+    scene has model files, their digests by field (``robots[0].model`` → SHA-256), so an
+    edited URDF or mesh makes another configuration even under the same path."""
+    config = comparable_config(scenario_to_mapping(scenario))
+    if scene_files:
+        config["scene_files"] = dict(sorted(scene_files.items()))
+    return config
+
+
 def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Path) -> None:
     """Compare with the baseline and fill ``verdict``, ``exit_code``, ``reasons``,
     ``baseline`` and ``comparison`` in the summary."""
@@ -554,8 +566,10 @@ def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Pa
     if "@" in baseline_name(scenario):  # a sweep point's own baseline
         note = (f"no baseline at {path}: bless every sweep point with `srr suite SUITE "
                 "--update-baselines --reason TEXT`")
+    files = summary.get("scene_files") if base is not None and base.config is not None \
+        and "scene_files" in base.config else None  # a baseline from before srr hashed them
     mismatch = [] if base is None or base.config is None else config_differences(
-        with_defaults(base.config), scenario_to_mapping(scenario))
+        with_defaults(base.config), scene_config(scenario, files))
     verdict = decide(scores.health, scores.metrics, cmp, note, mismatch)
     summary["verdict"], summary["exit_code"] = verdict.name, verdict.exit_code
     summary["reasons"] = list(verdict.reasons)
@@ -580,7 +594,7 @@ def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
     path = baseline_path(baseline_name(scenario),
                          baselines_dir(summary.get("scenario_file", ""), baselines))
     save_baseline(path, summary, reason=reason, source_run=str(run_dir),
-                  config=comparable_config(scenario_to_mapping(scenario)),
+                  config=scene_config(scenario, summary.get("scene_files")),
                   bag=Path(run_dir) / "bag")
     return path
 

@@ -11,7 +11,7 @@ from harness.graph import GraphStage
 from harness.scenario import RobotSpec, Scenario
 
 __all__ = ["BuildContext", "GraphEdits", "NodeOrigin", "fresh_graph", "gate_step",
-           "gated_render_product"]
+           "gated_render_product", "sensor_frame_tf"]
 
 GraphEdits = tuple[list[tuple[str, str]], list[tuple[str, str]], list[tuple[str, Any]]]
 
@@ -92,3 +92,37 @@ def gated_render_product(tick_hz: int, fps: float, prim: str,
     ]
     return nodes, connect, values
 
+
+
+def sensor_frame_tf(bc: BuildContext, robot: RobotSpec, kind: str, frame_id: str,
+                    path: str, node: str = "PublishSensorTF",
+                    read_time: bool = True) -> GraphEdits:
+    """The static TF ``<link> → <frame_id>`` of ``robot.sensors.<kind>``, with the sensor's
+    pose in its link, when the robot publishes its TF tree and ``frame_id`` is not the link's
+    own frame (else nothing). A ``PublishRawTransformTree`` on the robot's static TF topic,
+    driven by the graph's ``OnPlaybackTick`` and stamped by its ``ReadSimTime`` (added
+    unless ``read_time`` is False: the graph has one)."""
+    from harness.geometry import wxyz_to_xyzw
+    from harness.graph.nodes.ros_bridge import frame_of, relative_pose
+
+    sensor_prim = bc.world.sensor_prim(robot.name, kind)
+    link_prim = sensor_prim.rsplit("/", 1)[0]
+    if not robot.tf_tree.enabled or frame_id == frame_of(link_prim):
+        return [], [], []
+    translation, rotation = relative_pose(bc.world, link_prim, sensor_prim)
+    nodes = [("ReadSimTime", "isaacsim.core.nodes.IsaacReadSimulationTime")] if read_time else []
+    nodes.append((node, "isaacsim.ros2.bridge.ROS2PublishRawTransformTree"))
+    connect = [("OnPlaybackTick.outputs:tick", f"{node}.inputs:execIn"),
+               ("ReadSimTime.outputs:simulationTime", f"{node}.inputs:timeStamp")]
+    values: list[tuple[str, Any]] = [
+        (f"{node}.inputs:topicName", robot.tf_tree.static_topic),
+        (f"{node}.inputs:staticPublisher", True),
+        (f"{node}.inputs:parentFrameId", robot.frame(frame_of(link_prim))),
+        (f"{node}.inputs:childFrameId", robot.frame(frame_id)),
+        (f"{node}.inputs:translation", [float(v) for v in translation]),
+        (f"{node}.inputs:rotation", [float(v) for v in wxyz_to_xyzw(
+            [float(c) for c in rotation])]),
+    ]
+    bc.annotate(path, node, bc.robot_field(robot), topicName="tf_tree.static_topic",
+                parentFrameId=f"sensors.{kind}.link", childFrameId=f"sensors.{kind}.frame_id")
+    return nodes, connect, values

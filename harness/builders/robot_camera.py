@@ -22,10 +22,8 @@ the world. A ``frame_id`` equal to the link (``camera_link``) publishes in the l
 
 from __future__ import annotations
 
-from harness.builders.base import BuildContext, fresh_graph, gated_render_product
-from harness.geometry import wxyz_to_xyzw
+from harness.builders.base import BuildContext, fresh_graph, gated_render_product, sensor_frame_tf
 from harness.graph import Controller
-from harness.graph.nodes.ros_bridge import frame_of, relative_pose
 from harness.scenario import RobotSpec
 
 __all__ = ["build", "graph_path"]
@@ -43,7 +41,6 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
         return None
     path = graph_path(robot)
     camera_prim = bc.world.sensor_prim(robot.name, "camera")
-    link_prim = bc.world.link_prim(robot.name, spec.link)
     keys = Controller.Keys
     nodes, connect, values = gated_render_product(bc.scenario.physics.tick_hz, spec.fps,
                                                   camera_prim, spec.resolution)
@@ -66,28 +63,11 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
             (f"{name}.inputs:nodeNamespace", robot.ns),
             (f"{name}.inputs:frameId", robot.frame(spec.frame_id)),
         ]
-    if robot.tf_tree.enabled and spec.frame_id != frame_of(link_prim):
-        translation, rotation = relative_pose(bc.world, link_prim, camera_prim)
-        nodes += [
-            ("ReadSimTime", "isaacsim.core.nodes.IsaacReadSimulationTime"),
-            ("PublishCameraTF", "isaacsim.ros2.bridge.ROS2PublishRawTransformTree"),
-        ]
-        connect += [
-            ("OnPlaybackTick.outputs:tick", "PublishCameraTF.inputs:execIn"),
-            ("ReadSimTime.outputs:simulationTime", "PublishCameraTF.inputs:timeStamp"),
-        ]
-        values += [
-            ("PublishCameraTF.inputs:topicName", robot.tf_tree.static_topic),
-            ("PublishCameraTF.inputs:staticPublisher", True),
-            ("PublishCameraTF.inputs:parentFrameId", robot.frame(frame_of(link_prim))),
-            ("PublishCameraTF.inputs:childFrameId", robot.frame(spec.frame_id)),
-            ("PublishCameraTF.inputs:translation", [float(v) for v in translation]),
-            ("PublishCameraTF.inputs:rotation",
-             [float(v) for v in wxyz_to_xyzw([float(c) for c in rotation])]),
-        ]
-        bc.annotate(path, "PublishCameraTF", bc.robot_field(robot),
-                    topicName="tf_tree.static_topic", parentFrameId="sensors.camera.link",
-                    childFrameId="sensors.camera.frame_id")
+    tf_nodes, tf_connect, tf_values = sensor_frame_tf(bc, robot, "camera", spec.frame_id, path,
+                                                      "PublishCameraTF")
+    nodes += tf_nodes
+    connect += tf_connect
+    values += tf_values
     Controller.edit(fresh_graph(path), {
         keys.CREATE_NODES: nodes,
         keys.CONNECT: connect,

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from harness.builders.base import BuildContext, fresh_graph, gate_step
+from harness.builders.base import BuildContext, fresh_graph, gate_step, sensor_frame_tf
 from harness.graph import Controller, usdrt
 from harness.scenario import RobotSpec
 
@@ -66,6 +66,11 @@ def build_lidar(bc: BuildContext, robot: RobotSpec) -> str | None:
         ("LidarHelper.inputs:frameId", robot.frame(spec.frame_id)),
         ("LidarHelper.inputs:nodeNamespace", robot.ns),
     ]
+    tf_nodes, tf_connect, tf_values = sensor_frame_tf(bc, robot, "lidar", spec.frame_id, path,
+                                                      "PublishLidarTF", read_time=False)
+    nodes += tf_nodes
+    connect += tf_connect
+    values += tf_values
     Controller.edit(fresh_graph(path), {
         keys.CREATE_NODES: nodes,
         keys.CONNECT: connect,
@@ -82,6 +87,8 @@ def build_imu(bc: BuildContext, robot: RobotSpec) -> str | None:
         return None
     path = imu_graph_path(robot)
     keys = Controller.Keys
+    tf_nodes, tf_connect, tf_values = sensor_frame_tf(bc, robot, "imu", spec.frame_id, path,
+                                                      "PublishImuTF", read_time=False)
     Controller.edit(fresh_graph(path), {
         keys.CREATE_NODES: [
             ("OnPlaybackTick", "omni.graph.action.OnPlaybackTick"),
@@ -89,6 +96,7 @@ def build_imu(bc: BuildContext, robot: RobotSpec) -> str | None:
             ("SimulationGate", "isaacsim.core.nodes.IsaacSimulationGate"),
             ("ReadIMU", "isaacsim.sensors.physics.IsaacReadIMU"),
             ("PublishIMU", "isaacsim.ros2.bridge.ROS2PublishImu"),
+            *tf_nodes,
         ],
         keys.CONNECT: [
             ("OnPlaybackTick.outputs:tick", "SimulationGate.inputs:execIn"),
@@ -98,6 +106,7 @@ def build_imu(bc: BuildContext, robot: RobotSpec) -> str | None:
             ("ReadIMU.outputs:linAcc", "PublishIMU.inputs:linearAcceleration"),
             ("ReadIMU.outputs:angVel", "PublishIMU.inputs:angularVelocity"),
             ("ReadIMU.outputs:orientation", "PublishIMU.inputs:orientation"),
+            *tf_connect,
         ],
         keys.SET_VALUES: [
             ("SimulationGate.inputs:step", gate_step(bc.scenario.physics.tick_hz, spec.fps)),
@@ -106,6 +115,7 @@ def build_imu(bc: BuildContext, robot: RobotSpec) -> str | None:
             ("PublishIMU.inputs:topicName", spec.topic),
             ("PublishIMU.inputs:frameId", robot.frame(spec.frame_id)),
             ("PublishIMU.inputs:nodeNamespace", robot.ns),
+            *tf_values,
         ],
     })
     bc.annotate(path, "PublishIMU", bc.robot_field(robot, "sensors.imu"), topicName="topic")

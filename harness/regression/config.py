@@ -7,7 +7,8 @@ is left out: the systems under test (a new version of a plug-in, changed paramet
 scenario's name and description, which baseline it names, the tolerances and the health-gate
 settings, how the bag is written (``recording``: chunking, fsync, the disk guard) and the sweep a
 suite may expand the scenario into (``sweep``: each point is its own configuration).
-:func:`comparable_config` is that part of a resolved scenario, as plain data;
+:func:`comparable_config` is that part of a resolved scenario, as plain data (a run adds
+``scene_files``, the digests of the model files its scene is built from);
 :func:`config_differences` names what differs, field by field. A baseline blessed before srr
 gained a field has no value for it; :func:`with_defaults` gives it the field's default, so
 adding a field with a default changes no verdict.
@@ -42,12 +43,17 @@ def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
 def with_defaults(config: Mapping[str, Any]) -> dict[str, Any]:
     """A stored comparable config with every field it lacks filled with its default (read
     through the scenario schema); as it is when it no longer validates."""
+    files = config.get("scene_files")
     try:
-        sc = scenario_from_mapping({**config, "format_version": FORMAT_VERSION,
-                                    "name": "baseline"}, "<baseline config>")
+        sc = scenario_from_mapping({**{k: v for k, v in config.items() if k != "scene_files"},
+                                    "format_version": FORMAT_VERSION, "name": "baseline"},
+                                   "<baseline config>")
     except SrrError:
         return dict(config)
-    return comparable_config(scenario_to_mapping(sc))
+    out = comparable_config(scenario_to_mapping(sc))
+    if files is not None:
+        out["scene_files"] = files
+    return out
 
 
 def _flat(value: Any, path: str, out: dict[str, Any]) -> None:

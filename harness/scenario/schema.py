@@ -70,7 +70,8 @@ def num(default: float | None, lo: float | None = None, hi: float | None = None,
 
 @dataclass(frozen=True)
 class Pose:
-    """A pose in the world frame: position in metres, roll/pitch/yaw in degrees (extrinsic XYZ)."""
+    """A pose in the world frame (or, as a sensor's ``offset``, in its link's or site's
+    frame): position in metres, roll/pitch/yaw in degrees (extrinsic XYZ)."""
 
     position: Vec3 = (0.0, 0.0, 0.0)
     rpy_deg: Vec3 = (0.0, 0.0, 0.0)
@@ -225,6 +226,8 @@ class RobotCameraSpec:
     enabled: bool = True
     graph: bool = True
     link: str = "camera_link"
+    site: str | None = None
+    offset: Pose = Pose()
     topic: str = "camera/color"
     info_topic: str = "camera/camera_info"
     depth_topic: str | None = None
@@ -243,6 +246,8 @@ class LidarSpec:
     enabled: bool = True
     graph: bool = True
     link: str = "base_scan"
+    site: str | None = None
+    offset: Pose = Pose()
     topic: str = "scan"
     frame_id: str = "base_scan"
     type: Literal["laser_scan", "point_cloud"] = "laser_scan"
@@ -261,6 +266,8 @@ class ImuSpec:
     enabled: bool = True
     graph: bool = True
     link: str = "imu_link"
+    site: str | None = None
+    offset: Pose = Pose()
     topic: str = "imu"
     frame_id: str = "imu_link"
     fps: float = num(60.0, 0.0, 1000.0, lo_open=True)
@@ -268,6 +275,12 @@ class ImuSpec:
 
 @dataclass(frozen=True)
 class SensorsSpec:
+    """A robot's mounted sensors. Each sits on ``link`` (a link of the robot) or, for a
+    model file, on ``site`` (a site the file names; its link is the site's body), moved by
+    ``offset`` (in the link's or the site's frame). A sensor whose ``frame_id`` is not its
+    link's frame gets a static TF ``<link> → <frame_id>`` with its pose in the link; a sensor
+    off its link's origin must have such a frame of its own."""
+
     camera: RobotCameraSpec | None = None
     lidar: LidarSpec | None = None
     imu: ImuSpec | None = None
@@ -277,12 +290,16 @@ class SensorsSpec:
 class DriveSpec:
     """How srr drives one joint of a model file that has no actuator on it (``model.drives``).
 
-    The controller decides the kind: wheels and a swivel-drive's drive joint get a velocity
-    servo (``kv``), a swivel joint a position servo (``kp``, with ``kv`` as its damping).
+    For a joint the ``control:`` block drives, the controller decides the kind: wheels and a
+    swivel-drive's drive joint get a velocity servo (``kv``), a swivel joint a position servo
+    (``kp``, with ``kv`` as its damping). Any other hinge or slide joint listed here gets the
+    servo ``mode`` says (default: velocity for a joint that turns freely, position
+    otherwise), for a graph's ``ArticulationController`` to command by joint name.
     Unset values are scaled from the model's mass (see :mod:`harness.sim.robots.imported`).
     ``max_force`` limits the torque (N·m; N for a slide joint), ``armature`` adds rotor
     inertia to the joint (kg·m²)."""
 
+    mode: Literal["position", "velocity"] | None = None
     kp: float | None = num(None, 0.0, 1e9, lo_open=True)
     kv: float | None = num(None, 0.0, 1e9, lo_open=True)
     max_force: float | None = num(None, 0.0, 1e9, lo_open=True)

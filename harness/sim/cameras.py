@@ -81,12 +81,15 @@ def add_fixed_camera(spec: mujoco.MjSpec, camera: CameraSpec, prims: PrimTable) 
 
 
 def add_mounted_camera(body: mujoco.MjsBody, mj_name: str, fovy_deg: float,
-                       resolution: tuple[int, int], prim: str, prims: PrimTable) -> str:
-    """Add a camera on a robot link looking along the link's +X (REP-103 ``camera_link``)."""
+                       resolution: tuple[int, int], prim: str, prims: PrimTable,
+                       pos: Sequence[float] = (0.0, 0.0, 0.0),
+                       quat: Sequence[float] = (1.0, 0.0, 0.0, 0.0)) -> str:
+    """Add a camera on a robot link at ``pos``/``quat`` (wxyz) in the link, looking along
+    that mount's +X (REP-103 ``camera_link``)."""
     body.add_camera(
         name=mj_name,
-        pos=[0.0, 0.0, 0.0],
-        quat=list(Q_MJ_IN_WORLD_CONVENTION),
+        pos=[float(v) for v in pos],
+        quat=[float(v) for v in quat_mul(quat, Q_MJ_IN_WORLD_CONVENTION)],
         fovy=float(fovy_deg),
         resolution=[float(resolution[0]), float(resolution[1])],
     )

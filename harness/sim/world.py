@@ -190,7 +190,7 @@ def _assemble(scenario: Scenario, prims: PrimTable, source: str, environ: Mappin
         height = float(z) if robot.model_file is not None else 0.0
         build = add_robot(spec, robot, (float(x), float(y), height), quat, prims, where)
         assets.update(build.assets)
-        builds.append((build, add_robot_sensors(spec, robot, build, prims)))
+        builds.append((build, add_robot_sensors(spec, robot, build, prims, where)))
     for camera in scenario.cameras:
         if camera.enabled:
             add_fixed_camera(spec, camera, prims)
@@ -204,8 +204,10 @@ class World:
 
     def __init__(self, scenario: Scenario, model: mujoco.MjModel, data: mujoco.MjData,
                  prims: Mapping[str, PrimRef], robots: Mapping[str, RobotInfo],
-                 workers: WorkerDriver | None = None) -> None:
+                 workers: WorkerDriver | None = None,
+                 scene_files: Mapping[str, str] | None = None) -> None:
         self._scenario = scenario
+        self.scene_files: Mapping[str, str] = types.MappingProxyType(dict(scene_files or {}))
         self._model = model
         self._data = data
         self._prims = prims
@@ -238,8 +240,10 @@ class World:
         data = mujoco.MjData(model)
         resolved = prims.resolve(model)
         robots = {b.name: _resolve_robot(model, b, s) for b, s in builds}
+        files = {f"robots[{scenario.robot_index(b.name)}].model": b.file_digest
+                 for b, _ in builds if b.file_digest is not None}
         return cls(scenario, model, data, resolved, types.MappingProxyType(robots),
-                   WorkerDriver(model, workers))
+                   WorkerDriver(model, workers), files)
 
     # ------------------------------------------------------------------ state
     @property

@@ -94,3 +94,28 @@ def test_shipped_baselines_record_their_configuration(name: str) -> None:
     assert "graphs" not in data["config"]
     assert with_defaults(data["config"]) == comparable_config(scenario_to_mapping(
         api.load(SCENARIOS / f"{name}.yaml")))
+
+
+def test_an_edited_model_file_is_another_configuration(tmp_path: Path) -> None:
+    """The baseline records the digest of the robot's model file (and its meshes): a copy of
+    the scene compares like for like, the same path with an edited file does not."""
+    for name in ("same", "edited"):
+        shutil.copytree(SCENARIOS / "models" / "pallet_truck",
+                        tmp_path / name / "models" / "pallet_truck")
+        shutil.copy(SCENARIOS / "pallet_truck_mjcf.yaml", tmp_path / name)
+    xml = tmp_path / "edited" / "models" / "pallet_truck" / "pallet_truck.xml"
+    xml.write_text(xml.read_text().replace('kv="800"', 'kv="400"'))
+    bdir = SCENARIOS.parent / "baselines"
+    stored = json.loads((bdir / "pallet_truck_mjcf.json").read_text())["config"]
+    assert set(stored["scene_files"]) == {"robots[0].model"}
+    diffs = {}
+    for name in ("same", "edited"):
+        path = tmp_path / name / "pallet_truck_mjcf.yaml"
+        res = api.run_scenario(api.load(path, duration=1.0), source=str(path),
+                               out=tmp_path / f"run_{name}", baselines=bdir)
+        assert res.verdict == "MISMATCH"  # one second, not eleven
+        diffs[name] = res.summary["baseline"]["config_differences"]
+    assert diffs["same"] == ["duration: 11.0 → 1.0"]
+    assert diffs["edited"][0] == "duration: 11.0 → 1.0"
+    assert diffs["edited"][1].startswith(
+        f"scene_files.robots[0].model: '{stored['scene_files']['robots[0].model']}' → '")

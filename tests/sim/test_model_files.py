@@ -162,6 +162,15 @@ ASCII_STL = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0
      "robots[0].model.drives.traction_motor", ["already has actuator 'traction_servo'"]),
     (lambda t: diffbot(model={"drives": {"left_wheel_hing": {"kv": 1.0}}}),
      "robots[0].model.drives.left_wheel_hing", ["did you mean 'left_wheel_hinge'"]),
+    (lambda t: diffbot(model={"drives": {"lidar_joint": {}}}),
+     "robots[0].model.drives.lidar_joint", ["is fixed: only a hinge or a slide joint"]),
+    (lambda t: pallet(model={"drives": {"steer_hinge": {"mode": "velocity"}}},
+                      control={**PALLET_CONTROL, "swivel_joint": "steer_hinge"}),
+     "robots[0].model.drives.steer_hinge",
+     ["already has actuator 'steer_servo'"]),
+    (lambda t: diffbot(model={"drives": {"left_wheel_hinge": {"mode": "position"}}}),
+     "robots[0].model.drives.left_wheel_hinge.mode",
+     ["the control block commands joint 'left_wheel_hinge' by velocity, not position"]),
     (lambda t: diffbot(model={"frictionless_links": ["castor_link"]}),
      "robots[0].model.frictionless_links[0]", ["no link 'castor_link'",
                                                "did you mean 'caster_link'"]),
@@ -251,6 +260,36 @@ def test_a_parked_file_robot_needs_no_joint_names(tmp_path: Path) -> None:
     world = World.build(load_scenario(path), str(path))
     assert world.model.nu == 0 and set(world.robot("bot").joints) == {"left_wheel_hinge",
                                                                       "right_wheel_hinge"}
+
+
+def test_drives_serve_any_named_joint_for_an_articulation_controller(tmp_path: Path) -> None:
+    """With the control graph off, ``model.drives`` puts servos on named joints: the wheels
+    (they turn freely: velocity; gains given, as a wheel's own inertia says nothing of the
+    robot it pushes) and the pallet truck's load-wheel axle asked for by position (default
+    gains); the file's own servos answer by their joints' names too."""
+    path = write(tmp_path,
+                 diffbot(control={"enabled": False},
+                         model={"drives": {"left_wheel_hinge": {"kv": 0.2},
+                                           "right_wheel_hinge": {"kv": 0.2}}}),
+                 pallet(control={"enabled": False}, spawn={"position": [-4.0, 0.0, 0.0]},
+                        model={"drives": {"load_wheel_left_axle": {"mode": "position"}}}))
+    world = World.build(load_scenario(path), str(path))
+    bot, truck = world.robot("bot"), world.robot("truck")
+    assert {j: r.mode.value for j, r in bot.joints.items() if r.mode} == {
+        "left_wheel_hinge": "velocity", "right_wheel_hinge": "velocity"}
+    assert truck.joints["load_wheel_left_axle"].mode.value == "position"
+    assert truck.joints["steer_hinge"].mode.value == "position"  # the file's steer_servo
+    for _ in range(240):  # 1 s of 240 Hz steps
+        world.apply_joint_commands("/World/bot", ["left_wheel_hinge", "right_wheel_hinge"],
+                                   velocities=[4.0, 4.0])
+        world.apply_joint_commands("/World/truck", ["steer_hinge", "load_wheel_left_axle"],
+                                   positions=[0.4, 0.2])
+        world.step(1)
+    vel, _ = world.prim_velocity("/World/bot/base_footprint")
+    assert vel[0] == pytest.approx(4.0 * 0.05, rel=0.05)  # wheel rate × radius
+    qpos = world.data.qpos
+    for joint, target in (("steer_hinge", 0.4), ("load_wheel_left_axle", 0.2)):
+        assert qpos[truck.joints[joint].qposadr] == pytest.approx(target, abs=0.02)
 
 
 def test_file_robot_rolls_forward_on_positive_wheel_rates(tmp_path: Path) -> None:

@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from harness.errors import SimulationError
+from harness.errors import ScenarioError, SimulationError
 from harness.scenario.schema import (
     CameraSpec,
     DiffDriveControl,
@@ -336,8 +336,10 @@ def test_mounted_sensors_get_prims_and_the_imu_reads_gravity() -> None:
 
 def test_sensor_on_a_missing_link_is_refused() -> None:
     sensors = SensorsSpec(lidar=LidarSpec(link="roof_scanner"))
-    with pytest.raises(SimulationError, match=r"robots\.tb3\.sensors\.lidar\.link"):
+    with pytest.raises(ScenarioError) as err:
         World.build(scenario(tb3(sensors=sensors)))
+    assert err.value.field == "robots[0].sensors.lidar.link"
+    assert "turtlebot3_waffle_pi has no link 'roof_scanner'" in err.value.message
 
 
 def test_duplicate_prims_are_refused() -> None:

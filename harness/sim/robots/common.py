@@ -60,6 +60,8 @@ class RobotBuild:
     ``links``: link name → (prim path, MuJoCo body name); sensors mount on links.
     ``assets``: files the robot's meshes and textures are read from, by the names the spec
     uses (robots from model files; the world's spec compiles from memory).
+    ``file_digest``: for a robot from a model file, the SHA-256 of the file and of every
+    mesh and texture it uses, so a changed model makes a run another configuration.
     """
 
     name: str
@@ -73,6 +75,7 @@ class RobotBuild:
     actuators: Mapping[str, tuple[str, ActuatorMode]]
     links: Mapping[str, tuple[str, str]]
     assets: Mapping[str, bytes] = field(default_factory=lambda: types.MappingProxyType({}))
+    file_digest: str | None = None
 
 
 def add_visual_geom(body: mujoco.MjsBody, name: str, gtype: mujoco.mjtGeom,

@@ -14,7 +14,10 @@ indicator disk); the root link's prim is the chassis odometry reads and its name
 default base frame. Forward is +X (REP-103) unless ``odometry.robot_front`` says otherwise.
 
 Joints by name (the ``control:`` block): a diff-drive robot's two wheel joints, or a
-swivel-drive robot's drive and swivel joints. Each must exist (the closest names are
+swivel-drive robot's drive and swivel joints; and any hinge or slide joint named in
+``model.drives``, for a graph's ``ArticulationController`` to command (its ``mode``, or
+velocity for a joint that turns freely and position otherwise). The file's own position and
+velocity servos are commanded by their joints' names too. Each must exist (the closest names are
 suggested) and fit its role: a wheel or drive joint turns freely (a URDF ``continuous``
 joint, an unlimited hinge), a swivel joint is a hinge. A joint the file already puts a
 position or velocity servo on is driven through it (it must be the kind the controller
@@ -23,7 +26,9 @@ the model's mass ``m``: wheels and drive joints a velocity servo with
 ``kv = 50/s · m · r² / n`` and ``max_force = 3 m/s² · m · r / n`` (``r`` the wheel radius,
 ``n`` the number of driven wheels: a velocity time constant of 20 ms and 3 m/s² of
 traction), a swivel joint a position servo with ``kp = 4 N·m/rad per kg · m``, critically
-damped on the joint's own inertia, and ``max_force = 2 N·m per kg · m``.
+damped on the joint's own inertia, and ``max_force = 2 N·m per kg · m``; a velocity servo
+on a joint no controller drives the robot with gets ``kv = 50/s · I`` (``I`` the joint's own
+inertia) and the same ``max_force``.
 
 URDF geom groups follow the built-in models: visual geoms (no contacts) group 1, collision
 geoms group 3 (hidden from cameras and lidars) when the model has visual geoms, else group 1;
@@ -38,6 +43,7 @@ field and the model file.
 from __future__ import annotations
 
 import difflib
+import hashlib
 import math
 import re
 import types
@@ -150,13 +156,35 @@ def _check_roles(roles: Sequence[_Role], loaded: LoadedModel, model: ModelFile, 
         if role.joint in model.drives:
             raise src.error(f"model.drives.{role.joint}", f"joint {role.joint!r} already has "
                             f"actuator {name!r} in {shown}; set its gains there")
-    controlled = [r.joint for r in roles]
-    for joint in model.drives:
-        if joint not in controlled:
-            hint = (_suggest(joint, list(loaded.joints)) if joint not in loaded.joints
-                    else f" (the control block drives {', '.join(map(repr, controlled))})")
-            raise src.error(f"model.drives.{joint}", f"{joint!r} is not a joint the control "
-                            f"block drives in {shown}{hint}")
+
+
+def _drive_modes(roles: Sequence[_Role], loaded: LoadedModel, model: ModelFile, shown: str,
+                 src: ModelSource) -> dict[str, ActuatorMode]:
+    """The servo srr adds per joint: the role's for a controlled joint without an actuator,
+    and for every other joint in ``model.drives`` its ``mode`` (default: velocity for a joint
+    that turns freely, position otherwise)."""
+    modes = {r.joint: r.mode for r in roles if r.joint not in loaded.actuators}
+    for joint, drive in model.drives.items():
+        field = f"model.drives.{joint}"
+        info = loaded.joints.get(joint)
+        if info is None:
+            raise src.error(field, f"{shown} has no joint {joint!r}"
+                            f"{_suggest(joint, list(loaded.joints))}")
+        if info.kind not in ("hinge", "slide"):
+            raise src.error(field, f"joint {joint!r} of {shown} is {info.described}: only a "
+                            "hinge or a slide joint can be driven")
+        act = loaded.actuators.get(joint)
+        if act is not None:
+            raise src.error(field, f"joint {joint!r} already has actuator {act[0]!r} in "
+                            f"{shown}; set its gains there")
+        wanted = ActuatorMode(drive.mode) if drive.mode is not None else None
+        role = modes.get(joint)
+        if role is not None and wanted is not None and wanted is not role:
+            raise src.error(f"{field}.mode", f"the control block commands joint {joint!r} by "
+                            f"{role.value}, not {wanted.value}")
+        modes[joint] = role or wanted or (ActuatorMode.VELOCITY if info.spins
+                                          else ActuatorMode.POSITION)
+    return modes
 
 
 def _check_links(robot: RobotSpec, loaded: LoadedModel, shown: str, src: ModelSource) -> None:
@@ -171,24 +199,37 @@ def _check_links(robot: RobotSpec, loaded: LoadedModel, shown: str, src: ModelSo
     sensors = robot.sensors
     for kind, block in (("camera", sensors.camera), ("lidar", sensors.lidar),
                         ("imu", sensors.imu)):
-        if block is not None and block.enabled:
+        if block is not None and block.enabled and block.site is None:
             wanted.append((f"sensors.{kind}.link", block.link))
     for field, link in wanted:
         if link not in loaded.links:
             raise src.error(field, f"{shown} has no link {link!r}"
                             f"{_suggest(link, loaded.links)}")
+    sites = [site.name for site in loaded.spec.sites]
+    for kind, block in (("camera", sensors.camera), ("lidar", sensors.lidar),
+                        ("imu", sensors.imu)):
+        if block is not None and block.enabled and block.site is not None \
+                and block.site not in sites:
+            raise src.error(f"sensors.{kind}.site", f"{shown} has no site {block.site!r}"
+                            f"{_suggest(block.site, sites)}")
 
 
-def _drive_settings(role: _Role, drive: DriveSpec, loaded: LoadedModel, wheel_radius: float,
-                    n_wheels: int) -> tuple[float, float, float]:
-    """(gain, damping, max force) of the servo srr adds for ``role``."""
+def _drive_settings(joint: str, mode: ActuatorMode, drive: DriveSpec, loaded: LoadedModel,
+                    wheel: tuple[float, int] | None) -> tuple[float, float, float]:
+    """(gain, damping, max force) of the servo srr adds on ``joint``. ``wheel``: (radius,
+    number of driven wheels) for a joint the controller drives the robot with."""
     m = loaded.mass
-    if role.mode is ActuatorMode.VELOCITY:
-        kv = drive.kv or _VELOCITY_RATE * m * wheel_radius**2 / n_wheels
-        force = drive.max_force or _TRACTION_ACCEL * m * wheel_radius / n_wheels
+    inertia = loaded.joint_inertia.get(joint, 0.0) + (drive.armature or 0.0)
+    if mode is ActuatorMode.VELOCITY:
+        if wheel is not None:
+            radius, n_wheels = wheel
+            kv = drive.kv or _VELOCITY_RATE * m * radius**2 / n_wheels
+            force = drive.max_force or _TRACTION_ACCEL * m * radius / n_wheels
+        else:
+            kv = drive.kv or _VELOCITY_RATE * max(inertia, 1e-6)
+            force = drive.max_force or _POSITION_FORCE * m
         return kv, 0.0, force
     kp = drive.kp or _POSITION_STIFFNESS * m
-    inertia = loaded.joint_inertia.get(role.joint, 0.0) + (drive.armature or 0.0)
     kv = drive.kv or 2.0 * math.sqrt(kp * max(inertia, 1e-6))
     return kp, kv, drive.max_force or _POSITION_FORCE * m
 
@@ -239,6 +280,7 @@ def add_model_robot(spec: mujoco.MjSpec, robot: RobotSpec,
     # A robot whose control graph is off is parked: its joints need no role and no drive.
     roles = _roles(control, shown, src) if control.enabled else []
     _check_roles(roles, loaded, model, shown, src)
+    drive_modes = _drive_modes(roles, loaded, model, shown, src)
     _check_links(robot, loaded, shown, src)
 
     n, prim = robot.name, robot.prim
@@ -257,31 +299,39 @@ def add_model_robot(spec: mujoco.MjSpec, robot: RobotSpec,
     joints = {j: f"{n}/{j}" for j, info in loaded.joints.items()
               if info.kind in ("hinge", "slide")}
 
-    actuators: dict[str, tuple[str, ActuatorMode]] = {}
+    # The file's own position and velocity servos, each on its joint, and srr's servos.
+    actuators = {j: (f"{n}/{a}", mode) for j, (a, mode) in loaded.actuators.items()
+                 if mode is not None}
     n_wheels = max(1, sum(r.mode is ActuatorMode.VELOCITY for r in roles))
-    for role in roles:
-        existing = loaded.actuators.get(role.joint)
-        if existing is not None:
-            actuators[role.joint] = (f"{n}/{existing[0]}", role.mode)
-            continue
-        drive = model.drives.get(role.joint, DriveSpec())
-        gain, damping, force = _drive_settings(role, drive, loaded, control.wheel_radius,
-                                               n_wheels)
+    wheels = {r.joint for r in roles if r.spins}
+    for joint, mode in drive_modes.items():
+        drive = model.drives.get(joint, DriveSpec())
+        gain, damping, force = _drive_settings(
+            joint, mode, drive, loaded,
+            (control.wheel_radius, n_wheels) if joint in wheels else None)
         if drive.armature is not None:
-            spec.joint(f"{n}/{role.joint}").armature = drive.armature
-        act = spec.add_actuator(name=f"{n}/{role.joint}/srr_drive", target=f"{n}/{role.joint}",
+            spec.joint(f"{n}/{joint}").armature = drive.armature
+        act = spec.add_actuator(name=f"{n}/{joint}/srr_drive", target=f"{n}/{joint}",
                                 trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        if role.mode is ActuatorMode.VELOCITY:
+        if mode is ActuatorMode.VELOCITY:
             act.set_to_velocity(kv=gain)
         else:
             act.set_to_position(kp=gain, kv=damping)
         act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
         act.forcerange = [-force, force]
-        actuators[role.joint] = (f"{n}/{role.joint}/srr_drive", role.mode)
+        actuators[joint] = (f"{n}/{joint}/srr_drive", mode)
 
     return RobotBuild(
         name=n, model=robot.model_name, prim=prim, root_body=f"{n}/{loaded.root}",
         base_prim=f"{prim}/{loaded.root}", robot_front=ROBOT_FRONT,
         default_base_frame=loaded.root, joints=types.MappingProxyType(joints),
         actuators=types.MappingProxyType(actuators), links=types.MappingProxyType(links),
-        assets=loaded.assets)
+        assets=loaded.assets, file_digest=_file_digest(path, loaded))
+
+
+def _file_digest(path: Path, loaded: LoadedModel) -> str:
+    """SHA-256 over the model file's bytes and its assets (named by their content hashes)."""
+    digest = hashlib.sha256(path.read_bytes())
+    for key in sorted(loaded.assets):
+        digest.update(key.encode())
+    return digest.hexdigest()
