@@ -286,7 +286,7 @@ def test_drives_serve_any_named_joint_for_an_articulation_controller(tmp_path: P
                                    positions=[0.4, 0.2])
         world.step(1)
     vel, _ = world.prim_velocity("/World/bot/base_footprint")
-    assert vel[0] == pytest.approx(4.0 * 0.05, rel=0.05)  # wheel rate × radius
+    assert vel[0] == pytest.approx(4.0 * 0.05, rel=0.05)  # wheel rate times radius
     qpos = world.data.qpos
     for joint, target in (("steer_hinge", 0.4), ("load_wheel_left_axle", 0.2)):
         assert qpos[truck.joints[joint].qposadr] == pytest.approx(target, abs=0.02)
