@@ -28,8 +28,10 @@ the path is free (a body wins over a geom).
 
 Map: every static geom of the file (its body welded to the world) that robots can meet — its
 lowest point below ``MAP_BAND[1]`` and its highest above ``MAP_BAND[0]``, seen (group 0-2) or
-colliding — has a :class:`~harness.sim.footprints.Footprint`, computed from the file compiled
-on its own at its pose before the world is built (the same geometry the world then has).
+colliding — has a :class:`~harness.sim.footprints.Footprint` (a URDF link's visual and
+collision shapes, the same outline at the same heights, have one), computed from the file
+compiled on its own at its pose before the world is built (the same geometry the world then
+has).
 
 Errors are :class:`~harness.errors.ScenarioError` naming the scenario file, the field
 (``world.model.mjcf``) and the world file.
@@ -163,6 +165,7 @@ def _measure(spec: mujoco.MjSpec, assets: Mapping[str, bytes], model: WorldModel
     mujoco.mj_kinematics(compiled, data)
     static: set[str] = set()
     footprints: list[Footprint] = []
+    seen_shapes: set[tuple[tuple[tuple[float, float], ...], float, float]] = set()
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
     for g in range(compiled.ngeom):
         name = mujoco.mj_id2name(compiled, mujoco.mjtObj.mjOBJ_GEOM, g) or ""
@@ -178,7 +181,12 @@ def _measure(spec: mujoco.MjSpec, assets: Mapping[str, bytes], model: WorldModel
         if pts is None or not (seen or collides):
             continue
         fp = geom_footprint(compiled, data, g, labels.get(plain, plain))
-        if fp is not None and fp.z_max > MAP_BAND[0] and fp.z_min < MAP_BAND[1]:
+        if fp is None or fp.z_max <= MAP_BAND[0] or fp.z_min >= MAP_BAND[1]:
+            continue
+        key = (tuple((round(x, 4), round(y, 4)) for x, y in fp.points),
+               round(fp.z_min, 4), round(fp.z_max, 4))
+        if key not in seen_shapes:  # a URDF link's visual and collision shapes: one
+            seen_shapes.add(key)
             footprints.append(fp)
     bounds = None if not np.isfinite(lo).all() else (
         float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]), float(hi[2]))
