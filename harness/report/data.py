@@ -164,10 +164,6 @@ class WorldMap:
     mode: str
     outlines: tuple[Outline, ...]
 
-    @property
-    def replaces_warehouse(self) -> bool:
-        return self.mode == "replace"
-
 
 def world_map(summary: dict[str, Any]) -> WorldMap | None:
     """The run's :class:`WorldMap`, or None (no world file). Entries that do not read as

@@ -532,8 +532,9 @@ def _trailer(sc: Scenario) -> list[tuple[float, float]]:
 
 def map_svg(data: RunData | Sequence[tuple[RunData, RunStyle]], *, width: float = WIDTH,
             max_height: float = 560.0, moments: Sequence[Moment] | None = None) -> str:
-    """Top-down view: walls, shelves, trailer, routes, zones, cameras, trajectories (ground
-    truth solid, odometry dashed), workers' paths, collisions and the numbered moments.
+    """Top-down view: walls, shelves, trailer (the procedural warehouse) and a world file's
+    static outlines (``summary.json``'s ``world_map``), routes, zones, cameras, trajectories
+    (ground truth solid, odometry dashed), workers' paths, collisions and the numbered moments.
 
     Several runs: the scene of the first, every run's robots and workers in its colours
     (class ``robot-path run-<key>``), collisions; odometry and mismatch segments are left to
@@ -544,8 +545,8 @@ def map_svg(data: RunData | Sequence[tuple[RunData, RunStyle]], *, width: float 
     sc = data.scenario
     if sc is None:
         return ""
-    wm = world_map(data.summary)
-    warehouse = wm is None or not wm.replaces_warehouse
+    wm = world_map(data.summary)  # a world file's static geometry, as the run recorded it
+    warehouse = sc.world.procedural
     wx, wy = sc.world.size
     xs, ys = ([-wx / 2, wx / 2], [-wy / 2, wy / 2]) if warehouse else ([], [])
     trailer = _trailer(sc) if warehouse and sc.world.dock.enabled else []

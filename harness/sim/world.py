@@ -1,9 +1,11 @@
 """The simulated world: a MuJoCo model built from a :class:`~harness.scenario.schema.Scenario`.
 
-``World.build(scenario)`` assembles an ``MjSpec`` (warehouse, enabled robots, enabled fixed
-cameras, robot-mounted sensor attach points, workers on foot), compiles it and resolves every
-prim path to a MuJoCo object. Everything the rest of srr needs is addressed by prim path
-(``/World/...``) or by robot name; MuJoCo names stay internal.
+``World.build(scenario)`` assembles an ``MjSpec`` (the warehouse and/or a world file, enabled
+robots, enabled fixed cameras, robot-mounted sensor attach points, workers on foot), compiles
+it and resolves every prim path to a MuJoCo object. A world file (``world.model``,
+:mod:`harness.sim.world_file`) is read and checked before anything else, and after compiling
+no robot may start inside one of its static geoms. Everything the rest of srr needs is
+addressed by prim path (``/World/...``) or by robot name; MuJoCo names stay internal.
 
 Conventions:
 
@@ -300,9 +302,10 @@ class World:
     def build(cls, scenario: Scenario, source: str = "<scenario>",
               environ: Mapping[str, str] | None = None) -> World:
         """Build the world for ``scenario`` (enabled robots and cameras only). ``source`` is
-        the scenario file: robots' model files are found relative to it (or to the include
-        that holds the robot) and errors about them name it; ``environ`` (default: the
-        process environment) holds ``SRR_PACKAGE_PATH`` / ``ROS_PACKAGE_PATH``."""
+        the scenario file: robots' and the world's model files are found relative to it (or
+        to the include that holds the robot or the world) and errors about them name it;
+        ``environ`` (default: the process environment) holds ``SRR_PACKAGE_PATH`` /
+        ``ROS_PACKAGE_PATH``."""
         prims = PrimTable()
         workers = plan_workers(scenario)
         env = os.environ if environ is None else environ

@@ -188,7 +188,7 @@ def test_camera_depth_to_the_files_wall(tmp_path: Path) -> None:
                                "depth_topic": "camera/depth"}}}], duration=0.1)
     sc = load_scenario(path)
     w = World.build(sc, str(path))
-    (cx, cy, cz), quat = w.prim_pose(w.sensor_prim("tb", "camera"))
+    (cx, _, cz), quat = w.prim_pose(w.sensor_prim("tb", "camera"))
     forward = np.array([1 - 2 * (quat[2] ** 2 + quat[3] ** 2),
                         2 * (quat[1] * quat[2] + quat[0] * quat[3]),
                         2 * (quat[1] * quat[3] - quat[0] * quat[2])])  # +X of the camera prim
@@ -294,7 +294,7 @@ def test_extend_keeps_the_warehouse_and_drops_the_files_floor(tmp_path: Path) ->
     assert "warehouse floor 12 × 10 m" in svg and svg.count('class="static"') == \
         len(w.footprints())
     wm = world_map(summary)
-    assert wm is not None and not wm.replaces_warehouse
+    assert wm is not None and wm.mode == "extend"
 
 
 def test_world_paths_are_relative_to_the_file_that_holds_the_world(tmp_path: Path) -> None:
@@ -390,3 +390,12 @@ def test_world_map_reads_back_leniently() -> None:
         "not a mapping"]}})
     assert wm is not None and [o.name for o in wm.outlines] == ["ok"]
     assert json.dumps(wm.outlines[0].points) == "[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]"
+
+
+def test_a_replaced_warehouse_is_not_drawn_without_the_recorded_map(tmp_path: Path) -> None:
+    """A run directory without ``world_map`` (recovered after a crash): the map draws no
+    warehouse the scenario did not have."""
+    sc = load_scenario(SCENARIO)
+    svg = map_svg(RunData(tmp_path, {}, "", scenario=sc))
+    assert svg and "warehouse floor" not in svg and 'class="shelf"' not in svg
+    assert 'class="static"' not in svg

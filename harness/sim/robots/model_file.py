@@ -1,5 +1,9 @@
 """Read a robot's model file (URDF or MJCF) into a MuJoCo spec ready to attach to the world.
 
+:func:`read_model_file` is the reading part alone (parsing, asset paths, assets in memory),
+shared with world files (:mod:`harness.sim.world_file`); :func:`load_model_file` adds the
+robot's checks.
+
 MuJoCo parses both formats itself (``mujoco.MjSpec.from_string`` / ``from_file``); this
 module prepares what it reads and checks that the result stands on its own:
 
