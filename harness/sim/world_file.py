@@ -66,7 +66,6 @@ PREFIX = "world-file/"
 #: slab, below ceilings and lamps.
 MAP_BAND = (0.01, 2.5)
 _STATIC_GROUP = 0
-_HIDDEN_GROUP = 3
 _NAME_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-]*$")
 _PLANE = mujoco.mjtGeom.mjGEOM_PLANE
 
@@ -176,7 +175,7 @@ def _measure(spec: mujoco.MjSpec, assets: Mapping[str, bytes], model: WorldModel
         if int(compiled.body_weldid[compiled.geom_bodyid[g]]) != 0:
             continue
         static.add(name)
-        seen = int(compiled.geom_group[g]) < _HIDDEN_GROUP
+        seen = int(compiled.geom_group[g]) < COLLISION_GROUP  # 3 and up: hidden
         collides = bool(compiled.geom_contype[g] or compiled.geom_conaffinity[g])
         if pts is None or not (seen or collides):
             continue
