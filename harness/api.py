@@ -58,6 +58,7 @@ from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.scenario import Scenario, SutSpec, load_scenario, parse_override, scenario_to_mapping
 from harness.scoring import Scores, check_scoring, scenario_frames, score_frames
+from harness.sim.world_file import map_json
 from harness.summary import read_summary
 from harness.sut.base import SutContext, load_suts
 from harness.wiring import check_wiring
@@ -227,10 +228,13 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     except BaseException:
         sim.close()
         raise
+    extra: dict[str, Any] = {"graphs": sim.graph_paths, "warnings": list(warnings),
+                             "scene_files": dict(sim.world.scene_files),
+                             "command": reproduce_command(source, scenario, run_dir)}
+    if sim.world.world_file is not None:  # the file's static geometry, for the report's map
+        extra["world_map"] = map_json(sim.world.world_file)
     loop = _Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
-                 sim.srr_gt, {"graphs": sim.graph_paths, "warnings": list(warnings),
-                              "scene_files": dict(sim.world.scene_files),
-                              "command": reproduce_command(source, scenario, run_dir)})
+                 sim.srr_gt, extra)
     try:
         return _record(scenario, loop, source=source, run_dir=run_dir,
                        n_ticks=scenario.n_ticks, progress=progress, baselines=baselines,
@@ -441,6 +445,8 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         "run_dir": str(src), "digest": summary.get("digest"), "mode": "open-loop",
         "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
         "overrides": list(overrides), "withheld": sorted(withheld)}}
+    if "world_map" in summary:  # the recorded scene, as it was
+        extra["world_map"] = summary["world_map"]
     loop = _Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
                  bool(summary.get("srr_gt")), extra)
     return _record(scenario, loop, source=source, run_dir=out_dir,

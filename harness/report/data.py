@@ -35,13 +35,16 @@ __all__ = [
     "Edge",
     "Interval",
     "Moment",
+    "Outline",
     "PerceptionSeries",
     "RunData",
     "SafetySeries",
     "Track",
+    "WorldMap",
     "load_run",
     "metric_windows",
     "read_summary",
+    "world_map",
 ]
 
 Window = tuple[float, float]
@@ -142,6 +145,44 @@ class Track:
         if i > 0 and abs(self.t[i - 1] - t_s) < abs(self.t[i] - t_s):
             i -= 1
         return float(self.x[i]), float(self.y[i])
+
+
+@dataclass(frozen=True)
+class Outline:
+    """A static shape of a world file on the map: its name and convex outline (world XY)."""
+
+    name: str
+    points: tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True)
+class WorldMap:
+    """The world file's static geometry as the run recorded it (``summary.json``'s
+    ``world_map``): the file, its mode (``replace`` or ``extend``) and the outlines."""
+
+    file: str
+    mode: str
+    outlines: tuple[Outline, ...]
+
+
+def world_map(summary: dict[str, Any]) -> WorldMap | None:
+    """The run's :class:`WorldMap`, or None (no world file). Entries that do not read as
+    outlines (three or more finite [x, y] points) are left out."""
+    raw = summary.get("world_map")
+    if not isinstance(raw, dict):
+        return None
+    outlines = []
+    for item in raw.get("footprints") or []:
+        if not isinstance(item, dict) or not isinstance(item.get("points"), list):
+            continue
+        try:
+            pts = tuple((float(p[0]), float(p[1])) for p in item["points"])
+        except (TypeError, ValueError, IndexError):
+            continue
+        if len(pts) >= 3 and all(math.isfinite(c) for p in pts for c in p):
+            outlines.append(Outline(str(item.get("name", "")), pts))
+    return WorldMap(str(raw.get("file", "")), str(raw.get("mode", "replace")),
+                    tuple(outlines))
 
 
 @dataclass(frozen=True)

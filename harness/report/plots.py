@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TypeVar
 
 import numpy as np
@@ -26,6 +27,7 @@ from harness.report.data import (
     RunData,
     SafetySeries,
     Track,
+    world_map,
 )
 from harness.report.svg import Scale, Svg, decimate, nice_ticks, tick_label
 from harness.scenario import Scenario
@@ -71,6 +73,7 @@ COLORS = {
     "highlight": "#111827",
     "moment": "#6b7280",
     "collision": "#111827",
+    "static": "#a8a29e",
 }
 
 
@@ -529,8 +532,9 @@ def _trailer(sc: Scenario) -> list[tuple[float, float]]:
 
 def map_svg(data: RunData | Sequence[tuple[RunData, RunStyle]], *, width: float = WIDTH,
             max_height: float = 560.0, moments: Sequence[Moment] | None = None) -> str:
-    """Top-down view: walls, shelves, trailer, routes, zones, cameras, trajectories (ground
-    truth solid, odometry dashed), workers' paths, collisions and the numbered moments.
+    """Top-down view: walls, shelves, trailer (the procedural warehouse) and a world file's
+    static outlines (``summary.json``'s ``world_map``), routes, zones, cameras, trajectories
+    (ground truth solid, odometry dashed), workers' paths, collisions and the numbered moments.
 
     Several runs: the scene of the first, every run's robots and workers in its colours
     (class ``robot-path run-<key>``), collisions; odometry and mismatch segments are left to
@@ -541,17 +545,20 @@ def map_svg(data: RunData | Sequence[tuple[RunData, RunStyle]], *, width: float 
     sc = data.scenario
     if sc is None:
         return ""
+    wm = world_map(data.summary)  # a world file's static geometry, as the run recorded it
+    warehouse = sc.world.procedural
     wx, wy = sc.world.size
-    xs = [-wx / 2, wx / 2]
-    ys = [-wy / 2, wy / 2]
-    trailer = _trailer(sc) if sc.world.dock.enabled else []
-    for x, y in trailer:
+    xs, ys = ([-wx / 2, wx / 2], [-wy / 2, wy / 2]) if warehouse else ([], [])
+    trailer = _trailer(sc) if warehouse and sc.world.dock.enabled else []
+    for x, y in [*trailer, *(p for o in (wm.outlines if wm else ()) for p in o.points)]:
         xs.append(x)
         ys.append(y)
     for tr in (t for d, _ in layers for t in d.tracks):
         if tr.x.size:
             xs += [float(np.nanmin(tr.x)), float(np.nanmax(tr.x))]
             ys += [float(np.nanmin(tr.y)), float(np.nanmax(tr.y))]
+    if not xs:  # a world file without static geometry, and nothing moved
+        xs, ys = [-1.0, 1.0], [-1.0, 1.0]
     x0, x1, y0, y1 = min(xs) - 1.0, max(xs) + 1.0, min(ys) - 1.0, max(ys) + 1.0
     pad_l, pad_b, pad_t, pad_r = 40.0, 26.0, 10.0, 10.0
     k = min((width - pad_l - pad_r) / (x1 - x0), (max_height - pad_b - pad_t) / (y1 - y0))
@@ -578,12 +585,16 @@ def map_svg(data: RunData | Sequence[tuple[RunData, RunStyle]], *, width: float 
     for v in gy:
         svg.line(X(x0), Y(v), X(x1), Y(v), class_="grid")
         svg.text(X(x0) - 5, Y(v) + 4, tick_label(v, gy), class_="tick", text_anchor="end")
-    poly([(-wx / 2, -wy / 2), (wx / 2, -wy / 2), (wx / 2, wy / 2), (-wx / 2, wy / 2)],
-         class_="floor", title=f"warehouse floor {wx:g} × {wy:g} m (walls)")
-    for i, sh in enumerate(sc.world.shelves):
-        lx, ly = sh.size[0] / 2, sh.size[1] / 2
-        poly(_rot([(-lx, -ly), (lx, -ly), (lx, ly), (-lx, ly)], sh.position[0], sh.position[1],
-                  sh.yaw_deg), class_="shelf", title=f"shelf {i}")
+    if warehouse:
+        poly([(-wx / 2, -wy / 2), (wx / 2, -wy / 2), (wx / 2, wy / 2), (-wx / 2, wy / 2)],
+             class_="floor", title=f"warehouse floor {wx:g} × {wy:g} m (walls)")
+        for i, sh in enumerate(sc.world.shelves):
+            lx, ly = sh.size[0] / 2, sh.size[1] / 2
+            poly(_rot([(-lx, -ly), (lx, -ly), (lx, ly), (-lx, ly)], sh.position[0],
+                      sh.position[1], sh.yaw_deg), class_="shelf", title=f"shelf {i}")
+    for o in (wm.outlines if wm is not None else ()):
+        poly(o.points, class_="static", title=f"{o.name} ({Path(wm.file).name})"
+             if wm is not None else o.name)
     if trailer:
         poly(trailer, class_="trailer", title="trailer (open end at the dock)")
         d = sc.world.dock
@@ -716,7 +727,7 @@ def map_legend(data: RunData | Sequence[tuple[RunData, RunStyle]]
     if layers[0][1] is not None:
         return _overlay_legend([(d, st) for d, st in layers if st is not None])
     robots = [t for t in data.tracks if t.kind == "robot"]
-    out = []
+    out = _static_legend(data)
     for source in sorted({t.source for t in robots}):
         out.append((f"robot ({source})", COLORS["robot"], "line"))
     if any(t.odom_x is not None for t in robots):
@@ -744,10 +755,17 @@ def map_legend(data: RunData | Sequence[tuple[RunData, RunStyle]]
     return out
 
 
+def _static_legend(data: RunData) -> list[tuple[str, str, str]]:
+    wm = world_map(data.summary)
+    if wm is None or not wm.outlines:
+        return []
+    return [(f"static geometry of {Path(wm.file).name}", COLORS["static"], "fill")]
+
+
 def _overlay_legend(layers: Sequence[tuple[RunData, RunStyle]]) -> list[tuple[str, str, str]]:
     sc = layers[0][0].scenario
     assert sc is not None
-    out = []
+    out = _static_legend(layers[0][0])
     for d, st in layers:
         for source in sorted({t.source for t in d.tracks if t.kind == "robot"}):
             out.append((f"{st.label}: robot ({source})", st.color, "line"))

@@ -128,6 +128,7 @@ svg .point-label, svg .lag-label, svg .moment-label { paint-order:stroke; stroke
 svg.map .map-bg { fill:#fafafa; }
 svg.map .floor { fill:#ffffff; stroke:#374151; stroke-width:3; }
 svg.map .shelf { fill:#d6d3d1; stroke:#a8a29e; }
+svg.map .static { fill:#d6d3d1; stroke:#78716c; stroke-width:1; }
 svg.map .trailer { fill:#f5f5f4; stroke:#57534e; stroke-width:2; }
 svg.map .roi { fill:#7c3aed; fill-opacity:.12; stroke:#7c3aed; stroke-width:1.5; }
 svg.map .area { fill:none; stroke:#0f766e; stroke-width:1.2; stroke-dasharray:6 4; }

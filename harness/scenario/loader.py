@@ -17,7 +17,7 @@ from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
 import yaml
 
-from harness.errors import ScenarioError
+from harness.errors import ScenarioError, SrrError
 from harness.scenario.schema import (
     FORMAT_VERSION,
     DiffDriveControl,
@@ -25,6 +25,7 @@ from harness.scenario.schema import (
     GraphSpec,
     RobotSpec,
     Scenario,
+    WorldSpec,
 )
 
 __all__ = ["apply_overrides", "graph_name", "load_scenario", "parse_override", "resolve_names",
@@ -422,11 +423,51 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
             v.fail(f"routes.{name}.waypoints", "a route needs at least two waypoints")
     _check_workers_and_zones(sc, v)
     _check_names(v, sc, "")
+    _check_world(sc, v)
     _check_robots(sc, v)
     _check_cameras(sc, v)
     _check_suts(sc, v)
     _check_graphs(sc, v)
     _check_control_scoring(sc, v)
+
+
+_PROCEDURAL_FIELDS = ("size", "wall_height", "shelves", "dock")
+
+
+def _check_world(sc: Scenario, v: _Validator) -> None:
+    """A world file: exactly one of ``mjcf``/``urdf``; with ``mode: replace`` no procedural
+    field set to anything but its default (it would be silently unused); a valid prim that no
+    robot or camera lies in (or holds)."""
+    from harness.sim.prims import check_prim_path
+
+    model = sc.world.model
+    if model is None:
+        return
+    if (model.urdf is None) == (model.mjcf is None):
+        v.fail("world.model", "set exactly one of 'urdf' and 'mjcf' (the path of the world's "
+               "model file)")
+    if not model.path.strip():
+        v.fail(f"world.model.{model.kind}", "must not be empty")
+    if model.mode == "replace":
+        default = WorldSpec()
+        for name in _PROCEDURAL_FIELDS:
+            if getattr(sc.world, name) != getattr(default, name):
+                v.fail(f"world.{name}", "is not used: world.model.mode is 'replace' (the model "
+                       "file is the whole world); use mode: extend to build the procedural "
+                       "warehouse around the file, or leave this field out")
+    try:
+        check_prim_path(model.prim)
+    except SrrError as err:
+        v.fail("world.model.prim", str(err))
+    root = model.prim.rstrip("/")
+    taken = [(f"robots[{i}].articulation_prim", r.prim) for i, r in enumerate(sc.robots)
+             if r.enabled]
+    taken += [(f"cameras[{i}].camera_prim", c.prim) for i, c in enumerate(sc.cameras)
+              if c.enabled]
+    for field, prim in taken:
+        if prim == root or prim.startswith(root + "/") or root.startswith(prim + "/"):
+            v.fail(field, f"{prim} overlaps {root}, where the world file's bodies are "
+                   "(world.model.prim): move one of them")
 
 
 def _check_robots(sc: Scenario, v: _Validator) -> None:

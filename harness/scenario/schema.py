@@ -47,6 +47,7 @@ __all__ = [
     "ToleranceSpec",
     "TripwireSpec",
     "WorkerSpec",
+    "WorldModel",
     "WorldSpec",
     "ZonesSpec",
 ]
@@ -130,8 +131,39 @@ class DockSpec:
 
 
 @dataclass(frozen=True)
+class WorldModel:
+    """A world described by a file: ``world.model: {mjcf: PATH}`` or ``{urdf: PATH}``.
+
+    ``mode: replace`` (default): the file is the whole world and the procedural warehouse's
+    fields (``size``, ``wall_height``, ``shelves``, ``dock``) are not used; srr adds a ground
+    plane when the file has none and a sun when it has no light. ``mode: extend``: the
+    procedural warehouse plus everything in the file but its ground planes. ``pose`` places
+    the file's world frame in the scene and ``prim`` is where its bodies' prims go. Paths
+    resolve like a robot model file's (:class:`ModelFile`). See :mod:`harness.sim.world_file`.
+    """
+
+    mjcf: str | None = None
+    urdf: str | None = None
+    mode: Literal["replace", "extend"] = "replace"
+    package_paths: tuple[str, ...] = ()
+    pose: Pose = Pose()
+    prim: str = "/World/Environment"  # the file's bodies are prims <prim>/<body name>
+
+    @property
+    def kind(self) -> Literal["urdf", "mjcf"]:
+        """Which format the file is in (the loader makes sure exactly one is set)."""
+        return "urdf" if self.urdf is not None else "mjcf"
+
+    @property
+    def path(self) -> str:
+        """The file as written in the scenario."""
+        return self.urdf if self.urdf is not None else self.mjcf or ""
+
+
+@dataclass(frozen=True)
 class WorldSpec:
-    """The warehouse: floor of ``size`` metres centred on the origin, walls, shelving, dock."""
+    """The warehouse: floor of ``size`` metres centred on the origin, walls, shelving, dock;
+    or (``model``) a world from a file, instead of it or in it."""
 
     size: Vec2 = (30.0, 20.0)
     wall_height: float = num(4.0, 0.5, 20.0)
@@ -142,6 +174,12 @@ class WorldSpec:
         ShelfSpec(position=(2.0, -6.0)),
     )
     dock: DockSpec = DockSpec()
+    model: WorldModel | None = None
+
+    @property
+    def procedural(self) -> bool:
+        """True when the procedural warehouse is built (no world file, or ``mode: extend``)."""
+        return self.model is None or self.model.mode == "extend"
 
 
 @dataclass(frozen=True)

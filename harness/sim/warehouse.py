@@ -27,11 +27,16 @@ from harness.sim.prims import PrimKind, PrimTable
 
 __all__ = [
     "DOOR_HEADROOM",
+    "FLOOR_MARGIN",
     "TRAILER_WALL",
     "WALL_THICKNESS",
+    "add_ground",
+    "add_sky",
+    "add_sun",
     "add_warehouse",
     "door_gaps",
     "floor_half_extent",
+    "set_headlight",
     "trailer_footprint",
 ]
 
@@ -39,7 +44,7 @@ WALL_THICKNESS = 0.2
 TRAILER_WALL = 0.05
 DOOR_HEADROOM = 0.3  # door opening height above the trailer's roof line
 _DOOR_MARGIN = 0.15  # clearance each side of the trailer in the door opening
-_FLOOR_MARGIN = 2.0
+FLOOR_MARGIN = 2.0  # ground plane beyond the walls (and a file world's geometry)
 
 _BOX = mujoco.mjtGeom.mjGEOM_BOX
 _STATIC_GROUP = 0
@@ -83,7 +88,7 @@ def floor_half_extent(world: WorldSpec) -> tuple[float, float]:
     if world.dock.enabled:
         for x, y in trailer_footprint(world.dock):
             hx, hy = max(hx, abs(x)), max(hy, abs(y))
-    return hx + _FLOOR_MARGIN, hy + _FLOOR_MARGIN
+    return hx + FLOOR_MARGIN, hy + FLOOR_MARGIN
 
 
 def _walls(world: WorldSpec) -> list[_Wall]:
@@ -147,22 +152,29 @@ def _box(body: mujoco.MjsBody, name: str, pos: Sequence[float], half: Sequence[f
     )
 
 
-def _add_floor(spec: mujoco.MjSpec, body: mujoco.MjsBody, world: WorldSpec,
-               prims: PrimTable) -> None:
+def add_ground(spec: mujoco.MjSpec, body: mujoco.MjsBody, half: tuple[float, float],
+               prefix: str) -> str:
+    """A checkered ground plane of ``half`` extents (x, y) on ``body``, its texture, material
+    and geom named ``<prefix>floor...``; returns the geom's name."""
     spec.add_texture(
-        name="warehouse/floor_checker", type=mujoco.mjtTexture.mjTEXTURE_2D,
+        name=f"{prefix}floor_checker", type=mujoco.mjtTexture.mjTEXTURE_2D,
         builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, width=512, height=512,
         rgb1=[0.62, 0.62, 0.60], rgb2=[0.42, 0.43, 0.46],
         mark=mujoco.mjtMark.mjMARK_EDGE, markrgb=[0.25, 0.25, 0.25],
     )
-    material = spec.add_material(name="warehouse/floor", texrepeat=[0.5, 0.5], texuniform=True,
+    material = spec.add_material(name=f"{prefix}floor", texrepeat=[0.5, 0.5], texuniform=True,
                                  reflectance=0.05)
-    material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "warehouse/floor_checker"
-    hx, hy = floor_half_extent(world)
-    body.add_geom(name="warehouse/floor", type=mujoco.mjtGeom.mjGEOM_PLANE,
-                  size=[hx, hy, 1.0], material="warehouse/floor", group=_STATIC_GROUP,
+    material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = f"{prefix}floor_checker"
+    body.add_geom(name=f"{prefix}floor", type=mujoco.mjtGeom.mjGEOM_PLANE,
+                  size=[half[0], half[1], 1.0], material=f"{prefix}floor", group=_STATIC_GROUP,
                   contype=1, conaffinity=1)
-    prims.declare("/World/Warehouse/Floor", PrimKind.GEOM, "warehouse/floor")
+    return f"{prefix}floor"
+
+
+def _add_floor(spec: mujoco.MjSpec, body: mujoco.MjsBody, world: WorldSpec,
+               prims: PrimTable) -> None:
+    name = add_ground(spec, body, floor_half_extent(world), "warehouse/")
+    prims.declare("/World/Warehouse/Floor", PrimKind.GEOM, name)
 
 
 def _add_walls(body: mujoco.MjsBody, world: WorldSpec) -> None:
@@ -233,18 +245,33 @@ def _add_trailer(parent: mujoco.MjsBody, dock: DockSpec, prims: PrimTable) -> No
                    castshadow=False)
 
 
-def _add_lights(spec: mujoco.MjSpec, world: WorldSpec) -> None:
-    spec.add_texture(name="warehouse/sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+def add_sky(spec: mujoco.MjSpec, prefix: str) -> None:
+    """A gradient sky box, texture ``<prefix>sky``."""
+    spec.add_texture(name=f"{prefix}sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
                      builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, width=256, height=256,
                      rgb1=[0.55, 0.65, 0.80], rgb2=[0.15, 0.17, 0.22])
+
+
+def set_headlight(spec: mujoco.MjSpec) -> None:
+    """The viewer's headlight, dimmed so the scene's own lights shape it."""
     spec.visual.headlight.ambient = [0.25, 0.25, 0.25]
     spec.visual.headlight.diffuse = [0.35, 0.35, 0.35]
     spec.visual.headlight.specular = [0.05, 0.05, 0.05]
-    top = world.wall_height
+
+
+def add_sun(spec: mujoco.MjSpec, top: float, prefix: str) -> None:
+    """A shadow-casting directional light ``<prefix>sun`` 10 m above ``top``."""
     spec.worldbody.add_light(
-        name="warehouse/sun", type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+        name=f"{prefix}sun", type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
         pos=[0.0, 0.0, top + 10.0], dir=[0.3, 0.2, -1.0], diffuse=[0.45, 0.45, 0.42],
         specular=[0.1, 0.1, 0.1], castshadow=True)
+
+
+def _add_lights(spec: mujoco.MjSpec, world: WorldSpec) -> None:
+    add_sky(spec, "warehouse/")
+    set_headlight(spec)
+    top = world.wall_height
+    add_sun(spec, top, "warehouse/")
     qx, qy = world.size[0] / 4, world.size[1] / 4
     for i, (x, y) in enumerate(((qx, qy), (-qx, qy), (-qx, -qy), (qx, -qy))):
         spec.worldbody.add_light(

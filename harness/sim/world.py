@@ -1,9 +1,11 @@
 """The simulated world: a MuJoCo model built from a :class:`~harness.scenario.schema.Scenario`.
 
-``World.build(scenario)`` assembles an ``MjSpec`` (warehouse, enabled robots, enabled fixed
-cameras, robot-mounted sensor attach points, workers on foot), compiles it and resolves every
-prim path to a MuJoCo object. Everything the rest of srr needs is addressed by prim path
-(``/World/...``) or by robot name; MuJoCo names stay internal.
+``World.build(scenario)`` assembles an ``MjSpec`` (the warehouse and/or a world file, enabled
+robots, enabled fixed cameras, robot-mounted sensor attach points, workers on foot), compiles
+it and resolves every prim path to a MuJoCo object. A world file (``world.model``,
+:mod:`harness.sim.world_file`) is read and checked before anything else, and after compiling
+no robot may start inside one of its static geoms. Everything the rest of srr needs is
+addressed by prim path (``/World/...``) or by robot name; MuJoCo names stay internal.
 
 Conventions:
 
@@ -35,15 +37,26 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from harness.errors import SimulationError
-from harness.scenario.schema import Scenario
+from harness.errors import ScenarioError, SimulationError
+from harness.scenario.schema import Scenario, WorldSpec
 from harness.sim.cameras import add_fixed_camera, world_convention_quat
+from harness.sim.footprints import Footprint
 from harness.sim.geometry import FloatArray, quat_from_mat, quat_from_rpy_deg
 from harness.sim.prims import PrimKind, PrimRef, PrimTable
 from harness.sim.robots import ActuatorMode, ModelSource, RobotBuild, add_robot
+from harness.sim.robots.model_file import file_digest
 from harness.sim.sensors import MountedSensors, add_robot_sensors
-from harness.sim.warehouse import add_warehouse, floor_half_extent
+from harness.sim.warehouse import (
+    FLOOR_MARGIN,
+    add_ground,
+    add_sky,
+    add_sun,
+    add_warehouse,
+    floor_half_extent,
+    set_headlight,
+)
 from harness.sim.workers import Worker, WorkerDriver, add_workers, plan_workers
+from harness.sim.world_file import LoadedWorld, WorldSource, add_world_file, load_world_file
 
 __all__ = ["ImuReading", "JointRef", "RobotInfo", "World"]
 
@@ -54,6 +67,11 @@ _INTEGRATORS = {
     "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
 }
 _NEAR_CLIP_M = 0.03
+_GROUND_PREFIX = "srr-ground/"  # srr's ground, sky and sun under a world file ('-': no robot)
+_MIN_GROUND = 5.0  # m: the smallest half extent of the ground srr adds under a world file
+_MIN_TOP = 1.0  # m
+_PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)
+_SPAWN_DEPTH = 0.01  # m: a robot deeper than this in a world file's static geom is refused
 _MIN_OFFSCREEN = (640, 480)
 
 Vec3 = tuple[float, float, float]
@@ -100,7 +118,22 @@ class ImuReading(NamedTuple):
     linear_acceleration: FloatArray
 
 
-def _configure(spec: mujoco.MjSpec, scenario: Scenario) -> None:
+def _scene_extent(world: WorldSpec, loaded: LoadedWorld | None) -> tuple[float, float, float]:
+    """Half extents (x, y) of the ground and the height of the scene: the warehouse's, grown
+    to hold a world file's geometry (plus a margin on the ground)."""
+    hx = hy = top = 0.0
+    if world.procedural:
+        (hx, hy), top = floor_half_extent(world), world.wall_height
+    if loaded is not None:
+        x0, x1, y0, y1, z1 = loaded.bounds or (0.0, 0.0, 0.0, 0.0, 0.0)
+        hx = max(hx, max(abs(x0), abs(x1)) + FLOOR_MARGIN, _MIN_GROUND)
+        hy = max(hy, max(abs(y0), abs(y1)) + FLOOR_MARGIN, _MIN_GROUND)
+        top = max(top, z1, _MIN_TOP)
+    return hx, hy, top
+
+
+def _configure(spec: mujoco.MjSpec, scenario: Scenario,
+               extent3: tuple[float, float, float]) -> None:
     physics = scenario.physics
     spec.modelname = "srr"
     spec.compiler.degree = False
@@ -108,10 +141,10 @@ def _configure(spec: mujoco.MjSpec, scenario: Scenario) -> None:
     spec.option.timestep = 1.0 / (physics.tick_hz * physics.substeps)
     spec.option.integrator = _INTEGRATORS[physics.integrator]
     spec.option.iterations = physics.solver_iterations
-    hx, hy = floor_half_extent(scenario.world)
-    extent = 2.0 * max(hx, hy, scenario.world.wall_height)
+    hx, hy, top = extent3
+    extent = 2.0 * max(hx, hy, top)
     spec.stat.extent = extent
-    spec.stat.center = [0.0, 0.0, scenario.world.wall_height / 2]
+    spec.stat.center = [0.0, 0.0, top / 2]
     spec.visual.map.znear = _NEAR_CLIP_M / extent
     spec.visual.map.zfar = 3.0
     widths = [_MIN_OFFSCREEN[0]] + [c.resolution[0] for c in scenario.cameras]
@@ -167,15 +200,37 @@ def _resolve_robot(model: mujoco.MjModel, build: RobotBuild,
     )
 
 
+def _add_scene(spec: mujoco.MjSpec, world: WorldSpec, loaded: LoadedWorld | None,
+               extent3: tuple[float, float, float], prims: PrimTable) -> None:
+    """The static scene: the warehouse, a world file, or both (``world.model.mode``). A
+    file that replaces the warehouse gets srr's ground, sky and sun where it has none."""
+    if world.procedural:
+        add_warehouse(spec, world, prims)
+    if loaded is None:
+        return
+    if not world.procedural:
+        if not loaded.has_floor:
+            add_ground(spec, spec.worldbody, (extent3[0], extent3[1]), _GROUND_PREFIX)
+        if not loaded.has_sky:
+            add_sky(spec, _GROUND_PREFIX)
+        set_headlight(spec)
+        if not loaded.has_light:
+            add_sun(spec, extent3[2], _GROUND_PREFIX)
+    add_world_file(spec, loaded, prims)
+
+
 def _assemble(scenario: Scenario, prims: PrimTable, source: str, environ: Mapping[str, str],
+              loaded: LoadedWorld | None,
               ) -> tuple[mujoco.MjSpec, list[tuple[RobotBuild, MountedSensors]]]:
-    """The whole spec: options, warehouse, enabled robots with their sensors, fixed cameras."""
+    """The whole spec: options, warehouse and/or world file, enabled robots with their
+    sensors, fixed cameras."""
     spec = mujoco.MjSpec()
-    _configure(spec, scenario)
-    add_warehouse(spec, scenario.world, prims)
+    extent3 = _scene_extent(scenario.world, loaded)
+    _configure(spec, scenario, extent3)
+    _add_scene(spec, scenario.world, loaded, extent3, prims)
     builds: list[tuple[RobotBuild, MountedSensors]] = []
     seen: set[str] = set()
-    assets: dict[str, bytes] = {}
+    assets: dict[str, bytes] = dict(loaded.assets) if loaded is not None else {}
     for i, robot in enumerate(scenario.robots):
         if not robot.enabled:
             continue
@@ -199,14 +254,40 @@ def _assemble(scenario: Scenario, prims: PrimTable, source: str, environ: Mappin
     return spec, builds
 
 
+def _check_spawns(world: World, loaded: LoadedWorld, source: str) -> None:
+    """No robot starts inside a static geom of the world file: the contacts at the spawn
+    state (after ``mj_forward``) between a robot and such a geom (planes aside) must not be
+    deeper than ``_SPAWN_DEPTH``."""
+    m, d = world.model, world.data
+    sc = world.scenario
+    static = {int(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, n)): n for n in loaded.static}
+    owner = {b: name for name in world.robot_names() for b in world.robot_body_ids(name)}
+    for c in d.contact[:d.ncon]:
+        if c.dist >= -_SPAWN_DEPTH:
+            continue
+        for mine, other in ((int(c.geom1), int(c.geom2)), (int(c.geom2), int(c.geom1))):
+            robot = owner.get(int(m.geom_bodyid[mine]))
+            name = static.get(other)
+            if robot is None or name is None or int(m.geom_type[other]) == _PLANE:
+                continue
+            i = sc.robot_index(robot)
+            x, y, _ = sc.robots[i].spawn.position
+            raise ScenarioError(
+                sc.file_for(f"robots[{i}]", source), f"robots[{i}].spawn.position",
+                f"robot {robot} at ({x:g}, {y:g}) starts inside {loaded.geoms.get(name, name)!r}"
+                f" of {loaded.shown} ({-c.dist:.3f} m deep): move it to free floor")
+
+
 class World:
     """A compiled MuJoCo world plus the prim and robot tables; build it with :meth:`build`."""
 
     def __init__(self, scenario: Scenario, model: mujoco.MjModel, data: mujoco.MjData,
                  prims: Mapping[str, PrimRef], robots: Mapping[str, RobotInfo],
                  workers: WorkerDriver | None = None,
+                 world_file: LoadedWorld | None = None,
                  scene_files: Mapping[str, str] | None = None) -> None:
         self._scenario = scenario
+        self._world_file = world_file
         self.scene_files: Mapping[str, str] = types.MappingProxyType(dict(scene_files or {}))
         self._model = model
         self._data = data
@@ -224,14 +305,20 @@ class World:
     def build(cls, scenario: Scenario, source: str = "<scenario>",
               environ: Mapping[str, str] | None = None) -> World:
         """Build the world for ``scenario`` (enabled robots and cameras only). ``source`` is
-        the scenario file: robots' model files are found relative to it (or to the include
-        that holds the robot) and errors about them name it; ``environ`` (default: the
-        process environment) holds ``SRR_PACKAGE_PATH`` / ``ROS_PACKAGE_PATH``."""
+        the scenario file: robots' and the world's model files are found relative to it (or
+        to the include that holds the robot or the world) and errors about them name it;
+        ``environ`` (default: the process environment) holds ``SRR_PACKAGE_PATH`` /
+        ``ROS_PACKAGE_PATH``."""
         prims = PrimTable()
         workers = plan_workers(scenario)
         env = os.environ if environ is None else environ
+        loaded = None
+        if scenario.world.model is not None:
+            file = scenario.file_for("world", source)
+            loaded = load_world_file(scenario.world.model,
+                                     WorldSource(file, Path(file).parent, env))
         try:
-            spec, builds = _assemble(scenario, prims, source, env)
+            spec, builds = _assemble(scenario, prims, source, env, loaded)
             add_workers(spec, workers, prims)
             model = spec.compile()
         except ValueError as err:  # MuJoCo refuses a spec element (e.g. a repeated name)
@@ -242,8 +329,24 @@ class World:
         robots = {b.name: _resolve_robot(model, b, s) for b, s in builds}
         files = {f"robots[{scenario.robot_index(b.name)}].model": b.file_digest
                  for b, _ in builds if b.file_digest is not None}
-        return cls(scenario, model, data, resolved, types.MappingProxyType(robots),
-                   WorkerDriver(model, workers), files)
+        if loaded is not None:
+            files["world.model"] = file_digest(loaded.path, loaded.assets)
+        world = cls(scenario, model, data, resolved, types.MappingProxyType(robots),
+                    WorkerDriver(model, workers), loaded, files)
+        if loaded is not None:
+            _check_spawns(world, loaded, source)
+        return world
+
+    # ------------------------------------------------------------------ world file
+    @property
+    def world_file(self) -> LoadedWorld | None:
+        """The world file (``world.model``) as it was read, or None."""
+        return self._world_file
+
+    def footprints(self) -> tuple[Footprint, ...]:
+        """Outlines on the floor of the world file's static geometry, for the map (see
+        :mod:`harness.sim.world_file`); empty without a world file."""
+        return () if self._world_file is None else self._world_file.footprints
 
     # ------------------------------------------------------------------ state
     @property

@@ -7,6 +7,8 @@ byte. MuJoCo reads binary STL (not ASCII) and Wavefront OBJ, so there is one of 
   corners, 0.30 x 0.22 x 0.08 m, centred on its origin.
 * ``srr_diffbot/meshes/wheel.obj``: a wheel, radius 0.05 m, width 0.03 m, axle along +Y.
 * ``pallet_truck/meshes/mast.obj``: the pallet truck's mast, two uprights and a cross bar.
+* ``shelf_world/meshes/bollard.obj``: a bollard in the test world, an octagonal prism with
+  corners 0.2 m from its axis (the first on +X), 0.8 m high, its base at z = 0.
 """
 
 from __future__ import annotations
@@ -89,6 +91,11 @@ def main() -> None:
         mast_v += v
         mast_f += [tuple(base + i for i in face) for face in f]
     write_obj(HERE / "pallet_truck" / "meshes" / "mast.obj", mast_v, mast_f)
+
+    octagon = [(0.2 * math.cos(math.pi * k / 4), 0.2 * math.sin(math.pi * k / 4))
+               for k in range(8)]
+    verts, faces = prism(octagon, 0.0, 0.8)
+    write_obj(HERE / "shelf_world" / "meshes" / "bollard.obj", verts, faces)
 
 
 if __name__ == "__main__":

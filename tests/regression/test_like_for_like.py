@@ -12,6 +12,7 @@ import pytest
 from harness import api
 from harness.regression import comparable_config, config_differences, with_defaults
 from harness.scenario import load_scenario, scenario_to_mapping
+from harness.sim import World
 from tests.conftest import SCENARIOS
 
 FW = SCENARIOS / "forklift_warehouse.yaml"
@@ -119,3 +120,13 @@ def test_an_edited_model_file_is_another_configuration(tmp_path: Path) -> None:
     assert diffs["edited"][0] == "duration: 11.0 → 1.0"
     assert diffs["edited"][1].startswith(
         f"scene_files.robots[0].model: '{stored['scene_files']['robots[0].model']}' → '")
+
+
+def test_a_world_file_is_part_of_the_configuration() -> None:
+    """The shelf world's baseline records its world file's digest, which the run computes
+    from the file and its meshes as they are now."""
+    path = SCENARIOS / "shelf_world_mjcf.yaml"
+    stored = json.loads((SCENARIOS.parent / "baselines" / "shelf_world_mjcf.json").read_text())
+    world = World.build(load_scenario(path), str(path))
+    assert dict(world.scene_files) == stored["config"]["scene_files"]
+    assert set(world.scene_files) == {"world.model"}

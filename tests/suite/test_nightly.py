@@ -20,7 +20,7 @@ WORKFLOW = ROOT / ".github" / "workflows" / "nightly.yml"
 def test_nightly_suite_plans_with_a_baseline_for_every_group() -> None:
     plan = plan_suite([NIGHTLY])
     groups = {r.group: r for r in plan.runs}
-    assert len(groups) == 8 + 5 and len(plan.runs) == 8 * 2 + 5
+    assert len(groups) == 9 + 5 and len(plan.runs) == 9 * 2 + 5
     sweep = [g for g in groups if g.startswith("crossing_reaction_delay[")]
     assert sweep == [f"crossing_reaction_delay[reaction_delay={v}]"
                      for v in ("0", "0.5", "1", "1.5", "2")]

@@ -43,7 +43,6 @@ field and the model file.
 from __future__ import annotations
 
 import difflib
-import hashlib
 import math
 import re
 import types
@@ -64,7 +63,12 @@ from harness.scenario.schema import (
 from harness.sim.geometry import FloatArray
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import COLLISION_GROUP, VISUAL_GROUP, ActuatorMode, RobotBuild
-from harness.sim.robots.model_file import LoadedModel, ModelFileError, load_model_file
+from harness.sim.robots.model_file import (
+    LoadedModel,
+    ModelFileError,
+    file_digest,
+    load_model_file,
+)
 from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
 
 __all__ = ["ROBOT_FRONT", "ModelSource", "add_model_robot"]
@@ -326,12 +330,4 @@ def add_model_robot(spec: mujoco.MjSpec, robot: RobotSpec,
         base_prim=f"{prim}/{loaded.root}", robot_front=ROBOT_FRONT,
         default_base_frame=loaded.root, joints=types.MappingProxyType(joints),
         actuators=types.MappingProxyType(actuators), links=types.MappingProxyType(links),
-        assets=loaded.assets, file_digest=_file_digest(path, loaded))
-
-
-def _file_digest(path: Path, loaded: LoadedModel) -> str:
-    """SHA-256 over the model file's bytes and its assets (named by their content hashes)."""
-    digest = hashlib.sha256(path.read_bytes())
-    for key in sorted(loaded.assets):
-        digest.update(key.encode())
-    return digest.hexdigest()
+        assets=loaded.assets, file_digest=file_digest(path, loaded.assets))

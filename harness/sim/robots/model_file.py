@@ -1,5 +1,9 @@
 """Read a robot's model file (URDF or MJCF) into a MuJoCo spec ready to attach to the world.
 
+:func:`read_model_file` is the reading part alone (parsing, asset paths, assets in memory),
+shared with world files (:mod:`harness.sim.world_file`); :func:`load_model_file` adds the
+robot's checks.
+
 MuJoCo parses both formats itself (``mujoco.MjSpec.from_string`` / ``from_file``); this
 module prepares what it reads and checks that the result stands on its own:
 
@@ -35,7 +39,8 @@ import mujoco
 from harness.sim.robots.common import ActuatorMode
 from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
 
-__all__ = ["JointInfo", "LoadedModel", "ModelFileError", "load_model_file"]
+__all__ = ["JointInfo", "LoadedModel", "ModelFileError", "ParsedModel", "file_digest",
+           "load_model_file", "one_line", "read_model_file"]
 
 _URDF_COMPILER = {"discardvisual": "false", "fusestatic": "false", "strippath": "false"}
 _JOINT_KINDS = {
@@ -88,7 +93,8 @@ class LoadedModel:
     joint_inertia: Mapping[str, float]
 
 
-def _one_line(err: BaseException) -> str:
+def one_line(err: BaseException) -> str:
+    """MuJoCo's (often multi-line) error message on one line, at most 300 characters."""
     text = "; ".join(line.strip() for line in str(err).splitlines() if line.strip())
     text = text.removeprefix("Error: ")
     return text if len(text) <= 300 else text[:297] + "..."
@@ -144,7 +150,7 @@ def _parse(path: Path, kind: Literal["urdf", "mjcf"],
             spec = mujoco.MjSpec.from_file(str(path))
     except ValueError as err:
         raise ModelFileError(f"MuJoCo cannot read it as {kind.upper()}: "
-                             f"{_one_line(err)}") from err
+                             f"{one_line(err)}") from err
     return spec, urdf_types
 
 
@@ -194,11 +200,34 @@ def _describe(kind: str, limited: bool, urdf_type: str | None) -> str:
         else kind
 
 
+@dataclass(frozen=True)
+class ParsedModel:
+    """A model file as MuJoCo reads it, not yet checked: ``spec`` (fresh) names its asset
+    files by the keys of ``assets`` (their bytes, in memory); ``urdf_types``: a URDF's joint
+    types by joint name (empty for MJCF)."""
+
+    path: Path
+    kind: Literal["urdf", "mjcf"]
+    spec: mujoco.MjSpec
+    assets: Mapping[str, bytes]
+    urdf_types: Mapping[str, str]
+
+
+def read_model_file(path: Path, kind: Literal["urdf", "mjcf"],
+                    packages: PackagePath) -> ParsedModel:
+    """Parse ``path`` (a URDF prepared as the module says) and bring its asset files into
+    memory; what the model is for (a robot, a world) is the caller's to check."""
+    spec, urdf_types = _parse(path, kind, packages)
+    assets = _take_assets(spec, path, packages)
+    return ParsedModel(path, kind, spec, types.MappingProxyType(assets),
+                       types.MappingProxyType(urdf_types))
+
+
 def load_model_file(path: Path, kind: Literal["urdf", "mjcf"],
                     packages: PackagePath) -> LoadedModel:
     """Parse ``path``, bring its asset files into memory and compile it alone to check it."""
-    spec, urdf_types = _parse(path, kind, packages)
-    assets = _take_assets(spec, path, packages)
+    parsed = read_model_file(path, kind, packages)
+    spec, urdf_types, assets = parsed.spec, parsed.urdf_types, dict(parsed.assets)
     for i, act in enumerate(spec.actuators):  # named, so the world can find them again
         if not act.name:
             act.name = f"srr_actuator_{i}"
@@ -213,7 +242,7 @@ def load_model_file(path: Path, kind: Literal["urdf", "mjcf"],
     try:
         model = spec.compile()
     except ValueError as err:
-        raise ModelFileError(f"MuJoCo cannot build it: {_one_line(err)}") from err
+        raise ModelFileError(f"MuJoCo cannot build it: {one_line(err)}") from err
 
     def name(objtype: mujoco.mjtObj, idx: int) -> str:
         return mujoco.mj_id2name(model, objtype, idx) or ""
@@ -253,3 +282,12 @@ def load_model_file(path: Path, kind: Literal["urdf", "mjcf"],
         root=tops[0].name, links=tuple(links), link_parents=types.MappingProxyType(parents),
         joints=types.MappingProxyType(joints), actuators=types.MappingProxyType(actuators),
         mass=float(model.body_mass[1:].sum()), joint_inertia=types.MappingProxyType(inertia))
+
+
+def file_digest(path: Path, assets: Mapping[str, bytes]) -> str:
+    """SHA-256 over a model file's bytes and its assets' names (content hashes, see
+    :func:`_take_assets`): what changes when the file or any mesh or texture it uses does."""
+    digest = hashlib.sha256(path.read_bytes())
+    for key in sorted(assets):
+        digest.update(key.encode())
+    return digest.hexdigest()
