@@ -11,6 +11,7 @@ from pathlib import Path
 import yaml
 import zstandard
 from mcap.exceptions import McapError
+from rosbags.rosbag1 import ReaderError as Rosbag1ReaderError
 from rosbags.rosbag2 import Reader
 from rosbags.rosbag2.errors import ReaderError
 
@@ -22,8 +23,8 @@ __all__ = ["BAG_READ_ERRORS", "BagInfo", "BagTopic", "inspect_bag"]
 #: What the bag readers (rosbags, mcap and the decompressors under them) raise on a damaged,
 #: truncated or foreign file. Every reader in srr turns these into one BagError line.
 BAG_READ_ERRORS: tuple[type[BaseException], ...] = (
-    ReaderError, McapError, OSError, EOFError, struct.error, ValueError, KeyError, IndexError,
-    TypeError, AttributeError, AssertionError, OverflowError, MemoryError,
+    ReaderError, Rosbag1ReaderError, McapError, OSError, EOFError, struct.error, ValueError,
+    KeyError, IndexError, TypeError, AttributeError, AssertionError, OverflowError, MemoryError,
     zstandard.ZstdError, RuntimeError, yaml.YAMLError)
 
 
