@@ -290,3 +290,25 @@ def test_output_kind_and_inspect(srr: Callable[..., Done], clocks: Path, tmp_pat
     assert shown.returncode == 0, shown.stderr
     clock_type = "rosgraph_msgs/Clock" if ros == 1 else "rosgraph_msgs/msg/Clock"
     assert clock_type in shown.stdout and "6" in shown.stdout
+
+
+def test_a_foreign_bag_with_tf_tfmessage(tmp_path: Path) -> None:
+    """A ROS 1 bag written elsewhere, with the older ``tf/tfMessage`` on /tf, reads into the
+    same TF table (the type is read as tf2_msgs/msg/TFMessage)."""
+    from rosbags.rosbag1 import Writer
+
+    from harness.bus.ros1 import ROS1_TYPESTORE
+
+    tf = m.tf_message([m.transform_stamped(2_000_000_000, "odom", "base_link", [1, 2, 0],
+                                           [0, 0, 0, 1])])
+    raw = Ros1Encoder().encode("/tf", TF_MESSAGE, tf)
+    with Writer(tmp_path / "x.bag") as bag:
+        conn = bag.add_connection("/tf", "tf/msg/tfMessage", typestore=ROS1_TYPESTORE)
+        for k in range(3):
+            bag.write(conn, k * 1_000_000_000, raw)
+    frames = load_frames(tmp_path / "x.bag")
+    assert frames.topics[["name", "type", "count"]].values.tolist() == [
+        ["/tf", TF_MESSAGE, 3]]
+    assert frames.tf[["parent", "child", "x", "y"]].values.tolist() == \
+        [["odom", "base_link", 1.0, 2.0]] * 3
+    assert (frames.tf["t_ns"] == 2_000_000_000).all()

@@ -30,6 +30,7 @@ from mcap.reader import make_reader
 from mcap_ros1.decoder import DecoderFactory as Ros1DecoderFactory
 from rosbags.highlevel import AnyReader
 
+from harness import api
 from harness import graph as og
 from harness.engine import Simulation
 from harness.report.images import nearest_images
@@ -252,12 +253,9 @@ def test_replay_of_the_recording_reproduces_it(bag: Recorded, tmp_path: Path) ->
     if bag.summary["output"] != {"ros": 1, "format": "bag", "because": "output.format: bag"}:
         pytest.skip("replay is checked once, on the ROS 1 bag")
     out = tmp_path / "replay"
-    done = subprocess.run([sys.executable, "-m", "harness.cli", "replay", str(bag.run_dir),
-                           "--out", str(out), "-q"], cwd=ROOT, capture_output=True, text=True,
-                          timeout=300)
-    assert done.returncode == 1, done.stderr
-    replayed = json.loads((out / "summary.json").read_text())
+    replayed = api.replay(bag.run_dir, out=out).summary
     assert sorted((out / "bag").iterdir()) == [out / "bag" / "bag.bag"]
+    assert replayed["output"]["ros"] == 1
     assert {t: v["sha256"] for t, v in replayed["topics"].items()} == \
         {t: v["sha256"] for t, v in bag.summary["topics"].items()}
 
@@ -266,14 +264,12 @@ def test_ros1_runs_are_deterministic(tmp_path: Path) -> None:
     """Two runs of the seed's scene recorded as ROS 1 give identical per-topic digests."""
     if not rendering_available():
         pytest.skip("no OpenGL for the seed's camera (MUJOCO_GL=egl or osmesa)")
-    done = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(SCENARIO), "--out",
-                           str(tmp_path), "-q", "--repeat", "2", "--duration", "0.25"],
-                          env=gl_env(), cwd=ROOT, capture_output=True, text=True, timeout=300)
-    assert done.returncode == 1, done.stderr  # UNSCORED
-    report = json.loads((tmp_path / "determinism.json").read_text())
-    assert report["identical"] and report["differing_topics"] == []
-    summary = json.loads((tmp_path / "run_1" / "summary.json").read_text())
-    assert summary["output"]["ros"] == 1 and summary["topics"]["/clock"]["count"] == 15
+    sc = api.load(SCENARIO, duration=0.1)
+    rep = api.run_repeat(sc, 2, source=str(SCENARIO), out=tmp_path)
+    assert rep.identical and rep.differing_topics == ()
+    summary = rep.runs[0].summary
+    assert summary["output"]["ros"] == 1 and summary["topics"]["/clock"]["count"] == 6
+    assert rep.runs[0].summary["digest"] == rep.runs[1].summary["digest"]
 
 
 def test_verbatim_add_tf_sends_the_whole_tree_to_tf() -> None:
