@@ -312,3 +312,12 @@ def test_a_foreign_bag_with_tf_tfmessage(tmp_path: Path) -> None:
     assert frames.tf[["parent", "child", "x", "y"]].values.tolist() == \
         [["odom", "base_link", 1.0, 2.0]] * 3
     assert (frames.tf["t_ns"] == 2_000_000_000).all()
+
+
+def test_fields_ros1_drops_are_warned(srr: Callable[..., Done], clocks: Path) -> None:
+    done = srr("validate", str(clocks), "--set",
+               "systems_under_test=[{name: t, plugin: 'tests.e2e.replay_plugins:BlindTracker'}]")
+    assert done.returncode == 0, done.stderr
+    assert ("srr validate: warning: ROS 1 output: visualization_msgs/msg/MarkerArray "
+            "(/perception/tracks) is recorded without mesh_file, texture, texture_resource, "
+            "uv_coordinates (ROS 1 has no such fields)") in done.stderr

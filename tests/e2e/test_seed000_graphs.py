@@ -33,6 +33,7 @@ from rosbags.highlevel import AnyReader
 from harness import api
 from harness import graph as og
 from harness.engine import Simulation
+from harness.frames import load_frames
 from harness.report.images import nearest_images
 from harness.scenario import load_scenario
 from tests.conftest import ROOT
@@ -247,17 +248,26 @@ def test_report_keyframes_read_the_recording(bag: Recorded) -> None:
     assert np.array_equal(pixels, full[::4, ::4])  # shrunk to 320 wide
 
 
-def test_replay_of_the_recording_reproduces_it(bag: Recorded, tmp_path: Path) -> None:
-    """``srr replay`` plays the recording (ROS 1 too) into the scripted teleop again: the
-    replayed run records the same bytes, per topic."""
+def test_replay_diff_and_bless_a_ros1_bag(bag: Recorded, tmp_path: Path) -> None:
+    """``srr replay`` plays the ROS 1 recording into the scripted teleop again and records
+    the same bytes, per topic; ``srr diff`` finds the two identical; blessing the run keeps a
+    ``ros1``-profile reference recording that reads back."""
     if bag.summary["output"] != {"ros": 1, "format": "bag", "because": "output.format: bag"}:
-        pytest.skip("replay is checked once, on the ROS 1 bag")
+        pytest.skip("checked once, on the ROS 1 bag")
     out = tmp_path / "replay"
     replayed = api.replay(bag.run_dir, out=out).summary
     assert sorted((out / "bag").iterdir()) == [out / "bag" / "bag.bag"]
     assert replayed["output"]["ros"] == 1
     assert {t: v["sha256"] for t, v in replayed["topics"].items()} == \
         {t: v["sha256"] for t, v in bag.summary["topics"].items()}
+    diff = api.diff_runs(bag.run_dir, out)
+    assert diff.equal and {t.status for t in diff.topics} == {"identical"}
+    baseline = api.bless(bag.run_dir, "ROS 1 reference", baselines=tmp_path / "baselines")
+    reference = baseline.with_suffix(".mcap")
+    with reference.open("rb") as f:
+        assert make_reader(f).get_header().profile == "ros1"
+    ref = load_frames(reference)
+    assert len(ref.odom) == 2 * TICKS and len(ref.gt_poses) == TICKS and len(ref.tf) == 6
 
 
 def test_ros1_runs_are_deterministic(tmp_path: Path) -> None:
