@@ -464,6 +464,9 @@ def _check_replay_scene(recorded: Scenario, scenario: Scenario) -> None:
         cfg.pop("scoring", None)
         return cfg
 
+    if recorded.output != scenario.output:
+        raise ScenarioError("--set", "output", "a replay records what the recording is "
+                            "(ROS 1 or ROS 2, bag or MCAP); it cannot change the output")
     diffs = config_differences(scene(recorded), scene(scenario))
     if diffs:
         field = diffs[0].split(":", 1)[0]

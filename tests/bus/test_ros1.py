@@ -290,6 +290,10 @@ def test_output_kind_and_inspect(srr: Callable[..., Done], clocks: Path, tmp_pat
     assert shown.returncode == 0, shown.stderr
     clock_type = "rosgraph_msgs/Clock" if ros == 1 else "rosgraph_msgs/msg/Clock"
     assert clock_type in shown.stdout and "6" in shown.stdout
+    if not sets:  # a replay records what the recording is
+        done = srr("replay", str(out), "--set", "output.ros=2", "--out", str(tmp_path / "r"))
+        assert done.returncode == 2 and "--set: output: a replay records what the " \
+            "recording is" in done.stderr and not (tmp_path / "r").exists()
 
 
 def test_a_foreign_bag_with_tf_tfmessage(tmp_path: Path) -> None:
