@@ -4,7 +4,8 @@
 that every published message was recorded, and writes the run directory:
 
     scenario.yaml   resolved scenario (includes expanded, defaults and overrides applied)
-    bag/            rosbag2 directory: metadata.yaml + one .mcap
+    bag/            rosbag2 directory: metadata.yaml + one .mcap (ROS 2); or, for a run that
+                    records ROS 1 (harness.output), bag/bag.bag or bag/bag.mcap (ros1 profile)
     summary.json    verdict and reasons, health gates, metrics, baseline comparison,
                     per-topic count/rate/bytes/sha256, versions, seed, command to reproduce
     junit.xml       health gates and metric comparisons as test cases, for CI systems
@@ -31,8 +32,9 @@ import yaml
 
 from harness import __version__, runmarker
 from harness.atomic import write_json_atomic
-from harness.bus import Bus, Recorder, TopicStats
+from harness.bus import Bus, TopicStats
 from harness.bus.bagfile import ChunkPolicy
+from harness.bus.bagread import ros1_recording
 from harness.bus.live import LiveConfig, LiveView
 from harness.bus.recover import RecoveredBag, recover_bag
 from harness.diff import DiffResult, Tolerance
@@ -42,6 +44,7 @@ from harness.engine import Simulation
 from harness.errors import BagError, InvalidRunError, RunStopped, ScenarioError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
 from harness.metrics.types import HealthResult
+from harness.output import ROS2_OUTPUT, OutputKind, check_output_topics, decide_output
 from harness.regression import (
     baseline_path,
     comparable_config,
@@ -189,6 +192,7 @@ class _Loop:
     ticks: Callable[[], int]
     srr_gt: bool
     extra: dict[str, Any]
+    output: OutputKind = ROS2_OUTPUT  # what the recorder writes (harness.output)
 
 
 def _prepare(run_dir: Path) -> None:
@@ -219,8 +223,13 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(with_ros2_bridge(scenario, run_dir), source=source)
     try:
+        output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
+        if live is not None and output.ros == 1:
+            raise SrrError(f"--foxglove: the live view serves ROS 2 messages, and this run "
+                           f"records ROS 1 ({output.because})")
         plan = sim.plan()
-        warnings = check_wiring(plan, scenario, source)
+        warnings = [*check_wiring(plan, scenario, source),
+                    *check_output_topics(output, plan.topics, scenario, source)]
         # After the plan, so the server advertises every topic the run will publish at once.
         view = (LiveView.start(live, topics={t.topic: t.msgtype for t in plan.topics
                                              if t.kind == "pub"}, notice=notice)
@@ -234,7 +243,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     if sim.world.world_file is not None:  # the file's static geometry, for the report's map
         extra["world_map"] = map_json(sim.world.world_file)
     loop = _Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
-                 sim.srr_gt, extra)
+                 sim.srr_gt, extra, output)
     try:
         return _record(scenario, loop, source=source, run_dir=run_dir,
                        n_ticks=scenario.n_ticks, progress=progress, baselines=baselines,
@@ -288,7 +297,7 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     (run_dir / "scenario.yaml").write_text(
         yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
     rec = scenario.recording
-    recorder = Recorder(run_dir / "bag", chunks=ChunkPolicy(
+    recorder = loop.output.recorder(run_dir / "bag", ChunkPolicy(
         max_bytes=round(rec.chunk_mb * MB), max_span_ns=round(rec.chunk_s * 1e9),
         fsync=rec.fsync, compression=rec.compression))
     guard = DiskGuard(run_dir, round(rec.min_free_mb * MB), free_space,
@@ -364,6 +373,7 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
         "graphs": [],
         "systems_under_test": [name for name, _, _ in loop.suts],
         "sut_endpoints": _sut_endpoints(loop.suts),
+        "output": loop.output.summary(),
         "topics": topics,
         "digest": combined_digest(topics),
         "versions": versions(),
@@ -448,7 +458,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     if "world_map" in summary:  # the recorded scene, as it was
         extra["world_map"] = summary["world_map"]
     loop = _Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
-                 bool(summary.get("srr_gt")), extra)
+                 bool(summary.get("srr_gt")), extra, playback.output)
     return _record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.get("ticks") or scenario.n_ticks), progress=progress,
                    baselines=baselines)
@@ -461,6 +471,9 @@ def _check_replay_scene(recorded: Scenario, scenario: Scenario) -> None:
         cfg.pop("scoring", None)
         return cfg
 
+    if recorded.output != scenario.output:
+        raise ScenarioError("--set", "output", "a replay records what the recording is "
+                            "(ROS 1 or ROS 2, bag or MCAP); it cannot change the output")
     diffs = config_differences(scene(recorded), scene(scenario))
     if diffs:
         field = diffs[0].split(":", 1)[0]
@@ -510,7 +523,7 @@ def report(run_dir: str | Path) -> Path:
     run = Path(run_dir)
     summary = read_summary(run)
     scenario = load_scenario(run / "scenario.yaml")
-    if not (run / "bag" / "metadata.yaml").is_file():
+    if not (run / "bag" / "metadata.yaml").is_file() and ros1_recording(run / "bag") is None:
         raise BagError(f"{run / 'bag'}: metadata.yaml: missing (not a rosbag2 directory)")
     frames = scenario_frames(scenario, run / "bag")
     return write_report(run, summary=summary, scenario=scenario, frames=frames)
@@ -524,7 +537,10 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(with_ros2_bridge(scenario, None), source=source)
     try:
-        return check_wiring(sim.plan(), scenario, source)
+        output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
+        plan = sim.plan()
+        return (*check_wiring(plan, scenario, source),
+                *check_output_topics(output, plan.topics, scenario, source))
     finally:
         sim.close()
 

@@ -293,8 +293,11 @@ def _print_run(res: api.RunResult) -> None:
     s = res.summary
     what = (f"open-loop replay of {s['replay_of']['run_dir']}, " if s.get("replay_of")
             else "")
+    out = s.get("output") or {}
+    ros1 = (f", recorded as ROS 1 ({'.bag' if out.get('format') == 'bag' else 'MCAP'})"
+            if out.get("ros") == 1 else "")
     table = Table(title=f"{s['scenario']}: {what}{s['simulated_s']:.1f} s simulated, "
-                  f"seed {s['seed']}")
+                  f"seed {s['seed']}{ros1}")
     for col in ("topic", "type", "count", "rate Hz"):
         table.add_column(col, justify="right" if col in ("count", "rate Hz") else "left")
     for name, t in s["topics"].items():

@@ -59,6 +59,7 @@ class Simulation:
         with self.stage:
             self.graph_paths = build_all(build)
         self.origins = build.origins  # node path → scenario field, for the wiring checks
+        self.custom_graphs = build.custom_graphs  # graph path → graphs[i] (harness.output)
         self.suts: list[tuple[str, SystemUnderTest, SutContext]] = load_suts(
             scenario, self.bus, source)
         self._started = False

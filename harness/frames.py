@@ -9,6 +9,10 @@ and contents, sequence lengths, the encapsulation). Every message of the same le
 layout bytes equal the template's has its fields at the same offsets, so they are read for all
 of those messages at once with numpy. Messages that fit no template are decoded one by one
 with ``rosbags``' ``deserialize_cdr``; both paths give the same values (a test checks it).
+A ROS 1 recording (:mod:`harness.bus.bagread`) is read the same way: the cursor walks ROS 1
+serialization instead (no encapsulation or alignment, a ``seq`` in every header, ROS 1's
+shorter ``Marker``) and the slow path decodes with rosbags' Noetic types, so every table
+below is the same whichever ROS the run recorded.
 
 Tables (all times are simulation time in integer nanoseconds):
 
@@ -46,20 +50,20 @@ from __future__ import annotations
 
 import re
 import struct
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
-from mcap.reader import make_reader
-from rosbags.rosbag2 import Reader
 from rosbags.serde import SerdeError
 
 from harness.bag import BAG_READ_ERRORS
+from harness.bus.bagread import Encoding, open_recording, ros1_recording
 from harness.bus.endpoints import tf_tree_of
 from harness.bus.messages import TYPESTORE
+from harness.bus.ros1 import deserialize_ros1
 from harness.errors import BagError, reason
 
 __all__ = [
@@ -146,19 +150,27 @@ _Item = tuple[_Fields, dict[str, str]]
 
 
 class _Cursor:
-    """Walks one little-endian CDR message, noting field offsets and layout bytes."""
+    """Walks one little-endian CDR message (or, ``ros1``, one ROS 1 message: no encapsulation,
+    no alignment, strings without a terminating NUL, a ``seq`` first in each header), noting
+    field offsets and layout bytes."""
 
-    __slots__ = ("buf", "const", "pos")
+    __slots__ = ("buf", "const", "pos", "ros1")
 
-    def __init__(self, buf: bytes) -> None:
+    def __init__(self, buf: bytes, ros1: bool = False) -> None:
+        self.buf = buf
+        self.ros1 = ros1
+        if ros1:
+            self.pos = 0
+            self.const: list[tuple[int, int]] = []
+            return
         if len(buf) < 4 or buf[0] != 0 or buf[1] != 1:
             raise _LayoutError("not little-endian CDR")
-        self.buf = buf
         self.pos = 4
-        self.const: list[tuple[int, int]] = [(0, 2)]
+        self.const = [(0, 2)]
 
     def _align(self, n: int) -> None:
-        self.pos += (-(self.pos - 4)) % n
+        if not self.ros1:
+            self.pos += (-(self.pos - 4)) % n
 
     def field(self, size: int) -> int:
         self._align(size)
@@ -177,6 +189,12 @@ class _Cursor:
         n = self.count()
         p = self.pos
         self.pos += n
+        if self.ros1:
+            if self.pos > len(self.buf):
+                raise _LayoutError("bad string")
+            if n:
+                self.const.append((p, p + n))
+            return self.buf[p:p + n].decode()
         if self.pos > len(self.buf) or n == 0 or self.buf[self.pos - 1] != 0:
             raise _LayoutError("bad string")
         self.const.append((p, p + n))
@@ -197,17 +215,22 @@ class _Cursor:
             raise _LayoutError("truncated")
 
     def finish(self) -> None:
-        if not 0 <= len(self.buf) - self.pos < 8:
+        if not 0 <= len(self.buf) - self.pos < (1 if self.ros1 else 8):
             raise _LayoutError("size mismatch")
 
     def header(self, f: _Fields, s: dict[str, str]) -> None:
-        f["sec"] = (self.field(4), "<i4")
+        if self.ros1:
+            self.field(4)  # seq
+            f["sec"] = (self.field(4), "<u4")
+        else:
+            f["sec"] = (self.field(4), "<i4")
         f["nanosec"] = (self.field(4), "<u4")
         s["frame_id"] = self.string()
 
 
 def _walk_clock(c: _Cursor) -> list[_Item]:
-    f: _Fields = {"sec": (c.field(4), "<i4"), "nanosec": (c.field(4), "<u4")}
+    f: _Fields = {"sec": (c.field(4), "<u4" if c.ros1 else "<i4"),
+                  "nanosec": (c.field(4), "<u4")}
     return [(f, {})]
 
 
@@ -269,6 +292,12 @@ def _walk_marker_array(c: _Cursor) -> list[_Item]:
         c.field(1)  # frame_locked
         c.skip_seq(3 * 8, 8)  # points
         c.skip_seq(4 * 4, 4)  # colors
+        if c.ros1:  # ROS 1's Marker ends here, without texture, uv and mesh-file fields
+            c.string()  # text
+            c.string()  # mesh_resource
+            c.field(1)  # mesh_use_embedded_materials
+            items.append((f, s))
+            continue
         c.string()  # texture_resource
         c.field(4)  # texture.header.stamp
         c.field(4)
@@ -387,9 +416,10 @@ def _strided(u8: np.ndarray, n: int, length: int, offset: int, dtype: str) -> np
     return view.copy()
 
 
-def decode_batch(raws: Sequence[bytes], msgtype: str, *, fast: bool = True
-                 ) -> dict[str, np.ndarray]:
-    """Decode CDR messages of one type into columns.
+def decode_batch(raws: Sequence[bytes], msgtype: str, *, fast: bool = True,
+                 encoding: Encoding = "cdr") -> dict[str, np.ndarray]:
+    """Decode CDR messages (``encoding="ros1"``: ROS 1 messages of the same type's ROS 1
+    counterpart) of one type into columns.
 
     Returns ``msg`` (index of the message each row came from), ``item`` (index of the row
     inside its message: transform or marker number), ``fast`` (whether the row was read by
@@ -417,7 +447,7 @@ def decode_batch(raws: Sequence[bytes], msgtype: str, *, fast: bool = True
                 break
             templates += 1
             try:
-                cur = _Cursor(raws[t])
+                cur = _Cursor(raws[t], ros1=encoding == "ros1")
                 items = _WALKERS[msgtype](cur)
                 cur.finish()
             except (_LayoutError, UnicodeDecodeError):
@@ -426,7 +456,8 @@ def decode_batch(raws: Sequence[bytes], msgtype: str, *, fast: bool = True
                 continue
             cand = remaining[lengths[remaining] == lengths[t]]
             starts = starts_all[cand]
-            const_idx = np.concatenate([np.arange(a, b) for a, b in cur.const])
+            const_idx = np.concatenate([np.arange(a, b) for a, b in cur.const]
+                                       or [np.zeros(0, dtype=np.int64)])
             same = (blob[starts[:, None] + const_idx[None, :]]
                     == blob[starts_all[t] + const_idx][None, :]).all(axis=1)
             rows, starts = cand[same], starts[same]
@@ -446,7 +477,8 @@ def decode_batch(raws: Sequence[bytes], msgtype: str, *, fast: bool = True
         recs: dict[str, list[Any]] = {k: [] for k in cols}
         for i in slow:
             try:
-                msg = TYPESTORE.deserialize_cdr(raws[i], msgtype)
+                msg = (deserialize_ros1(raws[i], msgtype) if encoding == "ros1"
+                       else TYPESTORE.deserialize_cdr(raws[i], msgtype))
             except SerdeError as err:
                 raise BagError(f"message {i} of type {msgtype}: {err}") from err
             for j, d in enumerate(_obj_items(msg, msgtype)):
@@ -622,67 +654,24 @@ def _tf_table(topic: str, cols: dict[str, np.ndarray], log_ns: np.ndarray) -> pd
         **{k: cols[k] for k in _POSE}})
 
 
-@dataclass(frozen=True)
-class _Conn:
-    id: int
-    topic: str
-    msgtype: str
-
-
-class _McapFile:
-    """A plain MCAP file (a baseline's reference recording) read like a rosbag2 directory:
-    ``connections``, ``messages()`` as (connection, log time, raw CDR), start and end."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.connections: list[_Conn] = []
-        self.start_time, self.end_time = 2**63 - 1, 0
-
-    def __enter__(self) -> _McapFile:
-        with self.path.open("rb") as f:
-            summary = make_reader(f).get_summary()
-        if summary is None:
-            raise ValueError("no summary section (not a finished MCAP file)")
-        self.connections = [_Conn(c.id, c.topic, summary.schemas[c.schema_id].name)
-                            for c in summary.channels.values()]
-        if summary.statistics is not None and summary.statistics.message_count:
-            self.start_time = summary.statistics.message_start_time
-            # exclusive, as rosbags reports a bag's end: after the last message
-            self.end_time = summary.statistics.message_end_time + 1
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def messages(self) -> Iterator[tuple[_Conn, int, bytes]]:
-        by_id = {c.id: c for c in self.connections}
-        with self.path.open("rb") as f:
-            for _schema, channel, message in make_reader(f).iter_messages(
-                    log_time_order=False):
-                yield by_id[channel.id], message.log_time, message.data
-
-
-def _open_bag(path: Path) -> Any:
-    """A rosbags Reader for a rosbag2 directory, or :class:`_McapFile` for a ``.mcap``."""
-    return _McapFile(path) if path.is_file() else Reader(path)
-
-
 def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = None,
                 muted_topic: str = "/safety/is_muted", clock_topic: str = "/clock",
                 world_frame: str = "world", fast: bool = True) -> Frames:
     """Read a rosbag2 directory (or a run directory holding ``bag/``, or a plain ``.mcap``
-    file such as a baseline's reference recording) into :class:`Frames`.
+    file such as a baseline's reference recording, or a ROS 1 recording: a ``.bag`` file or
+    a ``bag/`` directory holding one, or a ``ros1``-profile MCAP) into :class:`Frames`.
 
     ``marker_topics``: the ``MarkerArray`` topics that carry tracks; None takes every topic
     of that type. Raises :class:`BagError` for a missing, truncated or undecodable bag.
     """
     p = Path(bag_dir)
-    if (p / "bag" / "metadata.yaml").exists():
+    if (p / "bag" / "metadata.yaml").exists() or ros1_recording(p / "bag") is not None:
         p = p / "bag"
-    if not p.is_file() and not (p / "metadata.yaml").exists():
+    if not p.is_file() and not (p / "metadata.yaml").exists() and ros1_recording(p) is None:
         raise BagError(f"{bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
     try:
-        with _open_bag(p) as reader:
+        with open_recording(p) as reader:
+            encoding = reader.encoding
             conns = list(reader.connections)
             wanted: dict[int, str] = {}
             for c in conns:
@@ -726,7 +715,8 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
     topics = pd.DataFrame(topic_rows).sort_values("name", kind="stable").reset_index(
         drop=True)
 
-    decoded = {cid: decode_batch(raws[cid], by_topic[cid].msgtype, fast=fast)
+    decoded = {cid: decode_batch(raws[cid], by_topic[cid].msgtype, fast=fast,
+                                 encoding=encoding)
                for cid in sorted(wanted, key=lambda i: wanted[i])}
     tf = _concat([_tf_table(wanted[cid], decoded[cid], log_arr[cid]) for cid in decoded
                   if by_topic[cid].msgtype == TF_MESSAGE and tf_tree_of(wanted[cid])],

@@ -27,8 +27,11 @@ from rosbags.serde import SerdeError
 
 from harness.bag import BAG_READ_ERRORS
 from harness.bus import Bus, Qos
+from harness.bus.bagread import open_recording, ros1_recording
 from harness.bus.messages import TYPESTORE
+from harness.bus.ros1 import Ros1TypeError, deserialize_ros1, ros1_type, to_ros2
 from harness.errors import BagError, reason
+from harness.output import ROS2_OUTPUT, OutputKind
 from harness.scenario import Scenario
 from harness.sut.base import SutContext, SystemUnderTest, load_suts
 
@@ -59,11 +62,25 @@ def _qos(profiles: Any) -> Qos:
                depth=max(int(p.get("depth", 10)), 1))
 
 
+#: A latched ROS 1 topic is played back transient-local, keeping as many messages as srr's
+#: own static TF publishers do (a ROS 1 bag does not say how many).
+_LATCHED = Qos(durability="transient_local", depth=100)
+
+
 class Playback:
-    """The messages of a rosbag2 directory with one MCAP file, in publication order."""
+    """The messages of a rosbag2 directory with one MCAP file, in publication order — or of a
+    ROS 1 run's ``bag/`` (``.bag``, or MCAP with the ``ros1`` profile), whose messages are
+    played back as they were recorded and decoded into ROS 2 messages for the systems under
+    test. A ``.bag`` gives the messages of one tick by topic, not in publication order (its
+    reader orders them by time only); a topic's own order is kept either way."""
 
     def __init__(self, bag_dir: Path) -> None:
         self.bag_dir = Path(bag_dir)
+        self.output: OutputKind = ROS2_OUTPUT
+        ros1 = ros1_recording(self.bag_dir)
+        if ros1 is not None:
+            self._open_ros1(ros1)
+            return
         if not (self.bag_dir / "metadata.yaml").is_file():
             raise BagError(f"{self.bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
         meta_file = self.bag_dir / "metadata.yaml"
@@ -84,40 +101,68 @@ class Playback:
                            f"{', '.join(p.name for p in files) or 'none'}")
         self.file = files[0]
 
-    def by_time(self) -> Iterator[tuple[int, list[tuple[str, str, bytes]]]]:
-        """(log time, [(topic, type, raw CDR), ...]) in file order, one group per log time."""
+    def _open_ros1(self, file: Path) -> None:
+        self.file = file
         try:
-            with self.file.open("rb") as f:
-                reader = make_reader(f)
-                stamp: int | None = None
-                group: list[tuple[str, str, bytes]] = []
-                for _schema, channel, message in reader.iter_messages(log_time_order=False):
-                    if stamp is not None and message.log_time != stamp:
-                        if message.log_time < stamp:
-                            raise BagError(f"{self.file}: log time goes back from {stamp} to "
-                                           f"{message.log_time} ns (not an srr recording)")
-                        yield stamp, group
-                        group = []
-                    stamp = message.log_time
-                    rec = self.topics.get(channel.topic)
-                    if rec is None:
-                        raise BagError(f"{self.file}: topic {channel.topic} is not in "
-                                       "metadata.yaml")
-                    group.append((channel.topic, rec.msgtype, message.data))
-                if stamp is not None:
+            with open_recording(file) as rec:
+                self.topics = {c.topic: RecordedTopic(c.topic, c.msgtype,
+                                                      _LATCHED if c.latched else Qos())
+                               for c in rec.connections}
+        except BAG_READ_ERRORS as err:
+            raise BagError(f"{file}: cannot read recording: {reason(err)}") from err
+        self.output = OutputKind(1, "bag" if file.suffix == ".bag" else "mcap",
+                                 f"the recording {file.name} is ROS 1")
+
+    def _messages(self) -> Iterator[tuple[str, int, bytes]]:
+        """(topic, log time, payload) in file order (a .bag: in time order)."""
+        if self.file.suffix == ".bag":
+            with open_recording(self.file) as rec:
+                for conn, t, raw in rec.messages():
+                    yield conn.topic, t, raw
+            return
+        with self.file.open("rb") as f:
+            for _schema, channel, message in make_reader(f).iter_messages(
+                    log_time_order=False):
+                yield channel.topic, message.log_time, message.data
+
+    def by_time(self) -> Iterator[tuple[int, list[tuple[str, str, bytes]]]]:
+        """(log time, [(topic, type, raw bytes), ...]) in file order, one group per log
+        time; the type is the bus's (ROS 2) name."""
+        where = "metadata.yaml" if self.output.ros == 2 else "the recording's index"
+        try:
+            stamp: int | None = None
+            group: list[tuple[str, str, bytes]] = []
+            for topic, log_time, data in self._messages():
+                if stamp is not None and log_time != stamp:
+                    if log_time < stamp:
+                        raise BagError(f"{self.file}: log time goes back from {stamp} to "
+                                       f"{log_time} ns (not an srr recording)")
                     yield stamp, group
+                    group = []
+                stamp = log_time
+                rec = self.topics.get(topic)
+                if rec is None:
+                    raise BagError(f"{self.file}: topic {topic} is not in {where}")
+                group.append((topic, rec.msgtype, data))
+            if stamp is not None:
+                yield stamp, group
         except BAG_READ_ERRORS as err:
             raise BagError(f"{self.file}: cannot read recording: {reason(err)}") from err
 
 
-_DECODE_ERRORS: tuple[type[BaseException], ...] = (SerdeError, *BAG_READ_ERRORS)
+_DECODE_ERRORS: tuple[type[BaseException], ...] = (SerdeError, Ros1TypeError,
+                                                    *BAG_READ_ERRORS)
 
 
-def _decoder(file: Path, now_ns: Callable[[], int]) -> Callable[[bytes, str], Any]:
-    """``deserialize_cdr`` that reports a message the recording holds but cannot decode as
-    one BagError line naming the file, the type and the time."""
+def _decoder(file: Path, now_ns: Callable[[], int], ros1: bool = False
+             ) -> Callable[[bytes, str], Any]:
+    """``deserialize_cdr`` (``ros1``: ROS 1 deserialization and conversion to the ROS 2
+    message) that reports a message the recording holds but cannot decode as one BagError
+    line naming the file, the type and the time."""
     def decode(raw: bytes, msgtype: str) -> Any:
         try:
+            if ros1:
+                return to_ros2(deserialize_ros1(raw, ros1_type(msgtype)), ros1_type(msgtype))
             return TYPESTORE.deserialize_cdr(raw, msgtype)
         except _DECODE_ERRORS as err:
             raise BagError(f"{file}: a {msgtype} message at {now_ns() / 1e9:.3f} s does not "
@@ -141,7 +186,8 @@ class Replay:
         self.suts: list[tuple[str, SystemUnderTest, SutContext]] = load_suts(
             scenario, self.bus, source)
         self._groups: Iterator[tuple[int, list[tuple[str, str, bytes]]]] = iter(())
-        self._decode = _decoder(playback.file, lambda: self.time_ns)
+        self._decode = _decoder(playback.file, lambda: self.time_ns,
+                                ros1=playback.output.ros == 1)
         self._pending: tuple[int, list[tuple[str, str, bytes]]] | None = None
         self._started = False
 

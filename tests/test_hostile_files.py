@@ -114,6 +114,51 @@ def test_damaged_mcap(good_run: Path, tmp_path: Path, capsys: pytest.CaptureFixt
         assert code == 2, err  # a shortened file is always noticed
 
 
+@pytest.fixture(scope="module", params=["bag", "mcap"])
+def ros1_run(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The forklift run recorded as ROS 1: a ``.bag``, or MCAP with the ``ros1`` profile."""
+    out = tmp_path_factory.mktemp(f"hostile-ros1-{request.param}") / "run"
+    sc = api.load(FW, duration=0.5, overrides=["output.ros=1",
+                                               f"output.format={request.param}"])
+    api.run_scenario(sc, source=str(FW), out=out)
+    return out
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(damage=damages, command=st.sampled_from(["inspect", "report", "replay", "bless",
+                                                "diff", "recover"]))
+def test_damaged_ros1_recording(ros1_run: Path, tmp_path: Path,
+                                capsys: pytest.CaptureFixture[str], damage: Damage,
+                                command: str) -> None:
+    """The same for a ROS 1 run's recording; ``recover`` refuses it whole or damaged."""
+    run = copy_run(ros1_run, tmp_path)
+    (file,) = (run / "bag").iterdir()
+    original = file.read_bytes()
+    file.write_bytes(damage(original))
+    report_before = (run / "report.html").read_bytes()
+    out, bdir = tmp_path / "out", tmp_path / "baselines"
+    shutil.rmtree(out, ignore_errors=True)
+    shutil.rmtree(bdir, ignore_errors=True)
+    argv = {"inspect": ["inspect", str(run / "bag")], "report": ["report", str(run)],
+            "replay": ["replay", str(run), "--out", str(out), "-q"],
+            "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
+                      str(bdir)],
+            "diff": ["diff", str(ros1_run), str(run)],
+            "recover": ["recover", str(run)]}[command]
+    damaged = file.read_bytes()
+    code, err = cli(capsys, *argv)
+    one_clean_line(code, err, argv[0])
+    if code == 2:
+        assert not out.exists() and (run / "report.html").read_bytes() == report_before
+        assert not list(bdir.glob("*.json")) if bdir.exists() else True
+        assert file.read_bytes() == damaged
+    if damaged != original and len(damaged) < len(original) * 0.999:
+        assert code == 2, err  # a shortened file is always noticed
+    if command == "recover" and damaged[:32] == original[:32]:  # still says it is ROS 1
+        assert code == 2 and "a ROS 1 recording" in err, err
+
+
 SUMMARIES = ["", "{", "[]", "null", '{"verdict": 3}', '{"scenario": "x"}',
              '{"verdict": "PASS", "topics": 5}', '{"verdict": "PASS", "seed": "abc", '
              '"scenario": "forklift_warehouse", "metrics": "none"}']

@@ -42,6 +42,9 @@ class BuildContext:
     srr_gt: bool = False
     source: str = "<scenario>"
     origins: dict[str, NodeOrigin] = dataclasses.field(default_factory=dict)
+    # graph path → ``graphs[i]`` of every graph a scenario's own builder built (in build
+    # order), filled by :func:`harness.builders.custom.build_custom`
+    custom_graphs: dict[str, str] = dataclasses.field(default_factory=dict)
 
     def robot_field(self, robot: RobotSpec, sub: str = "") -> str:
         """Field path of a robot block, e.g. ``robots[1].odometry``."""

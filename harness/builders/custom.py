@@ -238,5 +238,6 @@ def build_custom(bc: BuildContext, taken: dict[str, str]) -> list[str]:
                 stage.delete_graph(graph.path)
             stage.adopt(graph)
             taken[graph.path] = f"{field} ({name})"
+            bc.custom_graphs[graph.path] = field
             paths.append(graph.path)
     return paths

@@ -74,6 +74,9 @@ class TopicMeta:
     type_hash: str = ""  # RIHS01_...
     schema_encoding: str = "ros2msg"
     serialization_format: str = "cdr"
+    # The channel's metadata, when not rosbag2's (QoS and type hash): the ros1 profile's
+    # ``callerid`` and ``latching``.
+    channel_metadata: tuple[tuple[str, str], ...] | None = None
 
     @property
     def qos_profiles(self) -> list[Any]:
@@ -87,14 +90,15 @@ class McapBagWriter:
     Not thread-safe: one thread calls :meth:`add_topic`, :meth:`write` and :meth:`finish`.
     """
 
-    def __init__(self, path: Path, policy: ChunkPolicy = ChunkPolicy()) -> None:
+    def __init__(self, path: Path, policy: ChunkPolicy = ChunkPolicy(), *,
+                 profile: str = "ros2") -> None:
         self.path = Path(path)
         self.policy = policy
         self._file: IO[bytes] = self.path.open("xb")
         # Chunks are closed here, not by the library's size check (it only sees bytes).
         self._mcap = Writer(self._file, chunk_size=1 << 62,
                             compression=_COMPRESSION[policy.compression])
-        self._mcap.start(profile="ros2",
+        self._mcap.start(profile=profile,
                          library=f"srr-{__version__}; mcap-python-{version('mcap')}")
         self._schemas: dict[tuple[str, bytes], int] = {}
         self.topics: list[TopicMeta] = []
@@ -117,6 +121,8 @@ class McapBagWriter:
         meta = {"offered_qos_profiles": topic.qos}
         if topic.type_hash:
             meta["topic_type_hash"] = topic.type_hash
+        if topic.channel_metadata is not None:
+            meta = dict(topic.channel_metadata)
         cid = self._mcap.register_channel(topic.name, topic.serialization_format, sid, meta)
         self._chunk_bytes += 64 + len(topic.name) + len(topic.qos)
         self.topics.append(topic)
@@ -151,11 +157,13 @@ class McapBagWriter:
         self._chunk_bytes = 0
         self._sync()
 
-    def finish(self, serialized_metadata: str) -> None:
-        """Close the last chunk, write the ``rosbag2`` metadata record, the summary (schemas,
-        channels, statistics, chunk indexes) and the footer, and close the file."""
+    def finish(self, serialized_metadata: str | None) -> None:
+        """Close the last chunk, write the ``rosbag2`` metadata record (unless None), the
+        summary (schemas, channels, statistics, chunk indexes) and the footer, and close the
+        file."""
         self.close_chunk()
-        self._mcap.add_metadata("rosbag2", {"serialized_metadata": serialized_metadata})
+        if serialized_metadata is not None:
+            self._mcap.add_metadata("rosbag2", {"serialized_metadata": serialized_metadata})
         self._mcap.finish()  # type: ignore[no-untyped-call]
         self._file.flush()
         if self.policy.fsync:

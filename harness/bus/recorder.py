@@ -130,7 +130,7 @@ class Recorder:
         # disk-space guard).
         self.bytes_serialized = 0
         self._qos_of: Callable[[str], Qos] = lambda topic: Qos()
-        self._writer: McapBagWriter | None = None
+        self._writer: Any = None
         self._state: dict[str, _TopicState] = {}
         self._queue: queue.Queue[tuple[_TopicState, int, bytes] | None] = queue.Queue(
             maxsize=queue_size)
@@ -154,7 +154,7 @@ class Recorder:
             self._qos_of = qos_of
         try:
             self.bag_dir.mkdir(parents=True)
-            self._writer = McapBagWriter(self.mcap_path, self.chunks)
+            self._writer = self._open_writer()
         except OSError as err:
             raise BagError(f"{self.bag_dir}: cannot record: {err.strerror or err}") from err
         self._thread = threading.Thread(target=self._drain, name="srr-recorder", daemon=True)
@@ -170,9 +170,9 @@ class Recorder:
             raise self._error
         st = self._state.get(env.topic)
         if st is None:
-            st = self._state[env.topic] = _TopicState(env.topic, env.msgtype,
-                                                      self._qos_of(env.topic))
-        data = env.raw if env.raw is not None else serialize(env.msg, env.msgtype)
+            st = self._state[env.topic] = _TopicState(env.topic, self._recorded_type(
+                env.msgtype), self._qos_of(env.topic))
+        data = self._serialize(env)
         self.bytes_serialized += len(data)
         for tap in self._forward:
             tap(env, data)
@@ -192,7 +192,7 @@ class Recorder:
             st, stamp, data = item
             try:
                 if st.channel is None:
-                    st.channel = writer.add_topic(topic_meta(st.topic, st.msgtype, st.qos))
+                    st.channel = self._add_topic(writer, st.topic, st.msgtype, st.qos)
                 writer.write(st.channel, stamp, data)
             except Exception as err:  # handed to the caller's thread as one clear error
                 self._fail(st.topic, err)
@@ -216,19 +216,41 @@ class Recorder:
             if self._error is not None:
                 writer.abort()
             else:
-                info = bag_metadata(writer.path.name, list(zip(writer.topics, writer.counts,
-                                                               strict=True)),
-                                    writer.start_ns, writer.end_ns)
                 try:
-                    writer.finish(dump_metadata(info))
+                    self._finish(writer)
                 except Exception as err:
                     writer.abort()
                     self._fail("the bag's index", err)
-                else:
-                    write_metadata(self.bag_dir, info)
         if self._error is not None:
             raise self._error
         return self.stats()
+
+    # -- the format: a rosbag2 directory with one MCAP file of CDR messages (ROS 2). A
+    # subclass records another (harness.bus.ros1bag: ROS 1) by overriding these.
+    def _open_writer(self) -> Any:
+        """The file writer, opened (called once, on the caller's thread)."""
+        return McapBagWriter(self.mcap_path, self.chunks)
+
+    def _recorded_type(self, msgtype: str) -> str:
+        """The type name a bus type is recorded (and reported) as."""
+        return msgtype
+
+    def _serialize(self, env: Envelope) -> bytes:
+        """The bytes recorded for one message (on the caller's thread, in publication order).
+        ``env.raw`` is a replayed recording's bytes, already in this format."""
+        return env.raw if env.raw is not None else serialize(env.msg, env.msgtype)
+
+    def _add_topic(self, writer: Any, topic: str, msgtype: str, qos: Qos) -> int:
+        """Register a topic with the writer (on the writer thread); returns its channel."""
+        return int(writer.add_topic(topic_meta(topic, msgtype, qos)))
+
+    def _finish(self, writer: Any) -> None:
+        """Close the file (summary, index) and write what goes beside it."""
+        info = bag_metadata(writer.path.name, list(zip(writer.topics, writer.counts,
+                                                       strict=True)),
+                            writer.start_ns, writer.end_ns)
+        writer.finish(dump_metadata(info))
+        write_metadata(self.bag_dir, info)
 
     def stats(self) -> dict[str, TopicStats]:
         return {

@@ -43,6 +43,7 @@ from harness.bus.bagfile import (
     dump_metadata,
     write_metadata,
 )
+from harness.bus.bagread import mcap_profile, ros1_recording
 from harness.bus.recorder import TopicStats, digest_update
 from harness.errors import BagError
 
@@ -305,9 +306,22 @@ def _fsync_dir(path: Path) -> None:
         os.close(fd)
 
 
+def _refuse_ros1(p: Path) -> None:
+    for cand in (p, p / "bag"):
+        found = (cand if cand.is_file() and (cand.suffix == ".bag"
+                                              or mcap_profile(cand) == "ros1")
+                 else ros1_recording(cand))
+        if found is not None:
+            raise BagError(f"{found}: a ROS 1 recording; srr recover rebuilds ROS 2 bags "
+                           "(rosbag2, MCAP) only (ROS 1's `rosbag reindex` rebuilds a .bag "
+                           "cut short)")
+
+
 def recover_bag(path: str | Path) -> RecoveredBag:
     """Check a bag and, if its MCAP file was cut short, rebuild it from its complete chunks
-    (see the module docstring). Raises :class:`BagError` for what cannot be recovered."""
+    (see the module docstring). Raises :class:`BagError` for what cannot be recovered,
+    among it a ROS 1 recording (its own tools rebuild a ``.bag``: ``rosbag reindex``)."""
+    _refuse_ros1(Path(path))
     bag_dir, mcap = locate_mcap(path)
     try:
         scan = _scan(mcap, _collect())

@@ -15,6 +15,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from harness.bus.bagread import ros1_recording
 from harness.diff.metrics import metric_deltas, summary_metrics
 from harness.diff.result import DiffResult, RunInfo, TopicDiff
 from harness.diff.tolerance import Tolerance, glob_match, parse_tolerance
@@ -38,7 +39,7 @@ def open_run(path: Path) -> tuple[dict[str, Any], Path]:
     bag = path / "bag"
     if not bag.is_dir():
         raise SrrError(f"{bag}: missing (a run directory holds its recording in bag/)")
-    if not (bag / "metadata.yaml").is_file():
+    if not (bag / "metadata.yaml").is_file() and ros1_recording(bag) is None:
         raise SrrError(f"{bag / 'metadata.yaml'}: missing (not a rosbag2 directory)")
     return summary, bag
 

@@ -10,6 +10,10 @@ Only the messages of a topic that one run has reached and the other not yet are 
 memory (runs of one scenario stay within a tick of each other); nothing else is kept, so
 camera images are never all loaded at once. Each topic's SHA-256 over (log time, payload)
 is recomputed as the recorder computes it.
+
+ROS 1 recordings (:mod:`harness.bus.bagread`) are compared the same way; their topics carry
+their ROS 1 type names (``sensor_msgs/Image``), so a ROS 1 run and a ROS 2 run differ in type
+on every topic, and a differing ROS 1 payload is decoded into the ROS 2 message to walk it.
 """
 
 from __future__ import annotations
@@ -24,11 +28,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from rosbags.rosbag2 import Reader
 from rosbags.serde import SerdeError
 
 from harness.bag import BAG_READ_ERRORS
+from harness.bus.bagread import open_recording
 from harness.bus.messages import TYPESTORE
+from harness.bus.ros1 import Ros1TypeError, deserialize_ros1, to_ros2
 from harness.diff.fields import as_float, walk
 from harness.diff.result import Divergence, FieldDiff, TopicDiff, TopicStatus, Worst
 from harness.diff.tolerance import Tolerance, glob_match, tolerance_for
@@ -37,7 +42,16 @@ from harness.errors import BagError, reason
 __all__ = ["diff_bags", "message_stream"]
 
 _READ_ERRORS = BAG_READ_ERRORS
-_DECODE_ERRORS: tuple[type[BaseException], ...] = (SerdeError, *BAG_READ_ERRORS)
+_DECODE_ERRORS: tuple[type[BaseException], ...] = (SerdeError, Ros1TypeError,
+                                                    *BAG_READ_ERRORS)
+
+
+def _decode(raw: bytes, msgtype: str) -> Any:
+    """The ROS 2 message of a payload of ``msgtype`` as recorded: ``pkg/msg/Name`` is CDR,
+    ``pkg/Name`` (a ROS 1 recording) ROS 1."""
+    if "/msg/" in msgtype:
+        return TYPESTORE.deserialize_cdr(raw, msgtype)
+    return to_ros2(deserialize_ros1(raw, msgtype), msgtype)
 
 
 def _num(v: float) -> str:
@@ -207,7 +221,7 @@ class _Topic:
             msgs = []
             for bag, raw in zip(bags, (raw_a, raw_b), strict=True):
                 try:
-                    msgs.append(TYPESTORE.deserialize_cdr(raw, msgtype))
+                    msgs.append(_decode(raw, msgtype))
                 except _DECODE_ERRORS as err:
                     raise BagError(f"{bag}: {self.name} message #{i} ({msgtype}) does not "
                                    f"decode: {reason(err)}") from err
@@ -287,21 +301,20 @@ class _Topic:
 
 def message_stream(bag: Path
                    ) -> tuple[dict[str, str], Generator[tuple[str, str, int, bytes], None, None]]:
-    """The topics of a rosbag2 directory (name → type) and an iterator of ``(topic, type,
-    log time, payload)`` over every message, in the reader's order, which closes the bag when
-    exhausted. Read errors (when opening or later) become :class:`BagError` naming the
-    bag."""
+    """The topics of a rosbag2 directory or a ROS 1 run's ``bag/`` (name → type as
+    recorded) and an iterator of ``(topic, type, log time, payload)`` over every message, in
+    the reader's order, which closes the bag when exhausted. Read errors (when opening or
+    later) become :class:`BagError` naming the bag."""
     try:
-        reader = Reader(bag)
-        reader.open()
+        reader = open_recording(bag)
     except _READ_ERRORS as err:
         raise BagError(f"{bag}: cannot read bag: {reason(err)}") from err
-    types = {c.topic: c.msgtype for c in reader.connections}
+    types = {c.topic: c.recorded_type for c in reader.connections}
 
     def messages() -> Generator[tuple[str, str, int, bytes], None, None]:
         try:
             for conn, ns, raw in reader.messages():
-                yield conn.topic, conn.msgtype, int(ns), bytes(raw)
+                yield conn.topic, conn.recorded_type, int(ns), bytes(raw)
         except _READ_ERRORS as err:
             raise BagError(f"{bag}: cannot read bag: {reason(err)}") from err
         finally:

@@ -6,7 +6,9 @@ objects (MarkerArray), ``/clock`` and ``/tf_static`` — everything the report o
 baseline's trajectories and time series — copied byte for byte with their schemas and log
 times, in zstd-compressed chunks. Images, point clouds, scans, IMU and the dynamic ``/tf`` are
 left out (they are the bulk and the overlays do not need them). It is a plain MCAP file:
-Foxglove opens it, and :func:`harness.frames.load_frames` reads it like a bag.
+Foxglove opens it, and :func:`harness.frames.load_frames` reads it like a bag. A run that
+recorded ROS 1 gets a ``ros1``-profile reference (from its ``.bag`` or MCAP file) with the ROS 1
+definitions and bytes as they are.
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
 from harness.bag import BAG_READ_ERRORS
+from harness.bus.bagread import open_recording, ros1_recording
+from harness.bus.ros1 import ros2_type
 from harness.errors import BagError, reason
 
 __all__ = ["KEPT_TYPES", "ReferenceInfo", "kept", "reference_path", "write_reference"]
@@ -37,7 +41,10 @@ class ReferenceInfo:
 
 
 def kept(topic: str, msgtype: str) -> bool:
-    """Whether a topic goes into the reference recording."""
+    """Whether a topic goes into the reference recording (``msgtype`` as ROS 2 or ROS 1
+    spells it)."""
+    if "/msg/" not in msgtype:
+        msgtype = ros2_type(msgtype)
     if msgtype == "tf2_msgs/msg/TFMessage":
         return topic.startswith("/gt/") or topic.rsplit("/", 1)[-1] == "tf_static"
     return msgtype in KEPT_TYPES
@@ -49,9 +56,13 @@ def reference_path(baseline_json: Path) -> Path:
 
 
 def write_reference(bag_dir: Path, path: Path) -> ReferenceInfo:
-    """Copy the kept topics of the run's bag (rosbag2 directory with one MCAP) to ``path``,
-    atomically (a temporary file renamed into place)."""
-    mcaps = sorted(Path(bag_dir).glob("*.mcap"))
+    """Copy the kept topics of the run's bag (rosbag2 directory with one MCAP, or a ROS 1
+    run's ``.bag`` or ``ros1`` MCAP) to ``path``, atomically (a temporary file renamed into
+    place)."""
+    ros1 = ros1_recording(Path(bag_dir))
+    if ros1 is not None and ros1.suffix == ".bag":
+        return _reference_from_bag(ros1, path)
+    mcaps = [ros1] if ros1 is not None else sorted(Path(bag_dir).glob("*.mcap"))
     if len(mcaps) != 1:
         raise BagError(f"{bag_dir}: expected one .mcap file to take the reference recording "
                        f"from, found {len(mcaps)}")
@@ -60,7 +71,8 @@ def write_reference(bag_dir: Path, path: Path) -> ReferenceInfo:
     try:
         with mcaps[0].open("rb") as src, tmp.open("wb") as dst:
             writer = Writer(dst, compression=CompressionType.ZSTD, chunk_size=1 << 20)
-            writer.start(profile="ros2", library="srr reference recording")
+            writer.start(profile="ros1" if ros1 is not None else "ros2",
+                         library="srr reference recording")
             schemas: dict[int, int] = {}
             channels: dict[int, int] = {}
             for schema, channel, message in make_reader(src).iter_messages(
@@ -82,5 +94,37 @@ def write_reference(bag_dir: Path, path: Path) -> ReferenceInfo:
     except BAG_READ_ERRORS as err:
         tmp.unlink(missing_ok=True)
         raise BagError(f"{mcaps[0]}: cannot write the reference recording {path}: {reason(err)}") \
+            from err
+    return ReferenceInfo(path, path.stat().st_size, dict(sorted(counts.items())))
+
+
+def _reference_from_bag(bag: Path, path: Path) -> ReferenceInfo:
+    """:func:`write_reference` of a ROS 1 ``.bag``: the kept connections as ``ros1msg``
+    schemas and ``ros1`` channels (callerid, latching), messages byte for byte."""
+    tmp = path.with_name(path.name + ".tmp")
+    counts: dict[str, int] = {}
+    try:
+        with open_recording(bag) as rec, tmp.open("wb") as dst:
+            writer = Writer(dst, compression=CompressionType.ZSTD, chunk_size=1 << 20)
+            writer.start(profile="ros1", library="srr reference recording")
+            conns = [c for c in rec.connections if kept(c.topic, c.recorded_type)]
+            schemas: dict[str, int] = {}
+            channels: dict[int, int] = {}
+            for c in conns:
+                if c.recorded_type not in schemas:
+                    schemas[c.recorded_type] = writer.register_schema(
+                        c.recorded_type, "ros1msg", c.schema)
+                channels[c.id] = writer.register_channel(
+                    c.topic, "ros1", schemas[c.recorded_type],
+                    {"callerid": c.metadata.get("callerid", ""),
+                     "latching": "true" if c.latched else "false"})
+            for conn, t, raw in rec.messages(conns) if conns else ():
+                writer.add_message(channels[conn.id], t, raw, t, 0)
+                counts[conn.topic] = counts.get(conn.topic, 0) + 1
+            writer.finish()  # type: ignore[no-untyped-call]  # mcap leaves it unannotated
+        os.replace(tmp, path)
+    except BAG_READ_ERRORS as err:
+        tmp.unlink(missing_ok=True)
+        raise BagError(f"{bag}: cannot write the reference recording {path}: {reason(err)}") \
             from err
     return ReferenceInfo(path, path.stat().st_size, dict(sorted(counts.items())))

@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from harness.bus import resolve_topic
+from harness.bus.bagread import ros1_recording
 from harness.errors import SrrError
 from harness.frames import Frames
 from harness.metrics.control import robot_poses, route_distance
@@ -245,7 +246,8 @@ def load_run(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
         except SrrError as err:
             data.problems.append(f"scenario.yaml does not load: {err}")
     data.scenario = scenario
-    if frames is None and (run_dir / "bag" / "metadata.yaml").is_file():
+    if frames is None and ((run_dir / "bag" / "metadata.yaml").is_file()
+                           or ros1_recording(run_dir / "bag") is not None):
         try:
             frames = scenario_frames(scenario, run_dir / "bag")
         except SrrError as err:

@@ -14,9 +14,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from rosbags.rosbag2 import Reader
 
-from harness.bus.messages import TYPESTORE
+from harness.bus.bagread import open_recording
 
 __all__ = ["IMAGE_TYPE", "Keyframe", "data_uri", "encode_png", "image_array", "keyframes",
            "nearest_images"]
@@ -97,14 +96,15 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
     every image topic of the bag (pixels as :func:`image_array` gives them).
 
     ``max_gap_ns``: topic → largest gap between its messages (the search window around a
-    target is that gap); ``topics`` restricts the image topics. Depth and other non-colour
+    target is that gap); ``topics`` restricts the image topics. ``bag_dir`` holds a ROS 2 or
+    a ROS 1 recording (:func:`harness.bus.bagread.open_recording`). Depth and other non-colour
     images are skipped. Only the windows around the targets are read. Returns target → list
     sorted by topic."""
     out: dict[int, list[tuple[str, int, np.ndarray]]] = {t: [] for t in targets_ns}
     if not targets_ns:
         return out
     gaps = max_gap_ns or {}
-    with Reader(bag_dir) as reader:
+    with open_recording(bag_dir) as reader:
         conns = [c for c in reader.connections if c.msgtype == IMAGE_TYPE
                  and (topics is None or c.topic in topics)]
         non_color: set[str] = set()
@@ -120,7 +120,7 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
                         best = (ts, raw)
                 if best is None:
                     continue
-                msg = TYPESTORE.deserialize_cdr(best[1], conn.msgtype)
+                msg = reader.decode(best[1], conn)
                 pixels = image_array(msg)
                 if pixels is None:
                     non_color.add(conn.topic)

@@ -429,6 +429,25 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
     _check_suts(sc, v)
     _check_graphs(sc, v)
     _check_control_scoring(sc, v)
+    _check_output(sc, v)
+
+
+def _check_output(sc: Scenario, v: _Validator) -> None:
+    """``output:`` values that cannot work together (what the graphs imply is checked once
+    they are built: :mod:`harness.output`)."""
+    out = sc.output
+    if isinstance(out.ros, bool):  # YAML true == 1 to Literal[1, 2]
+        v.fail("output.ros", f"expected one of 1, 2, got {out.ros!r}")
+    if out.format == "bag" and out.ros == 2:
+        v.fail("output.format", "bag is a ROS 1 bag; ROS 2 output is a rosbag2 directory "
+               "(format: mcap)")
+    ros1 = out.ros == 1 or out.format == "bag"
+    if out.format == "bag" and sc.recording.compression == "zstd":
+        v.fail("recording.compression", "a ROS 1 bag compresses its chunks with lz4 (or "
+               "bz2), not zstd: use lz4 or none, or output.format: mcap")
+    if ros1 and sc.ros2.enabled:
+        v.fail("ros2.enabled", "the live ROS 2 bridge needs ROS 2 output, and this scenario "
+               "records ROS 1 (output)")
 
 
 _PROCEDURAL_FIELDS = ("size", "wall_height", "shelves", "dock")

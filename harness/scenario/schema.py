@@ -28,6 +28,7 @@ __all__ = [
     "LidarSpec",
     "ModelFile",
     "OdometrySpec",
+    "OutputSpec",
     "PerceptionScoring",
     "PhysicsSpec",
     "Pose",
@@ -107,6 +108,20 @@ class RecordingSpec:
     fsync: bool = False
     min_free_mb: float = num(256.0, 0.0, 1e9)
     compression: Literal["none", "zstd", "lz4"] = "none"
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """``output:`` block: which ROS the recording speaks, decided once per run.
+
+    ``ros``: 2 records a rosbag2 directory (MCAP, CDR, ROS 2 Jazzy messages); 1 records ROS 1
+    (Noetic message definitions and serialization), as a ``.bag`` (``format: bag``) or as
+    MCAP with the ``ros1`` profile (``format: mcap``, the default). Left out (null), it
+    follows the bridge nodes the ``graphs:`` builders create: ``omni.isaac.ros_bridge.ROS1*``
+    node types mean ROS 1, anything else ROS 2; ``format: bag`` alone means ROS 1."""
+
+    ros: Literal[1, 2] | None = None
+    format: Literal["mcap", "bag"] | None = None
 
 
 @dataclass(frozen=True)
@@ -702,6 +717,7 @@ class Scenario:
     graphs: tuple[GraphSpec, ...] = ()
     scoring: ScoringSpec = ScoringSpec()
     recording: RecordingSpec = RecordingSpec()
+    output: OutputSpec = OutputSpec()
     ros2: Ros2Spec = Ros2Spec()
     baseline: str | None = None  # which baselines/<name>.json to compare with (default: name)
     # Parameters ``srr suite`` sweeps: ``--set`` path → list of values or {from, to, step}

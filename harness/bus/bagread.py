@@ -1,0 +1,298 @@
+"""Read back any recording srr writes, ROS 2 or ROS 1, behind one small interface.
+
+* a rosbag2 directory (``metadata.yaml`` + one MCAP file of CDR messages): rosbags' rosbag2
+  reader;
+* a ROS 1 ``.bag``: rosbags' rosbag1 reader;
+* a plain MCAP file, ``ros2`` or ``ros1`` profile (a ROS 1 run's ``bag/bag.mcap``, a
+  baseline's reference recording): the ``mcap`` library, in file order.
+
+A run's ``bag/`` directory holds the first, or (a ROS 1 run) no ``metadata.yaml`` and one
+``.bag`` or ``ros1``-profile ``.mcap`` file: :func:`ros1_recording` finds it.
+
+Every :class:`Connection` names its type as the bus does (ROS 2's ``pkg/msg/Name``, with
+``tf/tfMessage`` read as ``tf2_msgs/msg/TFMessage``) and as recorded; :attr:`Recording.encoding`
+says how the payloads are serialized (``cdr`` or ``ros1``), and :meth:`Recording.decode` turns
+one into the bus's ROS 2 message. Readers raise their own errors on damaged files (rosbags',
+mcap's, ``OSError``...): callers turn them into one :class:`~harness.errors.BagError` line
+with :data:`harness.bag.BAG_READ_ERRORS`.
+"""
+
+from __future__ import annotations
+
+import inspect
+import struct
+from collections.abc import Collection, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import lz4.frame
+import zstandard
+from mcap.data_stream import ReadDataStream
+from mcap.reader import SeekingReader, make_reader
+from mcap.records import Chunk
+from rosbags.rosbag1 import Reader as Rosbag1Reader
+from rosbags.rosbag2 import Reader as Rosbag2Reader
+from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
+
+from harness.bus.messages import TYPESTORE
+from harness.bus.ros1 import deserialize_ros1, ros2_type, to_ros2
+
+__all__ = ["Connection", "Encoding", "Recording", "mcap_profile", "open_recording",
+           "ros1_recording"]
+
+Encoding = Literal["cdr", "ros1"]
+
+# mcap 1.3 renamed iter_messages' time window (start_time / end_time still work, deprecated)
+_NEW_WINDOW = "starting_at" in inspect.signature(SeekingReader.iter_messages).parameters
+_STARTING_AT = "starting_at" if _NEW_WINDOW else "start_time"  # inclusive
+_ENDING_BEFORE = "ending_before" if _NEW_WINDOW else "end_time"  # exclusive
+
+
+@dataclass(frozen=True)
+class Connection:
+    """One topic of a recording. ``msgtype``: the bus's (ROS 2) name of its type;
+    ``recorded_type``: the name in the file (``sensor_msgs/Image`` in a ROS 1 bag)."""
+
+    id: int
+    topic: str
+    msgtype: str
+    recorded_type: str
+    latched: bool = False
+    count: int | None = None  # from the file's index, where it has one
+    schema: bytes = b""
+    schema_encoding: str = ""
+    metadata: dict[str, str] = field(default_factory=dict)
+
+
+def mcap_profile(path: Path) -> str | None:
+    """The header profile of an MCAP file (``ros1``, ``ros2``), None when it has none."""
+    try:
+        with Path(path).open("rb") as f:
+            return str(make_reader(f).get_header().profile)
+    except Exception:  # not MCAP, empty, unreadable: not a ROS 1 recording
+        return None
+
+
+def ros1_recording(bag_dir: Path) -> Path | None:
+    """The ROS 1 recording in a run's ``bag/`` directory (no ``metadata.yaml``, one ``.bag``
+    or one ``ros1``-profile ``.mcap`` file), or None."""
+    p = Path(bag_dir)
+    if not p.is_dir() or (p / "metadata.yaml").exists():
+        return None
+    bags = sorted(p.glob("*.bag"))
+    if len(bags) == 1:
+        return bags[0]
+    mcaps = sorted(p.glob("*.mcap"))
+    if not bags and len(mcaps) == 1 and mcap_profile(mcaps[0]) == "ros1":
+        return mcaps[0]
+    return None
+
+
+class Recording:
+    """An open recording: ``connections``, ``start_time`` (first log time), ``end_time``
+    (after the last, as rosbags reports it), :meth:`messages` and :meth:`decode`."""
+
+    kind: Literal["rosbag2", "bag", "mcap"]
+    encoding: Encoding
+
+    def __init__(self, path: Path) -> None:
+        self.path = Path(path)
+        self.connections: list[Connection] = []
+        self.start_time = 2**63 - 1
+        self.end_time = 0
+        self.profile = ""
+
+    def __enter__(self) -> Recording:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        return None
+
+    def messages(self, connections: Collection[Connection] = (), start: int | None = None,
+                 stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
+        """(connection, log time, payload) of ``connections`` (all when empty) with log times
+        in [start, stop)."""
+        raise NotImplementedError
+
+    def decode(self, raw: bytes, conn: Connection) -> Any:
+        """The bus's (ROS 2) message for one payload of ``conn``."""
+        if self.encoding == "cdr":
+            return TYPESTORE.deserialize_cdr(raw, conn.msgtype)
+        return to_ros2(deserialize_ros1(raw, conn.recorded_type), conn.recorded_type)
+
+
+class _Rosbag2(Recording):
+    kind = "rosbag2"
+    encoding: Encoding = "cdr"
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(path)
+        self.profile = "ros2"
+        self._reader = Rosbag2Reader(path)
+        self._reader.open()
+        self._raw = {c.id: c for c in self._reader.connections}
+        for c in self._reader.connections:
+            qos = getattr(c.ext, "offered_qos_profiles", []) or []
+            latched = bool(qos) and qos[0].durability.name.lower() == "transient_local"
+            self.connections.append(Connection(c.id, c.topic, c.msgtype, c.msgtype, latched,
+                                               c.msgcount))
+        self._by_id = {c.id: c for c in self.connections}
+        self.start_time, self.end_time = self._reader.start_time, self._reader.end_time
+
+    def close(self) -> None:
+        self._reader.close()
+
+    def messages(self, connections: Collection[Connection] = (), start: int | None = None,
+                 stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
+        raw = [self._raw[c.id] for c in connections]
+        by_id = self._by_id
+        for conn, t, data in self._reader.messages(connections=raw, start=start, stop=stop):
+            yield by_id[conn.id], t, data
+
+
+class _Rosbag1(Recording):
+    kind = "bag"
+    encoding: Encoding = "ros1"
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(path)
+        self.profile = "ros1"
+        self._reader = Rosbag1Reader(path)
+        self._reader.open()
+        self._raw = {c.id: c for c in self._reader.connections}
+        for c in self._reader.connections:
+            latching = getattr(c.ext, "latching", None)
+            self.connections.append(Connection(
+                c.id, c.topic, ros2_type(c.msgtype), str(denormalize_msgtype(c.msgtype)),
+                bool(latching), c.msgcount,
+                c.msgdef.data.encode(), "ros1msg",
+                {"md5sum": c.digest, "callerid": str(getattr(c.ext, "callerid", "") or ""),
+                 "latching": "true" if latching else "false"}))
+        self._by_id = {c.id: c for c in self.connections}
+        if self._reader.message_count:
+            self.start_time, self.end_time = self._reader.start_time, self._reader.end_time
+
+    def close(self) -> None:
+        self._reader.close()
+
+    def messages(self, connections: Collection[Connection] = (), start: int | None = None,
+                 stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
+        raw = [self._raw[c.id] for c in connections]
+        by_id = self._by_id
+        for conn, t, data in self._reader.messages(connections=raw, start=start, stop=stop):
+            yield by_id[conn.id], t, data
+
+
+class _Mcap(Recording):
+    kind = "mcap"
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(path)
+        with self.path.open("rb") as f:
+            reader = make_reader(f)
+            self.profile = str(reader.get_header().profile)
+            summary = reader.get_summary()
+        if summary is None:
+            raise ValueError("no summary section (not a finished MCAP file)")
+        encodings = {c.message_encoding for c in summary.channels.values()}
+        self.encoding = "ros1" if encodings == {"ros1"} or (
+            not encodings and self.profile == "ros1") else "cdr"
+        for c in summary.channels.values():
+            schema = summary.schemas.get(c.schema_id)
+            name = schema.name if schema is not None else ""
+            latched = (c.metadata.get("latching") in ("true", "1")
+                       or "transient_local" in c.metadata.get("offered_qos_profiles", ""))
+            count = None if summary.statistics is None else \
+                summary.statistics.channel_message_counts.get(c.id)
+            bus_type = ros2_type(normalize_msgtype(name)) if self.encoding == "ros1" else name
+            self.connections.append(Connection(
+                c.id, c.topic, bus_type, name, latched, count,
+                schema.data if schema is not None else b"",
+                schema.encoding if schema is not None else "", dict(c.metadata)))
+        self._by_id = {c.id: c for c in self.connections}
+        self._chunks = sorted(summary.chunk_indexes, key=lambda ci: ci.chunk_start_offset)
+        if summary.statistics is not None and summary.statistics.message_count:
+            self.start_time = summary.statistics.message_start_time
+            # exclusive, as rosbags reports a bag's end: after the last message
+            self.end_time = summary.statistics.message_end_time + 1
+
+    def messages(self, connections: Collection[Connection] = (), start: int | None = None,
+                 stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
+        if self._chunks:
+            yield from self._chunked(connections, start, stop)
+            return
+        window: dict[str, int] = {}
+        if start is not None:
+            window[_STARTING_AT] = start
+        if stop is not None:
+            window[_ENDING_BEFORE] = stop
+        topics = [c.topic for c in connections] or None
+        by_id = self._by_id
+        with self.path.open("rb") as f:
+            for _schema, channel, message in make_reader(f).iter_messages(
+                    topics=topics, log_time_order=False, **window):  # type: ignore[arg-type]
+                yield by_id[channel.id], message.log_time, message.data
+
+    def _chunked(self, connections: Collection[Connection], start: int | None,
+                 stop: int | None) -> Iterator[tuple[Connection, int, bytes]]:
+        """File order, chunk by chunk (from the summary's chunk index), each chunk's records
+        walked in one loop: about 2.5x the mcap reader's own rate on srr's bags."""
+        by_id = self._by_id
+        wanted = {c.id for c in connections} or set(by_id)
+        lo, hi = (-1 if start is None else start), (2**63 if stop is None else stop)
+        with self.path.open("rb") as f:
+            for ci in self._chunks:
+                if ci.message_end_time < lo or ci.message_start_time >= hi:
+                    continue
+                if ci.message_index_offsets and not wanted & set(ci.message_index_offsets):
+                    continue
+                f.seek(ci.chunk_start_offset + 9)  # past the record's opcode and length
+                chunk = Chunk.read(ReadDataStream(f))
+                buf = _decompress(chunk)
+                pos, end = 0, len(buf)
+                while pos < end:
+                    op, length = _RECORD.unpack_from(buf, pos)
+                    pos += 9
+                    if op == _MESSAGE_OP:
+                        cid, _seq, log_time, _pub = _MESSAGE.unpack_from(buf, pos)
+                        if cid in wanted and lo <= log_time < hi:
+                            yield by_id[cid], log_time, buf[pos + 22:pos + length]
+                    pos += length
+                if pos != end:
+                    raise ValueError(f"chunk at {ci.chunk_start_offset}: records overrun it")
+
+
+_RECORD = struct.Struct("<BQ")  # opcode, length
+_MESSAGE = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
+_MESSAGE_OP = 0x05
+
+
+def _decompress(chunk: Chunk) -> bytes:
+    if chunk.compression == "zstd":
+        return bytes(zstandard.decompress(chunk.data, chunk.uncompressed_size))
+    if chunk.compression == "lz4":
+        return bytes(lz4.frame.decompress(chunk.data))
+    if chunk.compression:
+        raise ValueError(f"unknown chunk compression {chunk.compression!r}")
+    return bytes(chunk.data)
+
+
+def open_recording(path: str | Path) -> Recording:
+    """Open a rosbag2 directory, a ``.bag`` or ``.mcap`` file, or a run's ``bag/`` directory
+    holding a ROS 1 recording. Raises the readers' own errors (see the module docstring);
+    ``FileNotFoundError`` when ``path`` holds none of these."""
+    p = Path(path)
+    if p.is_dir():
+        if (p / "metadata.yaml").exists():
+            return _Rosbag2(p)
+        found = ros1_recording(p)
+        if found is None:
+            raise FileNotFoundError(f"{p}: metadata.yaml: missing (not a rosbag2 directory)")
+        p = found
+    if p.suffix == ".bag":
+        return _Rosbag1(p)
+    return _Mcap(p)

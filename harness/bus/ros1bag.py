@@ -1,0 +1,145 @@
+"""Record the bus as ROS 1: a ``.bag`` (rosbags' rosbag1 writer) or MCAP with the ``ros1``
+profile.
+
+:class:`Ros1Recorder` is the :class:`~harness.bus.recorder.Recorder` with the ROS 1 format:
+each message is converted and serialized by :mod:`harness.bus.ros1` (Noetic definitions,
+header ``seq`` per topic) on the caller's thread and written, in publication order, with the
+simulation time as its time, into ``<bag_dir>/<name>.bag`` or ``<bag_dir>/<name>.mcap``.
+Counts, bytes and digests are kept as for ROS 2, over the ROS 1 bytes.
+
+* ``.bag`` (format 2.0): one connection per topic with its type (``sensor_msgs/Image``), MD5
+  sum, full message definition, ``callerid`` ``/srr`` and ``latching`` 1 for transient-local
+  topics (``/tf_static``), 0 otherwise. Chunks close at ``chunk_mb`` or when they span
+  ``chunk_s`` of simulated time and are flushed then; ``compression: lz4`` compresses them.
+  The index is written when the bag closes: a bag cut short has none (ROS 1's
+  ``rosbag reindex`` rebuilds it; ``srr recover`` handles MCAP only).
+* MCAP (``ros1`` profile): ``ros1msg`` schemas named ``pkg/Type`` holding the same
+  definitions, ``ros1`` message encoding, channel metadata ``callerid`` and ``latching``
+  (``true``/``false``), written by the same bounded-chunk writer as ROS 2 bags (so
+  ``chunk_mb``, ``chunk_s``, ``fsync`` and ``compression`` apply alike). No
+  ``metadata.yaml``: it is not a rosbag2 bag.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any, Literal
+
+from rosbags.rosbag1 import Writer as Rosbag1Writer
+from rosbags.typesys.msg import normalize_msgtype
+
+from harness.bus.bagfile import ChunkPolicy, McapBagWriter, TopicMeta
+from harness.bus.bus import Envelope, Qos
+from harness.bus.recorder import Recorder
+from harness.bus.ros1 import ROS1_TYPESTORE, Ros1Encoder, msgdef, ros1_name
+
+__all__ = ["CALLERID", "Ros1Recorder", "ros1_file"]
+
+CALLERID = "/srr"
+Ros1Format = Literal["bag", "mcap"]
+
+
+def ros1_file(bag_dir: Path, fmt: Ros1Format) -> Path:
+    """Where a ROS 1 recording of ``bag_dir`` lives: ``<bag_dir>/<name>.bag`` or ``.mcap``."""
+    return Path(bag_dir) / f"{Path(bag_dir).name}.{fmt}"
+
+
+class _BagWriter:
+    """rosbags' rosbag1 writer behind the recorder's writer interface, closing chunks at
+    the policy's size or span (rosbags closes them at its size threshold only)."""
+
+    def __init__(self, path: Path, policy: ChunkPolicy) -> None:
+        if policy.compression not in ("none", "lz4"):
+            raise ValueError(f"a ROS 1 bag cannot compress with {policy.compression}")
+        self.path = path
+        self.policy = policy
+        self._bag = Rosbag1Writer(path)
+        self._bag.chunk_threshold = max(1, policy.max_bytes)
+        if policy.compression == "lz4":
+            self._bag.set_compression(Rosbag1Writer.CompressionFormat.LZ4)
+        self._bag.open()
+        self._conns: list[Any] = []
+        self._chunk_start: int | None = None
+        self._sync()
+
+    def add_topic(self, topic: str, msgtype: str, latched: bool) -> int:
+        self._conns.append(self._bag.add_connection(
+            topic, normalize_msgtype(msgtype), typestore=ROS1_TYPESTORE, callerid=CALLERID,
+            latching=int(latched)))
+        return len(self._conns) - 1
+
+    def write(self, channel: int, log_time: int, data: bytes) -> None:
+        start = self._chunk_start
+        if start is not None and log_time - start >= self.policy.max_span_ns:
+            self._bag.write_chunk(self._bag.chunks[-1])
+            self._chunk_closed()
+        if self._chunk_start is None:
+            self._chunk_start = log_time
+        chunks = len(self._bag.chunks)
+        self._bag.write(self._conns[channel], log_time, data)
+        if len(self._bag.chunks) != chunks:  # rosbags closed it at its size threshold
+            self._chunk_closed()
+
+    def _chunk_closed(self) -> None:
+        self._chunk_start = None
+        self._sync()
+
+    def _sync(self) -> None:
+        bio = self._bag.bio
+        assert bio is not None
+        bio.flush()
+        if self.policy.fsync:
+            os.fsync(bio.fileno())
+
+    def finish(self) -> None:
+        self._bag.close()
+
+    def abort(self) -> None:
+        if self._bag.bio is not None:
+            self._bag.bio.close()
+
+
+class Ros1Recorder(Recorder):
+    """Writes the bus as ROS 1 into ``bag_dir`` (see the module docstring); ``fmt``:
+    ``bag`` or ``mcap``."""
+
+    def __init__(self, bag_dir: Path, fmt: Ros1Format, *, queue_size: int = 64,
+                 chunks: ChunkPolicy | None = None) -> None:
+        super().__init__(bag_dir, queue_size=queue_size, chunks=chunks)
+        self.format: Ros1Format = fmt
+        self._encoder = Ros1Encoder()
+
+    @property
+    def path(self) -> Path:
+        """The recording's file."""
+        return ros1_file(self.bag_dir, self.format)
+
+    def _open_writer(self) -> Any:
+        if self.format == "bag":
+            return _BagWriter(self.path, self.chunks)
+        return McapBagWriter(self.path, self.chunks, profile="ros1")
+
+    def _recorded_type(self, msgtype: str) -> str:
+        return ros1_name(msgtype)
+
+    def _serialize(self, env: Envelope) -> bytes:
+        if env.raw is not None:  # a replayed ROS 1 recording's bytes
+            return env.raw
+        return self._encoder.encode(env.topic, env.msgtype, env.msg)
+
+    def _add_topic(self, writer: Any, topic: str, msgtype: str, qos: Qos) -> int:
+        latched = qos.durability == "transient_local"
+        if isinstance(writer, _BagWriter):
+            return writer.add_topic(topic, msgtype, latched)
+        text, _md5 = msgdef(msgtype)
+        meta = (("callerid", CALLERID), ("latching", "true" if latched else "false"))
+        return int(writer.add_topic(TopicMeta(
+            topic, msgtype, text.encode(), "", schema_encoding="ros1msg",
+            serialization_format="ros1", channel_metadata=meta)))
+
+    def _finish(self, writer: Any) -> None:
+        if isinstance(writer, _BagWriter):
+            writer.finish()
+        else:
+            writer.finish(None)
