@@ -145,10 +145,12 @@ scenarios:
                              "2", "--out", str(out), "-q"], cwd=ROOT, env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     deadline = time.monotonic() + 60
-    while not (out / "runs" / "quick" / "nominal" / "r1" / "summary.json").is_file():
+    slow_bag = out / "runs" / "slow" / "nominal" / "r1" / "bag"
+    while not ((out / "runs" / "quick" / "nominal" / "r1" / "summary.json").is_file()
+               and any(slow_bag.glob("*.mcap"))):  # the quick run done, the slow one recording
         assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()[0]
         time.sleep(0.1)
-    time.sleep(1.0)  # the slow run is mid-way
+    time.sleep(1.0)  # the slow run is mid-way (50 ms a tick: about 20 of its 180 ticks)
     proc.send_signal(signal.SIGINT)
     text = proc.communicate(timeout=60)[0]
     assert proc.returncode == 130, text
