@@ -5,7 +5,8 @@ A baseline is only a yardstick for runs of the same *configuration*: the same si
 physics settings, and the same scoring definitions. What a regression test is meant to vary
 is left out: the systems under test (a new version of a plug-in, changed parameters), the
 scenario's name and description, which baseline it names, the tolerances and the health-gate
-settings, how the bag is written (``recording``: chunking, fsync, the disk guard) and the sweep a
+settings, how the bag is written (``recording``: chunking, fsync, the disk guard; a camera's
+``record``: raw or compressed images), live outputs (``ros2``, ``rtsp``) and the sweep a
 suite may expand the scenario into (``sweep``: each point is its own configuration).
 :func:`comparable_config` is that part of a resolved scenario, as plain data;
 :func:`config_differences` names what differs, field by field. A baseline blessed before srr
@@ -25,14 +26,20 @@ __all__ = ["EXCLUDED", "comparable_config", "config_differences", "with_defaults
 
 #: Top-level keys, and ``scoring`` sub-keys, that do not make two configurations different.
 EXCLUDED = frozenset({"format_version", "name", "description", "baseline",
-                      "systems_under_test", "recording", "sweep", "ros2"})
+                      "systems_under_test", "recording", "sweep", "ros2", "rtsp"})
 EXCLUDED_SCORING = frozenset({"tolerances", "health"})
+#: Keys of each ``cameras`` entry that do not make two configurations different.
+EXCLUDED_CAMERA = frozenset({"record"})
 
 
 def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
     """The comparable part of a resolved scenario mapping
     (:func:`~harness.scenario.scenario_to_mapping`)."""
     out = {k: v for k, v in mapping.items() if k not in EXCLUDED}
+    cameras = out.get("cameras")
+    if isinstance(cameras, list):
+        out["cameras"] = [{k: v for k, v in c.items() if k not in EXCLUDED_CAMERA}
+                          if isinstance(c, Mapping) else c for c in cameras]
     scoring = out.get("scoring")
     if isinstance(scoring, Mapping):
         out["scoring"] = {k: v for k, v in scoring.items() if k not in EXCLUDED_SCORING}

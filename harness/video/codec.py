@@ -171,10 +171,12 @@ class H264Encoder:
                              f"({ENCODERS.get(s.encoder, s.encoder)}): {err}") from err
         return cc
 
-    def encode(self, rgb: np.ndarray, time_ns: int, *, keyframe: bool = False
-               ) -> list[EncodedFrame]:
-        """Encode one frame taken at ``time_ns``; ``keyframe`` forces an IDR. Returns the
-        access units that came out (one per frame with both encoders' settings here)."""
+    def encode(self, rgb: np.ndarray, time_ns: int, *, keyframe: bool = False,
+               index: int | None = None) -> list[EncodedFrame]:
+        """Encode one frame taken at ``time_ns``; ``keyframe`` forces an IDR. ``index`` is
+        the frame's number in the stream (default: frames encoded so far); frames whose
+        index is a multiple of ``keyframe_interval`` are keyframes. Returns the access
+        units that came out (one per frame with both encoders' settings here)."""
         av = _av()
         if self._cc is None:
             self._cc = self._open()
@@ -182,7 +184,7 @@ class H264Encoder:
         if a.shape != (self.height, self.width, 3):
             raise VideoError(f"{self.where}: expected a {self.width}x{self.height} RGB frame, "
                              f"got shape {a.shape}")
-        index = self._count
+        index = self._count if index is None else int(index)
         self._count += 1
         frame = av.VideoFrame.from_ndarray(a, format="rgb24").reformat(
             format="yuv420p", dst_colorspace="ITU601", dst_color_range="MPEG")
