@@ -38,9 +38,9 @@ from harness.bus import Bus, Qos
 from harness.bus.messages import TYPESTORE
 from harness.errors import BagError, VideoError, reason
 from harness.graph.nodes.camera import depth_image_message, rgb_image_message
-from harness.video.codec import H264Decoder, decode_depth_png, decode_rgb
 from harness.scenario import Scenario
 from harness.sut.base import SutContext, SystemUnderTest, load_suts
+from harness.video.codec import H264Decoder, decode_depth_png, decode_rgb
 
 __all__ = ["Playback", "RecordedTopic", "Replay"]
 
