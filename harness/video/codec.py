@@ -47,6 +47,7 @@ __all__ = [
     "encode_jpeg",
     "encode_png",
     "psnr",
+    "reformatter",
 ]
 
 #: ``encoder`` setting → FFmpeg encoder name.
@@ -137,6 +138,7 @@ class H264Encoder:
         self.settings = settings
         self.where = where
         self._cc: Any = None
+        self._reformat: Any = None
         self._count = 0
         self._times: dict[int, tuple[int, int]] = {}  # pts → (time_ns, index)
 
@@ -186,8 +188,11 @@ class H264Encoder:
                              f"got shape {a.shape}")
         index = self._count if index is None else int(index)
         self._count += 1
-        frame = av.VideoFrame.from_ndarray(a, format="rgb24").reformat(
-            format="yuv420p", dst_colorspace="ITU601", dst_color_range="MPEG")
+        if self._reformat is None:
+            self._reformat = reformatter()
+        frame = self._reformat.reformat(av.VideoFrame.from_ndarray(a, format="rgb24"),
+                                        format="yuv420p", dst_colorspace="ITU601",
+                                        dst_color_range="MPEG")
         frame.pts = int(time_ns)
         if keyframe or index % self.settings.keyframe_interval == 0:
             frame.pict_type = av.video.frame.PictureType.I
@@ -249,12 +254,19 @@ def _rgb(rgb: np.ndarray) -> np.ndarray:
     return a
 
 
-def encode_jpeg(rgb: np.ndarray, qscale: int = 3) -> bytes:
+def reformatter() -> Any:
+    """A PyAV ``VideoReformatter``: it keeps its swscale context from one frame to the next
+    of the same size (converting a 160×120 frame costs 0.06 ms with it, 0.5 ms without)."""
+    return _av().video.reformatter.VideoReformatter()
+
+
+def encode_jpeg(rgb: np.ndarray, qscale: int = 3, reformat: Any = None) -> bytes:
     """JPEG bytes of an RGB frame (4:2:0, full range). ``qscale`` is FFmpeg's ``-q:v``:
-    2 (best) … 31."""
+    2 (best) … 31. ``reformat``: a :func:`reformatter` to reuse across frames."""
     av = _av()
     a = _rgb(rgb)
-    frame = av.VideoFrame.from_ndarray(a, format="rgb24").reformat(format="yuvj420p")
+    frame = (reformat or reformatter()).reformat(av.VideoFrame.from_ndarray(a, format="rgb24"),
+                                                 format="yuvj420p")
     return _still("mjpeg", "yuvj420p", frame, a.shape[1], a.shape[0], qscale)
 
 
@@ -282,7 +294,7 @@ def encode_depth_png(depth_m: np.ndarray) -> bytes:
     if d.ndim != 2:
         raise VideoError(f"expected an (h, w) depth image, got shape {d.shape}")
     frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(depth_to_mm(d)),
-                                       format="gray16le").reformat(format="gray16be")
+                                       format="gray16be")  # PyAV swaps the bytes
     return _still("png", "gray16be", frame, d.shape[1], d.shape[0])
 
 
@@ -303,7 +315,7 @@ def decode_depth_png(data: bytes) -> np.ndarray:
     frame = decode_image(data, "png")
     if frame.format.name not in ("gray16be", "gray16le"):
         raise VideoError(f"png: expected a 16-bit grey depth image, got {frame.format.name}")
-    mm = frame.reformat(format="gray16le").to_ndarray().astype(np.float32)
+    mm = frame.to_ndarray().astype(np.float32)  # native uint16 from gray16be or -le
     out: np.ndarray = np.where(mm > 0, mm / np.float32(1000.0), np.float32(math.inf))
     return out.astype(np.float32)
 

@@ -22,10 +22,10 @@ from harness.errors import StreamError
 __all__ = ["APT_PACKAGES", "Gst", "gi_search_path", "load"]
 
 #: What Debian/Ubuntu need for the RTSP streams (PyGObject, the RTSP server's typelib, and the
-#: appsrc, h264parse and rtph264pay elements).
+#: appsrc and rtph264pay elements).
 APT_PACKAGES = ("python3-gi", "gir1.2-gst-rtsp-server-1.0", "gstreamer1.0-plugins-base",
-                "gstreamer1.0-plugins-good", "gstreamer1.0-plugins-bad")
-_ELEMENTS = ("appsrc", "h264parse", "rtph264pay")
+                "gstreamer1.0-plugins-good")
+_ELEMENTS = ("appsrc", "rtph264pay")
 
 
 @dataclass(frozen=True)

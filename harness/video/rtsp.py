@@ -2,7 +2,7 @@
 
 One :class:`RtspHub` per run owns a GLib main loop on a thread of its own and one
 ``GstRTSPServer`` per port (several mount paths may share a port). Each mount is a shared
-media whose pipeline is ``appsrc ! h264parse ! rtph264pay``: the access units come ready-made
+media whose pipeline is ``appsrc ! rtph264pay``: the access units come ready-made
 from :class:`~harness.video.codec.H264Encoder` (with their simulation-time SEI), so GStreamer
 only packetizes them into RTP (RFC 6184) and serves RTSP (RTP over UDP or interleaved in the
 RTSP TCP connection, as the client asks). Nothing is re-encoded, resampled or repeated: each
@@ -32,7 +32,7 @@ __all__ = ["DEFAULT_HOST", "RtspHub", "RtspStream", "StreamConfig"]
 DEFAULT_HOST = "127.0.0.1"
 _LAUNCH = ("( appsrc name=src is-live=true format=time do-timestamp=false "
            "caps=video/x-h264,stream-format=byte-stream,alignment=au "
-           "! h264parse ! rtph264pay name=pay0 pt=96 config-interval=-1 )")
+           "! rtph264pay name=pay0 pt=96 config-interval=-1 )")
 
 
 @dataclass(frozen=True)

@@ -136,6 +136,11 @@ def test_compressed_only_dock_run_feeds_perception_raw_and_replays_decoded(
     # in the run the tracker read the raw depth images: the very same tracks
     assert small.summary["topics"][tracks]["sha256"] == raw.summary["topics"][tracks]["sha256"]
     assert "/dock_cam_left_depth" not in small.summary["topics"]
+    # the report's camera keyframes come from the compressed topics (h264 decoded from the
+    # keyframe before the moment)
+    html = (small.run_dir / "report.html").read_text()
+    assert 'alt="/dock_cam_left_rgb/h264 at ' in html
+    assert 'alt="/dock_cam_right_rgb/h264 at ' in html
     raw_bytes = sum(t["bytes"] for t in raw.summary["topics"].values())
     small_bytes = sum(t["bytes"] for t in small.summary["topics"].values())
     assert small_bytes * 5 < raw_bytes

@@ -49,6 +49,7 @@ from harness.video.codec import (
     encode_depth_png,
     encode_jpeg,
     encode_png,
+    reformatter,
 )
 
 __all__ = ["COMPRESSED_FORMATS", "RTSP_HUB", "CompressedCameraHelper", "RTSPCameraHelper",
@@ -153,6 +154,7 @@ class CompressedCameraHelper(NodeType):
                              f"{db.inputs.jpegQscale}")
         self._settings = _settings(db) if self._format == "h264" else None
         self._encoder: H264Encoder | None = None
+        self._reformat: Any = None
         self._pub = ctx.bus.advertise(topic_of(db), msgtype)
 
     def reset(self) -> None:
@@ -179,7 +181,10 @@ class CompressedCameraHelper(NodeType):
             if self._stream == "depth":
                 data, fmt = encode_depth_png(frame.depth), DEPTH_PNG_FORMAT
             elif self._format == "jpeg":
-                data, fmt = encode_jpeg(frame.rgb, int(db.inputs.jpegQscale)), "jpeg"
+                if self._reformat is None:
+                    self._reformat = reformatter()
+                data = encode_jpeg(frame.rgb, int(db.inputs.jpegQscale), self._reformat)
+                fmt = "jpeg"
             else:
                 data, fmt = encode_png(frame.rgb), "png"
         except VideoError as err:
