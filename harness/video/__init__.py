@@ -19,7 +19,13 @@ from harness.video.codec import (
     encode_png,
     psnr,
 )
-from harness.video.sei import SIM_TIME_UUID, SimTime, insert_sim_time, read_sim_time
+from harness.video.sei import (
+    SIM_TIME_UUID,
+    SimTime,
+    insert_sim_time,
+    read_sim_time,
+    sim_time_of_user_data,
+)
 
 __all__ = [
     "DEPTH_PNG_FORMAT",
@@ -38,4 +44,5 @@ __all__ = [
     "insert_sim_time",
     "psnr",
     "read_sim_time",
+    "sim_time_of_user_data",
 ]

@@ -26,6 +26,7 @@ __all__ = [
     "insert_sim_time",
     "nal_units",
     "read_sim_time",
+    "sim_time_of_user_data",
     "sim_time_sei",
 ]
 
@@ -131,14 +132,24 @@ def _sei_messages(rbsp: bytes) -> Iterator[tuple[int, bytes]]:
         i += size
 
 
+def sim_time_of_user_data(payload: bytes) -> SimTime | None:
+    """The simulation time in one SEI user-data-unregistered payload (UUID + data), as
+    decoders hand it over (FFmpeg: ``AV_FRAME_DATA_SEI_UNREGISTERED`` frame side data), or
+    None when it is not srr's."""
+    if len(payload) < 16 + _PAYLOAD.size or payload[:16] != SIM_TIME_UUID:
+        return None
+    t, idx = _PAYLOAD.unpack_from(payload, 16)
+    return SimTime(t, idx)
+
+
 def read_sim_time(annexb: bytes) -> SimTime | None:
     """The simulation time carried by an access unit (Annex B), or None when it has none."""
     for _code, head, end in nal_units(annexb):
         if annexb[head] & 0x1F != _SEI_NAL:
             continue
         for ptype, payload in _sei_messages(_unescape(annexb[head + 1:end])):
-            if (ptype == _USER_DATA_UNREGISTERED and len(payload) >= 16 + _PAYLOAD.size
-                    and payload[:16] == SIM_TIME_UUID):
-                t, idx = _PAYLOAD.unpack_from(payload, 16)
-                return SimTime(t, idx)
+            found = sim_time_of_user_data(payload) if ptype == _USER_DATA_UNREGISTERED \
+                else None
+            if found is not None:
+                return found
     return None

@@ -18,7 +18,7 @@ import pytest
 from harness import api
 from harness.cli import main
 from harness.graph.nodes.video import RTSP_HUB
-from harness.video import psnr, read_sim_time
+from harness.video import psnr, read_sim_time, sim_time_of_user_data
 from tests.e2e.bagread import decoded
 
 SCENARIO = Path(__file__).with_name("rtsp_two_cameras.yaml")
@@ -41,7 +41,7 @@ def _free_ports(n: int) -> list[int]:
 
 @dataclass
 class Received:
-    """What one RTSP client got: per frame (SEI simulation time, SEI index, RTP pts, RGB)."""
+    """What one RTSP client got: per frame (SEI simulation time, SEI index, pts, RGB)."""
 
     url: str
     frames: list[tuple[int, int, int | None, np.ndarray]] = field(default_factory=list)
@@ -67,11 +67,14 @@ def _client(url: str, out: Received, deadline: float) -> None:
         for packet in container.demux(stream):
             if packet.size == 0:
                 continue
-            sei = read_sim_time(bytes(packet))
             for frame in packet.decode():
                 out.size = (frame.width, frame.height)
-                assert sei is not None, "an access unit without the simulation-time SEI"
-                out.frames.append((sei.time_ns, sei.index, packet.pts,
+                # the decoder hands over the SEI as side data, however RTP split the frame
+                (sei,) = [t for sd in frame.side_data
+                          if (t := sim_time_of_user_data(bytes(sd))) is not None]
+                in_packet = read_sim_time(bytes(packet))
+                assert in_packet in (None, sei)
+                out.frames.append((sei.time_ns, sei.index, frame.pts,
                                    frame.to_ndarray(format="rgb24")))
     except av.error.EOFError:
         pass
