@@ -562,11 +562,55 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     setting up the systems under test, and the wiring (topics and TF). Raises the first error;
     returns the warnings."""
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
+    busy = check_video(scenario, source)
     sim = Simulation(with_ros2_bridge(scenario, None), source=source)
     try:
-        return check_wiring(sim.plan(), scenario, source)
+        return (*check_wiring(sim.plan(), scenario, source), *busy)
     finally:
         sim.close()
+
+
+def check_video(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """What ``srr validate`` can know of the video settings before a run: every h264 encoder
+    the scenario asks for opens here (NVENC needs an NVIDIA GPU with an encoder), and, with
+    ``rtsp.enabled``, GStreamer's RTSP server loads. Raises the first error; returns warnings
+    for stream ports another program holds now (a run would stop on them)."""
+    import socket
+
+    from harness.builders.rtsp_cameras import stream_cameras
+    from harness.errors import StreamError, VideoError
+    from harness.video import gst
+    from harness.video.codec import check_encoder, settings_of
+
+    wanted = [(f"cameras[{i}].record.h264", c.record.h264)
+              for i, c in enumerate(scenario.cameras) if c.enabled and "h264" in c.record.rgb]
+    cams = stream_cameras(scenario)
+    if cams:
+        wanted.append(("rtsp.h264", scenario.rtsp.h264))
+    for field, spec in wanted:
+        try:
+            check_encoder(settings_of(spec))
+        except VideoError as err:
+            raise ScenarioError(scenario.file_for(field.split(".")[0], source), field,
+                                str(err)) from err
+    if not cams:
+        return ()
+    try:
+        gst.load()
+    except StreamError as err:
+        raise ScenarioError(scenario.file_for("rtsp", source), "rtsp.enabled",
+                            str(err)) from err
+    warnings = []
+    for i, cam in cams:
+        with socket.socket(socket.AF_INET6 if ":" in scenario.rtsp.host
+                           else socket.AF_INET) as probe:
+            try:
+                probe.bind((scenario.rtsp.host, cam.port or 0))
+            except OSError as err:
+                warnings.append(f"{scenario.file_for(f'cameras[{i}]', source)}: "
+                                f"cameras[{i}].port: {scenario.rtsp.host}:{cam.port} cannot "
+                                f"be bound now ({err.strerror or err}); a run would stop there")
+    return tuple(warnings)
 
 
 def baseline_name(scenario: Scenario) -> str:

@@ -25,6 +25,7 @@ from harness.scenario.schema import (
     DiffDriveControl,
     ForkliftControl,
     GraphSpec,
+    H264Spec,
     RobotSpec,
     Scenario,
 )
@@ -504,6 +505,7 @@ def _check_record(v: _Validator, i: int, cam: CameraSpec) -> None:
     """A camera's ``record`` block: formats of streams the camera has, each once, one still
     format per topic, even sizes for h264."""
     rec = cam.record
+    _check_h264(v, f"cameras[{i}].record.h264", rec.h264)
     for stream, formats in (("rgb", rec.rgb), ("depth", rec.depth)):
         where = f"cameras[{i}].record.{stream}"
         for k, fmt in enumerate(formats):
@@ -519,6 +521,20 @@ def _check_record(v: _Validator, i: int, cam: CameraSpec) -> None:
     if "h264" in rec.rgb and (w % 2 or h % 2):
         v.fail(f"cameras[{i}].resolution", f"h264 (cameras[{i}].record.rgb) needs an even "
                f"width and height, got {w}x{h}")
+
+
+#: Speed presets each h264 encoder knows.
+H264_PRESETS = {
+    "x264": ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow",
+             "slower", "veryslow", "placebo"),
+    "nvenc": ("p1", "p2", "p3", "p4", "p5", "p6", "p7"),
+}
+
+
+def _check_h264(v: _Validator, path: str, spec: H264Spec) -> None:
+    if spec.preset is not None and spec.preset not in H264_PRESETS[spec.encoder]:
+        v.fail(f"{path}.preset", f"{spec.encoder} has no preset {spec.preset!r} (presets: "
+               f"{', '.join(H264_PRESETS[spec.encoder])})")
 
 
 def _check_rtsp(sc: Scenario, v: _Validator) -> None:
@@ -544,6 +560,7 @@ def _check_rtsp(sc: Scenario, v: _Validator) -> None:
         if sc.rtsp.enabled and (w % 2 or h % 2):
             v.fail(f"cameras[{i}].resolution", f"an RTSP stream (h264, 4:2:0) needs an even "
                    f"width and height, got {w}x{h}")
+    _check_h264(v, "rtsp.h264", sc.rtsp.h264)
     if not sc.rtsp.enabled:
         return
     if not sc.rtsp.host.strip():

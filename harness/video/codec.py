@@ -39,6 +39,7 @@ __all__ = [
     "H264Decoder",
     "H264Encoder",
     "H264Settings",
+    "check_encoder",
     "decode_depth_png",
     "decode_image",
     "decode_rgb",
@@ -48,6 +49,7 @@ __all__ = [
     "encode_png",
     "psnr",
     "reformatter",
+    "settings_of",
 ]
 
 #: ``encoder`` setting → FFmpeg encoder name.
@@ -149,6 +151,20 @@ class H264Encoder:
 
     def _open(self) -> Any:
         av = _av()
+        import av.logging as av_logging
+
+        level = av_logging.get_level()
+        try:
+            with av_logging.Capture() as logs:
+                av_logging.set_level(av_logging.ERROR)  # FFmpeg's reason, for the message
+                return self._open_codec(av)
+        except VideoError as err:
+            why = " ".join(m.strip() for lvl, _n, m in logs if lvl <= av_logging.ERROR)
+            raise VideoError(f"{err}{': ' + why if why else ''}") from err.__cause__
+        finally:
+            av_logging.set_level(level)
+
+    def _open_codec(self, av: Any) -> Any:
         s = self.settings
         try:
             cc = av.CodecContext.create(ENCODERS[s.encoder], "w")
@@ -169,8 +185,9 @@ class H264Encoder:
             cc.options = s.options()
             cc.open()
         except (av.FFmpegError, ValueError, KeyError) as err:
+            reason = getattr(err, "strerror", None) or str(err)
             raise VideoError(f"{self.where}: cannot open the {s.encoder} h264 encoder "
-                             f"({ENCODERS.get(s.encoder, s.encoder)}): {err}") from err
+                             f"({ENCODERS.get(s.encoder, s.encoder)}): {reason}") from err
         return cc
 
     def encode(self, rgb: np.ndarray, time_ns: int, *, keyframe: bool = False,
@@ -232,6 +249,20 @@ class H264Decoder:
         except av.FFmpegError as err:
             raise VideoError(f"h264: cannot decode: {err}") from err
         return [f.to_ndarray(format="rgb24") for f in frames]
+
+
+def settings_of(spec: Any) -> H264Settings:
+    """:class:`H264Settings` from a scenario's ``h264`` block (same field names)."""
+    return H264Settings(encoder=spec.encoder, keyframe_interval=spec.keyframe_interval,
+                        crf=spec.crf, bitrate_kbps=spec.bitrate_kbps, threads=spec.threads,
+                        preset=spec.preset)
+
+
+def check_encoder(settings: H264Settings) -> None:
+    """Open (and close) the encoder ``settings`` ask for, on a small picture: a
+    :class:`~harness.errors.VideoError` when it cannot open here (NVENC without an NVIDIA GPU
+    that has an encoder, an unknown preset)."""
+    H264Encoder(64, 64, 30, settings, f"h264.encoder {settings.encoder}")._open()
 
 
 def _still(codec: str, pix_fmt: str, frame: Any, width: int, height: int,

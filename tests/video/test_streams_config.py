@@ -4,6 +4,7 @@ anything listens or renders."""
 
 from __future__ import annotations
 
+import socket
 from pathlib import Path
 
 import pytest
@@ -52,10 +53,16 @@ rtsp: {enabled: true}
          "cameras[0].record.rgb[0]", "expected one of 'raw', 'h264', 'jpeg', 'png'"),
         (("outputs: [rgb, depth]}", "outputs: [rgb], record: {h264: {crf: 60}}}"),
          "cameras[0].record.h264.crf", "must be <= 51"),
+        (("rtsp: {enabled: true}", "rtsp: {enabled: true, h264: {preset: turbo}}"),
+         "rtsp.h264.preset", "x264 has no preset 'turbo' (presets: ultrafast,"),
+        (("rtsp: {enabled: true}",
+          "rtsp: {enabled: true, h264: {encoder: nvenc, preset: veryfast}}"),
+         "rtsp.h264.preset", "nvenc has no preset 'veryfast' (presets: p1,"),
     ],
     ids=["same-url", "port-zero", "relative-mount", "mount-with-space", "odd-size",
          "empty-host", "unknown-encoder", "zero-fps", "depth-not-published",
-         "jpeg-and-png", "twice", "unknown-format", "crf-range"],
+         "jpeg-and-png", "twice", "unknown-format", "crf-range", "x264-preset",
+         "nvenc-preset"],
 )
 def test_bad_stream_settings_are_one_line_exit_2(tmp_path: Path,
                                                  capsys: pytest.CaptureFixture[str],
@@ -107,3 +114,33 @@ def test_topics_of_a_record_block(tmp_path: Path) -> None:
     # how a camera is recorded and whether it streams do not make runs incomparable
     plain = api.load(path, overrides=["cameras.0.record.rgb=[raw]", "rtsp.enabled=false"])
     assert config_differences(scenario_to_mapping(plain), scenario_to_mapping(sc)) == []
+
+
+def test_validate_warns_of_a_port_held_now(tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    with socket.socket() as blocker:
+        blocker.bind(("127.0.0.1", 0))
+        blocker.listen()
+        busy = blocker.getsockname()[1]
+        path = tmp_path / "scenario.yaml"
+        path.write_text(CAMS.replace("port: 8555", f"port: {busy}"))
+        assert main(["validate", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert (f"{path}: cameras[1].port: 127.0.0.1:{busy} cannot be bound now (Address already "
+            "in use); a run would stop there") in err
+
+
+def test_validate_opens_the_encoders_it_will_need(tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """NVENC opens only on an NVIDIA GPU with an encoder engine: elsewhere ``srr validate``
+    says so in one line, before a run would fail at its first frame."""
+    path = tmp_path / "scenario.yaml"
+    path.write_text(CAMS.replace("outputs: [rgb, depth]}", "outputs: [rgb], record: "
+                                 "{rgb: [h264], h264: {encoder: nvenc}}}"))
+    code = main(["validate", str(path)])
+    err = capsys.readouterr().err.strip()
+    if code == 0:  # a machine with NVENC
+        return
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"srr validate: {path}: cameras[0].record.h264: h264.encoder nvenc: "
+                          "cannot open the nvenc h264 encoder (h264_nvenc): "), err
