@@ -7,6 +7,7 @@ test fed raw frames in the run and decoded ones in a replay."""
 from __future__ import annotations
 
 import json
+import os
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -14,11 +15,12 @@ from typing import Any
 import av
 import numpy as np
 import pytest
+from mcap.reader import make_reader
 
 from harness import api
 from harness.video import psnr, read_sim_time
 from harness.video.sei import nal_units
-from tests.e2e.bagread import decoded
+from tests.e2e.bagread import decoded, mcap_file
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = Path(__file__).with_name("rtsp_two_cameras.yaml")
@@ -157,3 +159,23 @@ def test_compressed_only_dock_run_feeds_perception_raw_and_replays_decoded(
     assert json.loads((rep.run_dir / "summary.json").read_text())["unrecorded"] == {
         "/dock_cam_left_depth": {"type": "sensor_msgs/msg/Image", "published": 15},
         "/dock_cam_right_depth": {"type": "sensor_msgs/msg/Image", "published": 15}}
+
+
+@pytest.mark.ros2
+def test_compressed_images_read_back_with_rclpy(runs: Any) -> None:
+    """sensor_msgs/CompressedImage as recorded is what the real rclpy (ROS 2 Jazzy) reads."""
+    if os.environ.get("SRR_REQUIRE_ROS2") != "1":
+        pytest.importorskip("rclpy", reason="needs the ros2 extra")
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import CompressedImage
+
+    topics = ("/dock_cam_left_rgb/compressed", "/dock_cam_left_depth/compressed")
+    n = 0
+    with mcap_file(runs[0].run_dir).open("rb") as f:
+        for _schema, channel, message in make_reader(f).iter_messages(topics=list(topics)):
+            msg = deserialize_message(message.data, CompressedImage)
+            assert msg.format == ("jpeg" if "rgb" in channel.topic else "16UC1; png")
+            assert msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec == message.log_time
+            assert bytes(msg.data)[:4] in (b"\xff\xd8\xff\xdb", b"\x89PNG")
+            n += 1
+    assert n == 90
