@@ -5,9 +5,10 @@ the run's real-time factor with and without them.
    ``srr run`` as bundled (raw rgb8 + 32FC1 depth) and with both cameras recording
    ``rgb: [h264]`` and ``depth: [png]`` (the raw images still reach the systems under test,
    they are not recorded), alternating, best of ``--repeats``. Reports the MCAP file size, the
-   camera topics' bytes, and the real-time factor of the tick loop (simulated seconds ÷ wall
+   camera topics' bytes, the real-time factor of the tick loop (simulated seconds ÷ wall
    seconds from the first tick to the last; scoring and the report excluded) and of the
-   whole ``run_scenario``.
+   whole ``run_scenario``, and the loop's CPU time (all of the process's threads, the
+   renderer's included) per simulated second, which other jobs on the machine disturb less.
 2. Per frame: the encoders on frames rendered by the dock scene (its recorded raw frames),
    at the dock cameras' 160×120 and scaled up (nearest neighbour) to 640×480 and 1920×1440:
    x264 (``veryfast``, ``zerolatency``, CRF 23, one thread), JPEG (q 3), PNG, depth PNG.
@@ -45,21 +46,24 @@ COMPRESSED = ["cameras.0.record.rgb=[h264]", "cameras.1.record.rgb=[h264]",
 def _run(scene: str, overrides: list[str], out: Path) -> dict[str, Any]:
     path = ROOT / "scenarios" / f"{scene}.yaml"
     sc = api.load(path, overrides=overrides)
-    marks: dict[int, float] = {}
+    marks: dict[int, tuple[float, float]] = {}
 
     def progress(done: int, total: int) -> None:
         if done == 1 or done == total:
-            marks[done] = time.perf_counter()
+            marks[done] = (time.perf_counter(), time.process_time())
 
     t0 = time.perf_counter()
     res = api.run_scenario(sc, source=str(path), out=out, progress=progress)
     total = time.perf_counter() - t0
     ticks = res.summary["ticks"]
-    loop = marks[ticks] - marks[1]
+    loop = marks[ticks][0] - marks[1][0]
+    cpu = marks[ticks][1] - marks[1][1]
     sim_s = res.summary["simulated_s"]
     cams = {t: v["bytes"] for t, v in res.summary["topics"].items() if "_cam_" in t}
     (mcap,) = (out / "bag").glob("*.mcap")
-    return {"rtf_loop": (ticks - 1) / sc.physics.tick_hz / loop, "rtf_total": sim_s / total,
+    looped_s = (ticks - 1) / sc.physics.tick_hz
+    return {"rtf_loop": looped_s / loop, "rtf_total": sim_s / total,
+            "cpu_ms_per_sim_s": cpu / looped_s * 1e3,
             "wall_s": total, "mcap_bytes": mcap.stat().st_size, "camera_bytes": sum(cams.values()),
             "frames": sum(v["count"] for t, v in res.summary["topics"].items()
                           if t.endswith(("_rgb", "_rgb/h264"))),
@@ -74,8 +78,13 @@ def scenes(repeats: int, duration: float | None, tmp: Path) -> list[dict[str, An
         for r in range(repeats):
             for name, ov in (("raw", []), ("compressed", COMPRESSED)):
                 got = _run(scene, [*extra, *ov], tmp / f"{scene}-{name}-{r}")
-                if name not in best or got["rtf_loop"] > best[name]["rtf_loop"]:
+                if name not in best:
                     best[name] = got
+                else:  # best of the repeats, each figure on its own
+                    b = best[name]
+                    b["rtf_loop"] = max(b["rtf_loop"], got["rtf_loop"])
+                    b["rtf_total"] = max(b["rtf_total"], got["rtf_total"])
+                    b["cpu_ms_per_sim_s"] = min(b["cpu_ms_per_sim_s"], got["cpu_ms_per_sim_s"])
         raw, comp = best["raw"], best["compressed"]
         rows.append({"scene": scene, "raw": raw, "compressed": comp,
                      "size_ratio": raw["mcap_bytes"] / comp["mcap_bytes"],
@@ -84,7 +93,8 @@ def scenes(repeats: int, duration: float | None, tmp: Path) -> list[dict[str, An
               f"{comp['mcap_bytes'] / 1e6:7.2f} MB compressed ({rows[-1]['size_ratio']:.1f}×; "
               f"camera topics {rows[-1]['camera_ratio']:.0f}×); RTF loop {raw['rtf_loop']:.2f} "
               f"→ {comp['rtf_loop']:.2f}, whole run {raw['rtf_total']:.2f} → "
-              f"{comp['rtf_total']:.2f}", flush=True)
+              f"{comp['rtf_total']:.2f}; loop CPU {raw['cpu_ms_per_sim_s']:.0f} → "
+              f"{comp['cpu_ms_per_sim_s']:.0f} ms per simulated s", flush=True)
     return rows
 
 
