@@ -32,6 +32,7 @@ import yaml
 
 from harness import __version__, runmarker
 from harness.atomic import write_json_atomic
+from harness.builders.cameras import unrecorded_topics
 from harness.bus import Bus, TopicStats
 from harness.bus.bagfile import ChunkPolicy
 from harness.bus.bagread import ros1_recording
@@ -84,6 +85,7 @@ __all__ = [
     "run_planned_suite",
     "run_repeat",
     "run_scenario",
+    "start_streams",
     "suite",
     "validate",
     "versions",
@@ -237,6 +239,13 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     except BaseException:
         sim.close()
         raise
+    try:
+        start_streams(sim, scenario, source, notice)
+    except BaseException:
+        sim.close()
+        if view is not None:
+            view.close()
+        raise
     extra: dict[str, Any] = {"graphs": sim.graph_paths, "warnings": list(warnings),
                              "scene_files": dict(sim.world.scene_files),
                              "command": reproduce_command(source, scenario, run_dir)}
@@ -252,6 +261,39 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     finally:
         if view is not None:
             view.close()
+
+
+def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>",
+                  notice: Notice | None = None) -> list[str]:
+    """Serve the scenario's RTSP streams (``rtsp.enabled``): bind every camera's port now, so
+    a port in use stops the run before anything is written, then wait for clients
+    (``rtsp.wait_s``). Returns the stream URLs. The servers stop with the simulation."""
+    from harness.builders.rtsp_cameras import stream_cameras
+    from harness.errors import StreamError
+    from harness.graph.nodes.video import rtsp_hub
+    from harness.video.rtsp import StreamConfig
+
+    cams = stream_cameras(scenario)
+    if not cams:
+        return []
+    spec = scenario.rtsp
+    try:
+        hub = rtsp_hub(sim.ctx, rate=spec.rate)
+    except StreamError as err:
+        raise StreamError(f"{scenario.file_for('rtsp', source)}: rtsp.enabled: {err}") from err
+    urls = []
+    for i, cam in cams:
+        assert cam.port is not None
+        where = f"{scenario.file_for(f'cameras[{i}]', source)}: cameras[{i}].port"
+        urls.append(hub.stream(StreamConfig(cam.port, cam.mount, spec.host, where)).url)
+    say = notice or (lambda _text: None)
+    say(f"rtsp: serving {', '.join(urls)}")
+    if spec.wait_s is not None:
+        say(f"rtsp: waiting up to {spec.wait_s:g} s for a client on every stream")
+        missing = hub.wait_for_clients(spec.wait_s)
+        if missing:
+            say(f"rtsp: no client on {', '.join(missing)}; starting anyway")
+    return urls
 
 
 ROS2_BRIDGE = "ros2_bridge"
@@ -299,7 +341,8 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     rec = scenario.recording
     recorder = loop.output.recorder(run_dir / "bag", ChunkPolicy(
         max_bytes=round(rec.chunk_mb * MB), max_span_ns=round(rec.chunk_s * 1e9),
-        fsync=rec.fsync, compression=rec.compression))
+        fsync=rec.fsync, compression=rec.compression),
+        unrecorded=unrecorded_topics(scenario))
     guard = DiskGuard(run_dir, round(rec.min_free_mb * MB), free_space,
                       every_ticks=scenario.physics.tick_hz)
     interrupted = False
@@ -343,7 +386,8 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
     try:  # until summary.json exists the directory is half-written: an error removes it
         stats = recorder.close()
-        published = loop.bus.published_counts()
+        published = {t: n for t, n in loop.bus.published_counts().items()
+                     if t not in recorder.unrecorded}
         sim_s = loop.ticks() / scenario.physics.tick_hz
         topics = _topic_table(stats, published, sim_s)
         frames = scenario_frames(scenario, run_dir / "bag")
@@ -379,6 +423,9 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
         "versions": versions(),
         **loop.extra,
     }
+    if recorder.unrecorded:  # published in the run, recorded compressed (or not at all)
+        summary["unrecorded"] = {t: {"type": ty, "published": n}
+                                 for t, (ty, n) in recorder.skipped().items()}
     # what plug-ins noticed while running (the ROS 2 bridge: topics it could not bridge)
     summary["warnings"] = [*summary["warnings"], *(
         w for _, sut, _ in loop.suts for w in getattr(sut, "warnings", list)())]
@@ -509,7 +556,8 @@ def _replay_wiring(rep: Replay, playback: Playback, withheld: set[str]) -> list[
                 raise ScenarioError(ctx.field.split(": ", 1)[0], ctx.field.split(": ", 1)[-1],
                                     f"{name} uses {e.topic} as {e.msgtype}, but the recording "
                                     f"carries {rec.msgtype}")
-            fed = (rec is not None and e.topic not in withheld) or e.topic in produced
+            fed = ((rec is not None and e.topic not in withheld) or e.topic in produced
+                   or e.topic in rep.decoded)
             if e.kind == "sub" and not fed:
                 warnings.append(f"{ctx.field}: {name} subscribes to {e.topic}, which neither "
                                 "the recording nor another system under test provides")
@@ -535,14 +583,58 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     setting up the systems under test, and the wiring (topics and TF). Raises the first error;
     returns the warnings."""
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
+    busy = check_video(scenario, source)
     sim = Simulation(with_ros2_bridge(scenario, None), source=source)
     try:
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         plan = sim.plan()
         return (*check_wiring(plan, scenario, source),
-                *check_output_topics(output, plan.topics, scenario, source))
+                *check_output_topics(output, plan.topics, scenario, source), *busy)
     finally:
         sim.close()
+
+
+def check_video(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """What ``srr validate`` can know of the video settings before a run: every h264 encoder
+    the scenario asks for opens here (NVENC needs an NVIDIA GPU with an encoder), and, with
+    ``rtsp.enabled``, GStreamer's RTSP server loads. Raises the first error; returns warnings
+    for stream ports another program holds now (a run would stop on them)."""
+    import socket
+
+    from harness.builders.rtsp_cameras import stream_cameras
+    from harness.errors import StreamError, VideoError
+    from harness.video import gst
+    from harness.video.codec import check_encoder, settings_of
+
+    wanted = [(f"cameras[{i}].record.h264", c.record.h264)
+              for i, c in enumerate(scenario.cameras) if c.enabled and "h264" in c.record.rgb]
+    cams = stream_cameras(scenario)
+    if cams:
+        wanted.append(("rtsp.h264", scenario.rtsp.h264))
+    for field, spec in wanted:
+        try:
+            check_encoder(settings_of(spec))
+        except VideoError as err:
+            raise ScenarioError(scenario.file_for(field.split(".")[0], source), field,
+                                str(err)) from err
+    if not cams:
+        return ()
+    try:
+        gst.load()
+    except StreamError as err:
+        raise ScenarioError(scenario.file_for("rtsp", source), "rtsp.enabled",
+                            str(err)) from err
+    warnings = []
+    for i, cam in cams:
+        with socket.socket(socket.AF_INET6 if ":" in scenario.rtsp.host
+                           else socket.AF_INET) as probe:
+            try:
+                probe.bind((scenario.rtsp.host, cam.port or 0))
+            except OSError as err:
+                warnings.append(f"{scenario.file_for(f'cameras[{i}]', source)}: "
+                                f"cameras[{i}].port: {scenario.rtsp.host}:{cam.port} cannot "
+                                f"be bound now ({err.strerror or err}); a run would stop there")
+    return tuple(warnings)
 
 
 def baseline_name(scenario: Scenario) -> str:

@@ -65,6 +65,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--ros2", action="store_true", help="also publish every topic on a live "
                      "ROS 2 graph and take ros2.outputs from external nodes in lockstep "
                      "(= --set ros2.enabled=true)")
+    run.add_argument("--rtsp", action="store_true", help="serve every camera with a port "
+                     "as an h264 RTSP stream while the run goes (= --set rtsp.enabled=true)")
     run.add_argument("--update-baseline", action="store_true",
                      help="bless this run as the scenario's baseline")
     run.add_argument("--reason", default="updated with --update-baseline",
@@ -235,6 +237,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         overrides.append(f"recording.min_free_mb={args.min_free_mb!r}")
     if args.ros2:
         overrides.append("ros2.enabled=true")
+    if args.rtsp:
+        overrides.append("rtsp.enabled=true")
     if args.compression is not None:
         overrides.append(f"recording.compression={args.compression}")
     scenario = api.load(args.scenario, seed=args.seed, duration=args.duration,

@@ -3,7 +3,8 @@
 :func:`estimate_bag_bytes` is a pure function of the scenario: per published stream, the
 number of messages (the tick count, or the frames a ``SimulationGate`` lets through) times
 the message size plus what MCAP spends per message. Images are counted exactly (rgb8
-``w*h*3``, 32FC1 depth ``w*h*4``); a point cloud as if every pixel were valid (``w*h*16``,
+``w*h*3``, 32FC1 depth ``w*h*4``), compressed ones by an upper bound (a camera's ``record``);
+a point cloud as if every pixel were valid (``w*h*16``,
 an upper bound: pixels that see nothing are dropped); small messages (odometry, TF, clock,
 IMU, camera_info, ground truth) by their recorded sizes; each system under test gets an
 allowance of one small message per tick; the file adds its schemas, indexes and summary.
@@ -72,6 +73,16 @@ def mb(n: float) -> str:
     return f"{n / MB:,.1f} MB"
 
 
+def _compressed_bound(stream: str, fmt: str, w: int, h: int) -> int:
+    """An upper bound of one compressed frame: h264 no larger than the raw 4:2:0 picture,
+    JPEG than the RGB pixels, PNG than its pixels plus filter bytes and zlib's overhead."""
+    if fmt == "h264":
+        return w * h * 3 // 2
+    if fmt == "jpeg":
+        return w * h * 3
+    return w * h * (3 if stream == "rgb" else 2) + h + 1024
+
+
 def estimate_bag_bytes(scenario: Scenario) -> BagEstimate:
     """Estimate the size of the bag ``scenario`` records (see the module docstring)."""
     hz, ticks = scenario.physics.tick_hz, scenario.n_ticks
@@ -116,8 +127,13 @@ def estimate_bag_bytes(scenario: Scenario) -> BagEstimate:
         for out in c.outputs:
             if out == "camera_info":
                 stream(f"{c.name}_camera_info", CAMERA_INFO, n)
-            else:
+            elif out not in ("rgb", "depth") or "raw" in getattr(c.record, out):
                 stream(f"{c.name}_{out}", HEADER + w * h * per_pixel[out], n)
+        for stream_name, formats in (("rgb", c.record.rgb), ("depth", c.record.depth)):
+            for fmt in formats:
+                if fmt != "raw" and stream_name in c.outputs:
+                    stream(f"{c.name}_{stream_name} {fmt}",
+                           HEADER + _compressed_bound(stream_name, fmt, w, h), n)
         stream(f"{c.name} tf", TF_ONE, ticks)
     if scenario.srr_gt:
         gt_streams += sum(1 for wk in scenario.workers if wk.enabled)

@@ -17,6 +17,8 @@ __all__ = [
     "ScenarioError",
     "SimulationError",
     "SrrError",
+    "StreamError",
+    "VideoError",
     "reason",
 ]
 
@@ -66,6 +68,16 @@ class DiskSpaceError(SrrError):
 class LiveViewError(SrrError):
     """The live view (``--foxglove``) cannot start: a bad address, a port in use, or the
     foxglove-sdk package missing."""
+
+
+class VideoError(SrrError):
+    """An image or video encoder or decoder failed: an encoder that cannot open (NVENC
+    without an NVIDIA GPU), a frame of the wrong size, bytes that do not decode."""
+
+
+class StreamError(SrrError):
+    """A camera stream (RTSP) cannot be served: GStreamer's RTSP server missing, a port in
+    use, an address that cannot be bound."""
 
 
 class InvalidRunError(SrrError):

@@ -17,7 +17,7 @@ ROS 2 bridge and the Foxglove live view (both speak ROS 2) are refused.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -52,11 +52,13 @@ class OutputKind:
             return "ROS 2 (rosbag2, MCAP)"
         return "ROS 1 (.bag)" if self.format == "bag" else "ROS 1 (MCAP, ros1 profile)"
 
-    def recorder(self, bag_dir: Path, chunks: ChunkPolicy) -> Recorder:
-        """The recorder writing this kind into ``bag_dir``."""
+    def recorder(self, bag_dir: Path, chunks: ChunkPolicy,
+                 unrecorded: Collection[str] = ()) -> Recorder:
+        """The recorder writing this kind into ``bag_dir``; ``unrecorded`` topics are
+        counted, not written (raw images a camera records only compressed)."""
         if self.ros == 2:
-            return Recorder(bag_dir, chunks=chunks)
-        return Ros1Recorder(bag_dir, self.format, chunks=chunks)
+            return Recorder(bag_dir, chunks=chunks, unrecorded=unrecorded)
+        return Ros1Recorder(bag_dir, self.format, chunks=chunks, unrecorded=unrecorded)
 
     def summary(self) -> dict[str, Any]:
         """As ``summary.json`` keeps it (``output``)."""

@@ -12,6 +12,13 @@ does, without a world or graphs: per tick ``k`` (time ``k * 1e9 // tick_hz``)
 That is the closed loop's order (graphs publish, deliver, step, deliver), so unchanged systems
 under test see the same messages in the same order and publish the same bytes. What the
 systems under test publish does not feed back into the scene: the replay is open loop.
+
+A camera that recorded its images only compressed (its ``record`` block) still feeds systems
+under test that read the raw topic: each compressed message is decoded (h264 in stream
+order, JPEG, PNG; depth PNG back to 32FC1 metres) and published as a ``sensor_msgs/Image`` on
+the raw topic right after it. Decoded h264 and JPEG frames are close to the rendered ones,
+not equal to them, and depth comes back on the millimetre grid: a system under test reading
+them may publish other bytes than in the recorded run.
 """
 
 from __future__ import annotations
@@ -26,16 +33,21 @@ from mcap.reader import make_reader
 from rosbags.serde import SerdeError
 
 from harness.bag import BAG_READ_ERRORS
+from harness.builders.cameras import CompressedStream, compressed_streams
 from harness.bus import Bus, Qos
 from harness.bus.bagread import open_recording, ros1_recording
 from harness.bus.messages import TYPESTORE
 from harness.bus.ros1 import Ros1TypeError, deserialize_ros1, ros1_type, to_ros2
-from harness.errors import BagError, reason
+from harness.errors import BagError, VideoError, reason
+from harness.graph.nodes.camera import depth_image_message, rgb_image_message
 from harness.output import ROS2_OUTPUT, OutputKind
 from harness.scenario import Scenario
 from harness.sut.base import SutContext, SystemUnderTest, load_suts
+from harness.video.codec import H264Decoder, decode_depth_png, decode_rgb
 
 __all__ = ["Playback", "RecordedTopic", "Replay"]
+
+IMAGE = "sensor_msgs/msg/Image"
 
 _YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
@@ -154,6 +166,32 @@ _DECODE_ERRORS: tuple[type[BaseException], ...] = (SerdeError, Ros1TypeError,
                                                     *BAG_READ_ERRORS)
 
 
+class _RawFromCompressed:
+    """Decodes one compressed camera topic back to ``sensor_msgs/Image`` messages."""
+
+    def __init__(self, stream: CompressedStream) -> None:
+        self.stream = stream
+        self._h264 = H264Decoder() if stream.format == "h264" else None
+
+    def images(self, msg: Any) -> list[Any]:
+        s = self.stream
+        if self._h264 is not None:
+            stamp = msg.timestamp
+            frames = self._h264.decode(bytes(msg.data))
+        else:
+            stamp = msg.header.stamp
+            data = bytes(msg.data)
+            if s.stream == "depth":
+                frames = [decode_depth_png(data)]
+            else:
+                frames = [decode_rgb(data, "mjpeg" if s.format == "jpeg" else "png")]
+        ns = int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+        frame_id = str(msg.frame_id if self._h264 is not None else msg.header.frame_id)
+        if s.stream == "depth":
+            return [depth_image_message(ns, frame_id, f) for f in frames]
+        return [rgb_image_message(ns, frame_id, f) for f in frames]
+
+
 def _decoder(file: Path, now_ns: Callable[[], int], ros1: bool = False
              ) -> Callable[[bytes, str], Any]:
     """``deserialize_cdr`` (``ros1``: ROS 1 deserialization and conversion to the ROS 2
@@ -190,10 +228,24 @@ class Replay:
                                 ros1=playback.output.ros == 1)
         self._pending: tuple[int, list[tuple[str, str, bytes]]] | None = None
         self._started = False
+        # compressed topic → its decoder, for raw camera topics read but not recorded
+        self._decoders: dict[str, _RawFromCompressed] = {}
+
+    @property
+    def decoded(self) -> set[str]:
+        """Raw camera topics the replay decodes from compressed ones (after :meth:`start`)."""
+        return {d.stream.raw_topic for d in self._decoders.values()}
 
     def start(self) -> None:
         for _, sut, ctx in self.suts:
             sut.setup(ctx)
+        wanted = self.bus.subscribed()
+        for cam in self.scenario.cameras:
+            for cs in compressed_streams(cam):
+                if (cs.raw_topic in wanted and cs.raw_topic not in self.playback.topics
+                        and cs.topic in self.playback.topics
+                        and cs.raw_topic not in self.decoded):
+                    self._decoders[cs.topic] = _RawFromCompressed(cs)
         self._groups = self.playback.by_time()
         self._pending = next(self._groups, None)
         self._started = True
@@ -214,6 +266,15 @@ class Replay:
                 if topic not in self.withheld:
                     self.bus.publish_raw(topic, msgtype, raw, self._decode,
                                          self.playback.topics[topic].qos)
+                dec = self._decoders.get(topic)
+                if dec is not None:
+                    try:
+                        images = dec.images(self._decode(raw, msgtype))
+                    except VideoError as err:
+                        raise BagError(f"{self.playback.file}: {topic} at "
+                                       f"{self.time_ns / 1e9:.3f} s: {err}") from err
+                    for image in images:
+                        self.bus.publish(dec.stream.raw_topic, IMAGE, image)
             self._pending = next(self._groups, None)
         self.bus.spin()
         for _, sut, _ in self.suts:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.builders.base import gate_step
+from harness.builders.cameras import compressed_streams, unrecorded_topics
 from harness.bus import resolve_topic
 from harness.errors import ScenarioError
 from harness.frames import Frames, load_frames
@@ -71,13 +72,18 @@ def expected_rates(sc: Scenario) -> dict[str, float]:
             rates[resolve_topic(lidar.topic, robot.ns)] = _gate_rate(hz, lidar.fps)
         if imu is not None and imu.enabled and imu.graph:
             rates[resolve_topic(imu.topic, robot.ns)] = _gate_rate(hz, imu.fps)
+    unrecorded = unrecorded_topics(sc)
     for cam in sc.cameras:
         if not cam.enabled:
             continue
         suffix = {"rgb": "rgb", "depth": "depth", "pointcloud": "pointcloud",
                   "camera_info": "camera_info"}
         for out in cam.outputs:
-            rates[resolve_topic(f"{cam.name}_{suffix[out]}")] = _gate_rate(hz, cam.fps)
+            topic = resolve_topic(f"{cam.name}_{suffix[out]}")
+            if topic not in unrecorded:
+                rates[topic] = _gate_rate(hz, cam.fps)
+        for cs in compressed_streams(cam):
+            rates[cs.topic] = _gate_rate(hz, cam.fps)
     for topic, value in sc.scoring.health.expected_rates.items():
         rates[resolve_topic(topic)] = value
     return rates

@@ -2,8 +2,9 @@
 
 Builders are idempotent (building twice leaves one graph: an existing graph at the path is
 replaced) and return ``None`` when their block is disabled. :func:`build_all` runs them in
-the seed's order: clock first, then each enabled robot's control, odometry and TF graphs,
-then one graph per enabled fixed camera, and last the scenario's own ``graphs:`` builders
+the seed's order: clock first (with ground truth, camera TF and, when ``rtsp.enabled``, the
+RTSP multi-camera graph), then each enabled robot's control, odometry and TF graphs, then one
+graph per enabled fixed camera, and last the scenario's own ``graphs:`` builders
 (:mod:`harness.builders.custom`).
 """
 
@@ -22,6 +23,7 @@ from harness.builders import (
     odometry,
     robot_camera,
     robot_sensors,
+    rtsp_cameras,
     safety_indicator,
     tf_tree,
 )
@@ -35,6 +37,7 @@ GLOBAL_BUILDERS: tuple[Callable[[BuildContext], str | None], ...] = (
     clock.build,
     ground_truth.build,  # only with srr_gt
     camera_tf.build,  # every enabled fixed camera's TF
+    rtsp_cameras.build,  # only with rtsp.enabled
 )
 ROBOT_BUILDERS: tuple[Callable[[BuildContext, RobotSpec], str | None], ...] = (
     forklift_control.build,

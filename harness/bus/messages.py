@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
 __all__ = [
@@ -30,6 +30,25 @@ __all__ = [
 ]
 
 TYPESTORE: Typestore = get_typestore(Stores.ROS2_JAZZY)
+
+# Types Jazzy's common_interfaces lack, registered beside them. foxglove_msgs/CompressedVideo:
+# the field order and types of the foxglove_msgs package (ros-jazzy-foxglove-msgs), which
+# Foxglove's video decoding reads.
+_EXTRA_TYPES = {
+    "foxglove_msgs/msg/CompressedVideo": """\
+# One frame of a compressed video stream.
+builtin_interfaces/Time timestamp
+# Optical frame of the camera that took it.
+string frame_id
+# Exactly one frame: for h264, Annex B access units; a keyframe carries its SPS and PPS.
+uint8[] data
+# Codec: h264, h265, vp9 or av1.
+string format
+""",
+}
+for _name, _text in _EXTRA_TYPES.items():
+    if _name not in TYPESTORE.types:
+        TYPESTORE.register(get_types_from_msg(_text, _name))
 
 # Vectors and quaternions come in as plain sequences or as numpy arrays.
 _FloatVec = Sequence[float] | npt.NDArray[np.float64]

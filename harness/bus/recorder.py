@@ -4,7 +4,9 @@ The recorder is a bus tap: it sees each message at publish time, serializes it w
 rosbags typestore and writes it with the simulation time as log time, through
 :class:`~harness.bus.bagfile.McapBagWriter` (bounded chunks: a crash loses at most the chunk
 being filled). It keeps, per topic, the count, byte total and a SHA-256 digest over
-``(log time, payload)`` so two runs can be compared without reading the bags back.
+``(log time, payload)`` so two runs can be compared without reading the bags back. Topics
+named ``unrecorded`` (raw camera images a camera records only compressed) are counted, not
+written.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import hashlib
 import queue
 import struct
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -123,8 +125,13 @@ class Recorder:
     """
 
     def __init__(self, bag_dir: Path, *, queue_size: int = 64,
-                 chunks: ChunkPolicy | None = None) -> None:
+                 chunks: ChunkPolicy | None = None,
+                 unrecorded: Collection[str] = ()) -> None:
         self.bag_dir = Path(bag_dir)
+        # Topics published but not written (a camera's raw images when it records them
+        # compressed): counted, and still handed to the serialized taps.
+        self.unrecorded = frozenset(unrecorded)
+        self._skipped: dict[str, tuple[str, int]] = {}
         self.chunks = chunks or ChunkPolicy()
         # Serialized bytes handed to the writer so far (read on the caller's thread, e.g. by a
         # disk-space guard).
@@ -168,6 +175,14 @@ class Recorder:
             raise RuntimeError("recorder is not open")
         if self._error is not None:
             raise self._error
+        if env.topic in self.unrecorded:
+            _, n = self._skipped.get(env.topic, (env.msgtype, 0))
+            self._skipped[env.topic] = (env.msgtype, n + 1)
+            if self._forward:
+                data = env.raw if env.raw is not None else serialize(env.msg, env.msgtype)
+                for tap in self._forward:
+                    tap(env, data)
+            return
         st = self._state.get(env.topic)
         if st is None:
             st = self._state[env.topic] = _TopicState(env.topic, self._recorded_type(
@@ -224,6 +239,10 @@ class Recorder:
         if self._error is not None:
             raise self._error
         return self.stats()
+
+    def skipped(self) -> dict[str, tuple[str, int]]:
+        """Topic → (type, messages) of what was published on :attr:`unrecorded` topics."""
+        return dict(sorted(self._skipped.items()))
 
     # -- the format: a rosbag2 directory with one MCAP file of CDR messages (ROS 2). A
     # subclass records another (harness.bus.ros1bag: ROS 1) by overriding these.

@@ -23,6 +23,7 @@ Counts, bytes and digests are kept as for ROS 2, over the ROS 1 bytes.
 from __future__ import annotations
 
 import os
+from collections.abc import Collection
 from pathlib import Path
 from typing import Any, Literal
 
@@ -105,8 +106,8 @@ class Ros1Recorder(Recorder):
     ``bag`` or ``mcap``."""
 
     def __init__(self, bag_dir: Path, fmt: Ros1Format, *, queue_size: int = 64,
-                 chunks: ChunkPolicy | None = None) -> None:
-        super().__init__(bag_dir, queue_size=queue_size, chunks=chunks)
+                 chunks: ChunkPolicy | None = None, unrecorded: Collection[str] = ()) -> None:
+        super().__init__(bag_dir, queue_size=queue_size, chunks=chunks, unrecorded=unrecorded)
         self.format: Ros1Format = fmt
         self._encoder = Ros1Encoder()
 

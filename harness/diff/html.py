@@ -30,7 +30,14 @@ from harness.diff.result import DiffResult, TopicDiff
 from harness.diff.templates import DELTA_MACRO, DIFF, DIFF_CSS
 from harness.report.data import Moment, RunData, load_run
 from harness.report.html import fmt_value
-from harness.report.images import IMAGE_TYPE, Keyframe, data_uri, encode_png, nearest_images
+from harness.report.images import (
+    IMAGE_TYPE,
+    IMAGE_TYPES,
+    Keyframe,
+    data_uri,
+    encode_png,
+    nearest_images,
+)
 from harness.report.plots import BASELINE, CANDIDATE, map_legend, map_svg, time_panels
 from harness.report.templates import CSS, MACROS
 
@@ -134,7 +141,7 @@ def _gaps(data: RunData) -> dict[str, int]:
         return {}
     tp = data.frames.topics
     return {str(r["name"]): int(r["max_gap_ns"]) for _, r in tp.iterrows()
-            if r["type"] == IMAGE_TYPE}
+            if r["type"] in IMAGE_TYPES}
 
 
 def _keyframes(a: RunData, b: RunData, moments: Sequence[Moment]

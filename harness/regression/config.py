@@ -5,9 +5,10 @@ A baseline is only a yardstick for runs of the same *configuration*: the same si
 physics settings, and the same scoring definitions. What a regression test is meant to vary
 is left out: the systems under test (a new version of a plug-in, changed parameters), the
 scenario's name and description, which baseline it names, the tolerances and the health-gate
-settings, how the bag is written (``recording``: chunking, fsync, the disk guard;
-``output``: ROS 1 or ROS 2, bag or MCAP, whose messages carry the same values) and the sweep
-a suite may expand the scenario into (``sweep``: each point is its own configuration).
+settings, how the bag is written (``recording``: chunking, fsync, the disk guard; a camera's
+``record``: raw or compressed images; ``output``: ROS 1 or ROS 2, bag or MCAP, whose messages
+carry the same values), live outputs (``ros2``, ``rtsp``) and the sweep a suite may expand the
+scenario into (``sweep``: each point is its own configuration).
 :func:`comparable_config` is that part of a resolved scenario, as plain data (a run adds
 ``scene_files``, the digests of the model files its scene is built from);
 :func:`config_differences` names what differs, field by field. A baseline blessed before srr
@@ -27,14 +28,21 @@ __all__ = ["EXCLUDED", "comparable_config", "config_differences", "with_defaults
 
 #: Top-level keys, and ``scoring`` sub-keys, that do not make two configurations different.
 EXCLUDED = frozenset({"format_version", "name", "description", "baseline",
-                      "systems_under_test", "recording", "output", "sweep", "ros2"})
+                      "systems_under_test", "recording", "output", "sweep", "ros2",
+                      "rtsp"})
 EXCLUDED_SCORING = frozenset({"tolerances", "health"})
+#: Keys of each ``cameras`` entry that do not make two configurations different.
+EXCLUDED_CAMERA = frozenset({"record"})
 
 
 def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
     """The comparable part of a resolved scenario mapping
     (:func:`~harness.scenario.scenario_to_mapping`)."""
     out = {k: v for k, v in mapping.items() if k not in EXCLUDED}
+    cameras = out.get("cameras")
+    if isinstance(cameras, list):
+        out["cameras"] = [{k: v for k, v in c.items() if k not in EXCLUDED_CAMERA}
+                          if isinstance(c, Mapping) else c for c in cameras]
     scoring = out.get("scoring")
     if isinstance(scoring, Mapping):
         out["scoring"] = {k: v for k, v in scoring.items() if k not in EXCLUDED_SCORING}

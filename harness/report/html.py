@@ -31,7 +31,7 @@ from harness.metrics.safety import NEAR_AT
 from harness.regression.verdict import GOAL_REACHED, GOAL_REACHED_AT
 from harness.report.data import RunData, load_run, metric_windows
 from harness.report.graphs import graph_diagrams
-from harness.report.images import Keyframe, keyframes
+from harness.report.images import IMAGE_TYPES, Keyframe, keyframes
 from harness.report.plots import (
     Highlight,
     Panel,
@@ -222,7 +222,7 @@ def _keyframes(data: RunData) -> tuple[list[_KfRow], str | None]:
         return [], None
     tp = data.frames.topics
     gaps = {str(r["name"]): int(r["max_gap_ns"]) for _, r in tp.iterrows()
-            if r["type"] == "sensor_msgs/msg/Image"}
+            if r["type"] in IMAGE_TYPES}
     if not gaps:
         return [], None
     targets = [round(m.t_s * 1e9) for m in data.moments]

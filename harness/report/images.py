@@ -1,7 +1,10 @@
 """Camera keyframes for the report: the recorded frame nearest a moment, as an inline PNG.
 
-The PNG writer is the format's minimum (IHDR, one IDAT of zlib-compressed scanlines with
-filter type 0, IEND), enough for 8-bit RGB and grey images; no imaging library is needed.
+Raw images (``sensor_msgs/Image``) and compressed ones — ``sensor_msgs/CompressedImage`` in
+JPEG or PNG, ``foxglove_msgs/CompressedVideo`` in h264, decoded from the keyframe before the
+frame — are shown; depth images are not. The PNG writer is the format's minimum (IHDR, one
+IDAT of zlib-compressed scanlines with filter type 0, IEND), enough for 8-bit RGB and grey
+images.
 """
 
 from __future__ import annotations
@@ -12,15 +15,24 @@ import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from harness.bus.bagread import open_recording
+from harness.bus.bagread import Recording, open_recording
+from harness.errors import VideoError
+from harness.video.codec import H264Decoder, decode_rgb
+from harness.video.sei import nal_units
 
-__all__ = ["IMAGE_TYPE", "Keyframe", "data_uri", "encode_png", "image_array", "keyframes",
+__all__ = ["IMAGE_TYPE", "IMAGE_TYPES", "Keyframe", "data_uri", "encode_png", "image_array",
+           "keyframes",
            "nearest_images"]
 
 IMAGE_TYPE = "sensor_msgs/msg/Image"
+COMPRESSED_TYPE = "sensor_msgs/msg/CompressedImage"
+VIDEO_TYPE = "foxglove_msgs/msg/CompressedVideo"
+#: Every camera image type a keyframe can be taken from.
+IMAGE_TYPES = (IMAGE_TYPE, COMPRESSED_TYPE, VIDEO_TYPE)
 MAX_WIDTH = 320  # keyframes wider than this are shrunk by an integer factor
 
 _CHANNELS = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1}
@@ -68,9 +80,24 @@ def data_uri(png: bytes) -> str:
     return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
 
 
+def _shrink(a: np.ndarray) -> np.ndarray:
+    factor = -(-a.shape[1] // MAX_WIDTH)
+    return a[::factor, ::factor] if factor > 1 else a
+
+
 def image_array(msg: object) -> np.ndarray | None:
-    """An ``(h, w, 3)`` RGB or ``(h, w)`` grey array of a ``sensor_msgs/Image``, or None for
-    encodings that are not colour or 8-bit grey (depth images)."""
+    """An ``(h, w, 3)`` RGB or ``(h, w)`` grey array of a ``sensor_msgs/Image`` (or of a
+    JPEG or PNG ``sensor_msgs/CompressedImage``), or None for encodings that are not colour or
+    8-bit grey (depth images)."""
+    if getattr(msg, "__msgtype__", "") == COMPRESSED_TYPE:
+        fmt = str(getattr(msg, "format", "")).lower()
+        if ";" in fmt or not ("jpeg" in fmt or "png" in fmt):  # "16UC1; png": depth
+            return None
+        blob = bytes(msg.data)  # type: ignore[attr-defined]
+        try:
+            return _shrink(decode_rgb(blob, "mjpeg" if "jpeg" in fmt else "png"))
+        except VideoError:
+            return None
     enc = str(getattr(msg, "encoding", "")).lower()
     ch = _CHANNELS.get(enc)
     h, w, step = int(msg.height), int(msg.width), int(msg.step)  # type: ignore[attr-defined]
@@ -84,8 +111,41 @@ def image_array(msg: object) -> np.ndarray | None:
         a = a[:, :, :3]
     if ch == 1:
         a = a[:, :, 0]
-    factor = -(-w // MAX_WIDTH)
-    return a[::factor, ::factor] if factor > 1 else a
+    return _shrink(a)
+
+
+def _is_idr(data: bytes) -> bool:
+    return any(data[h] & 0x1F == 5 for _, h, _ in nal_units(data))
+
+
+def _video_frame(reader: Recording, conn: Any, target_ts: int) -> np.ndarray | None:
+    """The h264 frame logged at ``target_ts``, decoded from the last keyframe before it."""
+    window = 10_000_000_000
+    while True:
+        start = max(target_ts - window, 0)
+        units: list[bytes] = []
+        keyed, last = False, None
+        for _, ts, raw in reader.messages(connections=[conn], start=start,
+                                          stop=target_ts + 1):
+            msg: Any = reader.decode(raw, conn)
+            data = bytes(msg.data)
+            if _is_idr(data):
+                units, keyed = [], True  # decoding starts at the last keyframe
+            units.append(data)
+            last = ts
+        if keyed or start == 0:
+            break
+        window *= 4
+    if not keyed or last != target_ts:
+        return None
+    decoder = H264Decoder()
+    frames: list[np.ndarray] = []
+    try:
+        for data in units:
+            frames = decoder.decode(data) or frames
+    except VideoError:
+        return None
+    return _shrink(frames[-1]) if frames else None
 
 
 def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
@@ -105,7 +165,7 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
         return out
     gaps = max_gap_ns or {}
     with open_recording(bag_dir) as reader:
-        conns = [c for c in reader.connections if c.msgtype == IMAGE_TYPE
+        conns = [c for c in reader.connections if c.msgtype in IMAGE_TYPES
                  and (topics is None or c.topic in topics)]
         non_color: set[str] = set()
         for target in targets_ns:
@@ -120,8 +180,10 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
                         best = (ts, raw)
                 if best is None:
                     continue
-                msg = reader.decode(best[1], conn)
-                pixels = image_array(msg)
+                if conn.msgtype == VIDEO_TYPE:
+                    pixels = _video_frame(reader, conn, best[0])
+                else:
+                    pixels = image_array(reader.decode(best[1], conn))
                 if pixels is None:
                     non_color.add(conn.topic)
                     continue

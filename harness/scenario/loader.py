@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import types
 import typing
 from collections.abc import Callable, Mapping, Sequence
@@ -20,9 +21,11 @@ import yaml
 from harness.errors import ScenarioError, SrrError
 from harness.scenario.schema import (
     FORMAT_VERSION,
+    CameraSpec,
     DiffDriveControl,
     ForkliftControl,
     GraphSpec,
+    H264Spec,
     RobotSpec,
     Scenario,
     WorldSpec,
@@ -545,12 +548,86 @@ def _check_cameras(sc: Scenario, v: _Validator) -> None:
         w, h = cam.resolution
         if not (1 <= w <= 8192 and 1 <= h <= 8192):
             v.fail(f"cameras[{i}].resolution", f"must be within 1..8192, got {w}x{h}")
+        _check_record(v, i, cam)
         if not cam.enabled:
             continue
         if cam.prim in prims:
             v.fail(f"cameras[{i}].camera_prim", f"{cam.prim} is already the prim of "
                    f"{prims[cam.prim]}")
         prims[cam.prim] = f"cameras[{i}] ({cam.name})"
+    _check_rtsp(sc, v)
+
+
+_MOUNT_PATH = re.compile(r"^(/[A-Za-z0-9._~-]+)+$")
+
+
+def _check_record(v: _Validator, i: int, cam: CameraSpec) -> None:
+    """A camera's ``record`` block: formats of streams the camera has, each once, one still
+    format per topic, even sizes for h264."""
+    rec = cam.record
+    _check_h264(v, f"cameras[{i}].record.h264", rec.h264)
+    for stream, formats in (("rgb", rec.rgb), ("depth", rec.depth)):
+        where = f"cameras[{i}].record.{stream}"
+        for k, fmt in enumerate(formats):
+            if fmt in formats[:k]:
+                v.fail(f"{where}[{k}]", f"{fmt!r} is listed twice")
+        if formats and formats != ("raw",) and stream not in cam.outputs:
+            v.fail(where, f"records {', '.join(formats)} of the {stream} stream, but "
+                   f"cameras[{i}].outputs has no {stream!r}")
+    if "jpeg" in rec.rgb and "png" in rec.rgb:
+        v.fail(f"cameras[{i}].record.rgb", "jpeg and png both go to "
+               f"{cam.name}_rgb/compressed: choose one")
+    w, h = cam.resolution
+    if "h264" in rec.rgb and (w % 2 or h % 2):
+        v.fail(f"cameras[{i}].resolution", f"h264 (cameras[{i}].record.rgb) needs an even "
+               f"width and height, got {w}x{h}")
+
+
+#: Speed presets each h264 encoder knows.
+H264_PRESETS = {
+    "x264": ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow",
+             "slower", "veryslow", "placebo"),
+    "nvenc": ("p1", "p2", "p3", "p4", "p5", "p6", "p7"),
+}
+
+
+def _check_h264(v: _Validator, path: str, spec: H264Spec) -> None:
+    if spec.preset is not None and spec.preset not in H264_PRESETS[spec.encoder]:
+        v.fail(f"{path}.preset", f"{spec.encoder} has no preset {spec.preset!r} (presets: "
+               f"{', '.join(H264_PRESETS[spec.encoder])})")
+
+
+def _check_rtsp(sc: Scenario, v: _Validator) -> None:
+    """``rtsp:`` and the cameras' ``port`` / ``mount_path``: valid mount paths, no two
+    streams at one URL, h264-able sizes, at least one stream when enabled."""
+    urls: dict[tuple[int, str], int] = {}
+    streams = 0
+    for i, cam in enumerate(sc.cameras):
+        if cam.mount_path is not None and not _MOUNT_PATH.match(cam.mount_path):
+            v.fail(f"cameras[{i}].mount_path", "must be '/' followed by letters, digits and "
+                   f"'._~-' (segments separated by '/'), got {cam.mount_path!r}")
+        if cam.port is None or not cam.enabled:
+            continue
+        streams += 1
+        key = (cam.port, cam.mount)
+        if key in urls:
+            j = urls[key]
+            v.fail(f"cameras[{i}].port", f"rtsp://{sc.rtsp.host}:{cam.port}{cam.mount} is "
+                   f"also the stream of cameras[{j}] ({sc.cameras[j].name}): give each "
+                   "camera its own port (or mount_path)")
+        urls[key] = i
+        w, h = cam.resolution
+        if sc.rtsp.enabled and (w % 2 or h % 2):
+            v.fail(f"cameras[{i}].resolution", f"an RTSP stream (h264, 4:2:0) needs an even "
+                   f"width and height, got {w}x{h}")
+    _check_h264(v, "rtsp.h264", sc.rtsp.h264)
+    if not sc.rtsp.enabled:
+        return
+    if not sc.rtsp.host.strip():
+        v.fail("rtsp.host", "must not be empty")
+    if streams == 0:
+        v.fail("rtsp.enabled", "no enabled camera has a port: give each camera to stream a "
+               "port (and optionally a mount_path) in cameras")
 
 
 def _check_suts(sc: Scenario, v: _Validator) -> None:

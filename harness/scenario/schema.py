@@ -15,6 +15,7 @@ from typing import Any, Literal
 __all__ = [
     "FORMAT_VERSION",
     "ROBOT_MODELS",
+    "CameraRecordSpec",
     "CameraSpec",
     "ClockSpec",
     "ControlScoring",
@@ -23,6 +24,7 @@ __all__ = [
     "DriveSpec",
     "ForkliftControl",
     "GraphSpec",
+    "H264Spec",
     "HealthScoring",
     "ImuSpec",
     "LidarSpec",
@@ -37,6 +39,7 @@ __all__ = [
     "RobotCameraSpec",
     "RobotSpec",
     "RouteSpec",
+    "RtspSpec",
     "SafetyIndicatorSpec",
     "SafetyScoring",
     "Scenario",
@@ -453,8 +456,46 @@ class RobotSpec:
 
 
 @dataclass(frozen=True)
+class H264Spec:
+    """h264 encoder settings (:class:`harness.video.codec.H264Settings`).
+
+    ``encoder``: ``x264`` (CPU; with a fixed ``threads`` the bytes are the same on every
+    run) or ``nvenc`` (an NVIDIA GPU's video engine). ``keyframe_interval`` in frames.
+    ``crf``: constant quality, 0-51, lower is better (NVENC: ``cq``), unless
+    ``bitrate_kbps`` asks for a constant bit rate. ``preset``: the encoder's speed preset
+    (x264 ``ultrafast`` … ``veryslow``, NVENC ``p1`` … ``p7``; None: ``veryfast`` / ``p4``)."""
+
+    encoder: Literal["x264", "nvenc"] = "x264"
+    keyframe_interval: int = num(30, 1, 100000)
+    crf: int = num(23, 0, 51)
+    bitrate_kbps: int | None = num(None, 1, 1000000)
+    threads: int = num(1, 1, 64)
+    preset: str | None = None
+
+
+@dataclass(frozen=True)
+class CameraRecordSpec:
+    """``record:`` of a camera: what the bag holds of its images.
+
+    ``rgb``: any of ``raw`` (``<cam>_rgb``, sensor_msgs/Image), ``h264``
+    (``<cam>_rgb/h264``, foxglove_msgs/CompressedVideo) and one of ``jpeg`` or ``png``
+    (``<cam>_rgb/compressed``, sensor_msgs/CompressedImage). ``depth``: ``raw``
+    (``<cam>_depth``, 32FC1) and/or ``png`` (``<cam>_depth/compressed``, 16-bit millimetres).
+    A raw stream left out is still published to the systems under test in the run, just
+    not recorded. ``jpeg_qscale``: JPEG quality as FFmpeg's ``-q:v`` (2 best … 31)."""
+
+    rgb: tuple[Literal["raw", "h264", "jpeg", "png"], ...] = ("raw",)
+    depth: tuple[Literal["raw", "png"], ...] = ("raw",)
+    h264: H264Spec = H264Spec()
+    jpeg_qscale: int = num(3, 2, 31)
+
+
+@dataclass(frozen=True)
 class CameraSpec:
-    """One entry of ``cameras:`` (forklift seed's cameras.yaml shape) for a fixed camera."""
+    """One entry of ``cameras:`` (forklift seed's cameras.yaml shape) for a fixed camera.
+
+    ``port`` and ``mount_path`` (default ``/<name>``) serve the camera over RTSP when the
+    ``rtsp:`` block is enabled; ``record`` says how the bag holds its images."""
 
     name: str
     enabled: bool = True
@@ -465,13 +506,18 @@ class CameraSpec:
     fps: float = num(30.0, 0.0, 60.0, lo_open=True)
     outputs: tuple[Literal["rgb", "depth", "pointcloud", "camera_info"], ...] = (
         "rgb", "depth", "pointcloud", "camera_info")
-    # RTSP fields of the seed's cameras.yaml, accepted so the files stay interchangeable.
-    port: int | None = None
+    port: int | None = num(None, 1, 65535)
     mount_path: str | None = None
+    record: CameraRecordSpec = CameraRecordSpec()
 
     @property
     def prim(self) -> str:
         return self.camera_prim or f"/World/{self.name}"
+
+    @property
+    def mount(self) -> str:
+        """The RTSP mount path: ``mount_path`` or ``/<name>``."""
+        return self.mount_path or f"/{self.name}"
 
 
 @dataclass(frozen=True)
@@ -696,6 +742,25 @@ class Ros2Spec:
 
 
 @dataclass(frozen=True)
+class RtspSpec:
+    """``rtsp:`` block: every enabled camera with a ``port`` streams h264 over RTSP at
+    ``rtsp://<host>:<port><mount_path>`` (seed 002's ``/World/RTSPMultiGraph``).
+
+    ``fps``: the rate of the graph's one simulation gate (``step = round(tick_hz / fps)``),
+    hence of every stream. ``wait_s``: hold the first tick until every stream has a client,
+    at most this long (None: do not wait). ``rate``: pace the run so that simulated time goes
+    at most ``rate`` times as fast as the wall clock (None: as fast as it computes; the
+    servers still send each stream at its own pace)."""
+
+    enabled: bool = False
+    host: str = "127.0.0.1"
+    fps: float = num(30.0, 0.0, 1000.0, lo_open=True)
+    wait_s: float | None = num(None, 0.0, 3600.0)
+    rate: float | None = num(None, 0.0, 1000.0, lo_open=True)
+    h264: H264Spec = H264Spec()
+
+
+@dataclass(frozen=True)
 class Scenario:
     """A whole scenario, resolved: includes expanded, defaults filled, overrides applied."""
 
@@ -719,6 +784,7 @@ class Scenario:
     recording: RecordingSpec = RecordingSpec()
     output: OutputSpec = OutputSpec()
     ros2: Ros2Spec = Ros2Spec()
+    rtsp: RtspSpec = RtspSpec()
     baseline: str | None = None  # which baselines/<name>.json to compare with (default: name)
     # Parameters ``srr suite`` sweeps: ``--set`` path → list of values or {from, to, step}
     # (checked by harness.suite.sweep; ``srr run`` runs the scenario as written).

@@ -15,7 +15,8 @@ from harness.scenario import load_scenario, scenario_from_mapping
 KEYS = ["format_version", "name", "duration", "seed", "robots", "cameras", "workers", "zones",
         "physics", "world", "routes", "systems_under_test", "scoring", "model", "spawn",
         "position", "control", "wheelbase", "enabled", "fps", "resolution", "loading_roi",
-        "waypoints", "tick_hz", "include", "clock", "clock_topic", "x"]
+        "waypoints", "tick_hz", "include", "clock", "clock_topic", "x", "rtsp", "port",
+        "mount_path", "record", "h264", "rgb", "depth", "preset"]
 scalars = st.one_of(st.none(), st.booleans(), st.integers(-10**6, 10**6),
                     st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=12))
 values = st.recursive(scalars, lambda inner: st.one_of(

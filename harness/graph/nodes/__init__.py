@@ -8,7 +8,7 @@ __all__ = ["MODULES", "register_all"]
 
 # Built-ins first, then simulation, sensors and the ROS bridge.
 MODULES = ("core", "isaac_core", "prims", "camera", "sensors_range", "ros_bridge",
-           "ros_subscriber")
+           "ros_subscriber", "video")
 
 
 def register_all() -> None:
