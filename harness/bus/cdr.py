@@ -144,6 +144,15 @@ class _Run:
         return struct.Struct("".join(fmt))
 
 
+def _array_view(value: Any, size: int) -> memoryview:
+    """The raw bytes of a 1-d numpy array of elements of ``size`` bytes, without a copy (an
+    image's data is copied once, into the message); anything else is a mismatch."""
+    if (type(value) is not np.ndarray or value.ndim != 1 or value.itemsize != size
+            or not value.flags.c_contiguous):
+        raise _Mismatch
+    return memoryview(value).cast("B")
+
+
 def _array_bytes(value: Any, size: int, count: int | None) -> bytes:
     """The raw bytes of a 1-d numpy array of ``count`` elements (any count when None) of
     ``size`` bytes each, as rosbags copies them; anything else is a mismatch."""
@@ -185,9 +194,9 @@ class _Sequence:
                 out += bytes(_pad(len(out) - _HEADER_LEN, 4))
                 out += _COUNT.pack(len(data) + 1) + data + b"\0"
         else:
-            data = _array_bytes(items, self._align, None)
+            data = _array_view(items, self._align)
             out += _COUNT.pack(len(items))
-            if data:
+            if len(data):
                 out += bytes(_pad(len(out) - _HEADER_LEN, self._align))
                 out += data
 
