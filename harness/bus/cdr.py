@@ -150,7 +150,7 @@ def _array_view(value: Any, size: int) -> memoryview:
     if (type(value) is not np.ndarray or value.ndim != 1 or value.itemsize != size
             or not value.flags.c_contiguous):
         raise _Mismatch
-    return memoryview(value).cast("B")
+    return memoryview(value.data).cast("B")
 
 
 def _array_bytes(value: Any, size: int, count: int | None) -> bytes:
@@ -190,15 +190,15 @@ class _Sequence:
             for text in items:
                 if type(text) is not str:
                     raise _Mismatch
-                data = text.encode()
+                encoded = text.encode()
                 out += bytes(_pad(len(out) - _HEADER_LEN, 4))
-                out += _COUNT.pack(len(data) + 1) + data + b"\0"
+                out += _COUNT.pack(len(encoded) + 1) + encoded + b"\0"
         else:
-            data = _array_view(items, self._align)
+            view = _array_view(items, self._align)
             out += _COUNT.pack(len(items))
-            if len(data):
+            if len(view):
                 out += bytes(_pad(len(out) - _HEADER_LEN, self._align))
-                out += data
+                out += view
 
 
 # -- layouts -----------------------------------------------------------------------------------
