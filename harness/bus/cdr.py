@@ -17,8 +17,8 @@ one Python function per type that packs field by field; here a type is compiled 
 
 A message is written by its segments in order into one ``bytearray``. Anything the layout
 does not expect (a value of another type, an array of another length or dtype, a string of a
-type rosbags could not encode) makes the :class:`Serializer` hand the message to rosbags, so what
-comes out — bytes or error — is always what rosbags would give. Types this module does not
+type rosbags could not encode) makes the :class:`Serializer` hand the message to rosbags, so
+what comes out — bytes or error — is always what rosbags would give. Types this module does not
 compile (fixed arrays of strings or messages; none in ROS 2 Jazzy's standard set) go to
 rosbags too.
 
