@@ -1,6 +1,11 @@
 """Small rigid-body helpers. Quaternions are numpy arrays; the order is in each name.
 
 MuJoCo uses (w, x, y, z); ROS messages and Isaac's ``quatd`` attributes use (x, y, z, w).
+
+``qmul``, ``qconj`` and ``qrotate`` do the same arithmetic, in the same order, on tuples of
+Python floats, for code that runs every tick: Python floats are IEEE doubles, so the results
+are bit for bit those of ``quat_mul``, ``quat_conj`` and ``quat_rotate`` on float64 arrays,
+without building arrays.
 """
 
 from __future__ import annotations
@@ -12,6 +17,11 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "Quat",
+    "Vec3",
+    "qconj",
+    "qmul",
+    "qrotate",
     "quat_conj",
     "quat_from_rpy",
     "quat_from_yaw",
@@ -27,6 +37,9 @@ FloatArray = npt.NDArray[np.float64]
 # Quaternions and vectors come in as plain sequences or as numpy arrays.
 FloatVec = Sequence[float] | FloatArray
 _FLOAT64 = np.dtype(np.float64)
+#: A quaternion (order given where used) and a vector as tuples of Python floats.
+Quat = tuple[float, float, float, float]
+Vec3 = tuple[float, float, float]
 
 
 def wxyz_to_xyzw(q: FloatVec) -> FloatArray:
@@ -47,6 +60,41 @@ def _as_floats(q: FloatVec) -> Sequence[float] | FloatArray:
         values: list[float] = q.tolist()
         return values
     return q
+
+
+def qmul(a: Sequence[float], b: Sequence[float]) -> Quat:
+    """Hamilton product of two (w, x, y, z) quaternions of Python floats."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return (
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    )
+
+
+def qconj(q: Sequence[float]) -> Quat:
+    """Conjugate of a (w, x, y, z) quaternion of Python floats."""
+    return (q[0], -q[1], -q[2], -q[3])
+
+
+def qrotate(q: Sequence[float], v: Sequence[float]) -> Vec3:
+    """Rotate ``v`` by the (w, x, y, z) quaternion ``q`` (Python floats): the products
+    ``q * (0, v) * conj(q)`` of :func:`quat_rotate`, term for term (so signed zeros and
+    rounding come out the same), written out to save the calls."""
+    aw, ax, ay, az = q
+    bw, bx, by, bz = 0.0, float(v[0]), float(v[1]), float(v[2])
+    tw = aw * bw - ax * bx - ay * by - az * bz
+    tx = aw * bx + ax * bw + ay * bz - az * by
+    ty = aw * by - ax * bz + ay * bw + az * bx
+    tz = aw * bz + ax * by - ay * bx + az * bw
+    cw, cx, cy, cz = aw, -ax, -ay, -az
+    return (
+        tw * cx + tx * cw + ty * cz - tz * cy,
+        tw * cy - tx * cz + ty * cw + tz * cx,
+        tw * cz + tx * cy - ty * cx + tz * cw,
+    )
 
 
 def quat_mul(a: FloatVec, b: FloatVec) -> FloatArray:

@@ -265,7 +265,8 @@ class Replay:
             for topic, msgtype, raw in pending[1]:
                 if topic not in self.withheld:
                     self.bus.publish_raw(topic, msgtype, raw, self._decode,
-                                         self.playback.topics[topic].qos)
+                                         self.playback.topics[topic].qos,
+                                         "ros1" if self.playback.output.ros == 1 else "cdr")
                 dec = self._decoders.get(topic)
                 if dec is not None:
                     try:

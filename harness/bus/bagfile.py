@@ -25,10 +25,11 @@ from pathlib import Path
 from typing import IO, Any
 
 import yaml
-from mcap.writer import CompressionType, Writer
+from mcap.writer import CompressionType
 
 from harness import __version__
 from harness.atomic import write_text_atomic
+from harness.bus.mcap_writer import McapWriter
 
 __all__ = [
     "MESSAGE_OVERHEAD",
@@ -95,9 +96,9 @@ class McapBagWriter:
         self.path = Path(path)
         self.policy = policy
         self._file: IO[bytes] = self.path.open("xb")
-        # Chunks are closed here, not by the library's size check (it only sees bytes).
-        self._mcap = Writer(self._file, chunk_size=1 << 62,
-                            compression=_COMPRESSION[policy.compression])
+        # The bytes of the mcap library's Writer, cheaper per message (see .mcap_writer);
+        # chunks are closed here, by close_chunk.
+        self._mcap = McapWriter(self._file, _COMPRESSION[policy.compression])
         self._mcap.start(profile=profile,
                          library=f"srr-{__version__}; mcap-python-{version('mcap')}")
         self._schemas: dict[tuple[str, bytes], int] = {}
@@ -151,7 +152,7 @@ class McapBagWriter:
         """Write the chunk being filled (with its message indexes) and flush it."""
         if self._chunk_start is None:
             return
-        self._mcap.flush()  # type: ignore[no-untyped-call]
+        self._mcap.flush()
         self.chunks += 1
         self._chunk_start = None
         self._chunk_bytes = 0
@@ -164,7 +165,7 @@ class McapBagWriter:
         self.close_chunk()
         if serialized_metadata is not None:
             self._mcap.add_metadata("rosbag2", {"serialized_metadata": serialized_metadata})
-        self._mcap.finish()  # type: ignore[no-untyped-call]
+        self._mcap.finish()
         self._file.flush()
         if self.policy.fsync:
             os.fsync(self._file.fileno())

@@ -34,19 +34,42 @@ class Qos:
 TRANSIENT_LOCAL = Qos(durability="transient_local", depth=1)
 
 
-@dataclass(frozen=True)
 class Envelope:
     """One published message: where, what, when (simulation ns) and its sequence number.
 
-    ``raw`` holds the CDR bytes when the message was published already serialized (a replayed
-    recording); ``msg`` is then the decoded message, or None when nobody subscribes."""
+    ``raw`` holds the CDR bytes when the message was published already serialized: by a
+    publisher that lays out its own bytes (:meth:`Bus.publish_serialized`), whose message
+    object is then built on the first read of :attr:`msg` (a subscriber or a tap that looks
+    at it), or a replayed recording, whose ``msg`` is the decoded message, or None when nobody
+    subscribes. ``encoding`` says what ``raw`` is: ``cdr`` (ROS 2), or ``ros1`` for a replayed
+    ROS 1 recording. The fields are read-only by convention.
+    """
 
-    topic: str
-    msgtype: str
-    stamp_ns: int
-    seq: int
-    msg: Any
-    raw: bytes | None = None
+    __slots__ = ("_build", "_msg", "encoding", "msgtype", "raw", "seq", "stamp_ns", "topic")
+
+    def __init__(self, topic: str, msgtype: str, stamp_ns: int, seq: int, msg: Any,
+                 raw: bytes | None = None, build: Callable[[], Any] | None = None,
+                 encoding: str = "cdr") -> None:
+        self.topic = topic
+        self.msgtype = msgtype
+        self.stamp_ns = stamp_ns
+        self.seq = seq
+        self.raw = raw
+        self.encoding = encoding
+        self._msg = msg
+        self._build = build
+
+    def __repr__(self) -> str:
+        return (f"Envelope(topic={self.topic!r}, msgtype={self.msgtype!r}, "
+                f"stamp_ns={self.stamp_ns}, seq={self.seq})")
+
+    @property
+    def msg(self) -> Any:
+        """The message object (built now, once, when it was published as bytes)."""
+        if self._build is not None:
+            self._msg = self._build()
+            self._build = None
+        return self._msg
 
 
 @dataclass
@@ -71,6 +94,11 @@ class Publisher:
 
     def publish(self, msg: Any) -> None:
         self._bus.publish(self.topic, self.msgtype, msg)
+
+    def publish_serialized(self, raw: bytes, build: Callable[[], Any]) -> None:
+        """Publish a message given as its CDR bytes and a function making its object (see
+        :meth:`Bus.publish_serialized`)."""
+        self._bus.publish_serialized(self.topic, self.msgtype, raw, build)
 
 
 class Bus:
@@ -113,19 +141,32 @@ class Bus:
     # -- traffic ------------------------------------------------------------------------------
     def publish(self, topic: str, msgtype: str, msg: Any) -> None:
         self._send(self._declare(topic, msgtype, None),
-                   Envelope(topic, msgtype, self._now_ns(), self._seq, msg))
+                   Envelope(topic, msgtype, self._now_ns(), self._seq, msg), True)
+
+    def publish_serialized(self, topic: str, msgtype: str, raw: bytes,
+                           build: Callable[[], Any]) -> None:
+        """Publish a message as its CDR bytes ``raw`` (what taps such as the recorder take)
+        and ``build``, which makes the same message as an object: it runs when something
+        reads the message (a subscriber, a tap reading ``msg``), at most once, so a topic
+        nobody reads costs no object. Delivery is as for :meth:`publish`."""
+        self._send(self._declare(topic, msgtype, None),
+                   Envelope(topic, msgtype, self._now_ns(), self._seq, None, raw, build), True)
 
     def publish_raw(self, topic: str, msgtype: str, raw: bytes,
-                    decode: Callable[[bytes, str], Any], qos: Qos | None = None) -> None:
-        """Publish an already serialized message (a replayed recording). Taps get the bytes
-        as they are; ``decode(raw, msgtype)`` runs only when something will read the message
-        (a subscriber, or a transient-local topic that may be read later)."""
+                    decode: Callable[[bytes, str], Any], qos: Qos | None = None,
+                    encoding: str = "cdr") -> None:
+        """Publish an already serialized message (a replayed recording; ``encoding``:
+        ``cdr``, or ``ros1`` for a ROS 1 recording's bytes). Taps get the bytes as they are;
+        ``decode(raw, msgtype)`` runs only when something will read the message (a
+        subscriber, or a transient-local topic that may be read later)."""
         info = self._declare(topic, msgtype, qos)
         wanted = bool(self._subs.get(topic)) or info.qos.durability == "transient_local"
         msg = decode(raw, msgtype) if wanted else None
-        self._send(info, Envelope(topic, msgtype, self._now_ns(), self._seq, msg, raw))
+        self._send(info, Envelope(topic, msgtype, self._now_ns(), self._seq, msg, raw,
+                                  encoding=encoding),
+                   msg is not None or not raw)
 
-    def _send(self, info: TopicInfo, env: Envelope) -> None:
+    def _send(self, info: TopicInfo, env: Envelope, deliver: bool) -> None:
         self._seq += 1
         info.published += 1
         if info.qos.durability == "transient_local":
@@ -134,7 +175,7 @@ class Bus:
                 info.latched.popleft()
         for tap in self._taps:
             tap(env)
-        if env.msg is not None or not env.raw:
+        if deliver:
             self._queue.append(env)
 
     def spin(self) -> int:

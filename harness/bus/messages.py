@@ -2,28 +2,42 @@
 
 Messages are the typestore's generated dataclasses, so what the bus carries is exactly what
 is serialized to CDR. Every stamp comes from simulation time in integer nanoseconds.
+
+:func:`serialize` writes the bytes of rosbags' CDR serializer through layouts compiled once
+per type (:mod:`harness.bus.cdr`). Publishers whose messages keep one shape pack them from
+values instead (:func:`clock_packer`, :func:`tf_packer`, :func:`odometry_packer`), without
+building message objects; the ``*_of`` constructors make the same message as an object, for
+whoever reads it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
+from harness.bus.cdr import Packer, Serializer
+
 __all__ = [
     "TYPESTORE",
+    "Pose",
     "clock",
+    "clock_packer",
     "deserialize",
     "header",
     "make",
     "msg_type",
     "odometry",
+    "odometry_packer",
     "serialize",
+    "split_ns",
     "tf_message",
+    "tf_message_of",
+    "tf_packer",
     "time_msg",
     "transform_stamped",
     "twist",
@@ -104,64 +118,145 @@ def make(typename: str, **fields: Any) -> Any:
     return cls(**values)
 
 
-def serialize(msg: Any, typename: str) -> bytes:
+def _rosbags_serialize(msg: Any, typename: str) -> bytes:
     return bytes(TYPESTORE.serialize_cdr(msg, typename))
+
+
+_SERIALIZER = Serializer(TYPESTORE, _rosbags_serialize)
+
+
+def serialize(msg: Any, typename: str) -> bytes:
+    """``msg`` as CDR bytes: exactly rosbags' ``serialize_cdr`` (little-endian)."""
+    return _SERIALIZER(msg, typename)
 
 
 def deserialize(data: bytes, typename: str) -> Any:
     return TYPESTORE.deserialize_cdr(data, typename)
 
 
+_Time = msg_type("builtin_interfaces/msg/Time")
+_Header = msg_type("std_msgs/msg/Header")
+_Clock = msg_type("rosgraph_msgs/msg/Clock")
+_Vector3 = msg_type("geometry_msgs/msg/Vector3")
+_Quaternion = msg_type("geometry_msgs/msg/Quaternion")
+_Point = msg_type("geometry_msgs/msg/Point")
+_Pose = msg_type("geometry_msgs/msg/Pose")
+_Twist = msg_type("geometry_msgs/msg/Twist")
+_Transform = msg_type("geometry_msgs/msg/Transform")
+_TransformStamped = msg_type("geometry_msgs/msg/TransformStamped")
+_TFMessage = msg_type("tf2_msgs/msg/TFMessage")
+_PoseWithCovariance = msg_type("geometry_msgs/msg/PoseWithCovariance")
+_TwistWithCovariance = msg_type("geometry_msgs/msg/TwistWithCovariance")
+_Odometry = msg_type("nav_msgs/msg/Odometry")
+
+
+def split_ns(ns: int) -> tuple[int, int]:
+    """``(sec, nanosec)`` of a time in nanoseconds, as ``builtin_interfaces/Time`` holds it."""
+    return divmod(int(ns), 1_000_000_000)
+
+
 def time_msg(ns: int) -> Any:
     sec, nanosec = divmod(int(ns), 1_000_000_000)
-    return msg_type("builtin_interfaces/msg/Time")(sec=sec, nanosec=nanosec)
+    return _Time(sec=sec, nanosec=nanosec)
 
 
 def header(ns: int, frame_id: str) -> Any:
-    return msg_type("std_msgs/msg/Header")(stamp=time_msg(ns), frame_id=frame_id)
+    return _Header(stamp=time_msg(ns), frame_id=frame_id)
 
 
 def clock(ns: int) -> Any:
-    return msg_type("rosgraph_msgs/msg/Clock")(clock=time_msg(ns))
+    return _Clock(clock=time_msg(ns))
 
 
 def _vec3(v: _FloatVec) -> Any:
-    return msg_type("geometry_msgs/msg/Vector3")(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+    return _Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
 
 
 def _quat_xyzw(q: _FloatVec) -> Any:
-    return msg_type("geometry_msgs/msg/Quaternion")(
-        x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+    return _Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
 
 
 def twist(linear: Sequence[float], angular: Sequence[float]) -> Any:
-    return msg_type("geometry_msgs/msg/Twist")(linear=_vec3(linear), angular=_vec3(angular))
+    return _Twist(linear=_vec3(linear), angular=_vec3(angular))
 
 
 def transform_stamped(ns: int, parent: str, child: str, translation: _FloatVec,
                       rotation_xyzw: _FloatVec) -> Any:
-    tf = msg_type("geometry_msgs/msg/Transform")(
-        translation=_vec3(translation), rotation=_quat_xyzw(rotation_xyzw))
-    return msg_type("geometry_msgs/msg/TransformStamped")(
-        header=header(ns, parent), child_frame_id=child, transform=tf)
+    tf = _Transform(translation=_vec3(translation), rotation=_quat_xyzw(rotation_xyzw))
+    return _TransformStamped(header=header(ns, parent), child_frame_id=child, transform=tf)
 
 
 def tf_message(transforms: Sequence[Any]) -> Any:
-    return msg_type("tf2_msgs/msg/TFMessage")(transforms=list(transforms))
+    return _TFMessage(transforms=list(transforms))
+
+
+class Pose(NamedTuple):
+    """One transform of a TF message: parent and child frame, translation, rotation (x, y,
+    z, w)."""
+
+    parent: str
+    child: str
+    translation: _FloatVec
+    rotation_xyzw: _FloatVec
+
+
+def tf_message_of(ns: int, poses: Sequence[Pose]) -> Any:
+    """A TF message of ``poses``, all stamped ``ns``."""
+    return tf_message([transform_stamped(ns, *pose) for pose in poses])
 
 
 def odometry(ns: int, odom_frame: str, child_frame: str, position: Sequence[float],
              orientation_xyzw: Sequence[float], linear: Sequence[float],
              angular: Sequence[float]) -> Any:
-    point = msg_type("geometry_msgs/msg/Point")(
-        x=float(position[0]), y=float(position[1]), z=float(position[2]))
-    pose = msg_type("geometry_msgs/msg/Pose")(position=point,
-                                               orientation=_quat_xyzw(orientation_xyzw))
+    point = _Point(x=float(position[0]), y=float(position[1]), z=float(position[2]))
+    pose = _Pose(position=point, orientation=_quat_xyzw(orientation_xyzw))
     cov = np.zeros(36, dtype=np.float64)
-    return msg_type("nav_msgs/msg/Odometry")(
+    return _Odometry(
         header=header(ns, odom_frame),
         child_frame_id=child_frame,
-        pose=msg_type("geometry_msgs/msg/PoseWithCovariance")(pose=pose, covariance=cov),
-        twist=msg_type("geometry_msgs/msg/TwistWithCovariance")(
-            twist=twist(linear, angular), covariance=cov.copy()),
+        pose=_PoseWithCovariance(pose=pose, covariance=cov),
+        twist=_TwistWithCovariance(twist=twist(linear, angular), covariance=cov.copy()),
     )
+
+
+# -- packers: the same messages, from values ------------------------------------------------
+
+_STAMP = ("stamp.sec", "stamp.nanosec")
+_TRANSLATION = tuple(f"translation.{c}" for c in "xyz")
+_ROTATION = tuple(f"rotation.{c}" for c in "xyzw")
+
+
+def clock_packer() -> Packer:
+    """``rosgraph_msgs/Clock`` from ``(sec, nanosec)`` (see :func:`split_ns`)."""
+    return Packer(TYPESTORE, "rosgraph_msgs/msg/Clock", clock(0),
+                  ("clock.sec", "clock.nanosec"))
+
+
+def tf_packer(frames: Sequence[tuple[str, str]]) -> Packer:
+    """``tf2_msgs/TFMessage`` of one transform per ``(parent, child)`` of ``frames``, from the
+    values ``sec, nanosec, tx, ty, tz, qx, qy, qz, qw`` of each transform in turn (as
+    :func:`tf_message_of` would build it)."""
+    template = tf_message_of(0, [Pose(parent, child, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+                                 for parent, child in frames])
+    variables = tuple(
+        f"transforms[{i}].{path}"
+        for i in range(len(frames))
+        for path in (*(f"header.{p}" for p in _STAMP),
+                     *(f"transform.{p}" for p in (*_TRANSLATION, *_ROTATION)))
+    )
+    return Packer(TYPESTORE, "tf2_msgs/msg/TFMessage", template, variables)
+
+
+def odometry_packer(odom_frame: str, child_frame: str) -> Packer:
+    """``nav_msgs/Odometry`` from ``sec, nanosec``, position (3), orientation (x, y, z, w),
+    linear and angular velocity (3 each), zero covariances (as :func:`odometry` builds it)."""
+    template = odometry(0, odom_frame, child_frame, (0.0,) * 3, (0.0, 0.0, 0.0, 1.0),
+                        (0.0,) * 3, (0.0,) * 3)
+    variables = (
+        *(f"header.{p}" for p in _STAMP),
+        *(f"pose.pose.position.{c}" for c in "xyz"),
+        *(f"pose.pose.orientation.{c}" for c in "xyzw"),
+        *(f"twist.twist.linear.{c}" for c in "xyz"),
+        *(f"twist.twist.angular.{c}" for c in "xyz"),
+    )
+    return Packer(TYPESTORE, "nav_msgs/msg/Odometry", template, variables)

@@ -119,14 +119,19 @@ class Recorder:
 
     Messages are serialized on the caller's thread (the message objects are not shared
     further); writing to MCAP and hashing run on one background thread, in publication order,
-    so they overlap with rendering and physics (both release the GIL). The queue is bounded
-    and ``put`` blocks: the recorder slows the loop down rather than dropping anything. An
-    error on the writer thread is raised again by the next :meth:`write` or by :meth:`close`.
+    so they overlap with rendering and physics (both release the GIL). They are handed over
+    in batches of up to ``batch`` messages (fewer when they reach ``batch_bytes``), so small
+    messages cost the two threads one hand-off per batch rather than one each. The queue
+    holds at most ``queue_size`` messages in all (``queue_size // batch`` batches, at least
+    one) and ``put`` blocks: the recorder slows the loop down rather than dropping anything.
+    An error on the writer thread is raised again by the next :meth:`write` or by
+    :meth:`close`.
     """
 
     def __init__(self, bag_dir: Path, *, queue_size: int = 64,
                  chunks: ChunkPolicy | None = None,
-                 unrecorded: Collection[str] = ()) -> None:
+                 unrecorded: Collection[str] = (), batch: int = 16,
+                 batch_bytes: int = 1 << 20) -> None:
         self.bag_dir = Path(bag_dir)
         # Topics published but not written (a camera's raw images when it records them
         # compressed): counted, and still handed to the serialized taps.
@@ -139,8 +144,12 @@ class Recorder:
         self._qos_of: Callable[[str], Qos] = lambda topic: Qos()
         self._writer: Any = None
         self._state: dict[str, _TopicState] = {}
-        self._queue: queue.Queue[tuple[_TopicState, int, bytes] | None] = queue.Queue(
-            maxsize=queue_size)
+        self._batch_limit = max(1, batch)
+        self._batch_bytes_limit = batch_bytes
+        self._batch: list[tuple[_TopicState, int, bytes]] = []
+        self._batch_bytes = 0
+        self._queue: queue.Queue[list[tuple[_TopicState, int, bytes]] | None] = queue.Queue(
+            maxsize=max(1, queue_size // self._batch_limit))
         self._thread: threading.Thread | None = None
         self._error: BagError | None = None
         self._forward: list[Callable[[Envelope, bytes], None]] = []
@@ -191,7 +200,18 @@ class Recorder:
         self.bytes_serialized += len(data)
         for tap in self._forward:
             tap(env, data)
-        self._queue.put((st, env.stamp_ns, data))
+        self._batch.append((st, env.stamp_ns, data))
+        self._batch_bytes += len(data)
+        if (len(self._batch) >= self._batch_limit
+                or self._batch_bytes >= self._batch_bytes_limit):
+            self._hand_over()
+
+    def _hand_over(self) -> None:
+        """Queue the batch being filled for the writer thread (blocks while the queue is
+        full)."""
+        if self._batch:
+            self._queue.put(self._batch)
+            self._batch, self._batch_bytes = [], 0
 
     def _fail(self, what: str, err: Exception) -> None:
         reason = err.strerror if isinstance(err, OSError) and err.strerror else err
@@ -201,28 +221,29 @@ class Recorder:
     def _drain(self) -> None:
         writer = self._writer
         assert writer is not None
-        while (item := self._queue.get()) is not None:
-            if self._error is not None:
-                continue  # keep draining so producers never block on a dead writer
-            st, stamp, data = item
-            try:
-                if st.channel is None:
-                    st.channel = self._add_topic(writer, st.topic, st.msgtype, st.qos)
-                writer.write(st.channel, stamp, data)
-            except Exception as err:  # handed to the caller's thread as one clear error
-                self._fail(st.topic, err)
-                continue
-            st.count += 1
-            st.bytes += len(data)
-            digest_update(st.digest, stamp, data)
-            if st.first_ns is None:
-                st.first_ns = stamp
-            st.last_ns = stamp
+        while (batch := self._queue.get()) is not None:
+            for st, stamp, data in batch:
+                if self._error is not None:
+                    break  # keep draining so producers never block on a dead writer
+                try:
+                    if st.channel is None:
+                        st.channel = self._add_topic(writer, st.topic, st.msgtype, st.qos)
+                    writer.write(st.channel, stamp, data)
+                except Exception as err:  # handed to the caller's thread as one clear error
+                    self._fail(st.topic, err)
+                    break
+                st.count += 1
+                st.bytes += len(data)
+                digest_update(st.digest, stamp, data)
+                if st.first_ns is None:
+                    st.first_ns = stamp
+                st.last_ns = stamp
 
     def close(self) -> dict[str, TopicStats]:
         """Flush the queue, close the bag (summary, footer, ``metadata.yaml``), return
         per-topic statistics."""
         if self._thread is not None:
+            self._hand_over()
             self._queue.put(None)
             self._thread.join()
             self._thread = None
@@ -255,9 +276,11 @@ class Recorder:
         return msgtype
 
     def _serialize(self, env: Envelope) -> bytes:
-        """The bytes recorded for one message (on the caller's thread, in publication order).
-        ``env.raw`` is a replayed recording's bytes, already in this format."""
-        return env.raw if env.raw is not None else serialize(env.msg, env.msgtype)
+        """The bytes recorded for one message (on the caller's thread, in publication order):
+        ``env.raw`` when it is CDR (packed by its publisher, or a replayed ROS 2 recording)."""
+        if env.raw is not None and env.encoding == "cdr":
+            return env.raw
+        return serialize(env.msg, env.msgtype)
 
     def _add_topic(self, writer: Any, topic: str, msgtype: str, qos: Qos) -> int:
         """Register a topic with the writer (on the writer thread); returns its channel."""

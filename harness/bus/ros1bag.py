@@ -125,9 +125,9 @@ class Ros1Recorder(Recorder):
         return ros1_name(msgtype)
 
     def _serialize(self, env: Envelope) -> bytes:
-        if env.raw is not None:  # a replayed ROS 1 recording's bytes
+        if env.raw is not None and env.encoding == "ros1":  # a replayed ROS 1 recording's
             return env.raw
-        return self._encoder.encode(env.topic, env.msgtype, env.msg)
+        return self._encoder.encode(env.topic, env.msgtype, env.msg)  # (CDR bytes: built)
 
     def _add_topic(self, writer: Any, topic: str, msgtype: str, qos: Qos) -> int:
         latched = qos.durability == "transient_local"

@@ -27,7 +27,14 @@ from typing import Any, Literal
 from harness.errors import GraphError, SrrError
 from harness.graph.attributes import EXECUTION, Attr, coerce, compatible, is_valid_attr_name
 from harness.graph.node import MISSING, Database, NodeType
-from harness.graph.plan import Evaluation, NodePlan, build_plan
+from harness.graph.plan import (
+    Evaluation,
+    GraphPlan,
+    NodePlan,
+    Step,
+    build_graph_plan,
+    build_plan,
+)
 from harness.graph.registry import DEFAULT_REGISTRY, Registry
 
 __all__ = [
@@ -120,8 +127,11 @@ class Node:
         self._values: dict[str, Any] = {}
         self._outputs: dict[str, Any] = {}
         self._initialized = False
-        # Resolved bindings, built by Graph._plan and dropped by Graph._invalidate.
+        # Resolved bindings, built by Graph._build_plan and dropped by Graph._invalidate.
         self._plan: NodePlan | None = None
+        # The port and ``db`` every compute of this node gets (one pair, reused every run).
+        self._binding = _Binding(self)
+        self._db = Database(self._binding)
         self._reset_outputs()
 
     def __repr__(self) -> str:
@@ -271,7 +281,11 @@ class Attribute:
 
 
 class _Binding:
-    """Implements :class:`~harness.graph.node.NodePort` for one node in one evaluation.
+    """Implements :class:`~harness.graph.node.NodePort` for one node.
+
+    Each node has one, made with the node and reused by every run: :meth:`Graph._run` points
+    it at the evaluation in progress and clears :attr:`fired` before each compute (a node
+    never runs inside its own compute: execution and data cycles are refused).
 
     Reads and writes go through the node's :class:`~harness.graph.plan.NodePlan`, fetched
     from the node on every access (never kept here): a compute that edits the graph (e.g. adds
@@ -280,9 +294,9 @@ class _Binding:
 
     __slots__ = ("_evaluation", "_node", "fired")
 
-    def __init__(self, node: Node, evaluation: Evaluation | None) -> None:
+    def __init__(self, node: Node) -> None:
         self._node = node
-        self._evaluation = evaluation
+        self._evaluation: Evaluation | None = None
         # Execution outputs written by this run, by full name (created on the first write).
         self.fired: dict[str, bool] | None = None
 
@@ -377,7 +391,7 @@ class Graph:
         self._nodes: dict[str, Node] = {}
         self._connections: list[Connection] = []
         self._data_in: dict[tuple[str, str], Connection] | None = None
-        self._events: tuple[Node, ...] | None = None
+        self._flow: GraphPlan | None = None  # the execution flow, see .plan
 
     def __repr__(self) -> str:
         return f"Graph({self.path!r}, nodes={len(self._nodes)})"
@@ -562,15 +576,18 @@ class Graph:
     # -- evaluation ----------------------------------------------------------------------
 
     def evaluate(self, ctx: Any) -> None:
-        """Run one tick: fire every event node in creation order (see the module docstring)."""
+        """Run one tick: fire every event node in creation order (see the module docstring).
+
+        Execution follows the graph's plan (:class:`~harness.graph.plan.GraphPlan`). Should a
+        compute edit the graph, the rest of the tick resolves each step by name instead
+        (:meth:`_fire`), so the edit is seen exactly as it would be without a plan."""
         evaluation = Evaluation(ctx)
-        events = self._events
-        if events is None:  # cached until the next edit (see _invalidate)
-            events = self._events = tuple(n for n in self._nodes.values() if n.kind == "event")
-        nodes = self._nodes
-        for node in events:
-            if nodes.get(node.name) is node:
-                self._fire(node, evaluation)
+        flow = self._flow if self._flow is not None else self._build_flow()
+        for step in flow.events:
+            if self._flow is flow:
+                self._fire_step(step, evaluation, flow)
+            elif self._nodes.get(step.node.name) is step.node:  # not deleted meanwhile
+                self._fire(step.node, evaluation)
 
     def reset(self) -> None:
         """Reset every node: ``NodeType.reset``, outputs back to defaults, re-initialize later."""
@@ -580,32 +597,58 @@ class Graph:
             node._initialized = False
         self._invalidate()
 
+    def _fire_step(self, step: Step, evaluation: Evaluation, flow: GraphPlan) -> None:
+        """Run ``step``'s node, then push execution along its planned steps (``flow`` is the
+        plan in use: once an edit has dropped it, the rest goes through :meth:`_fire`)."""
+        node = step.node
+        if not self._run(node, evaluation):
+            return
+        if self._flow is not flow:
+            self._push(node, evaluation)
+            return
+        fired = node._binding.fired
+        for src_attr, child in step.children:
+            if fired and not fired.get(src_attr):  # outputs were selected, not this one
+                continue
+            if self._flow is flow:
+                self._fire_step(child, evaluation, flow)
+            else:
+                target = self._nodes.get(child.node.name)
+                if target is not None:
+                    self._fire(target, evaluation)
+
     def _fire(self, node: Node, evaluation: Evaluation) -> None:
+        """Run ``node`` and push execution on, resolving targets by name (after an edit)."""
         stack = evaluation.exec_stack
         if node.name in stack:
             chain = " -> ".join([*stack, node.name])
             raise GraphError(f"{self.path}: execution cycle {chain}")
         stack.append(node.name)
         try:
-            binding = _Binding(node, evaluation)
-            if not self._run(node, binding, evaluation):
-                return
-            fired = binding.fired
-            selected = {name for name, on in fired.items() if on} if fired else None
-            # The plan is fetched after compute, which may have edited the graph; its exec_out
-            # is an immutable snapshot, like the copy of the connection list it replaces.
-            plan = node._plan if node._plan is not None else self._build_plan(node)
-            for src_attr, dst_name in plan.exec_out:
-                if selected is not None and src_attr not in selected:
-                    continue
-                target = self._nodes.get(dst_name)
-                if target is not None:
-                    self._fire(target, evaluation)
+            if self._run(node, evaluation):
+                self._push(node, evaluation)
         finally:
             stack.pop()
 
-    def _run(self, node: Node, binding: _Binding, evaluation: Evaluation) -> bool:
-        db = Database(binding)
+    def _push(self, node: Node, evaluation: Evaluation) -> None:
+        """Fire the targets of the execution outputs ``node``'s last compute let through."""
+        fired = node._binding.fired
+        selected = {name for name, on in fired.items() if on} if fired else None
+        # The plan is fetched after compute, which may have edited the graph; its exec_out
+        # is an immutable snapshot, like the copy of the connection list it replaces.
+        plan = node._plan if node._plan is not None else self._build_plan(node)
+        for src_attr, dst_name in plan.exec_out:
+            if selected is not None and src_attr not in selected:
+                continue
+            target = self._nodes.get(dst_name)
+            if target is not None:
+                self._fire(target, evaluation)
+
+    def _run(self, node: Node, evaluation: Evaluation) -> bool:
+        binding = node._binding
+        binding._evaluation = evaluation
+        binding.fired = None
+        db = node._db
         try:
             if not node._initialized:
                 node.impl.initialize(db, evaluation.ctx)
@@ -626,7 +669,7 @@ class Graph:
             raise GraphError(f"{self.path}: data cycle through {node.name}")
         evaluation.computing.add(node.name)
         try:
-            self._run(node, _Binding(node, evaluation), evaluation)
+            self._run(node, evaluation)
         finally:
             evaluation.computing.discard(node.name)
         evaluation.done.add(node.name)
@@ -651,13 +694,21 @@ class Graph:
         node._plan = plan
         return plan
 
+    def _build_flow(self) -> GraphPlan:
+        """The graph's execution flow, built now when the last edit dropped it."""
+        events = tuple(n for n in self._nodes.values() if n.kind == "event")
+        self._flow = build_graph_plan(
+            events, self._nodes, lambda n: n._plan if n._plan is not None else self._build_plan(n)
+        )
+        return self._flow
+
     # -- indexes and cycle checks --------------------------------------------------------
 
     def _invalidate(self) -> None:
         """Drop every cache derived from the graph's structure: the data-input index, the
-        event-node list and each node's plan. Called by every edit (see :mod:`.plan`)."""
+        execution flow and each node's plan. Called by every edit (see :mod:`.plan`)."""
         self._data_in = None
-        self._events = None
+        self._flow = None
         for node in self._nodes.values():
             node._plan = None
 

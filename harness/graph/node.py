@@ -88,24 +88,28 @@ def _bare(name: str, prefix: str) -> str:
     return name[len(prefix):] if name.startswith(prefix) else name
 
 
+_get = object.__getattribute__
+
+
 class _Inputs:
-    """``db.inputs``: attribute reads pull values; writes are refused."""
+    """``db.inputs``: attribute reads pull values; writes are refused.
+
+    Reads go straight to :meth:`__getattribute__` (a ``__getattr__`` would first fail the
+    ordinary look-up, which costs an exception per read); names starting with ``__`` keep the
+    ordinary look-up, so copy/pickle probes behave as on any object.
+    """
 
     __slots__ = ("_port",)
 
     def __init__(self, port: NodePort) -> None:
         object.__setattr__(self, "_port", port)
 
-    def __getattr__(self, name: str) -> Any:
-        # Only reached for names that are not slots; "_port" itself is one, and an instance
-        # whose _port is unset (copy/pickle probing) must fail with AttributeError here.
-        if name == "_port":
-            raise AttributeError(name)
-        port: NodePort = self._port
+    def __getattribute__(self, name: str) -> Any:
+        if name[:2] == "__":
+            return _get(self, name)
+        port: NodePort = _get(self, "_port")
         value = port.read_input(name)
         if value is MISSING:
-            if name.startswith("__"):
-                raise AttributeError(name)
             known = ", ".join(port.input_names()) or "none"
             raise AttributeLookupError(
                 f"{port.node_path}: no attribute 'inputs:{name}' (inputs: {known})"
@@ -182,6 +186,8 @@ class Database:
 
     def is_connected(self, input_name: str) -> bool:
         """True when the input (``"x"`` or ``"inputs:x"``) has an upstream connection."""
+        if self._port.is_connected(input_name):  # only ever true for a bare input name
+            return True
         name = _bare(input_name, "inputs:")
         if self._port.input_attr(name) is None:
             raise AttributeLookupError(f"{self.node_path}: no attribute 'inputs:{name}'")

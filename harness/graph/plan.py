@@ -1,4 +1,8 @@
-"""Per-node evaluation plans: a node's attribute bindings, resolved once and reused every tick.
+"""Evaluation plans: what ``Graph.evaluate`` resolves once and reuses every tick.
+
+Per node (:class:`NodePlan`), the node's attribute bindings; per graph (:class:`GraphPlan`),
+the execution flow: its event nodes, each a :class:`Step` holding the steps its execution
+outputs lead to, so a tick walks object references instead of looking nodes up by name.
 
 Resolving ``db.inputs.x`` from scratch means finding the declaration, looking the input up in
 the graph's connection index, finding the source node and its declaration and dispatching the
@@ -10,6 +14,11 @@ does it once per node and :class:`NodePlan` keeps the answers:
   and otherwise a closure that pulls the upstream node when needed and converts the value;
 * every output maps to an :class:`OutputSlot` with its converter already chosen;
 * the execution fan-out of the node, as ``(exec output, target node name)`` in connection order.
+
+A :class:`GraphPlan` is built from the node plans (:func:`build_graph_plan`) and follows the
+same invariant: every edit drops it. An edit made *while* the graph evaluates (a compute that
+adds an attribute) is seen by the engine, which then finishes that evaluation resolving each
+step by name, exactly as without a graph plan.
 
 Invariant: a plan describes the graph as it was when the plan was built. It holds source
 *nodes* and declarations, never values: values are read from ``node._values`` /
@@ -31,7 +40,17 @@ from harness.graph.attributes import EXECUTION, Attr, Converter, converter
 if TYPE_CHECKING:
     from harness.graph.engine import Connection, Node
 
-__all__ = ["Evaluation", "InputEntry", "InputReader", "NodePlan", "OutputSlot", "build_plan"]
+__all__ = [
+    "Evaluation",
+    "GraphPlan",
+    "InputEntry",
+    "InputReader",
+    "NodePlan",
+    "OutputSlot",
+    "Step",
+    "build_graph_plan",
+    "build_plan",
+]
 
 
 class Evaluation:
@@ -194,3 +213,40 @@ def _input_reader(
             raise _does_not_fit(node, full, attr, src, src_full, err) from err
 
     return read
+
+
+@dataclass(eq=False, slots=True)
+class Step:
+    """One node in a graph's execution flow: the node and, in connection order, each execution
+    output with the step it leads to. A node reached along several paths has one step."""
+
+    node: Node
+    children: tuple[tuple[str, Step], ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class GraphPlan:
+    """A graph's execution flow, resolved: its event nodes' steps, in creation order."""
+
+    events: tuple[Step, ...]
+
+
+def build_graph_plan(
+    events: tuple[Node, ...], nodes: Mapping[str, Node], plan_of: Callable[[Node], NodePlan]
+) -> GraphPlan:
+    """The steps reachable from ``events`` along the execution connections of the node plans
+    (``plan_of``). Execution cycles are refused when connecting, so the steps form a DAG."""
+    steps: dict[str, Step] = {}
+
+    def step(node: Node) -> Step:
+        done = steps.get(node.name)
+        if done is not None:
+            return done
+        made = steps[node.name] = Step(node)
+        made.children = tuple(
+            (src_attr, step(nodes[dst])) for src_attr, dst in plan_of(node).exec_out
+            if dst in nodes
+        )
+        return made
+
+    return GraphPlan(tuple(step(node) for node in events))

@@ -39,18 +39,18 @@ def test_counts_and_digests_follow_publication_order(tmp_path: Path) -> None:
 def test_a_failing_disk_is_one_line_and_leaves_no_run(tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str],
                                                       monkeypatch: pytest.MonkeyPatch) -> None:
-    from mcap.writer import Writer
+    from harness.bus.mcap_writer import McapWriter
 
     calls = {"n": 0}
-    real = Writer.flush  # where a closed chunk goes to the file
+    real = McapWriter.flush  # where a closed chunk goes to the file
 
-    def failing(self: Writer) -> None:
+    def failing(self: McapWriter) -> None:
         calls["n"] += 1
         if calls["n"] > 1:
             raise OSError(28, "No space left on device")
         real(self)
 
-    monkeypatch.setattr(Writer, "flush", failing)
+    monkeypatch.setattr(McapWriter, "flush", failing)
     out = tmp_path / "r"
     code = main(["run", str(SCENARIO), "--duration", "3", "--out", str(out), "-q"])
     err = capsys.readouterr().err.strip()

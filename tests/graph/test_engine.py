@@ -309,3 +309,71 @@ def test_stage_is_restored_when_the_block_raises() -> None:
         with pytest.raises(RuntimeError), GraphStage():
             raise RuntimeError("x")
         assert GraphStage.current() is outer
+
+
+class _Editor(NodeType):
+    """Action: on its first compute, edits its own graph as ``self.edit`` says."""
+
+    kind = "action"
+    inputs = (Attr("execIn", "execution"),)
+    outputs = (Attr("execOut", "execution"),)
+    edit = ""
+
+    def __init__(self) -> None:
+        self.done = False
+
+    def compute(self, db: Database, ctx: Any) -> bool:
+        if not self.done:
+            self.done = True
+            graph = GraphStage.current().graph(db.graph_path)
+            if self.edit == "connect":  # a new target of this very node
+                graph.connect("E", "outputs:execOut", "Late", "inputs:execIn")
+            elif self.edit == "delete":  # a sibling that has not run yet
+                graph.delete_node("B")
+            elif self.edit == "attribute":  # the ROS 2 Subscriber's way: outputs of its own
+                graph.create_attribute("E", "outputs:extra", "double")
+        return True
+
+
+@pytest.mark.parametrize(("edit", "first", "then"), [
+    ("connect", ["A", "Late", "B"], ["A", "Late", "B"]),
+    ("delete", ["A"], ["A"]),
+    ("attribute", ["A", "B"], ["A", "B"]),
+])
+def test_an_edit_made_by_a_compute_shows_at_once(registry: Registry, edit: str,
+                                                 first: list[str], then: list[str]) -> None:
+    """The graph's plan is dropped mid-tick: the rest of the tick sees the edit, as when each
+    step was resolved by name."""
+    registry.register("test.Editor")(type("Editor", (_Editor,), {"edit": edit}))
+    with GraphStage(registry=registry) as stage:
+        og.Controller.edit("/G", {
+            keys.CREATE_NODES: [("Tick", TICK), ("E", "test.Editor"), ("A", "test.Record"),
+                                ("B", "test.Record"), ("Late", "test.Record")],
+            keys.CONNECT: [("Tick.outputs:tick", "E.inputs:execIn"),
+                           ("E.outputs:execOut", "A.inputs:execIn"),
+                           ("Tick.outputs:tick", "B.inputs:execIn")],
+        })
+        assert names(run_ticks(stage, 1)) == first
+        assert names(run_ticks(stage, 1)) == then
+
+
+def test_each_node_keeps_one_db_across_ticks(stage: GraphStage) -> None:
+    seen: list[int] = []
+
+    class Keep(NodeType):
+        kind = "action"
+        inputs = (Attr("execIn", "execution"),)
+
+        def compute(self, db: Database, ctx: Any) -> bool:
+            seen.append(id(db))
+            return True
+
+    stage.registry.register("test.Keep")(Keep)
+    og.Controller.edit("/G", {
+        keys.CREATE_NODES: [("Tick", TICK), ("K", "test.Keep")],
+        keys.CONNECT: [("Tick.outputs:tick", "K.inputs:execIn")],
+    })
+    run_ticks(stage, 3)
+    og.Controller.edit("/G", {keys.CREATE_NODES: [("Other", "test.Record")]})  # drops plans
+    run_ticks(stage, 1)
+    assert len(seen) == 4 and len(set(seen)) == 1

@@ -10,17 +10,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
-
 from harness.errors import GraphError
-from harness.geometry import (
-    quat_conj,
-    quat_from_yaw,
-    quat_mul,
-    quat_rotate,
-    wxyz_to_xyzw,
-    yaw_between,
-)
+from harness.geometry import Quat, qconj, qmul, qrotate, quat_from_yaw, yaw_between
 from harness.graph import Attr, NodeType, register
 
 __all__ = ["ArticulationController", "ComputeOdometry", "DifferentialController", "robot_root"]
@@ -73,28 +64,29 @@ class ComputeOdometry(NodeType):
         self._prim = _first(db.inputs.chassisPrim)
         if not self._prim or not ctx.world.has_prim(self._prim):
             raise GraphError(f"{db.node_path}.inputs:chassisPrim: no prim {self._prim!r}")
-        self._front = quat_from_yaw(yaw_between(db.inputs.robotFront))
-        self._origin: tuple[np.ndarray, np.ndarray] | None = None
+        self._front: Quat = tuple(quat_from_yaw(yaw_between(db.inputs.robotFront)).tolist())
+        self._origin: tuple[list[float], Quat] | None = None
 
-    def base_pose(self, world: Any) -> tuple[np.ndarray, np.ndarray]:
+    def base_pose(self, world: Any) -> tuple[list[float], Quat]:
+        """World position and (w, x, y, z) orientation of the base frame, as Python floats."""
         pos, quat = world.prim_pose(self._prim)
-        return np.asarray(pos, dtype=np.float64), quat_mul(quat, self._front)
+        return pos.tolist(), qmul(quat.tolist(), self._front)
 
     def compute(self, db: Any, ctx: Any) -> bool:
+        # Python floats throughout (see harness.geometry): the same values as numpy's.
         pos, quat = self.base_pose(ctx.world)
         if self._origin is None:
             self._origin = (pos, quat)
         p0, q0 = self._origin
-        inv0 = quat_conj(q0)
-        lin_w, ang_w = ctx.world.prim_velocity(self._prim)
-        inv = quat_conj(quat)
-        # tolist() gives the Python floats the outputs store (what coercion would make of the
-        # numpy scalars), so the writes take the already-stored-form fast path.
-        db.outputs.position = tuple(quat_rotate(inv0, pos - p0).tolist())
-        db.outputs.orientation = tuple(wxyz_to_xyzw(quat_mul(inv0, quat)).tolist())
-        db.outputs.linearVelocity = tuple(quat_rotate(inv, lin_w).tolist())
-        db.outputs.angularVelocity = tuple(quat_rotate(inv, ang_w).tolist())
-        db.outputs.globalLinearVelocity = tuple(float(v) for v in lin_w)
+        inv0 = qconj(q0)
+        lin_w, ang_w = (v.tolist() for v in ctx.world.prim_velocity(self._prim))
+        inv = qconj(quat)
+        db.outputs.position = qrotate(inv0, (pos[0] - p0[0], pos[1] - p0[1], pos[2] - p0[2]))
+        w, x, y, z = qmul(inv0, quat)
+        db.outputs.orientation = (x, y, z, w)
+        db.outputs.linearVelocity = qrotate(inv, lin_w)
+        db.outputs.angularVelocity = qrotate(inv, ang_w)
+        db.outputs.globalLinearVelocity = tuple(lin_w)
         return True
 
     def reset(self) -> None:

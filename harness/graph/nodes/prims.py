@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import Any
 
 from harness.errors import GraphError, SimulationError
-from harness.geometry import quat_from_yaw, quat_mul, wxyz_to_xyzw, yaw_between
+from harness.geometry import qmul, quat_from_yaw, yaw_between
 from harness.graph import Attr, NodeType, register
 from harness.sim.prims import PrimKind
 
@@ -49,8 +49,9 @@ class ReadPrimPose(NodeType):
 
     def compute(self, db: Any, ctx: Any) -> bool:
         pos, quat = ctx.world.prim_pose(self._prim)
-        db.outputs.translation = pos
-        db.outputs.rotation = wxyz_to_xyzw(quat_mul(quat.tolist(), self._front).tolist())
+        w, x, y, z = qmul(quat.tolist(), self._front)  # as quat_mul does, on Python floats
+        db.outputs.translation = tuple(pos.tolist())
+        db.outputs.rotation = (x, y, z, w)
         return True
 
 

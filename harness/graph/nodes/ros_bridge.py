@@ -5,19 +5,34 @@ and the older ``omni.isaac.ros2_bridge``) and of the ROS 1 bridge (``omni.isaac.
 aliases, so a builder written for Isaac Sim ports by changing imports. Every message is stamped
 from simulation time: ``inputs:timeStamp`` when connected (seconds, as Isaac's
 ReadSimulationTime gives it), otherwise the tick's own time.
+
+Publishers of messages with one shape (clock, odometry, TF) pack their bytes from values with
+a :class:`~harness.bus.cdr.Packer` made for the frame ids they publish, and leave building the
+message object to whoever reads it (:meth:`~harness.bus.Bus.publish_serialized`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from harness.bus import TopicNameError, resolve_topic
 from harness.bus.bus import Qos
+from harness.bus.cdr import Packer
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.bus.messages import clock, odometry, tf_message, transform_stamped
+from harness.bus.messages import (
+    Pose,
+    clock,
+    clock_packer,
+    odometry,
+    odometry_packer,
+    split_ns,
+    tf_message_of,
+    tf_packer,
+)
 from harness.errors import GraphError
 from harness.geometry import quat_conj, quat_mul, quat_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
@@ -97,8 +112,13 @@ class PublishClock(_Publisher):
     outputs = EXEC_OUT
     msgtype = "rosgraph_msgs/msg/Clock"
 
+    def initialize(self, db: Any, ctx: Any) -> None:
+        super().initialize(db, ctx)
+        self._packer = clock_packer()
+
     def compute(self, db: Any, ctx: Any) -> bool:
-        self._pub.publish(clock(stamp_of(db, ctx)))
+        ns = stamp_of(db, ctx)
+        self._pub.publish_serialized(self._packer.pack(*split_ns(ns)), partial(clock, ns))
         return True
 
 
@@ -149,11 +169,19 @@ class PublishOdometry(_Publisher):
     outputs = EXEC_OUT
     msgtype = "nav_msgs/msg/Odometry"
 
+    def initialize(self, db: Any, ctx: Any) -> None:
+        super().initialize(db, ctx)
+        self._frames: tuple[str, str] | None = None
+
     def compute(self, db: Any, ctx: Any) -> bool:
         i = db.inputs
-        self._pub.publish(odometry(stamp_of(db, ctx), i.odomFrameId, i.chassisFrameId,
-                                   i.position, i.orientation, i.linearVelocity,
-                                   i.angularVelocity))
+        frames = (i.odomFrameId, i.chassisFrameId)
+        if frames != self._frames:
+            self._frames, self._packer = frames, odometry_packer(*frames)
+        ns = stamp_of(db, ctx)
+        pos, ori, lin, ang = i.position, i.orientation, i.linearVelocity, i.angularVelocity
+        raw = self._packer.pack(*split_ns(ns), *pos, *ori, *lin, *ang)
+        self._pub.publish_serialized(raw, partial(odometry, ns, *frames, pos, ori, lin, ang))
         return True
 
 
@@ -169,6 +197,7 @@ class _TfPublisher(_Publisher):
     def qos(self, db: Any) -> Qos | None:
         self._static = self.is_static(db)  # fixed once the publisher exists
         self._last_key: tuple[Any, ...] | None = None
+        self._packers: dict[tuple[tuple[str, str], ...], Packer] = {}
         return STATIC_QOS if self._static else None
 
     def unchanged(self, key: tuple[Any, ...]) -> bool:
@@ -181,8 +210,16 @@ class _TfPublisher(_Publisher):
         self._last_key = key
         return False
 
-    def emit(self, transforms: list[Any]) -> None:
-        self._pub.publish(tf_message(transforms))
+    def emit(self, ns: int, poses: list[Pose]) -> None:
+        """Publish one TF message of ``poses`` stamped ``ns``."""
+        frames = tuple((pose.parent, pose.child) for pose in poses)
+        packer = self._packers.get(frames)
+        if packer is None:
+            packer = self._packers[frames] = tf_packer(frames)
+        sec, nanosec = split_ns(ns)
+        raw = packer.pack(*(value for pose in poses for value in (
+            sec, nanosec, *pose.translation, *pose.rotation_xyzw)))
+        self._pub.publish_serialized(raw, partial(tf_message_of, ns, poses))
 
     def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
         """The transforms this node publishes, as TF edges (see :meth:`endpoints`)."""
@@ -222,7 +259,7 @@ class PublishRawTransformTree(_TfPublisher):
         parent, child = i.parentFrameId, i.childFrameId
         if self.unchanged((parent, child, tr, rot)):
             return True
-        self.emit([transform_stamped(stamp_of(db, ctx), parent, child, tr, rot)])
+        self.emit(stamp_of(db, ctx), [Pose(parent, child, tr, rot)])
         return True
 
     def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
@@ -339,8 +376,7 @@ class PublishTransformTree(_TfPublisher):
                     for pf, cf, t, xyzw in poses)
         if self.unchanged(key):
             return True
-        ns = stamp_of(db, ctx)
-        self.emit([transform_stamped(ns, pf, cf, t, xyzw) for pf, cf, t, xyzw in poses])
+        self.emit(stamp_of(db, ctx), [Pose(*pose) for pose in poses])
         return True
 
 

@@ -1,0 +1,233 @@
+"""A chunked MCAP writer whose per-message path is a few bytes appended, not a dozen calls.
+
+It writes the bytes the ``mcap`` library's ``Writer`` writes with the settings srr uses
+(chunked, every index, schemas and channels repeated in the summary, statistics, summary
+offsets, CRCs of chunks and summary; no data-section CRC), for the same calls in the same
+order: a test checks that byte for byte. What differs is the cost of :meth:`add_message`:
+the library builds a record object and makes some twenty calls per message, here the
+Message record is one ``struct`` pack appended to the chunk being filled, and its index
+entry one tuple. The records written once per chunk or per file (header, schemas,
+channels, chunk, message indexes, metadata, summary, footer) are written with the
+library's own record classes.
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from typing import IO, Any
+
+from mcap.data_stream import RecordBuilder
+from mcap.opcode import Opcode
+from mcap.records import (
+    Channel,
+    Chunk,
+    ChunkIndex,
+    DataEnd,
+    Footer,
+    Header,
+    McapRecord,
+    MessageIndex,
+    Metadata,
+    MetadataIndex,
+    Schema,
+    Statistics,
+    SummaryOffset,
+)
+from mcap.writer import MCAP0_MAGIC, CompressionType
+
+__all__ = ["McapWriter"]
+
+# A Message record's head: opcode, record length, channel id, sequence, log and publish time.
+_MESSAGE_HEAD = struct.Struct("<BQHIQQ")
+_MESSAGE_FIELDS = 2 + 4 + 8 + 8
+
+
+def _take(builder: RecordBuilder) -> bytes:
+    """What ``builder`` holds, emptying it."""
+    return bytes(builder.end())  # type: ignore[no-untyped-call]
+
+
+def _record(record: McapRecord) -> bytes:
+    builder = RecordBuilder()
+    record.write(builder)
+    return _take(builder)
+
+
+def _compress(data: bytes, compression: CompressionType) -> tuple[str, bytes]:
+    if compression == CompressionType.ZSTD:
+        import zstandard
+
+        return "zstd", zstandard.compress(data)
+    if compression == CompressionType.LZ4:
+        import lz4.frame
+
+        return "lz4", bytes(lz4.frame.compress(data))
+    return "", data
+
+
+class McapWriter:
+    """Writes one MCAP file to ``stream`` (see the module docstring). Chunks are closed only
+    by :meth:`flush` and :meth:`finish`; the caller decides when (see
+    :class:`~harness.bus.bagfile.McapBagWriter`)."""
+
+    def __init__(self, stream: IO[bytes], compression: CompressionType = CompressionType.NONE,
+                 ) -> None:
+        self._stream = stream
+        self._compression = compression
+        self._records = RecordBuilder()  # records outside chunks, written out by _flush
+        self._schemas: list[Schema] = []
+        self._channels: list[Channel] = []
+        self._chunk_indexes: list[ChunkIndex] = []
+        self._metadata_indexes: list[MetadataIndex] = []
+        # statistics
+        self._message_count = 0
+        self._message_start = 0
+        self._message_end = 0
+        self._channel_counts: dict[int, int] = {}
+        self._chunk_count = 0
+        self._metadata_count = 0
+        # the chunk being filled
+        self._chunk = bytearray()
+        self._chunk_messages = 0
+        self._chunk_start = 0
+        self._chunk_end = 0
+        self._indexes: dict[int, list[tuple[int, int]]] = {}
+
+    # -- the file ----------------------------------------------------------------------------
+
+    def start(self, profile: str, library: str) -> None:
+        self._stream.write(MCAP0_MAGIC)
+        Header(profile, library).write(self._records)
+        self._flush()
+
+    def register_schema(self, name: str, encoding: str, data: bytes) -> int:
+        schema = Schema(id=len(self._schemas) + 1, data=data, encoding=encoding, name=name)
+        self._schemas.append(schema)
+        self._chunk += _record(schema)
+        return schema.id
+
+    def register_channel(self, topic: str, message_encoding: str, schema_id: int,
+                         metadata: dict[str, str]) -> int:
+        channel = Channel(id=len(self._channels) + 1, topic=topic,
+                          message_encoding=message_encoding, schema_id=schema_id,
+                          metadata=metadata)
+        self._channels.append(channel)
+        self._chunk += _record(channel)
+        return channel.id
+
+    def add_message(self, channel_id: int, log_time: int, data: bytes,
+                    publish_time: int) -> None:
+        """Append one message (sequence 0) to the chunk being filled."""
+        if self._message_count == 0 or log_time < self._message_start:
+            self._message_start = log_time
+        if log_time > self._message_end:
+            self._message_end = log_time
+        counts = self._channel_counts
+        counts[channel_id] = counts.get(channel_id, 0) + 1
+        self._message_count += 1
+
+        if self._chunk_messages == 0 or log_time < self._chunk_start:
+            self._chunk_start = log_time
+        if log_time > self._chunk_end:
+            self._chunk_end = log_time
+        chunk = self._chunk
+        index = self._indexes.get(channel_id)
+        if index is None:
+            index = self._indexes[channel_id] = []
+        index.append((log_time, len(chunk)))
+        self._chunk_messages += 1
+        chunk += _MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIELDS + len(data), channel_id, 0,
+                                    log_time, publish_time)
+        chunk += data
+
+    def flush(self) -> None:
+        """Close the chunk being filled (if it holds a message) and flush the stream."""
+        self._finish_chunk()
+        self._flush()
+        self._stream.flush()
+
+    def add_metadata(self, name: str, data: dict[str, str]) -> None:
+        self._flush()
+        offset = self._stream.tell()
+        self._metadata_count += 1
+        Metadata(name=name, metadata=data).write(self._records)
+        self._metadata_indexes.append(
+            MetadataIndex(offset=offset, length=self._records.count, name=name))
+        self._flush()
+
+    def finish(self) -> None:
+        """Close the last chunk; write the data end, the summary and the footer."""
+        self._finish_chunk()
+        DataEnd(0).write(self._records)
+        self._flush()
+        start = self._stream.tell()
+        summary = RecordBuilder()
+        offsets: list[SummaryOffset] = []
+
+        def group(opcode: Opcode, records: list[Any]) -> None:
+            first = summary.count
+            for record in records:
+                record.write(summary)
+            offsets.append(SummaryOffset(group_opcode=opcode, group_start=start + first,
+                                         group_length=summary.count - first))
+
+        group(Opcode.SCHEMA, self._schemas)
+        group(Opcode.CHANNEL, self._channels)
+        group(Opcode.STATISTICS, [Statistics(
+            attachment_count=0, channel_count=len(self._channels),
+            channel_message_counts=self._channel_counts, chunk_count=self._chunk_count,
+            message_count=self._message_count, metadata_count=self._metadata_count,
+            message_start_time=self._message_start, message_end_time=self._message_end,
+            schema_count=len(self._schemas))])
+        group(Opcode.CHUNK_INDEX, self._chunk_indexes)
+        group(Opcode.ATTACHMENT_INDEX, [])
+        group(Opcode.METADATA_INDEX, self._metadata_indexes)
+        offsets_start = start + summary.count
+        for offset in offsets:
+            offset.write(summary)
+        data = _take(summary)
+        crc = zlib.crc32(data)
+        crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4,
+                                     0 if not data else start, offsets_start), crc)
+        self._stream.write(data)
+        Footer(summary_start=0 if not data else start, summary_offset_start=offsets_start,
+               summary_crc=crc).write(self._records)
+        self._flush()
+        self._stream.write(MCAP0_MAGIC)
+
+    # -- chunks ------------------------------------------------------------------------------
+
+    def _finish_chunk(self) -> None:
+        if self._chunk_messages == 0:
+            return  # schema and channel records stay for the next chunk, as in the library
+        self._chunk_count += 1
+        raw = bytes(self._chunk)
+        compression, data = _compress(raw, self._compression)
+        chunk = Chunk(compression=compression, data=data, message_start_time=self._chunk_start,
+                      message_end_time=self._chunk_end, uncompressed_crc=zlib.crc32(raw),
+                      uncompressed_size=len(raw))
+        self._flush()
+        chunk_offset = self._stream.tell()
+        chunk.write(self._records)
+        index = ChunkIndex(
+            message_start_time=chunk.message_start_time,
+            message_end_time=chunk.message_end_time, chunk_start_offset=chunk_offset,
+            chunk_length=self._records.count, message_index_offsets={},
+            message_index_length=0, compression=compression, compressed_size=len(data),
+            uncompressed_size=len(raw))
+        self._flush()
+        indexes_offset = self._stream.tell()
+        for channel_id, records in self._indexes.items():
+            index.message_index_offsets[channel_id] = indexes_offset + self._records.count
+            MessageIndex(channel_id=channel_id, records=records).write(self._records)
+        index.message_index_length = self._records.count
+        self._flush()
+        self._chunk_indexes.append(index)
+        self._chunk = bytearray()
+        self._chunk_messages = 0
+        self._chunk_start = self._chunk_end = 0
+        self._indexes = {}
+
+    def _flush(self) -> None:
+        self._stream.write(_take(self._records))
