@@ -90,11 +90,23 @@ def _typed_message() -> Any:
 
 def publish(topic: str, mode: str, timeout: float) -> int:
     import rclpy
+    from rclpy.event_handler import PublisherEventCallbacks
+    from rclpy.executors import SingleThreadedExecutor
     from tf2_msgs.msg import TFMessage
 
     rclpy.init()
     node: Any = rclpy.create_node("srr_tf_publisher")
-    pub = node.create_publisher(TFMessage, topic, _qos(topic))
+    # every match counts, also one whose subscriber took the latched message and left
+    # between two looks at the subscription count
+    matches = [0]
+
+    def on_matched(status: Any) -> None:
+        matches[0] = max(matches[0], int(status.total_count))
+
+    pub = node.create_publisher(TFMessage, topic, _qos(topic),
+                                event_callbacks=PublisherEventCallbacks(matched=on_matched))
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
     msg = _typed_message() if mode == "typed" else rosbags_bytes()
     latched = topic.endswith("tf_static")
     pub.publish(msg)
@@ -107,10 +119,14 @@ def publish(topic: str, mode: str, timeout: float) -> int:
 
     threading.Thread(target=wait_for_eof, daemon=True).start()
     deadline, seen = time.monotonic() + timeout, False
-    while time.monotonic() < deadline and not stop.wait(0.05):
-        seen = seen or pub.get_subscription_count() > 0
+    while time.monotonic() < deadline and not stop.is_set():
+        executor.spin_once(timeout_sec=0.05)
+        seen = seen or pub.get_subscription_count() > 0 or matches[0] > 0
         if not latched:
             pub.publish(msg)
+    for _ in range(10):  # events already on their way
+        executor.spin_once(timeout_sec=0.02)
+    seen = seen or matches[0] > 0
     print("had a subscriber" if seen else "never had a subscriber", flush=True)
     node.destroy_node()
     rclpy.shutdown()
