@@ -32,7 +32,7 @@ import yaml
 
 from harness import __version__, runmarker
 from harness.atomic import write_json_atomic
-from harness.builders.cameras import unrecorded_topics
+from harness.builders.camera_record import recorded_cameras, unrecorded_topics
 from harness.bus import Bus, TopicStats
 from harness.bus.bagfile import ChunkPolicy
 from harness.bus.bagread import ros1_recording
@@ -606,8 +606,8 @@ def check_video(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ..
     from harness.video import gst
     from harness.video.codec import check_encoder, settings_of
 
-    wanted = [(f"cameras[{i}].record.h264", c.record.h264)
-              for i, c in enumerate(scenario.cameras) if c.enabled and "h264" in c.record.rgb]
+    wanted = [(f"{c.field}.record.h264", c.record.h264)
+              for c in recorded_cameras(scenario) if "h264" in c.record.rgb]
     cams = stream_cameras(scenario)
     if cams:
         wanted.append(("rtsp.h264", scenario.rtsp.h264))

@@ -109,10 +109,16 @@ def estimate_bag_bytes(scenario: Scenario) -> BagEstimate:
         if cam is not None and cam.enabled and cam.graph:
             w, h = cam.resolution
             n = frames(cam.fps)
-            stream(f"{r.name} camera rgb", HEADER + w * h * 3, n)
+            if "raw" in cam.record.rgb:
+                stream(f"{r.name} camera rgb", HEADER + w * h * 3, n)
             stream(f"{r.name} camera_info", CAMERA_INFO, n)
-            if cam.depth_topic:
+            if cam.depth_topic and "raw" in cam.record.depth:
                 stream(f"{r.name} camera depth", HEADER + w * h * 4, n)
+            for stream_name, formats in (("rgb", cam.record.rgb), ("depth", cam.record.depth)):
+                for fmt in formats:
+                    if fmt != "raw" and (stream_name == "rgb" or cam.depth_topic):
+                        stream(f"{r.name} camera {stream_name} {fmt}",
+                               HEADER + _compressed_bound(stream_name, fmt, w, h), n)
         if lidar is not None and lidar.enabled and lidar.graph:
             size = lidar.beams * (8 if lidar.type == "laser_scan" else POINT_STEP)
             stream(f"{r.name} lidar", HEADER + size, frames(lidar.fps))

@@ -33,7 +33,7 @@ from mcap.reader import make_reader
 from rosbags.serde import SerdeError
 
 from harness.bag import BAG_READ_ERRORS
-from harness.builders.cameras import CompressedStream, compressed_streams
+from harness.builders.camera_record import CompressedStream, compressed_streams, recorded_cameras
 from harness.bus import Bus, Qos
 from harness.bus.bagread import open_recording, ros1_recording
 from harness.bus.messages import TYPESTORE
@@ -240,7 +240,7 @@ class Replay:
         for _, sut, ctx in self.suts:
             sut.setup(ctx)
         wanted = self.bus.subscribed()
-        for cam in self.scenario.cameras:
+        for cam in recorded_cameras(self.scenario):
             for cs in compressed_streams(cam):
                 if (cs.raw_topic in wanted and cs.raw_topic not in self.playback.topics
                         and cs.topic in self.playback.topics

@@ -14,7 +14,12 @@ from pathlib import Path
 import numpy as np
 
 from harness.builders.base import gate_step
-from harness.builders.cameras import compressed_streams, unrecorded_topics
+from harness.builders.camera_record import (
+    compressed_streams,
+    fixed_camera,
+    robot_camera,
+    unrecorded_topics,
+)
 from harness.bus import resolve_topic
 from harness.errors import ScenarioError
 from harness.frames import Frames, load_frames
@@ -72,6 +77,10 @@ def expected_rates(sc: Scenario) -> dict[str, float]:
             rates[resolve_topic(lidar.topic, robot.ns)] = _gate_rate(hz, lidar.fps)
         if imu is not None and imu.enabled and imu.graph:
             rates[resolve_topic(imu.topic, robot.ns)] = _gate_rate(hz, imu.fps)
+        camera = robot_camera(sc, robot)
+        if camera is not None:
+            for cs in compressed_streams(camera):
+                rates[cs.topic] = _gate_rate(hz, camera.fps)
     unrecorded = unrecorded_topics(sc)
     for cam in sc.cameras:
         if not cam.enabled:
@@ -82,7 +91,7 @@ def expected_rates(sc: Scenario) -> dict[str, float]:
             topic = resolve_topic(f"{cam.name}_{suffix[out]}")
             if topic not in unrecorded:
                 rates[topic] = _gate_rate(hz, cam.fps)
-        for cs in compressed_streams(cam):
+        for cs in compressed_streams(fixed_camera(sc, cam)):
             rates[cs.topic] = _gate_rate(hz, cam.fps)
     for topic, value in sc.scoring.health.expected_rates.items():
         rates[resolve_topic(topic)] = value

@@ -18,11 +18,16 @@ link (``<link> → <frame_id>`` on the robot's static TF topic; the default ``ca
 ``camera_link → camera``), so the images, and a point cloud made from them, can be placed in
 the world. A ``frame_id`` equal to the link (``camera_link``) publishes in the link's axes
 (+X forward), which is not the optical convention ROS image consumers assume.
+
+The camera's ``record`` block adds a ``CompressedCameraHelper`` per compressed format, as a
+fixed camera's does (:mod:`harness.builders.camera_record`): ``<topic>/h264``,
+``<topic>/compressed`` and ``<depth_topic>/compressed``, in the robot's namespace.
 """
 
 from __future__ import annotations
 
 from harness.builders.base import BuildContext, fresh_graph, gated_render_product, sensor_frame_tf
+from harness.builders.camera_record import compressed_helpers, robot_camera
 from harness.graph import Controller
 from harness.scenario import RobotSpec
 
@@ -63,6 +68,12 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
             (f"{name}.inputs:nodeNamespace", robot.ns),
             (f"{name}.inputs:frameId", robot.frame(spec.frame_id)),
         ]
+    recorded = robot_camera(bc.scenario, robot)
+    assert recorded is not None
+    rec_nodes, rec_connect, rec_values = compressed_helpers(bc, path, recorded)
+    nodes += rec_nodes
+    connect += rec_connect
+    values += rec_values
     tf_nodes, tf_connect, tf_values = sensor_frame_tf(bc, robot, "camera", spec.frame_id, path,
                                                       "PublishCameraTF")
     nodes += tf_nodes

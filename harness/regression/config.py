@@ -6,9 +6,9 @@ physics settings, and the same scoring definitions. What a regression test is me
 is left out: the systems under test (a new version of a plug-in, changed parameters), the
 scenario's name and description, which baseline it names, the tolerances and the health-gate
 settings, how the bag is written (``recording``: chunking, fsync, the disk guard; a camera's
-``record``: raw or compressed images; ``output``: ROS 1 or ROS 2, bag or MCAP, whose messages
-carry the same values), live outputs (``ros2``, ``rtsp``) and the sweep a suite may expand the
-scenario into (``sweep``: each point is its own configuration).
+``record``, fixed or on a robot: raw or compressed images; ``output``: ROS 1 or ROS 2, bag or
+MCAP, whose messages carry the same values), live outputs (``ros2``, ``rtsp``) and the sweep
+a suite may expand the scenario into (``sweep``: each point is its own configuration).
 :func:`comparable_config` is that part of a resolved scenario, as plain data (a run adds
 ``scene_files``, the digests of the model files its scene is built from);
 :func:`config_differences` names what differs, field by field. A baseline blessed before srr
@@ -43,10 +43,24 @@ def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
     if isinstance(cameras, list):
         out["cameras"] = [{k: v for k, v in c.items() if k not in EXCLUDED_CAMERA}
                           if isinstance(c, Mapping) else c for c in cameras]
+    robots = out.get("robots")
+    if isinstance(robots, list):
+        out["robots"] = [_without_camera_record(r) for r in robots]
     scoring = out.get("scoring")
     if isinstance(scoring, Mapping):
         out["scoring"] = {k: v for k, v in scoring.items() if k not in EXCLUDED_SCORING}
     return out
+
+
+def _without_camera_record(robot: Any) -> Any:
+    """A robot entry without its camera's ``record`` (as it is when it has no camera)."""
+    if not isinstance(robot, Mapping):
+        return robot
+    sensors = robot.get("sensors")
+    if not isinstance(sensors, Mapping) or not isinstance(sensors.get("camera"), Mapping):
+        return robot
+    camera = {k: v for k, v in sensors["camera"].items() if k not in EXCLUDED_CAMERA}
+    return {**robot, "sensors": {**sensors, "camera": camera}}
 
 
 def with_defaults(config: Mapping[str, Any]) -> dict[str, Any]:

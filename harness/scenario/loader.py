@@ -21,7 +21,7 @@ import yaml
 from harness.errors import ScenarioError, SrrError
 from harness.scenario.schema import (
     FORMAT_VERSION,
-    CameraSpec,
+    CameraRecordSpec,
     DiffDriveControl,
     ForkliftControl,
     GraphSpec,
@@ -428,6 +428,7 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
     _check_names(v, sc, "")
     _check_world(sc, v)
     _check_robots(sc, v)
+    _check_robot_cameras(sc, v)
     _check_cameras(sc, v)
     _check_suts(sc, v)
     _check_graphs(sc, v)
@@ -548,7 +549,9 @@ def _check_cameras(sc: Scenario, v: _Validator) -> None:
         w, h = cam.resolution
         if not (1 <= w <= 8192 and 1 <= h <= 8192):
             v.fail(f"cameras[{i}].resolution", f"must be within 1..8192, got {w}x{h}")
-        _check_record(v, i, cam)
+        _check_record(v, f"cameras[{i}]", cam.record,
+                      {s: f"{cam.name}_{s}" for s in ("rgb", "depth") if s in cam.outputs},
+                      f"cameras[{i}].outputs has no '{{stream}}'", cam.resolution)
         if not cam.enabled:
             continue
         if cam.prim in prims:
@@ -561,26 +564,42 @@ def _check_cameras(sc: Scenario, v: _Validator) -> None:
 _MOUNT_PATH = re.compile(r"^(/[A-Za-z0-9._~-]+)+$")
 
 
-def _check_record(v: _Validator, i: int, cam: CameraSpec) -> None:
-    """A camera's ``record`` block: formats of streams the camera has, each once, one still
-    format per topic, even sizes for h264."""
-    rec = cam.record
-    _check_h264(v, f"cameras[{i}].record.h264", rec.h264)
+def _check_record(v: _Validator, where: str, rec: CameraRecordSpec, raw: Mapping[str, str],
+                  lacking: str, resolution: tuple[int, int]) -> None:
+    """The ``record`` block of the camera at ``where`` (``raw``: the raw topic of each image
+    stream it publishes; ``lacking``: why it does not publish a ``{stream}``): formats of
+    streams the camera has, each once, one still format per topic, even sizes for h264."""
+    _check_h264(v, f"{where}.record.h264", rec.h264)
     for stream, formats in (("rgb", rec.rgb), ("depth", rec.depth)):
-        where = f"cameras[{i}].record.{stream}"
+        path = f"{where}.record.{stream}"
         for k, fmt in enumerate(formats):
             if fmt in formats[:k]:
-                v.fail(f"{where}[{k}]", f"{fmt!r} is listed twice")
-        if formats and formats != ("raw",) and stream not in cam.outputs:
-            v.fail(where, f"records {', '.join(formats)} of the {stream} stream, but "
-                   f"cameras[{i}].outputs has no {stream!r}")
+                v.fail(f"{path}[{k}]", f"{fmt!r} is listed twice")
+        if formats and formats != ("raw",) and stream not in raw:
+            v.fail(path, f"records {', '.join(formats)} of the {stream} stream, but "
+                   + lacking.format(stream=stream))
     if "jpeg" in rec.rgb and "png" in rec.rgb:
-        v.fail(f"cameras[{i}].record.rgb", "jpeg and png both go to "
-               f"{cam.name}_rgb/compressed: choose one")
-    w, h = cam.resolution
+        v.fail(f"{where}.record.rgb", "jpeg and png both go to "
+               f"{raw['rgb']}/compressed: choose one")
+    w, h = resolution
     if "h264" in rec.rgb and (w % 2 or h % 2):
-        v.fail(f"cameras[{i}].resolution", f"h264 (cameras[{i}].record.rgb) needs an even "
+        v.fail(f"{where}.resolution", f"h264 ({where}.record.rgb) needs an even "
                f"width and height, got {w}x{h}")
+
+
+def _check_robot_cameras(sc: Scenario, v: _Validator) -> None:
+    """A robot camera's ``record`` block, as a fixed camera's; none without srr's graph."""
+    for i, robot in enumerate(sc.robots):
+        cam = robot.sensors.camera
+        if cam is None:
+            continue
+        where = f"robots[{i}].sensors.camera"
+        if not cam.graph and cam.record != CameraRecordSpec():
+            v.fail(f"{where}.record", "has no effect with graph: false (the graphs: builder "
+                   "that publishes the camera decides what it records)")
+        raw = {"rgb": cam.topic} | ({"depth": cam.depth_topic} if cam.depth_topic else {})
+        _check_record(v, where, cam.record, raw, f"{where}.depth_topic is not set",
+                      cam.resolution)
 
 
 #: Speed presets each h264 encoder knows.

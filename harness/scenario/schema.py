@@ -275,9 +275,47 @@ class SafetyIndicatorSpec:
 
 
 @dataclass(frozen=True)
+class H264Spec:
+    """h264 encoder settings (:class:`harness.video.codec.H264Settings`).
+
+    ``encoder``: ``x264`` (CPU; with a fixed ``threads`` the bytes are the same on every
+    run) or ``nvenc`` (an NVIDIA GPU's video engine). ``keyframe_interval`` in frames.
+    ``crf``: constant quality, 0-51, lower is better (NVENC: ``cq``), unless
+    ``bitrate_kbps`` asks for a constant bit rate. ``preset``: the encoder's speed preset
+    (x264 ``ultrafast`` … ``veryslow``, NVENC ``p1`` … ``p7``; None: ``veryfast`` / ``p4``)."""
+
+    encoder: Literal["x264", "nvenc"] = "x264"
+    keyframe_interval: int = num(30, 1, 100000)
+    crf: int = num(23, 0, 51)
+    bitrate_kbps: int | None = num(None, 1, 1000000)
+    threads: int = num(1, 1, 64)
+    preset: str | None = None
+
+
+@dataclass(frozen=True)
+class CameraRecordSpec:
+    """``record:`` of a camera: what the bag holds of its images.
+
+    ``rgb``: any of ``raw`` (the rgb topic, sensor_msgs/Image), ``h264`` (``<rgb
+    topic>/h264``, foxglove_msgs/CompressedVideo) and one of ``jpeg`` or ``png`` (``<rgb
+    topic>/compressed``, sensor_msgs/CompressedImage). ``depth``: ``raw`` (the depth topic,
+    32FC1) and/or ``png`` (``<depth topic>/compressed``, 16-bit millimetres). The topics are
+    a fixed camera's ``<cam>_rgb`` and ``<cam>_depth``, a robot camera's ``topic`` and
+    ``depth_topic`` (in the robot's namespace). A raw stream left out is still published to
+    the systems under test in the run, just not recorded. ``jpeg_qscale``: JPEG quality as
+    FFmpeg's ``-q:v`` (2 best … 31)."""
+
+    rgb: tuple[Literal["raw", "h264", "jpeg", "png"], ...] = ("raw",)
+    depth: tuple[Literal["raw", "png"], ...] = ("raw",)
+    h264: H264Spec = H264Spec()
+    jpeg_qscale: int = num(3, 2, 31)
+
+
+@dataclass(frozen=True)
 class RobotCameraSpec:
     """A camera mounted on a robot link. ``graph: false`` mounts it (its prim exists, with
-    this ``fovy_deg``) but builds no graph: a ``graphs:`` builder publishes it."""
+    this ``fovy_deg``) but builds no graph: a ``graphs:`` builder publishes it. ``record``
+    says how the bag holds its images, as a fixed camera's does."""
 
     enabled: bool = True
     graph: bool = True
@@ -291,6 +329,7 @@ class RobotCameraSpec:
     resolution: tuple[int, int] = (320, 240)
     fovy_deg: float = num(60.0, 1.0, 170.0)
     fps: float = num(30.0, 0.0, 60.0, lo_open=True)
+    record: CameraRecordSpec = CameraRecordSpec()
 
 
 @dataclass(frozen=True)
@@ -453,41 +492,6 @@ class RobotSpec:
         if self.control is not None:
             return self.control
         return ForkliftControl() if self.swivel_drive else DiffDriveControl()
-
-
-@dataclass(frozen=True)
-class H264Spec:
-    """h264 encoder settings (:class:`harness.video.codec.H264Settings`).
-
-    ``encoder``: ``x264`` (CPU; with a fixed ``threads`` the bytes are the same on every
-    run) or ``nvenc`` (an NVIDIA GPU's video engine). ``keyframe_interval`` in frames.
-    ``crf``: constant quality, 0-51, lower is better (NVENC: ``cq``), unless
-    ``bitrate_kbps`` asks for a constant bit rate. ``preset``: the encoder's speed preset
-    (x264 ``ultrafast`` … ``veryslow``, NVENC ``p1`` … ``p7``; None: ``veryfast`` / ``p4``)."""
-
-    encoder: Literal["x264", "nvenc"] = "x264"
-    keyframe_interval: int = num(30, 1, 100000)
-    crf: int = num(23, 0, 51)
-    bitrate_kbps: int | None = num(None, 1, 1000000)
-    threads: int = num(1, 1, 64)
-    preset: str | None = None
-
-
-@dataclass(frozen=True)
-class CameraRecordSpec:
-    """``record:`` of a camera: what the bag holds of its images.
-
-    ``rgb``: any of ``raw`` (``<cam>_rgb``, sensor_msgs/Image), ``h264``
-    (``<cam>_rgb/h264``, foxglove_msgs/CompressedVideo) and one of ``jpeg`` or ``png``
-    (``<cam>_rgb/compressed``, sensor_msgs/CompressedImage). ``depth``: ``raw``
-    (``<cam>_depth``, 32FC1) and/or ``png`` (``<cam>_depth/compressed``, 16-bit millimetres).
-    A raw stream left out is still published to the systems under test in the run, just
-    not recorded. ``jpeg_qscale``: JPEG quality as FFmpeg's ``-q:v`` (2 best … 31)."""
-
-    rgb: tuple[Literal["raw", "h264", "jpeg", "png"], ...] = ("raw",)
-    depth: tuple[Literal["raw", "png"], ...] = ("raw",)
-    h264: H264Spec = H264Spec()
-    jpeg_qscale: int = num(3, 2, 31)
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from harness import api
-from harness.builders.cameras import compressed_streams, unrecorded_topics
+from harness.builders.camera_record import compressed_streams, fixed_camera, unrecorded_topics
 from harness.cli import main
 from harness.regression import config_differences
 from harness.scenario import scenario_to_mapping
@@ -106,7 +106,8 @@ def test_topics_of_a_record_block(tmp_path: Path) -> None:
     path.write_text(CAMS.replace("outputs: [rgb, depth]}", "outputs: [rgb, depth], "
                                  "record: {rgb: [h264, jpeg], depth: [raw, png]}}"))
     sc = api.load(path)
-    assert [(s.topic, s.raw_topic, s.msgtype) for s in compressed_streams(sc.cameras[0])] == [
+    streams = compressed_streams(fixed_camera(sc, sc.cameras[0]))
+    assert [(s.topic, s.raw_topic, s.msgtype) for s in streams] == [
         ("/cam_a_rgb/h264", "/cam_a_rgb", "foxglove_msgs/msg/CompressedVideo"),
         ("/cam_a_rgb/compressed", "/cam_a_rgb", "sensor_msgs/msg/CompressedImage"),
         ("/cam_a_depth/compressed", "/cam_a_depth", "sensor_msgs/msg/CompressedImage")]
