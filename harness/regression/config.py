@@ -5,8 +5,9 @@ A baseline is only a yardstick for runs of the same *configuration*: the same si
 physics settings, and the same scoring definitions. What a regression test is meant to vary
 is left out: the systems under test (a new version of a plug-in, changed parameters), the
 scenario's name and description, which baseline it names, the tolerances and the health-gate
-settings, how the bag is written (``recording``: chunking, fsync, the disk guard) and the sweep a
-suite may expand the scenario into (``sweep``: each point is its own configuration).
+settings, how the bag is written (``recording``: chunking, fsync, the disk guard), whether
+images render on a background thread (``render.overlap``: the same bytes either way) and the
+sweep a suite may expand the scenario into (``sweep``: each point is its own configuration).
 :func:`comparable_config` is that part of a resolved scenario, as plain data;
 :func:`config_differences` names what differs, field by field. A baseline blessed before srr
 gained a field has no value for it; :func:`with_defaults` gives it the field's default, so
@@ -27,6 +28,7 @@ __all__ = ["EXCLUDED", "comparable_config", "config_differences", "with_defaults
 EXCLUDED = frozenset({"format_version", "name", "description", "baseline",
                       "systems_under_test", "recording", "sweep", "ros2"})
 EXCLUDED_SCORING = frozenset({"tolerances", "health"})
+EXCLUDED_RENDER = frozenset({"overlap"})
 
 
 def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
@@ -36,6 +38,9 @@ def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
     scoring = out.get("scoring")
     if isinstance(scoring, Mapping):
         out["scoring"] = {k: v for k, v in scoring.items() if k not in EXCLUDED_SCORING}
+    render = out.get("render")
+    if isinstance(render, Mapping):
+        out["render"] = {k: v for k, v in render.items() if k not in EXCLUDED_RENDER}
     return out
 
 

@@ -32,6 +32,7 @@ __all__ = [
     "PhysicsSpec",
     "Pose",
     "RecordingSpec",
+    "RenderSpec",
     "ReverseLogic",
     "RobotCameraSpec",
     "RobotSpec",
@@ -105,6 +106,31 @@ class RecordingSpec:
     fsync: bool = False
     min_free_mb: float = num(256.0, 0.0, 1e9)
     compression: Literal["none", "zstd", "lz4"] = "none"
+
+
+@dataclass(frozen=True)
+class RenderSpec:
+    """``render:`` block: how every camera draws the scene (what its images cost and look like).
+
+    ``shadows`` switches on the shadow pass of the scene's shadow-casting light (the warehouse's
+    sun), drawn from a ``shadow_size`` x ``shadow_size`` shadow map; ``reflections`` the mirror
+    pass of reflective materials (the warehouse floor); ``lights`` is ``all`` (the sun, the
+    ceiling spots and the trailer light) or ``sun`` (directional lights only); the headlight
+    always shines. These change colour images only: depth images are the same to within
+    rasterization (the mirror pass can move a pixel's depth by ~1e-5 m). The defaults are the
+    cheapest (on a CPU renderer the shadow and mirror passes cost about 4x the image itself).
+
+    ``overlap`` renders on a background thread and builds, serializes, writes and digests the
+    images there and on a few helper threads, so that the tick loop waits only for the
+    renderer; a consumer inside the run (a system under test subscribing to an image) still
+    gets it in the same tick. It changes no byte; ``false`` renders on the loop's thread.
+    """
+
+    shadows: bool = False
+    shadow_size: int = num(1024, 64, 16384)
+    reflections: bool = False
+    lights: Literal["all", "sun"] = "sun"
+    overlap: bool = True
 
 
 @dataclass(frozen=True)
@@ -647,6 +673,7 @@ class Scenario:
     graphs: tuple[GraphSpec, ...] = ()
     scoring: ScoringSpec = ScoringSpec()
     recording: RecordingSpec = RecordingSpec()
+    render: RenderSpec = RenderSpec()
     ros2: Ros2Spec = Ros2Spec()
     baseline: str | None = None  # which baselines/<name>.json to compare with (default: name)
     # Parameters ``srr suite`` sweeps: ``--set`` path → list of values or {from, to, step}
