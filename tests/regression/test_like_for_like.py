@@ -33,8 +33,11 @@ def test_what_counts_as_the_configuration() -> None:
     # names, health settings
     same = mapping("systems_under_test.route_follower.params.speed=1.0", "name=other",
                    "scoring.tolerances={control.*: {abs: 1}}",
-                   "scoring.health.rate_fraction=0.5")
+                   "scoring.health.rate_fraction=0.5", "render.overlap=false")
     assert config_differences(base, same) == []
+    # how images look does count (rendering on a background thread or not gives the same bytes)
+    assert config_differences(base, mapping("render.shadows=true")) == [
+        "render.shadows: False → True"]
     assert "systems_under_test" not in comparable_config(base)
     many = mapping("routes.dock_approach.waypoints=[[0, 0], [0, 1]]", "duration=1", "seed=1",
                    "srr_gt=false", "world.wall_height=3", "physics.tick_hz=30")
