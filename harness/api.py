@@ -41,6 +41,7 @@ from harness.diskspace import MB, DiskGuard, FreeSpace, check_free_space, disk_f
 from harness.engine import Simulation
 from harness.errors import BagError, InvalidRunError, RunStopped, ScenarioError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
+from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.regression import (
     baseline_path,
@@ -302,12 +303,15 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
             recorder.add_serialized_tap(view.log)
             view.advertise({t: i.msgtype for t, i in loop.bus.topics().items()}, loop.bus.qos)
             view.wait_for_client()
+        hz = scenario.physics.tick_hz
         for _ in range(n_ticks):
             loop.step()
             if view is not None:
                 view.tick()
             if progress is not None:
                 progress(loop.ticks(), n_ticks)
+            if loop.ticks() % hz == 0:  # flat resident memory however long the run
+                release_free_memory()
             low = guard.poll(loop.ticks(), recorder.bytes_serialized)
             if low is not None:
                 stopped = (f"{low}: the run was stopped after "
@@ -329,6 +333,7 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
     try:  # until summary.json exists the directory is half-written: an error removes it
         stats = recorder.close()
+        release_free_memory()  # the loop's buffers, before scoring reads the bag
         published = loop.bus.published_counts()
         sim_s = loop.ticks() / scenario.physics.tick_hz
         topics = _topic_table(stats, published, sim_s)

@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import re
 import struct
+from array import array
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -54,6 +55,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from mcap.reader import make_reader
+from pandas.api.types import union_categoricals
 from rosbags.rosbag2 import Reader
 from rosbags.serde import SerdeError
 
@@ -611,15 +613,44 @@ _TF_COLS = {"t_ns": "int64", "log_ns": "int64", "topic": "category", "tree": "ca
             **dict.fromkeys(_POSE, "float64")}
 
 
-def _tf_table(topic: str, cols: dict[str, np.ndarray], log_ns: np.ndarray) -> pd.DataFrame:
-    n = cols["msg"].size
-    tree = tf_tree_of(topic)
-    return pd.DataFrame({
-        "t_ns": _stamp(cols), "log_ns": log_ns[cols["msg"]],
-        "topic": np.full(n, topic, dtype=object), "tree": np.full(n, tree, dtype=object),
-        "static": np.full(n, topic.rsplit("/", 1)[-1] == "tf_static"),
-        "parent": cols["frame_id"], "child": cols["child_frame_id"],
-        **{k: cols[k] for k in _POSE}})
+def _tf_part(cols: dict[str, np.ndarray], log_ns: np.ndarray) -> dict[str, Any]:
+    """One batch of a transform-tree topic as the tf table's columns (frames as categoricals:
+    one byte a row)."""
+    return {"t_ns": _stamp(cols), "log_ns": log_ns,
+            "parent": pd.Categorical(cols["frame_id"]),
+            "child": pd.Categorical(cols["child_frame_id"]),
+            **{k: cols[k] for k in _POSE}}
+
+
+def _tf_frame(topics: list[tuple[str, list[dict[str, Any]]]]) -> pd.DataFrame:
+    """The ``tf`` table (``_TF_COLS``) from each transform-tree topic's batches, in topic
+    order; built column by column, so at most one column is held twice."""
+    parts = [(topic, part) for topic, batches in topics for part in batches]
+    if not parts:
+        return _empty(_TF_COLS)
+    sizes = np.array([part["t_ns"].size for _, part in parts], dtype=np.int64)
+    names = [topic for topic, _ in parts]
+
+    def per_topic(values: list[Any]) -> pd.Categorical:
+        cats = sorted(set(values))
+        codes = np.repeat(np.array([cats.index(v) for v in values], dtype=np.int8), sizes)
+        return pd.Categorical.from_codes(codes, cats)
+
+    out: dict[str, Any] = {}
+    for k in _TF_COLS:
+        if k == "topic":
+            out[k] = per_topic(names)
+        elif k == "tree":
+            out[k] = per_topic([tf_tree_of(t) for t in names])
+        elif k == "static":
+            out[k] = np.repeat(np.array([t.rsplit("/", 1)[-1] == "tf_static" for t in names]),
+                               sizes)
+        elif k in ("parent", "child"):
+            out[k] = union_categoricals([part.pop(k) for _, part in parts],
+                                        sort_categories=True)
+        else:
+            out[k] = np.concatenate([part.pop(k) for _, part in parts])
+    return pd.DataFrame(out)
 
 
 @dataclass(frozen=True)
@@ -667,6 +698,26 @@ def _open_bag(path: Path) -> Any:
     return _McapFile(path) if path.is_file() else Reader(path)
 
 
+#: Messages of one topic decoded at a time by :func:`load_frames`.
+_DECODE_BATCH = 4096
+
+
+def _decode_part(raws: Sequence[bytes], msgtype: str, fast: bool,
+                 first: int) -> dict[str, np.ndarray]:
+    """:func:`decode_batch` of the topic's messages ``first`` … ``first + len(raws) - 1``."""
+    cols = decode_batch(raws, msgtype, fast=fast)
+    if first:
+        cols["msg"] = cols["msg"] + first
+    return cols
+
+
+def _join_parts(parts: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """One topic's decoded batches as one set of columns (rows still by message, item)."""
+    if len(parts) == 1:
+        return parts[0]
+    return {k: np.concatenate([p.pop(k) for p in parts]) for k in list(parts[0])}
+
+
 def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = None,
                 muted_topic: str = "/safety/is_muted", clock_topic: str = "/clock",
                 world_frame: str = "world", fast: bool = True) -> Frames:
@@ -696,13 +747,35 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
                         and (marker_topics is None or c.topic in marker_topics)))
                 if keep:
                     wanted[c.id] = c.topic
-            log: dict[int, list[int]] = {c.id: [] for c in conns}
+            # Memory stays flat in the bag's length: log times go into compact arrays and
+            # the wanted payloads are decoded every _DECODE_BATCH messages, not kept.
+            # the transform tree's topics go straight into the tf table's columns
+            tree = {cid for cid, topic in wanted.items()
+                    if tf_tree_of(topic) is not None and GT_TOPIC.match(topic) is None}
+            log: dict[int, array[int]] = {c.id: array("q") for c in conns}
             raws: dict[int, list[bytes]] = {cid: [] for cid in wanted}
+            parts: dict[int, list[dict[str, Any]]] = {cid: [] for cid in wanted}
+            types = {c.id: c.msgtype for c in conns}
+
+            def flush(cid: int) -> None:
+                batch, first = raws[cid], len(log[cid]) - len(raws[cid])
+                cols = _decode_part(batch, types[cid], fast, first)
+                if cid in tree:
+                    batch_log = np.frombuffer(log[cid][first:], dtype=np.int64)
+                    cols = _tf_part(cols, batch_log[cols["msg"] - first])
+                parts[cid].append(cols)
+                raws[cid] = []
+
             for conn, t_ns, raw in reader.messages():
                 cid = conn.id
                 log[cid].append(t_ns)
                 if cid in wanted:
                     raws[cid].append(raw)
+                    if len(raws[cid]) >= _DECODE_BATCH:
+                        flush(cid)
+            for cid in wanted:
+                if raws[cid] or not parts[cid]:
+                    flush(cid)
             start_ns, end_ns = int(reader.start_time), int(reader.end_time)
     except BAG_READ_ERRORS as err:
         raise BagError(f"{bag_dir}: cannot read bag: {reason(err)}") from err
@@ -715,7 +788,7 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
                                          "max_gap_ns")}
     log_arr: dict[int, np.ndarray] = {}
     for cid, stamps in log.items():
-        arr = np.asarray(stamps, dtype=np.int64)
+        arr = np.frombuffer(stamps, dtype=np.int64) if stamps else np.zeros(0, np.int64)
         log_arr[cid] = arr
         topic_rows["name"].append(by_topic[cid].topic)
         topic_rows["type"].append(by_topic[cid].msgtype)
@@ -726,11 +799,9 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
     topics = pd.DataFrame(topic_rows).sort_values("name", kind="stable").reset_index(
         drop=True)
 
-    decoded = {cid: decode_batch(raws[cid], by_topic[cid].msgtype, fast=fast)
-               for cid in sorted(wanted, key=lambda i: wanted[i])}
-    tf = _concat([_tf_table(wanted[cid], decoded[cid], log_arr[cid]) for cid in decoded
-                  if by_topic[cid].msgtype == TF_MESSAGE and tf_tree_of(wanted[cid])],
-                 _TF_COLS)
+    order = sorted(wanted, key=lambda i: wanted[i])
+    tf = _tf_frame([(wanted[cid], parts.pop(cid)) for cid in order if cid in tree])
+    decoded = {cid: _join_parts(parts.pop(cid)) for cid in order if cid not in tree}
     tf_static = pd.DataFrame({k: tf.loc[tf["static"], k].to_numpy(
         dtype=object if k in ("parent", "child") else np.float64)
         for k in ("parent", "child", *_POSE)})
