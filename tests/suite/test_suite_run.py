@@ -227,3 +227,27 @@ def test_ray_suite_joins_an_existing_cluster(tmp_path: Path,
     finally:
         subprocess.run([ray_bin, "stop", "--force"], capture_output=True, env=env,
                        timeout=120)
+
+
+def test_forked_and_fresh_workers_record_the_same_bytes(tmp_path: Path,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Workers forked from the suite's process (the default where ``fork`` exists) and fresh
+    interpreters record the same bytes, a rendering scene with its perception included."""
+    from harness.suite.local import LocalExecutor
+    from harness.suite.runner import plan_suite, run_suite
+
+    monkeypatch.chdir(ROOT)
+    suite = tmp_path / "suite.yaml"
+    scenario = ROOT / "scenarios" / "dock_worker_crossing.yaml"
+    suite.write_text(f"scenarios:\n  - {{path: {scenario}, set: {{duration: 1.5}}}}\n",
+                     encoding="utf-8")
+    plan = plan_suite([suite])
+    digests = {}
+    for fork in (True, False):
+        out = tmp_path / f"out_{fork}"
+        res = run_suite(plan, LocalExecutor(1, fork=fork), out=out)
+        (run,) = res.summary["runs"]
+        summary = json.loads((out / run["run_dir"] / "summary.json").read_text())
+        assert summary["topics"]["/dock_cam_left_depth"]["count"] == 8
+        digests[fork] = summary["digest"]
+    assert digests[True] == digests[False]
