@@ -75,6 +75,7 @@ __all__ = [
     "TWIST",
     "Frames",
     "decode_batch",
+    "finished_mcap",
     "load_frames",
     "quat_yaw",
 ]
@@ -699,7 +700,7 @@ class _McapFile:
 _YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
-def _finished_mcap(bag_dir: Path) -> _McapFile | None:
+def finished_mcap(bag_dir: Path) -> _McapFile | None:
     """The bag's one MCAP file, opened, when ``metadata.yaml`` names exactly one and the file
     is finished (has its summary); else None. (Cheaper than rosbags' Reader, which spends
     ~0.2 s parsing ``metadata.yaml`` with ruamel; the messages are the same.)"""
@@ -719,7 +720,7 @@ def _open_bag(path: Path) -> Any:
     else a rosbags Reader (which says what is wrong with a damaged bag)."""
     if path.is_file():
         return _McapFile(path)
-    return _finished_mcap(path) or Reader(path)
+    return finished_mcap(path) or Reader(path)
 
 
 #: Messages of one topic decoded at a time by :func:`load_frames`.

@@ -7,16 +7,20 @@ filter type 0, IEND), enough for 8-bit RGB and grey images; no imaging library i
 from __future__ import annotations
 
 import base64
+import contextlib
 import struct
 import zlib
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from mcap.reader import make_reader
 from rosbags.rosbag2 import Reader
 
 from harness.bus.messages import TYPESTORE
+from harness.frames import finished_mcap
 
 __all__ = ["IMAGE_TYPE", "Keyframe", "data_uri", "encode_png", "image_array", "keyframes",
            "nearest_images"]
@@ -104,8 +108,8 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
     if not targets_ns:
         return out
     gaps = max_gap_ns or {}
-    with Reader(bag_dir) as reader:
-        conns = [c for c in reader.connections if c.msgtype == IMAGE_TYPE
+    with _windows(Path(bag_dir)) as (connections, window):
+        conns = [c for c in connections if c.msgtype == IMAGE_TYPE
                  and (topics is None or c.topic in topics)]
         non_color: set[str] = set()
         for target in targets_ns:
@@ -114,8 +118,7 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
                     continue
                 half = max(int(gaps.get(conn.topic, 1_000_000_000)), 1_000_000)
                 best: tuple[int, bytes] | None = None
-                for _, ts, raw in reader.messages(connections=[conn], start=target - half,
-                                                  stop=target + half + 1):
+                for ts, raw in window(conn, target - half, target + half + 1):
                     if best is None or abs(ts - target) < abs(best[0] - target):
                         best = (ts, raw)
                 if best is None:
@@ -127,6 +130,32 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
                     continue
                 out[target].append((conn.topic, best[0], pixels))
     return out
+
+
+Window = Callable[[Any, int, int], Iterator[tuple[int, bytes]]]
+
+
+@contextlib.contextmanager
+def _windows(bag_dir: Path) -> Iterator[tuple[list[Any], Window]]:
+    """The bag's connections and a reader of one connection's messages in ``[start, stop)``
+    (log time order): through the MCAP file's chunk index when the bag is one finished MCAP
+    file (no ruamel parsing of ``metadata.yaml``), else through rosbags' Reader."""
+    mcap = finished_mcap(bag_dir)
+    if mcap is None:
+        with Reader(bag_dir) as reader:
+            def rosbags_window(conn: Any, start: int, stop: int) -> Iterator[tuple[int, bytes]]:
+                for _, ts, raw in reader.messages(connections=[conn], start=start, stop=stop):
+                    yield ts, raw
+            yield list(reader.connections), rosbags_window
+        return
+    with mcap.path.open("rb") as f:
+        indexed = make_reader(f)
+
+        def mcap_window(conn: Any, start: int, stop: int) -> Iterator[tuple[int, bytes]]:
+            for _, _, message in indexed.iter_messages(topics=[conn.topic], start_time=start,
+                                                       end_time=stop):
+                yield message.log_time, message.data
+        yield list(mcap.connections), mcap_window
 
 
 def keyframes(bag_dir: Path, targets_ns: Sequence[int], *, max_gap_ns: dict[str, int]
