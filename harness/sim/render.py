@@ -64,6 +64,7 @@ __all__ = [
     "Renderer",
     "apply_render_settings",
     "depth_from_buffer",
+    "is_software_renderer",
     "points_from_depth",
 ]
 
@@ -121,6 +122,13 @@ class CameraFrame:
     rgb: UInt8Array
     depth: Float32Array
     intrinsics: Intrinsics
+
+
+def is_software_renderer(gl_renderer: str) -> bool:
+    """Whether an OpenGL renderer string names a CPU rasterizer (Mesa's llvmpipe, softpipe,
+    swrast): one that already renders on every core."""
+    name = gl_renderer.lower()
+    return any(k in name for k in ("llvmpipe", "softpipe", "swrast", "software rasterizer"))
 
 
 def apply_render_settings(model: mujoco.MjModel, settings: RenderSpec) -> None:
@@ -341,6 +349,18 @@ class Renderer:
                 ) from err
         else:
             self._gl.make_current()
+
+    def gl_renderer(self) -> str:
+        """The OpenGL ``GL_RENDERER`` string (creates the context on this thread); empty when
+        it cannot be read."""
+        self.start()
+        try:
+            from OpenGL import GL
+
+            name = GL.glGetString(GL.GL_RENDERER)
+        except Exception:  # informational: PyOpenGL missing or the platform disagrees
+            return ""
+        return name.decode(errors="replace") if isinstance(name, bytes) else str(name or "")
 
     def target(self, width: int, height: int) -> None:
         """Create the offscreen buffer for ``width`` x ``height`` now (the context must be

@@ -29,7 +29,7 @@ from harness.scenario.schema import (
     WorldSpec,
 )
 from harness.sim import World
-from harness.sim.render import Renderer
+from harness.sim.render import Renderer, is_software_renderer
 from harness.sim.render_pipeline import RenderThread
 
 SCENE = """\
@@ -151,7 +151,8 @@ def test_overlap_publishes_deferred_images_to_the_recorder_only() -> None:
     message at publish time."""
     sc = Scenario(format_version=1, name="hall", world=WorldSpec(size=(12.0, 10.0), shelves=(),
                                                                  dock=DockSpec(enabled=False)),
-                  cameras=(CameraSpec(name="cam", resolution=(16, 12), outputs=("rgb",)),))
+                  cameras=(CameraSpec(name="cam", resolution=(16, 12), outputs=("rgb",)),),
+                  render=RenderSpec(overlap=True))
     sim = Simulation(sc)
     seen: list[Any] = []
 
@@ -192,3 +193,21 @@ def test_deferred_resolves_once_across_threads() -> None:
     bus.publish("/x", "std_msgs/msg/Bool", Deferred(lambda: "built"))
     bus.spin()
     assert out == ["built"]
+
+
+def test_auto_overlaps_with_a_gpu_and_not_with_a_software_renderer() -> None:
+    assert is_software_renderer("llvmpipe (LLVM 15.0.6, 256 bits)")
+    assert is_software_renderer("softpipe") and is_software_renderer("Mesa X11 swrast")
+    assert not is_software_renderer("NVIDIA H100 80GB HBM3/PCIe/SSE2")
+    world = _hall(RenderSpec())
+    with Renderer(world.model, world.data) as probe:
+        name = probe.gl_renderer()
+    assert name  # the context says what it is
+    sim = Simulation(world.scenario)
+    try:
+        sim.run(1)
+        table = sim.ctx.extras[RENDER_PRODUCTS]
+        assert isinstance(table, RenderProductTable)
+        assert table.overlap is not is_software_renderer(name)
+    finally:
+        sim.close()

@@ -35,7 +35,7 @@ compatibility and change nothing.
 
 Rendering happens only when a helper that needs pixels executes (so a SimulationGate upstream
 sets the cost), and at most once per camera, size and tick however many helpers publish it.
-With ``render.overlap`` (the default) the frame renders on a background thread
+With ``render.overlap`` (``auto``: with a GPU) the frame renders on a background thread
 (:mod:`harness.sim.render_pipeline`) and the helpers publish :class:`~harness.bus.Deferred`
 messages built from it when it is needed: by a subscriber (in the same tick, as always) or by
 the recorder (on its own threads). The bytes are the same either way.
@@ -57,7 +57,13 @@ from harness.errors import GraphError, SimulationError
 from harness.graph import Attr, NodeType, register
 from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, aliases, frame_of, topic_of
 from harness.sim.prims import PrimKind
-from harness.sim.render import CameraFrame, Intrinsics, Renderer, points_from_depth
+from harness.sim.render import (
+    CameraFrame,
+    Intrinsics,
+    Renderer,
+    is_software_renderer,
+    points_from_depth,
+)
 from harness.sim.render_pipeline import RenderThread
 
 __all__ = [
@@ -204,8 +210,11 @@ class RenderProductTable(Mapping[str, RenderProduct]):
         self._frames: dict[tuple[int, int, int], FrameSource] = {}
         self._frames_tick: int | None = None
         render = getattr(getattr(world, "scenario", None), "render", None)
-        #: Render on a background thread (``render.overlap``); helpers then publish Deferred.
-        self.overlap = bool(getattr(render, "overlap", False))
+        setting = getattr(render, "overlap", False)
+        self._auto = setting == "auto"
+        #: Render on a background thread (``render.overlap``; ``auto`` is decided at the first
+        #: frame, from the OpenGL renderer); helpers then publish Deferred messages.
+        self.overlap = False if self._auto else bool(setting)
 
     def __getitem__(self, path: str) -> RenderProduct:
         return self._products[path]
@@ -264,9 +273,9 @@ class RenderProductTable(Mapping[str, RenderProduct]):
         key = (cam, product.width, product.height)
         src = self._frames.get(key)
         if src is None:
-            if self._renderer is None:
-                self._renderer = Renderer(self.world.model, self.world.data)
             try:
+                if self._renderer is None:
+                    self._renderer = self._first_renderer()
                 if self.overlap:
                     if self._thread is None:
                         self._thread = RenderThread(self._renderer)
@@ -277,6 +286,18 @@ class RenderProductTable(Mapping[str, RenderProduct]):
                 raise GraphError(f"{where}: {err}") from err
             self._frames[key] = src
         return src
+
+    def _first_renderer(self) -> Renderer:
+        """The run's renderer; with ``overlap: auto`` it also decides :attr:`overlap`: off
+        for a software renderer, on otherwise (the render thread makes its own context)."""
+        renderer = Renderer(self.world.model, self.world.data)
+        if self._auto:
+            self._auto = False
+            self.overlap = not is_software_renderer(renderer.gl_renderer())
+            if self.overlap:  # the context belongs to the render thread: start afresh there
+                renderer.close()
+                renderer = Renderer(self.world.model, self.world.data)
+        return renderer
 
     def frame(self, product: RenderProduct, tick: int, where: str) -> CameraFrame:
         """The product's frame for ``tick`` (waits for it with :attr:`overlap`)."""
