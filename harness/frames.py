@@ -44,17 +44,20 @@ they compare and filter like strings. Tables keep the bag's order (time order pe
 
 from __future__ import annotations
 
+import os
 import re
 import struct
 from array import array
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import lz4.frame
 import numpy as np
 import pandas as pd
 import yaml
+import zstandard
 from mcap.reader import make_reader
 from pandas.api.types import union_categoricals
 from rosbags.rosbag2 import Reader
@@ -663,13 +666,15 @@ class _Conn:
 
 
 class _McapFile:
-    """A plain MCAP file (a baseline's reference recording) read like a rosbag2 directory:
-    ``connections``, ``messages()`` as (connection, log time, raw CDR), start and end."""
+    """A plain MCAP file (a baseline's reference recording, or a finished bag's one file) read
+    like a rosbag2 directory: ``connections``, ``messages()`` as (connection, log time, raw
+    CDR), start and end."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self.connections: list[_Conn] = []
         self.start_time, self.end_time = 2**63 - 1, 0
+        self._chunks: list[Any] = []
 
     def __enter__(self) -> _McapFile:
         if self.connections:  # already opened
@@ -684,17 +689,86 @@ class _McapFile:
             self.start_time = summary.statistics.message_start_time
             # exclusive, as rosbags reports a bag's end: after the last message
             self.end_time = summary.statistics.message_end_time + 1
+        chunks = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)
+        if all(c.message_index_length > 0 for c in chunks):
+            self._chunks = chunks
         return self
 
     def __exit__(self, *exc: object) -> None:
         return None
 
-    def messages(self) -> Iterator[tuple[_Conn, int, bytes]]:
+    def messages(self, wanted: Collection[int] | None = None
+                 ) -> Iterator[tuple[_Conn, int, bytes | None]]:
+        """Every message, in file order. With ``wanted`` (channel ids) only those messages'
+        payloads are read (the others come with None): through the chunk and message indexes,
+        so a bag's images cost nothing but their index entries."""
         by_id = {c.id: c for c in self.connections}
+        if wanted is None or not self._chunks:
+            with self.path.open("rb") as f:
+                for _schema, channel, message in make_reader(f).iter_messages(
+                        log_time_order=False):
+                    yield by_id[channel.id], message.log_time, message.data
+            return
         with self.path.open("rb") as f:
-            for _schema, channel, message in make_reader(f).iter_messages(
-                    log_time_order=False):
-                yield by_id[channel.id], message.log_time, message.data
+            fd = f.fileno()
+            for ci in self._chunks:
+                entries = _message_index(os.pread(fd, ci.message_index_length,
+                                                  ci.chunk_start_offset + ci.chunk_length))
+                read = _chunk_reader(fd, ci, sum(1 for cid, _, _ in entries if cid in wanted))
+                for cid, log_time, offset in entries:
+                    yield by_id[cid], log_time, read(offset) if cid in wanted else None
+
+
+def _message_index(buf: bytes) -> list[tuple[int, int, int]]:
+    """(channel id, log time, offset in the chunk's records) of every MessageIndex record in
+    ``buf``, in record order (file order)."""
+    out: list[tuple[int, int, int]] = []
+    pos, end = 0, len(buf)
+    while pos < end:
+        opcode, length = _REC_HEAD.unpack_from(buf, pos)
+        body = pos + 9
+        if opcode == 0x07:  # MessageIndex: channel id, then (log time, offset) pairs
+            cid, n = struct.unpack_from("<HI", buf, body)
+            pairs = np.frombuffer(buf, dtype="<u8", count=n // 8, offset=body + 6)
+            out += [(cid, int(t), int(o)) for t, o in pairs.reshape(-1, 2)]
+        pos = body + length
+    out.sort(key=lambda e: e[2])
+    return out
+
+
+_REC_HEAD = struct.Struct("<BQ")
+_MSG_HEAD = 2 + 4 + 8 + 8  # channel id, sequence, log time, publish time
+
+
+def _chunk_reader(fd: int, ci: Any, n_wanted: int) -> Callable[[int], bytes]:
+    """The payload of the Message record at an offset in chunk ``ci``'s records: read one by
+    one from an uncompressed chunk holding a few wanted messages among large ones (a bag's
+    images stay on disk), else from the whole chunk, read (and decompressed) once."""
+    start = ci.chunk_start_offset + 9 + 8 + 8 + 8 + 4 + 4 + len(ci.compression.encode()) + 8
+    if n_wanted and not ci.compression and n_wanted * 4096 < ci.uncompressed_size:
+        def one(offset: int) -> bytes:
+            head = os.pread(fd, 9 + _MSG_HEAD + 1024, start + offset)
+            _, length = _REC_HEAD.unpack_from(head, 0)
+            if 9 + length > len(head):
+                head = os.pread(fd, 9 + length, start + offset)
+            return head[9 + _MSG_HEAD:9 + length]
+        return one
+    records: bytes = b""
+    if n_wanted:
+        data = os.pread(fd, ci.compressed_size, start)
+        if ci.compression == "zstd":
+            data = zstandard.ZstdDecompressor().decompress(data,
+                                                           max_output_size=ci.uncompressed_size)
+        elif ci.compression == "lz4":
+            data = lz4.frame.decompress(data)
+        elif ci.compression:
+            raise ValueError(f"unknown chunk compression {ci.compression!r}")
+        records = data
+
+    def sliced(offset: int) -> bytes:
+        _, length = _REC_HEAD.unpack_from(records, offset)
+        return records[offset + 9 + _MSG_HEAD:offset + 9 + length]
+    return sliced
 
 
 _YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -791,10 +865,13 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
                 parts[cid].append(cols)
                 raws[cid] = []
 
-            for conn, t_ns, raw in reader.messages():
+            scan = (reader.messages(set(wanted)) if isinstance(reader, _McapFile)
+                    else reader.messages())
+            for conn, t_ns, raw in scan:
                 cid = conn.id
                 log[cid].append(t_ns)
                 if cid in wanted:
+                    assert raw is not None
                     raws[cid].append(raw)
                     if len(raws[cid]) >= _DECODE_BATCH:
                         flush(cid)
