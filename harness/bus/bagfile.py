@@ -124,7 +124,7 @@ class McapBagWriter:
         assert cid == len(self.topics)
         return cid
 
-    def write(self, channel: int, log_time: int, data: bytes) -> None:
+    def write(self, channel: int, log_time: int, data: bytes | memoryview) -> None:
         """Add one message; closes the chunk first if it would span too much log time, and
         after if it has grown past the size bound."""
         start = self._chunk_start
@@ -133,7 +133,8 @@ class McapBagWriter:
             start = None
         if start is None:
             self._chunk_start = log_time
-        self._mcap.add_message(channel, log_time, data, log_time)
+        # the library only writes the payload into its chunk buffer: any bytes-like will do
+        self._mcap.add_message(channel, log_time, data, log_time)  # type: ignore[arg-type]
         self.counts[channel - 1] += 1
         self.start_ns = log_time if self.start_ns is None else min(self.start_ns, log_time)
         self.end_ns = log_time if self.end_ns is None else max(self.end_ns, log_time)

@@ -76,7 +76,7 @@ class TopicStats:
     durability: str
 
 
-def digest_update(h: Any, stamp_ns: int, data: bytes) -> None:
+def digest_update(h: Any, stamp_ns: int, data: bytes | memoryview) -> None:
     """Feed one message into a topic's digest: ``(log time, length, payload)``."""
     h.update(struct.pack("<qI", stamp_ns, len(data)))
     h.update(data)
@@ -103,11 +103,12 @@ class _HashLane:
     """A thread that digests the payloads of the topics given to it, in the order queued."""
 
     def __init__(self, name: str) -> None:
-        self._queue: queue.Queue[tuple[Any, int, bytes] | None] = queue.Queue(maxsize=256)
+        self._queue: queue.Queue[tuple[Any, int, bytes | memoryview] | None] = queue.Queue(
+            maxsize=256)
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
 
-    def put(self, digest: Any, stamp_ns: int, data: bytes) -> None:
+    def put(self, digest: Any, stamp_ns: int, data: bytes | memoryview) -> None:
         self._queue.put((digest, stamp_ns, data))
 
     def _run(self) -> None:
@@ -119,8 +120,10 @@ class _HashLane:
         self._thread.join()
 
 
-def _serialize_deferred(msg: Deferred, msgtype: str) -> bytes:
-    return serialize(msg.resolve(), msgtype)
+def _serialize_deferred(msg: Deferred, msgtype: str) -> memoryview:
+    """CDR of a deferred message (an image): the typestore's buffer as it is, not copied into
+    a ``bytes`` (megabytes a frame, copied holding the GIL)."""
+    return TYPESTORE.serialize_cdr(msg.resolve(), msgtype)
 
 
 def _bag_qos(qos: Qos) -> BagQos:
@@ -176,8 +179,8 @@ class Recorder:
         self._qos_of: Callable[[str], Qos] = lambda topic: Qos()
         self._writer: McapBagWriter | None = None
         self._state: dict[str, _TopicState] = {}
-        self._queue: queue.Queue[tuple[_TopicState, int, bytes | Future[bytes]] | None] = \
-            queue.Queue(maxsize=queue_size)
+        self._queue: queue.Queue[tuple[_TopicState, int, bytes | Future[memoryview]] | None] \
+            = queue.Queue(maxsize=queue_size)
         self._thread: threading.Thread | None = None
         self._pool: ThreadPoolExecutor | None = None
         self._lanes: list[_HashLane] = []
@@ -266,6 +269,7 @@ class Recorder:
                 continue  # keep draining so producers never block on a dead writer
             st, stamp, payload = item
             try:
+                data: bytes | memoryview
                 if isinstance(payload, Future):
                     data = payload.result()
                     self._deferred_bytes += len(data)
