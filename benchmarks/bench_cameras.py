@@ -215,19 +215,52 @@ class SrrRun:
     loop: float  # first tick to last tick
     loop_ticks: int
     summary: dict[str, Any]
+    # the loop's thread inside RenderThread.submit (capture, and waiting for a free scene:
+    # the renderer paces) and inside Recorder.write (small messages' CDR, and waiting for
+    # room in the writer's queue: the writer paces)
+    in_submit: float = 0.0
+    in_record: float = 0.0
+    in_draw: float = 0.0  # Renderer.draw (mjr_render + mjr_readPixels), whichever thread
+
+
+def _timed(cls: Any, name: str, acc: list[float]) -> Any:
+    """Wrap ``cls.name`` to add its wall time on the calling thread to ``acc[0]``."""
+    orig = getattr(cls, name)
+
+    def wrapper(*a: Any, **k: Any) -> Any:
+        t = time.perf_counter()
+        try:
+            return orig(*a, **k)
+        finally:
+            acc[0] += time.perf_counter() - t
+    setattr(cls, name, wrapper)
+    return orig
 
 
 def harness_run(sc: Scenario, out: Path) -> SrrRun:
+    from harness.bus.recorder import Recorder
+    from harness.sim.render_pipeline import RenderThread
+
     marks: dict[int, float] = {}
 
     def progress(k: int, n: int) -> None:
         if k in (1, n):
             marks[k] = time.perf_counter()
 
-    t0 = time.perf_counter()
-    res = api.run_scenario(sc, source=str(SCENARIO), out=out, progress=progress)
-    wall = time.perf_counter() - t0
-    return SrrRun(wall, marks[sc.n_ticks] - marks[1], sc.n_ticks - 1, res.summary)
+    submit, record, draw = [0.0], [0.0], [0.0]
+    orig_submit = _timed(RenderThread, "submit", submit)
+    orig_write = _timed(Recorder, "write", record)
+    orig_draw = _timed(Renderer, "draw", draw)
+    try:
+        t0 = time.perf_counter()
+        res = api.run_scenario(sc, source=str(SCENARIO), out=out, progress=progress)
+        wall = time.perf_counter() - t0
+    finally:
+        RenderThread.submit = orig_submit  # type: ignore[method-assign]
+        Recorder.write = orig_write  # type: ignore[method-assign]
+        Renderer.draw = orig_draw  # type: ignore[method-assign]
+    return SrrRun(wall, marks[sc.n_ticks] - marks[1], sc.n_ticks - 1, res.summary,
+                  submit[0], record[0], draw[0])
 
 
 def gl_renderer_name() -> str:
@@ -259,7 +292,7 @@ class Result:
 
 
 def measure(args: argparse.Namespace, config: str, tmp: Path) -> Result:
-    sc = load(args, CONFIGS[config])
+    sc = load(args, {**CONFIGS[config], "overlap": args.overlap})
     t_render: list[float] = []
     t_bare: list[float] = []
     runs: list[SrrRun] = []
@@ -298,6 +331,9 @@ def report(args: argparse.Namespace, r: Result) -> dict[str, Any]:
         "srr_loop_sets_per_s": loop_sets, "srr_over_render_only": loop_sets / limit,
         "srr_wall_s": r.srr.wall, "srr_rtf": args.duration / r.srr.wall,
         "srr_loop_rtf": loop_sets / args.fps,
+        "srr_loop_thread_s": {"loop": r.srr.loop, "in_render_submit": r.srr.in_submit,
+                              "in_recorder_write": r.srr.in_record},
+        "srr_draw_ms_per_frame": r.srr.in_draw / r.frames * 1e3,
         "bare_wall_s": r.bare, "bare_rtf": args.duration / r.bare,
         "overhead_srr_over_bare": r.srr.wall / r.bare,
         "bare_ms_per_frame": {"render": ph.render / ph.frames * 1e3,
@@ -314,6 +350,12 @@ def report(args: argparse.Namespace, r: Result) -> dict[str, Any]:
           f"{out['srr_loop_rtf']:.2f}")
     print(f"  srr run     : {r.srr.wall:7.2f} s  RTF {out['srr_rtf']:.2f} (whole run: build, "
           "loop, scoring, report)")
+    print(f"  srr loop    : {r.srr.loop:7.2f} s, of which the loop's thread spent "
+          f"{r.srr.in_submit:.2f} s submitting renders (capture + waiting for the renderer) "
+          f"and {r.srr.in_record:.2f} s handing messages to the recorder (small messages' "
+          "CDR + waiting for the writer); a draw took "
+          f"{out['srr_draw_ms_per_frame']:.2f} ms a frame in srr (render-only: "
+          f"{out['render_only_ms_per_frame']:.2f} ms with the capture)")
     print(f"  bare loop   : {r.bare:7.2f} s  RTF {out['bare_rtf']:.2f}; srr / bare "
           f"{out['overhead_srr_over_bare']:.3f}; per frame render "
           f"{out['bare_ms_per_frame']['render']:.2f} ms, messages+serialize "
@@ -333,6 +375,8 @@ def main() -> None:
                     help="comma-separated: rgb,depth,pointcloud,camera_info")
     ap.add_argument("--configs", type=lambda s: s.split(","), default=["off"],
                     help=f"comma-separated render configurations: {', '.join(CONFIGS)}")
+    ap.add_argument("--overlap", type=lambda s: {"true": True, "false": False}.get(s, s),
+                    default="auto", help="render.overlap for srr: auto (default), true, false")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
     ap.add_argument("--profile", action="store_true",
@@ -348,7 +392,7 @@ def main() -> None:
           f"MUJOCO_GL={os.environ.get('MUJOCO_GL')}, GL renderer: {gl_renderer_name()}")
     print(f"scenario: {args.cameras} camera(s) {args.width}x{args.height} at {args.fps:g} fps "
           f"(gate step {step}), outputs {','.join(args.outputs)}; {args.duration:g} s simulated "
-          f"= {sc.n_ticks} ticks")
+          f"= {sc.n_ticks} ticks; srr with render.overlap={args.overlap}")
     figures = []
     with tempfile.TemporaryDirectory() as tmp:
         for config in args.configs:

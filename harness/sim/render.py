@@ -304,6 +304,7 @@ class Renderer:
         self._camera = mujoco.MjvCamera()
         self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self._targets: dict[tuple[int, int], _Target] = {}
+        self._bound: _Target | None = None
         self._d_limits: dict[Intrinsics, npt.NDArray[np.float32]] = {}
         self._closed = False
         self.renders = 0
@@ -375,6 +376,7 @@ class Renderer:
                 raise SimulationError(f"image size must be positive, got {width}x{height}")
             target = _Target(self._model, *key)
             self._targets[key] = target
+            self._bound = target  # making the context binds its offscreen buffer
         return target
 
     def new_scene(self) -> mujoco.MjvScene:
@@ -419,7 +421,9 @@ class Renderer:
             buffer = np.empty_like(target.depth)
         else:
             rgb, buffer = target.rgb, target.depth
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, target.context)
+        if target is not self._bound:  # mjr_render leaves its context's buffer bound
+            mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, target.context)
+            self._bound = target
         mujoco.mjr_render(target.viewport, job.scene, target.context)
         mujoco.mjr_readPixels(rgb, buffer, target.viewport, target.context)
         self.renders += 1
@@ -440,6 +444,7 @@ class Renderer:
                 target.free()
             self._gl.free()
         self._targets.clear()
+        self._bound = None
         self._gl = None
         self._scene = None
 
