@@ -66,6 +66,7 @@ __all__ = [
     "depth_from_buffer",
     "is_software_renderer",
     "points_from_depth",
+    "rendered_in_this_process",
 ]
 
 MAX_GEOMS = 10_000
@@ -122,6 +123,15 @@ class CameraFrame:
     rgb: UInt8Array
     depth: Float32Array
     intrinsics: Intrinsics
+
+
+_CONTEXTS_MADE = False  # set once this process creates an OpenGL context
+
+
+def rendered_in_this_process() -> bool:
+    """Whether this process has created an OpenGL context (its driver's threads and state then
+    live here: a process forked from it must not render)."""
+    return _CONTEXTS_MADE
 
 
 def is_software_renderer(gl_renderer: str) -> bool:
@@ -340,6 +350,8 @@ class Renderer:
                     "cannot render: MuJoCo uses GLFW (MUJOCO_GL unset or 'glfw') and there is "
                     "no display; set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa "
                     "before starting")
+            global _CONTEXTS_MADE
+            _CONTEXTS_MADE = True
             try:
                 self._gl = mujoco.GLContext(max(1, vis.offwidth), max(1, vis.offheight))
                 self._gl.make_current()

@@ -1,12 +1,14 @@
 """Runs in parallel worker processes on this machine: one process per run, at most ``jobs`` at
 a time.
 
-Where the platform has ``fork`` (Linux, macOS) and the suite's process runs no other thread,
-each run's process is forked from the suite's, which has already imported srr, MuJoCo, NumPy,
-pandas and SciPy (1.4 s of start-up a run on the 2-core CI machine, a sixth of the bundled
-suite's CPU time); the child runs :func:`harness.suite.worker.main` and exits. Elsewhere it is
-a fresh ``python -m harness.suite.worker``. Either way a run never sees another run's state
-(the suite's process runs nothing itself).
+With ``fork=True`` (what ``srr suite`` asks for) each run's process is forked from the suite's,
+which has already imported srr, MuJoCo, NumPy, pandas and SciPy (1.4 s of start-up a run on
+the 2-core CI machine, a sixth of the bundled suite's CPU time); the child runs
+:func:`harness.suite.worker.main` and exits. That is done only on Linux and only while the
+suite's process is as clean as a fresh one — no other Python thread (a live progress display),
+no OpenGL context ever made here (its driver's threads and locks would not survive the fork) —
+else, and by default, each run is a fresh ``python -m harness.suite.worker``. Either way a run
+never sees another run's state.
 
 A process per run isolates what one run can break: a segfault, an out-of-memory kill or
 a hang costs that run (INVALID, with the signal or the timeout as the reason), never the
@@ -32,12 +34,20 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
 
+from harness.sim.render import rendered_in_this_process
 from harness.suite.events import Event, Listener, log_path, not_started
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, crash_reason, outcome_of
 from harness.suite.worker import peak_rss_mb
 
-__all__ = ["LocalExecutor"]
+__all__ = ["LocalExecutor", "fork_safe"]
+
+
+def fork_safe() -> bool:
+    """Whether a worker may be forked from this process: Linux, no other Python thread, and
+    no OpenGL context made here."""
+    return (sys.platform == "linux" and threading.active_count() == 1
+            and not rendered_in_this_process())
 
 
 class _Forked:
@@ -106,13 +116,13 @@ class LocalExecutor:
     name = "local"
 
     def __init__(self, jobs: int, *, baselines: Path | None = None, grace_s: float = 10.0,
-                 poll_s: float = 0.05, fork: bool | None = None) -> None:
+                 poll_s: float = 0.05, fork: bool = False) -> None:
         self.jobs = max(1, jobs)
         self.baselines = baselines
         self.grace_s = grace_s
         self.poll_s = poll_s
-        #: Fork each worker from this process (default: where ``os.fork`` exists).
-        self.fork = hasattr(os, "fork") if fork is None else fork
+        #: Fork each worker from this process when that is safe (:func:`fork_safe`).
+        self.fork = fork
 
     def _start(self, spec: RunSpec, out_root: Path) -> _Running:
         job = {**spec.job(), "out_root": str(out_root),
@@ -120,7 +130,7 @@ class LocalExecutor:
         log_file = log_path(out_root, spec)
         log_file.parent.mkdir(parents=True, exist_ok=True)
         log = log_file.open("wb")
-        if self.fork and threading.active_count() == 1:
+        if self.fork and fork_safe():
             return _Running(spec, _fork_worker(job, log), log, time.monotonic())
         env = dict(os.environ)
         # the worker imports plug-ins ("module:Class") from here, like `srr run` does
