@@ -301,21 +301,23 @@ def measure(args: argparse.Namespace, config: str, tmp: Path) -> Result:
     for i in range(args.repeats):
         t, frames = render_only(sc)
         t_render.append(t)
-        ph = Phases()
-        out = tmp / f"bare_{config}_{i}"
-        t_bare.append(bare(sc, out, ph))
-        shutil.rmtree(out, ignore_errors=True)
-        if t_bare[-1] == min(t_bare):
-            phases = ph
+        if not args.skip_bare:
+            ph = Phases()
+            out = tmp / f"bare_{config}_{i}"
+            t_bare.append(bare(sc, out, ph))
+            shutil.rmtree(out, ignore_errors=True)
+            if t_bare[-1] == min(t_bare):
+                phases = ph
         out = tmp / f"srr_{config}_{i}"
         runs.append(harness_run(sc, out))
         shutil.rmtree(out, ignore_errors=True)
     srr = min(runs, key=lambda r: r.loop)
     srr_counts = {t: v["count"] for t, v in srr.summary["topics"].items()}
-    assert srr_counts == phases.messages, (srr_counts, phases.messages)
+    if t_bare:
+        assert srr_counts == phases.messages, (srr_counts, phases.messages)
     assert srr.summary["verdict"] != "INVALID", srr.summary["reasons"]
-    return Result(config, min(t_render), frames, min(t_bare), srr, phases, t_render, t_bare,
-                  [r.loop for r in runs])
+    return Result(config, min(t_render), frames, min(t_bare, default=math.nan), srr, phases,
+                  t_render, t_bare, [r.loop for r in runs])
 
 
 def report(args: argparse.Namespace, r: Result) -> dict[str, Any]:
@@ -336,9 +338,9 @@ def report(args: argparse.Namespace, r: Result) -> dict[str, Any]:
         "srr_draw_ms_per_frame": r.srr.in_draw / r.frames * 1e3,
         "bare_wall_s": r.bare, "bare_rtf": args.duration / r.bare,
         "overhead_srr_over_bare": r.srr.wall / r.bare,
-        "bare_ms_per_frame": {"render": ph.render / ph.frames * 1e3,
-                              "messages_serialize": ph.serialize / ph.frames * 1e3,
-                              "mcap_write": ph.write / ph.frames * 1e3},
+        "bare_ms_per_frame": {"render": ph.render / max(ph.frames, 1) * 1e3,
+                              "messages_serialize": ph.serialize / max(ph.frames, 1) * 1e3,
+                              "mcap_write": ph.write / max(ph.frames, 1) * 1e3},
         "runs": {"render_only": r.all_render, "bare": r.all_bare, "srr_loop": r.all_srr},
     }
     print(f"[{r.config}] render {json.dumps(CONFIGS[r.config])}: {r.frames} frames, "
@@ -356,6 +358,8 @@ def report(args: argparse.Namespace, r: Result) -> dict[str, Any]:
           "CDR + waiting for the writer); a draw took "
           f"{out['srr_draw_ms_per_frame']:.2f} ms a frame in srr (render-only: "
           f"{out['render_only_ms_per_frame']:.2f} ms with the capture)")
+    if math.isnan(r.bare):
+        return out
     print(f"  bare loop   : {r.bare:7.2f} s  RTF {out['bare_rtf']:.2f}; srr / bare "
           f"{out['overhead_srr_over_bare']:.3f}; per frame render "
           f"{out['bare_ms_per_frame']['render']:.2f} ms, messages+serialize "
@@ -378,6 +382,7 @@ def main() -> None:
     ap.add_argument("--overlap", type=lambda s: {"true": True, "false": False}.get(s, s),
                     default="auto", help="render.overlap for srr: auto (default), true, false")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--skip-bare", action="store_true", help="measure no bare loop")
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
     ap.add_argument("--profile", action="store_true",
                     help="also profile one srr run (cProfile, top functions by own time)")
