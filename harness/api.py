@@ -44,6 +44,7 @@ from harness.diskspace import MB, DiskGuard, FreeSpace, check_free_space, disk_f
 from harness.engine import Simulation
 from harness.errors import BagError, InvalidRunError, RunStopped, ScenarioError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
+from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.output import ROS2_OUTPUT, OutputKind, check_output_topics, decide_output
 from harness.regression import (
@@ -359,12 +360,15 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
             recorder.add_serialized_tap(view.log)
             view.advertise({t: i.msgtype for t, i in loop.bus.topics().items()}, loop.bus.qos)
             view.wait_for_client()
+        hz = scenario.physics.tick_hz
         for _ in range(n_ticks):
             loop.step()
             if view is not None:
                 view.tick()
             if progress is not None:
                 progress(loop.ticks(), n_ticks)
+            if loop.ticks() % hz == 0:  # flat resident memory however long the run
+                release_free_memory()
             low = guard.poll(loop.ticks(), recorder.bytes_serialized)
             if low is not None:
                 stopped = (f"{low}: the run was stopped after "
@@ -386,6 +390,7 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
     try:  # until summary.json exists the directory is half-written: an error removes it
         stats = recorder.close()
+        release_free_memory()  # the loop's buffers, before scoring reads the bag
         published = {t: n for t, n in loop.bus.published_counts().items()
                      if t not in recorder.unrecorded}
         sim_s = loop.ticks() / scenario.physics.tick_hz
@@ -863,26 +868,28 @@ def suite(paths: Sequence[str | Path], *, executor: str = "local", jobs: int | N
           address: str | None = None, repeat: int | None = None, out: Path | None = None,
           timeout_s: float | None = None, history: Path | None = None,
           baselines: Path | None = None, gpu_share: float = 0.5,
-          bless_reason: str | None = None, listen: Any = None) -> Any:
+          bless_reason: str | None = None, listen: Any = None, fork: bool = False) -> Any:
     """``srr suite``: check every scenario, sweep point and suite file in ``paths`` (bad input
     raises :class:`SrrError` before anything runs), run them on ``executor`` (``local``: ``jobs``
     worker processes, default one per CPU; ``ray``: tasks on the cluster at ``address``, else on
     a local cluster started for the suite) and write ``out``'s ``summary.json``, ``junit.xml``
     and ``index.html``. Returns a :class:`harness.suite.runner.SuiteResult`; ``listen`` gets
-    :class:`harness.suite.events.Event` s as runs start and finish."""
+    :class:`harness.suite.events.Event` s as runs start and finish. ``fork``: local workers
+    are forked from this process when it is safe (:func:`harness.suite.local.fork_safe`; what
+    ``srr suite`` does), saving each run the interpreter's start-up and imports."""
     from harness.suite.runner import plan_suite
 
     plan = plan_suite(paths, repeat=repeat, timeout_s=timeout_s)
     return run_planned_suite(plan, executor=executor, jobs=jobs, address=address, out=out,
                              history=history, baselines=baselines, gpu_share=gpu_share,
-                             bless_reason=bless_reason, listen=listen)
+                             bless_reason=bless_reason, listen=listen, fork=fork)
 
 
 def run_planned_suite(plan: Any, *, executor: str = "local", jobs: int | None = None,
                       address: str | None = None, out: Path | None = None,
                       history: Path | None = None, baselines: Path | None = None,
                       gpu_share: float = 0.5, bless_reason: str | None = None,
-                      listen: Any = None) -> Any:
+                      listen: Any = None, fork: bool = False) -> Any:
     """:func:`suite` for a plan already checked (:func:`harness.suite.runner.plan_suite`)."""
     import os
 
@@ -896,7 +903,7 @@ def run_planned_suite(plan: Any, *, executor: str = "local", jobs: int | None = 
         raise SrrError(f"--executor: expected local or ray, got {executor!r}")
     if address is not None and executor != "ray":
         raise SrrError("--address: only with --executor ray")
-    ex: Any = (LocalExecutor(jobs or os.cpu_count() or 1, baselines=baselines)
+    ex: Any = (LocalExecutor(jobs or os.cpu_count() or 1, baselines=baselines, fork=fork)
                if executor == "local" else
                RayExecutor(address=address, jobs=jobs, baselines=baselines, gpu_share=gpu_share))
     return run_suite(plan, ex, out=out, history=history, listen=listen,

@@ -535,7 +535,8 @@ def _cmd_suite(args: argparse.Namespace) -> int:
                 plan, executor=args.executor, jobs=args.jobs, address=args.address,
                 out=args.out, history=args.history, baselines=args.baselines,
                 gpu_share=args.gpu_share,
-                bless_reason=args.reason if args.update_baselines else None, listen=listen)
+                bless_reason=args.reason if args.update_baselines else None, listen=listen,
+                fork=True)  # this process only plans: workers fork from it when safe
     s = res.summary
     out_console.print(groups_table(res.groups, f"suite {s['name']}: {len(s['runs'])} runs on "
                                    f"{s['executor']} × {s['jobs']} in {s['wall_s']:.1f} s"))

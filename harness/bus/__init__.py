@@ -1,6 +1,16 @@
 """The in-process bus, ROS 2 message helpers and the MCAP recorder."""
 
-from harness.bus.bus import TRANSIENT_LOCAL, Bus, BusError, Envelope, Publisher, Qos, TopicInfo
+from harness.bus.bus import (
+    TRANSIENT_LOCAL,
+    Bus,
+    BusError,
+    Deferred,
+    Envelope,
+    Publisher,
+    Qos,
+    TopicInfo,
+    resolved,
+)
 from harness.bus.live import LiveConfig, LiveView
 from harness.bus.names import (
     FrameIdError,
@@ -17,6 +27,7 @@ __all__ = [
     "TRANSIENT_LOCAL",
     "Bus",
     "BusError",
+    "Deferred",
     "Envelope",
     "FrameIdError",
     "LiveConfig",
@@ -29,6 +40,7 @@ __all__ = [
     "TopicStats",
     "remap_topic",
     "resolve_topic",
+    "resolved",
     "validate_frame_id",
     "validate_namespace",
     "validate_topic",

@@ -131,7 +131,7 @@ class McapBagWriter:
         assert cid == len(self.topics)
         return cid
 
-    def write(self, channel: int, log_time: int, data: bytes) -> None:
+    def write(self, channel: int, log_time: int, data: bytes | memoryview) -> None:
         """Add one message; closes the chunk first if it would span too much log time, and
         after if it has grown past the size bound."""
         start = self._chunk_start

@@ -10,6 +10,7 @@ subscribers (``/tf_static``).
 
 from __future__ import annotations
 
+import threading
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -17,7 +18,7 @@ from typing import Any, Literal
 
 from harness.errors import SrrError
 
-__all__ = ["Bus", "BusError", "Envelope", "Publisher", "Qos", "TopicInfo"]
+__all__ = ["Bus", "BusError", "Deferred", "Envelope", "Publisher", "Qos", "TopicInfo", "resolved"]
 
 
 class BusError(SrrError):
@@ -32,6 +33,37 @@ class Qos:
 
 
 TRANSIENT_LOCAL = Qos(durability="transient_local", depth=1)
+
+
+_UNSET = object()
+
+
+class Deferred:
+    """A message computed when first needed: ``resolve()`` calls ``build()`` once (on
+    whichever thread asks first; thread-safe) and returns its message from then on."""
+
+    __slots__ = ("_build", "_lock", "_msg")
+
+    def __init__(self, build: Callable[[], Any]) -> None:
+        self._build: Callable[[], Any] | None = build
+        self._lock = threading.Lock()
+        self._msg: Any = _UNSET
+
+    def resolve(self) -> Any:
+        msg = self._msg
+        if msg is _UNSET:
+            with self._lock:
+                if self._msg is _UNSET:
+                    build, self._build = self._build, None
+                    assert build is not None
+                    self._msg = build()
+                msg = self._msg
+        return msg
+
+
+def resolved(msg: Any) -> Any:
+    """``msg``, computed if it is a :class:`Deferred`."""
+    return msg.resolve() if type(msg) is Deferred else msg
 
 
 class Envelope:
@@ -110,6 +142,7 @@ class Bus:
         self._subs: dict[str, list[Callback]] = {}
         self._queue: deque[Envelope | _Redelivery] = deque()
         self._taps: list[Tap] = []
+        self._taps_defer = True  # every tap takes Deferred messages as they are
         self._seq = 0
 
     # -- topology -----------------------------------------------------------------------------
@@ -137,9 +170,12 @@ class Bus:
 
     def add_tap(self, tap: Tap) -> None:
         self._taps.append(tap)
+        self._taps_defer = all(getattr(t, "takes_deferred", False) for t in self._taps)
 
     # -- traffic ------------------------------------------------------------------------------
     def publish(self, topic: str, msgtype: str, msg: Any) -> None:
+        if not self._taps_defer and type(msg) is Deferred:
+            msg = msg.resolve()
         self._send(self._declare(topic, msgtype, None),
                    Envelope(topic, msgtype, self._now_ns(), self._seq, msg), True)
 
@@ -184,12 +220,15 @@ class Bus:
         while self._queue:
             env = self._queue.popleft()
             if isinstance(env, _Redelivery):
-                env.callback(env.env.msg)
+                env.callback(resolved(env.env.msg))
                 delivered += 1
                 continue
-            for cb in self._subs.get(env.topic, ()):
-                cb(env.msg)
-                delivered += 1
+            subs = self._subs.get(env.topic)
+            if subs:
+                msg = resolved(env.msg)
+                for cb in subs:
+                    cb(msg)
+                    delivered += 1
         return delivered
 
     # -- introspection ------------------------------------------------------------------------

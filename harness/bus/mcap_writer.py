@@ -116,7 +116,7 @@ class McapWriter:
         self._chunk += _record(channel)
         return channel.id
 
-    def add_message(self, channel_id: int, log_time: int, data: bytes,
+    def add_message(self, channel_id: int, log_time: int, data: bytes | memoryview,
                     publish_time: int) -> None:
         """Append one message (sequence 0) to the chunk being filled."""
         if self._message_count == 0 or log_time < self._message_start:

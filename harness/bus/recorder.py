@@ -7,15 +7,26 @@ being filled). It keeps, per topic, the count, byte total and a SHA-256 digest o
 ``(log time, payload)`` so two runs can be compared without reading the bags back. Topics
 named ``unrecorded`` (raw camera images a camera records only compressed) are counted, not
 written.
+
+Threads: the caller's (the tick loop) serializes ordinary messages; a :class:`Deferred`
+message (a camera image still rendering) is built and serialized by a small pool instead; one
+writer thread writes to MCAP in publication order, taking messages in batches (a deferred
+message's place in a batch holds its pending result); topics with large payloads are digested
+by a few hash threads (each topic on one of them, in order), the rest on the writer thread.
+Every step's output is the same bytes in the same order as doing it all on the caller's
+thread; the threads only overlap the work (CDR, SHA-256, file writes and NumPy release the
+GIL).
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
 import queue
 import struct
 import threading
 from collections.abc import Callable, Collection
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -41,11 +52,17 @@ from harness.bus.bagfile import (
     dump_metadata,
     write_metadata,
 )
-from harness.bus.bus import Envelope, Qos
+from harness.bus.bus import Deferred, Envelope, Qos, resolved
 from harness.bus.messages import TYPESTORE, serialize
 from harness.errors import BagError
 
-__all__ = ["Recorder", "TopicStats", "digest_update", "topic_meta"]
+__all__ = ["HASH_LANE_MIN_BYTES", "Recorder", "TopicStats", "digest_update", "topic_meta"]
+
+#: A topic whose first payload is at least this large is digested on a hash thread.
+HASH_LANE_MIN_BYTES = 64 * 1024
+# Threads that build and serialize deferred messages, and hash threads, at most.
+_POOL_THREADS = max(2, min(4, os.cpu_count() or 1))
+_HASH_LANES = max(1, min(4, os.cpu_count() or 1))
 
 
 @dataclass(frozen=True)
@@ -62,15 +79,15 @@ class TopicStats:
     durability: str
 
 
-def digest_update(h: Any, stamp_ns: int, data: bytes) -> None:
+def digest_update(h: Any, stamp_ns: int, data: bytes | memoryview) -> None:
     """Feed one message into a topic's digest: ``(log time, length, payload)``."""
     h.update(struct.pack("<qI", stamp_ns, len(data)))
     h.update(data)
 
 
 class _TopicState:
-    __slots__ = ("bytes", "channel", "count", "digest", "first_ns", "last_ns", "msgtype", "qos",
-                 "topic")
+    __slots__ = ("bytes", "channel", "count", "digest", "first_ns", "lane", "last_ns", "msgtype",
+                 "qos", "topic")
 
     def __init__(self, topic: str, msgtype: str, qos: Qos) -> None:
         self.topic = topic
@@ -82,6 +99,34 @@ class _TopicState:
         self.digest = hashlib.sha256()
         self.first_ns: int | None = None
         self.last_ns: int | None = None
+        self.lane: _HashLane | None = None  # None: digested on the writer thread
+
+
+class _HashLane:
+    """A thread that digests the payloads of the topics given to it, in the order queued."""
+
+    def __init__(self, name: str) -> None:
+        self._queue: queue.Queue[tuple[Any, int, bytes | memoryview] | None] = queue.Queue(
+            maxsize=256)
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def put(self, digest: Any, stamp_ns: int, data: bytes | memoryview) -> None:
+        self._queue.put((digest, stamp_ns, data))
+
+    def _run(self) -> None:
+        while (item := self._queue.get()) is not None:
+            digest_update(*item)
+
+    def close(self) -> None:
+        self._queue.put(None)
+        self._thread.join()
+
+
+def _serialize_deferred(msg: Deferred, msgtype: str) -> memoryview:
+    """CDR of a deferred message (an image): the typestore's buffer as it is, not copied into
+    a ``bytes`` (megabytes a frame, copied holding the GIL)."""
+    return TYPESTORE.serialize_cdr(msg.resolve(), msgtype)
 
 
 def _bag_qos(qos: Qos) -> BagQos:
@@ -118,15 +163,23 @@ class Recorder:
     can lose (see :class:`~harness.bus.bagfile.ChunkPolicy`).
 
     Messages are serialized on the caller's thread (the message objects are not shared
-    further); writing to MCAP and hashing run on one background thread, in publication order,
-    so they overlap with rendering and physics (both release the GIL). They are handed over
-    in batches of up to ``batch`` messages (fewer when they reach ``batch_bytes``), so small
-    messages cost the two threads one hand-off per batch rather than one each. The queue
-    holds at most ``queue_size`` messages in all (``queue_size // batch`` batches, at least
-    one) and ``put`` blocks: the recorder slows the loop down rather than dropping anything.
-    An error on the writer thread is raised again by the next :meth:`write` or by
-    :meth:`close`.
+    further), :class:`~harness.bus.bus.Deferred` ones on a pool (ROS 2 only: another format
+    builds them on the caller's thread); writing to MCAP and hashing run on background
+    threads, in publication order, so they overlap with rendering and physics (see the module
+    doc). Messages are handed to the writer thread in batches of up to ``batch`` messages
+    (fewer when they reach ``batch_bytes``; a deferred message counts no bytes, its size not
+    yet known), so small messages cost the two threads one hand-off per batch rather than one
+    each. The queue holds at most ``queue_size`` messages in all (``queue_size // batch``
+    batches, at least one) and ``put`` blocks: the recorder slows the loop down rather than
+    dropping anything. An error on a background thread is raised again by the next
+    :meth:`write` or by :meth:`close`.
     """
+
+    #: The bus hands :class:`~harness.bus.bus.Deferred` messages over as they are.
+    takes_deferred = True
+    #: Deferred messages are built and serialized on the pool (the typestore's CDR of the bus
+    #: type); False in a format that converts messages (ROS 1), which builds them inline.
+    _defer_ok = True
 
     def __init__(self, bag_dir: Path, *, queue_size: int = 64,
                  chunks: ChunkPolicy | None = None,
@@ -138,26 +191,36 @@ class Recorder:
         self.unrecorded = frozenset(unrecorded)
         self._skipped: dict[str, tuple[str, int]] = {}
         self.chunks = chunks or ChunkPolicy()
-        # Serialized bytes handed to the writer so far (read on the caller's thread, e.g. by a
-        # disk-space guard).
-        self.bytes_serialized = 0
+        self._inline_bytes = 0  # serialized on the caller's thread
+        self._deferred_bytes = 0  # serialized on the pool (counted by the writer thread)
         self._qos_of: Callable[[str], Qos] = lambda topic: Qos()
         self._writer: Any = None
         self._state: dict[str, _TopicState] = {}
         self._batch_limit = max(1, batch)
         self._batch_bytes_limit = batch_bytes
-        self._batch: list[tuple[_TopicState, int, bytes]] = []
+        self._batch: list[tuple[_TopicState, int, bytes | memoryview | Future[memoryview]]] = []
         self._batch_bytes = 0
-        self._queue: queue.Queue[list[tuple[_TopicState, int, bytes]] | None] = queue.Queue(
-            maxsize=max(1, queue_size // self._batch_limit))
+        self._queue: queue.Queue[
+            list[tuple[_TopicState, int, bytes | memoryview | Future[memoryview]]] | None] = \
+            queue.Queue(maxsize=max(1, queue_size // self._batch_limit))
         self._thread: threading.Thread | None = None
+        self._pool: ThreadPoolExecutor | None = None
+        self._lanes: list[_HashLane] = []
+        self._next_lane = 0
         self._error: BagError | None = None
         self._forward: list[Callable[[Envelope, bytes], None]] = []
+
+    @property
+    def bytes_serialized(self) -> int:
+        """Serialized bytes handed to the writer so far (read on the caller's thread, e.g. by
+        a disk-space guard; deferred messages count once the writer has them)."""
+        return self._inline_bytes + self._deferred_bytes
 
     def add_serialized_tap(self, tap: Callable[[Envelope, bytes], None]) -> None:
         """Also hand each envelope with its serialized bytes to ``tap`` (on the caller's
         thread, before the bytes are queued for writing), so a second consumer (the live view)
-        does not serialize the message again."""
+        does not serialize the message again. Deferred messages are then built on the
+        caller's thread too."""
         self._forward.append(tap)
 
     @property
@@ -188,7 +251,8 @@ class Recorder:
             _, n = self._skipped.get(env.topic, (env.msgtype, 0))
             self._skipped[env.topic] = (env.msgtype, n + 1)
             if self._forward:
-                data = env.raw if env.raw is not None else serialize(env.msg, env.msgtype)
+                data = (env.raw if env.raw is not None
+                        else serialize(resolved(env.msg), env.msgtype))
                 for tap in self._forward:
                     tap(env, data)
             return
@@ -196,8 +260,17 @@ class Recorder:
         if st is None:
             st = self._state[env.topic] = _TopicState(env.topic, self._recorded_type(
                 env.msgtype), self._qos_of(env.topic))
+        msg = env.msg
+        if type(msg) is Deferred and env.raw is None and self._defer_ok and not self._forward:
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(_POOL_THREADS, thread_name_prefix="srr-cdr")
+            self._batch.append((st, env.stamp_ns,
+                                self._pool.submit(_serialize_deferred, msg, env.msgtype)))
+            if len(self._batch) >= self._batch_limit:
+                self._hand_over()
+            return
         data = self._serialize(env)
-        self.bytes_serialized += len(data)
+        self._inline_bytes += len(data)
         for tap in self._forward:
             tap(env, data)
         self._batch.append((st, env.stamp_ns, data))
@@ -218,23 +291,44 @@ class Recorder:
         self._error = BagError(f"{self.bag_dir}: cannot record {what}: {reason}")
         self._error.__cause__ = err
 
+    def _lane(self, size: int) -> _HashLane | None:
+        """The hash thread for a new topic whose first payload has ``size`` bytes (None: the
+        writer thread digests it)."""
+        if size < HASH_LANE_MIN_BYTES:
+            return None
+        if len(self._lanes) < _HASH_LANES:
+            self._lanes.append(_HashLane(f"srr-digest-{len(self._lanes)}"))
+        lane = self._lanes[self._next_lane % len(self._lanes)]
+        self._next_lane += 1
+        return lane
+
     def _drain(self) -> None:
         writer = self._writer
         assert writer is not None
         while (batch := self._queue.get()) is not None:
-            for st, stamp, data in batch:
+            for st, stamp, payload in batch:
                 if self._error is not None:
                     break  # keep draining so producers never block on a dead writer
                 try:
+                    data: bytes | memoryview
+                    if isinstance(payload, Future):
+                        data = payload.result()
+                        self._deferred_bytes += len(data)
+                    else:
+                        data = payload
                     if st.channel is None:
                         st.channel = self._add_topic(writer, st.topic, st.msgtype, st.qos)
+                        st.lane = self._lane(len(data))
                     writer.write(st.channel, stamp, data)
                 except Exception as err:  # handed to the caller's thread as one clear error
                     self._fail(st.topic, err)
                     break
                 st.count += 1
                 st.bytes += len(data)
-                digest_update(st.digest, stamp, data)
+                if st.lane is None:
+                    digest_update(st.digest, stamp, data)
+                else:
+                    st.lane.put(st.digest, stamp, data)
                 if st.first_ns is None:
                     st.first_ns = stamp
                 st.last_ns = stamp
@@ -247,6 +341,12 @@ class Recorder:
             self._queue.put(None)
             self._thread.join()
             self._thread = None
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+        for lane in self._lanes:
+            lane.close()
+        self._lanes.clear()
         writer, self._writer = self._writer, None
         if writer is not None:
             if self._error is not None:
@@ -280,7 +380,7 @@ class Recorder:
         ``env.raw`` when it is CDR (packed by its publisher, or a replayed ROS 2 recording)."""
         if env.raw is not None and env.encoding == "cdr":
             return env.raw
-        return serialize(env.msg, env.msgtype)
+        return serialize(resolved(env.msg), env.msgtype)
 
     def _add_topic(self, writer: Any, topic: str, msgtype: str, qos: Qos) -> int:
         """Register a topic with the writer (on the writer thread); returns its channel."""

@@ -31,7 +31,7 @@ from rosbags.rosbag1 import Writer as Rosbag1Writer
 from rosbags.typesys.msg import normalize_msgtype
 
 from harness.bus.bagfile import ChunkPolicy, McapBagWriter, TopicMeta
-from harness.bus.bus import Envelope, Qos
+from harness.bus.bus import Envelope, Qos, resolved
 from harness.bus.recorder import Recorder
 from harness.bus.ros1 import ROS1_TYPESTORE, Ros1Encoder, msgdef, ros1_name
 
@@ -105,6 +105,8 @@ class Ros1Recorder(Recorder):
     """Writes the bus as ROS 1 into ``bag_dir`` (see the module docstring); ``fmt``:
     ``bag`` or ``mcap``."""
 
+    _defer_ok = False  # a deferred image is built here and converted, like any message
+
     def __init__(self, bag_dir: Path, fmt: Ros1Format, *, queue_size: int = 64,
                  chunks: ChunkPolicy | None = None, unrecorded: Collection[str] = ()) -> None:
         super().__init__(bag_dir, queue_size=queue_size, chunks=chunks, unrecorded=unrecorded)
@@ -127,7 +129,8 @@ class Ros1Recorder(Recorder):
     def _serialize(self, env: Envelope) -> bytes:
         if env.raw is not None and env.encoding == "ros1":  # a replayed ROS 1 recording's
             return env.raw
-        return self._encoder.encode(env.topic, env.msgtype, env.msg)  # (CDR bytes: built)
+        return self._encoder.encode(env.topic, env.msgtype,  # (CDR bytes: built)
+                                    resolved(env.msg))
 
     def _add_topic(self, writer: Any, topic: str, msgtype: str, qos: Qos) -> int:
         latched = qos.durability == "transient_local"

@@ -7,8 +7,9 @@ is left out: the systems under test (a new version of a plug-in, changed paramet
 scenario's name and description, which baseline it names, the tolerances and the health-gate
 settings, how the bag is written (``recording``: chunking, fsync, the disk guard; a camera's
 ``record``, fixed or on a robot: raw or compressed images; ``output``: ROS 1 or ROS 2, bag or
-MCAP, whose messages carry the same values), live outputs (``ros2``, ``rtsp``) and the sweep
-a suite may expand the scenario into (``sweep``: each point is its own configuration).
+MCAP, whose messages carry the same values), whether images render on a background thread
+(``render.overlap``: the same bytes either way), live outputs (``ros2``, ``rtsp``) and the
+sweep a suite may expand the scenario into (``sweep``: each point is its own configuration).
 :func:`comparable_config` is that part of a resolved scenario, as plain data (a run adds
 ``scene_files``, the digests of the model files its scene is built from);
 :func:`config_differences` names what differs, field by field. A baseline blessed before srr
@@ -33,6 +34,8 @@ EXCLUDED = frozenset({"format_version", "name", "description", "baseline",
 EXCLUDED_SCORING = frozenset({"tolerances", "health"})
 #: Keys of each ``cameras`` entry that do not make two configurations different.
 EXCLUDED_CAMERA = frozenset({"record"})
+#: ``render`` sub-keys that do not make two configurations different.
+EXCLUDED_RENDER = frozenset({"overlap"})
 
 
 def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
@@ -49,6 +52,9 @@ def comparable_config(mapping: Mapping[str, Any]) -> dict[str, Any]:
     scoring = out.get("scoring")
     if isinstance(scoring, Mapping):
         out["scoring"] = {k: v for k, v in scoring.items() if k not in EXCLUDED_SCORING}
+    render = out.get("render")
+    if isinstance(render, Mapping):
+        out["render"] = {k: v for k, v in render.items() if k not in EXCLUDED_RENDER}
     return out
 
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from harness.bus.bagread import Recording, open_recording
 from harness.errors import VideoError
+from harness.frames import finished_mcap
 from harness.video.codec import H264Decoder, decode_rgb
 from harness.video.sei import nal_units
 
@@ -164,7 +165,7 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
     if not targets_ns:
         return out
     gaps = max_gap_ns or {}
-    with open_recording(bag_dir) as reader:
+    with _open(Path(bag_dir)) as reader:
         conns = [c for c in reader.connections if c.msgtype in IMAGE_TYPES
                  and (topics is None or c.topic in topics)]
         non_color: set[str] = set()
@@ -189,6 +190,15 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
                     continue
                 out[target].append((conn.topic, best[0], pixels))
     return out
+
+
+def _open(bag_dir: Path) -> Recording:
+    """The recording, opened: a rosbag2 directory of one finished MCAP file is read through
+    that file's chunk index (no ruamel parsing of ``metadata.yaml``; the same messages), any
+    other recording (ROS 1, a damaged bag) as :func:`~harness.bus.bagread.open_recording`
+    reads it."""
+    mcap = finished_mcap(bag_dir) if bag_dir.is_dir() else None
+    return open_recording(mcap.path if mcap is not None else bag_dir)
 
 
 def keyframes(bag_dir: Path, targets_ns: Sequence[int], *, max_gap_ns: dict[str, int]

@@ -52,15 +52,21 @@ import numpy as np
 import numpy.typing as npt
 
 from harness.errors import SimulationError
+from harness.scenario.schema import RenderSpec
 
 __all__ = [
     "MAX_GEOMS",
     "SKY_RANGE_FRACTION",
     "CameraFrame",
     "Intrinsics",
+    "RawFrame",
+    "RenderJob",
     "Renderer",
+    "apply_render_settings",
     "depth_from_buffer",
+    "is_software_renderer",
     "points_from_depth",
+    "rendered_in_this_process",
 ]
 
 MAX_GEOMS = 10_000
@@ -117,6 +123,37 @@ class CameraFrame:
     rgb: UInt8Array
     depth: Float32Array
     intrinsics: Intrinsics
+
+
+_CONTEXTS_MADE = False  # set once this process creates an OpenGL context
+
+
+def rendered_in_this_process() -> bool:
+    """Whether this process has created an OpenGL context (its driver's threads and state then
+    live here: a process forked from it must not render)."""
+    return _CONTEXTS_MADE
+
+
+def is_software_renderer(gl_renderer: str) -> bool:
+    """Whether an OpenGL renderer string names a CPU rasterizer (Mesa's llvmpipe, softpipe,
+    swrast): one that already renders on every core."""
+    name = gl_renderer.lower()
+    return any(k in name for k in ("llvmpipe", "softpipe", "swrast", "software rasterizer"))
+
+
+def apply_render_settings(model: mujoco.MjModel, settings: RenderSpec) -> None:
+    """Put a scenario's ``render:`` block into a compiled model, so that every renderer of it
+    draws the same way: the shadow map size, no shadow-casting lights without ``shadows``, no
+    reflective materials without ``reflections``, only directional lights with ``lights: sun``.
+    Nothing here changes physics, ray casts or depth (see :class:`RenderSpec`)."""
+    model.vis.quality.shadowsize = int(settings.shadow_size)
+    if not settings.shadows:
+        model.light_castshadow[:] = False
+    if not settings.reflections:
+        model.mat_reflectance[:] = 0.0
+    if settings.lights == "sun":
+        directional = model.light_type == mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
+        model.light_active[:] = model.light_active & directional
 
 
 def depth_from_buffer(buffer: npt.NDArray[np.floating[Any]], near: float, far: float,
@@ -213,24 +250,71 @@ class _Target:
         self.context.free()
 
 
+@dataclass(frozen=True)
+class RenderJob:
+    """One camera's scene captured for one render (``mjv_updateScene`` done): everything
+    :meth:`Renderer.draw` needs, none of it shared with the live ``MjData``."""
+
+    camera_id: int
+    intrinsics: Intrinsics
+    scene: mujoco.MjvScene
+    near: float
+    far: float
+    d_limit: Float32Array  # per pixel, the window depth of the sky's range, top row first
+
+
+@dataclass(frozen=True)
+class RawFrame:
+    """A frame as OpenGL reads it back: bottom row first, depth as the reversed-Z buffer.
+    :meth:`rgb_image` and :meth:`depth_image` give the :class:`CameraFrame` arrays (each a new
+    read-only array; the same bytes whichever thread computes them)."""
+
+    camera_id: int
+    intrinsics: Intrinsics
+    rgb: UInt8Array
+    buffer: Float32Array
+    near: float
+    far: float
+    d_limit: Float32Array
+
+    def rgb_image(self) -> UInt8Array:
+        rgb = np.ascontiguousarray(self.rgb[::-1])
+        rgb.flags.writeable = False
+        return rgb
+
+    def depth_image(self) -> Float32Array:
+        depth = _linear_depth(self.buffer[::-1], self.near, self.far, self.d_limit)
+        depth.flags.writeable = False
+        return depth
+
+    def frame(self) -> CameraFrame:
+        return CameraFrame(self.camera_id, self.rgb_image(), self.depth_image(), self.intrinsics)
+
+
 class Renderer:
     """Renders the cameras of one MuJoCo model/data pair (one world).
 
     ``render(camera_id, width, height)`` is one ``mjv_updateScene`` + one ``mjr_render`` + one
-    ``mjr_readPixels``; :attr:`renders` counts them (tests and benchmarks read it).
+    ``mjr_readPixels``; :attr:`renders` counts them (tests and benchmarks read it). It is
+    :meth:`capture` (reads ``data``: the loop's thread) then :meth:`draw` (OpenGL: whichever
+    one thread owns the context, see :mod:`harness.sim.render_pipeline`) then
+    :meth:`RawFrame.frame`.
     """
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, *,
                  max_geoms: int = MAX_GEOMS) -> None:
         self._model = model
         self._data = data
-        self._max_geoms = max_geoms
+        # An MjvScene costs ~1 kB per geom slot: size it for this model (every geom and site
+        # several times over), not for the largest scene any model could need.
+        self._max_geoms = min(max_geoms, 4 * (model.ngeom + model.nsite + model.ntendon) + 1000)
         self._gl: Any = None
         self._scene: mujoco.MjvScene | None = None
         self._option = mujoco.MjvOption()
         self._camera = mujoco.MjvCamera()
         self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self._targets: dict[tuple[int, int], _Target] = {}
+        self._bound: _Target | None = None
         self._d_limits: dict[Intrinsics, npt.NDArray[np.float32]] = {}
         self._closed = False
         self.renders = 0
@@ -252,7 +336,8 @@ class Renderer:
             raise SimulationError(f"no camera with id {camera_id} (the model has "
                                   f"{self._model.ncam})")
 
-    def _start(self) -> None:
+    def start(self) -> None:
+        """Create the OpenGL context (once) and make it current on this thread."""
         if self._closed:
             raise SimulationError("renderer is closed")
         if self._gl is None:
@@ -265,6 +350,8 @@ class Renderer:
                     "cannot render: MuJoCo uses GLFW (MUJOCO_GL unset or 'glfw') and there is "
                     "no display; set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa "
                     "before starting")
+            global _CONTEXTS_MADE
+            _CONTEXTS_MADE = True
             try:
                 self._gl = mujoco.GLContext(max(1, vis.offwidth), max(1, vis.offheight))
                 self._gl.make_current()
@@ -273,9 +360,25 @@ class Renderer:
                     f"cannot create an OpenGL context for rendering ({type(err).__name__}: "
                     f"{err}); set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa"
                 ) from err
-            self._scene = mujoco.MjvScene(self._model, self._max_geoms)
         else:
             self._gl.make_current()
+
+    def gl_renderer(self) -> str:
+        """The OpenGL ``GL_RENDERER`` string (creates the context on this thread); empty when
+        it cannot be read."""
+        self.start()
+        try:
+            from OpenGL import GL
+
+            name = GL.glGetString(GL.GL_RENDERER)
+        except Exception:  # informational: PyOpenGL missing or the platform disagrees
+            return ""
+        return name.decode(errors="replace") if isinstance(name, bytes) else str(name or "")
+
+    def target(self, width: int, height: int) -> None:
+        """Create the offscreen buffer for ``width`` x ``height`` now (the context must be
+        current on this thread); :meth:`draw` does it on first use."""
+        self._target(width, height)
 
     def _target(self, width: int, height: int) -> _Target:
         key = (int(width), int(height))
@@ -285,34 +388,62 @@ class Renderer:
                 raise SimulationError(f"image size must be positive, got {width}x{height}")
             target = _Target(self._model, *key)
             self._targets[key] = target
+            self._bound = target  # making the context binds its offscreen buffer
         return target
 
-    def render(self, camera_id: int, width: int, height: int) -> CameraFrame:
-        """RGB and linear depth of camera ``camera_id`` for the current state."""
+    def new_scene(self) -> mujoco.MjvScene:
+        """An abstract scene to :meth:`capture` into (no OpenGL needed)."""
+        return mujoco.MjvScene(self._model, self._max_geoms)
+
+    def capture(self, camera_id: int, width: int, height: int,
+                scene: mujoco.MjvScene | None = None) -> RenderJob:
+        """Capture camera ``camera_id`` for the current state into ``scene`` (default: the
+        renderer's own); reads the model and ``data``, uses no OpenGL."""
         self._check_camera(camera_id)
-        self._start()
-        target = self._target(width, height)
-        scene = self._scene
-        assert scene is not None
+        if self._closed:
+            raise SimulationError("renderer is closed")
+        intr = self.intrinsics(camera_id, width, height)
+        if scene is None:
+            if self._scene is None:
+                self._scene = self.new_scene()
+            scene = self._scene
         self._camera.fixedcamid = camera_id
         mujoco.mjv_updateScene(self._model, self._data, self._option, None, self._camera,
                                mujoco.mjtCatBit.mjCAT_ALL, scene)
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, target.context)
-        mujoco.mjr_render(target.viewport, scene, target.context)
-        mujoco.mjr_readPixels(target.rgb, target.depth, target.viewport, target.context)
-        self.renders += 1
-        intr = self.intrinsics(camera_id, width, height)
+        if scene.ngeom >= scene.maxgeom:  # MuJoCo drops what does not fit: refuse instead
+            raise SimulationError(f"the scene has more than {scene.maxgeom} visual geoms; "
+                                  "camera images would miss some")
         near, far = self.near_far
         d_limit = self._d_limits.get(intr)
-        if d_limit is None:  # per pixel, the window depth of the sky's range, top row first
+        if d_limit is None:
             z_limit = SKY_RANGE_FRACTION * far / _ray_norms(intr)
             d_limit = np.asarray(_buffer_limit(near, far, z_limit), dtype=np.float32)
             self._d_limits[intr] = d_limit
-        rgb = np.ascontiguousarray(target.rgb[::-1])
-        depth = _linear_depth(target.depth[::-1], near, far, d_limit)
-        rgb.flags.writeable = False
-        depth.flags.writeable = False
-        return CameraFrame(camera_id, rgb, depth, intr)
+        return RenderJob(camera_id, intr, scene, near, far, d_limit)
+
+    def draw(self, job: RenderJob, *, fresh: bool = False) -> RawFrame:
+        """``mjr_render`` + ``mjr_readPixels`` of a captured scene. The frame's arrays are the
+        target's read-back buffers, overwritten by the next draw of that size, unless
+        ``fresh`` (new arrays, for a frame used after the next draw)."""
+        self.start()
+        intr = job.intrinsics
+        target = self._target(intr.width, intr.height)
+        if fresh:
+            rgb = np.empty_like(target.rgb)
+            buffer = np.empty_like(target.depth)
+        else:
+            rgb, buffer = target.rgb, target.depth
+        if target is not self._bound:  # mjr_render leaves its context's buffer bound
+            mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, target.context)
+            self._bound = target
+        mujoco.mjr_render(target.viewport, job.scene, target.context)
+        mujoco.mjr_readPixels(rgb, buffer, target.viewport, target.context)
+        self.renders += 1
+        return RawFrame(job.camera_id, intr, rgb, buffer, job.near, job.far, job.d_limit)
+
+    def render(self, camera_id: int, width: int, height: int) -> CameraFrame:
+        """RGB and linear depth of camera ``camera_id`` for the current state."""
+        return self.draw(self.capture(camera_id, width, height)).frame()
 
     def close(self) -> None:
         """Free the MjrContexts and the GL context (idempotent)."""
@@ -325,6 +456,7 @@ class Renderer:
                 target.free()
             self._gl.free()
         self._targets.clear()
+        self._bound = None
         self._gl = None
         self._scene = None
 

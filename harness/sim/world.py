@@ -43,6 +43,7 @@ from harness.sim.cameras import add_fixed_camera, world_convention_quat
 from harness.sim.footprints import Footprint
 from harness.sim.geometry import FloatArray, quat_from_mat, quat_from_rpy_deg
 from harness.sim.prims import PrimKind, PrimRef, PrimTable
+from harness.sim.render import apply_render_settings
 from harness.sim.robots import ActuatorMode, ModelSource, RobotBuild, add_robot
 from harness.sim.robots.model_file import file_digest
 from harness.sim.sensors import MountedSensors, add_robot_sensors
@@ -156,9 +157,6 @@ def _configure(spec: mujoco.MjSpec, scenario: Scenario,
             heights.append(cam.resolution[1])
     spec.visual.global_.offwidth = max(widths)
     spec.visual.global_.offheight = max(heights)
-    # MuJoCo's default 4096² shadow map costs ~40 ms per render on a CPU (llvmpipe); 1024²
-    # keeps soft, visible shadows at a third of the time.
-    spec.visual.quality.shadowsize = 1024
 
 
 def _resolve_robot(model: mujoco.MjModel, build: RobotBuild,
@@ -324,6 +322,7 @@ class World:
         except ValueError as err:  # MuJoCo refuses a spec element (e.g. a repeated name)
             raise SimulationError(f"scenario {scenario.name}: MuJoCo model could not be built: "
                                   f"{err}") from err
+        apply_render_settings(model, scenario.render)
         data = mujoco.MjData(model)
         resolved = prims.resolve(model)
         robots = {b.name: _resolve_robot(model, b, s) for b, s in builds}

@@ -1,7 +1,16 @@
-"""Runs in parallel worker processes on this machine: one fresh ``python -m
-harness.suite.worker`` per run, at most ``jobs`` at a time.
+"""Runs in parallel worker processes on this machine: one process per run, at most ``jobs`` at
+a time.
 
-A fresh process per run isolates what one run can break: a segfault, an out-of-memory kill or
+With ``fork=True`` (what ``srr suite`` asks for) each run's process is forked from the suite's,
+which has already imported srr, MuJoCo, NumPy, pandas and SciPy (1.4 s of start-up a run on
+the 2-core CI machine, a sixth of the bundled suite's CPU time); the child runs
+:func:`harness.suite.worker.main` and exits. That is done only on Linux and only while the
+suite's process is as clean as a fresh one — no other Python thread (a live progress display),
+no OpenGL context ever made here (its driver's threads and locks would not survive the fork) —
+else, and by default, each run is a fresh ``python -m harness.suite.worker``. Either way a run
+never sees another run's state.
+
+A process per run isolates what one run can break: a segfault, an out-of-memory kill or
 a hang costs that run (INVALID, with the signal or the timeout as the reason), never the
 suite. A run past its timeout gets SIGTERM (it finalizes its bag and summary), then SIGKILL
 after ``grace_s``. Ctrl-C (or SIGTERM to the suite) stops the runs the same way and keeps every
@@ -11,11 +20,13 @@ finished one. Worker output goes to ``OUT/logs/<run id>.log``.
 from __future__ import annotations
 
 import contextlib
+import faulthandler
 import json
 import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections import deque
 from collections.abc import Sequence
@@ -23,18 +34,68 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
 
+from harness.sim.render import rendered_in_this_process
 from harness.suite.events import Event, Listener, log_path, not_started
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, crash_reason, outcome_of
 from harness.suite.worker import peak_rss_mb
 
-__all__ = ["LocalExecutor"]
+__all__ = ["LocalExecutor", "fork_safe"]
+
+
+def fork_safe() -> bool:
+    """Whether a worker may be forked from this process: Linux, no other Python thread, and
+    no OpenGL context made here."""
+    return (sys.platform == "linux" and threading.active_count() == 1
+            and not rendered_in_this_process())
+
+
+class _Forked:
+    """A forked worker: what the executor reads of a ``Popen`` (``pid``, ``returncode``)."""
+
+    def __init__(self, pid: int) -> None:
+        self.pid = pid
+        self.returncode: int | None = None
+
+
+def _fork_worker(job: dict[str, object], log: IO[bytes]) -> _Forked:
+    """Fork a child that runs ``job`` as ``python -m harness.suite.worker`` would (its own
+    session, stdin from /dev/null, stdout and stderr to ``log``) and exits with its code."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid:
+        return _Forked(pid)
+    code = 70  # EX_SOFTWARE: the worker itself failed
+    try:
+        os.setsid()
+        null = os.open(os.devnull, os.O_RDONLY)
+        os.dup2(null, 0)
+        os.dup2(log.fileno(), 1)
+        os.dup2(log.fileno(), 2)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        if faulthandler.is_enabled():  # its dump goes to this run's log, not the suite's
+            faulthandler.enable(file=sys.stderr)
+        sys.path.insert(0, os.getcwd())  # plug-ins import from here, like `srr run`
+        from harness.suite.worker import main
+
+        code = main([json.dumps(job)])
+    except BaseException:  # reported in the run's log, then the child exits
+        import traceback
+
+        traceback.print_exc()
+    finally:
+        with contextlib.suppress(Exception):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        os._exit(code)
 
 
 @dataclass
 class _Running:
     spec: RunSpec
-    proc: subprocess.Popen[bytes]
+    proc: subprocess.Popen[bytes] | _Forked
     log: IO[bytes]
     t0: float
     kill_at: float | None = None  # set once SIGTERM was sent
@@ -55,11 +116,13 @@ class LocalExecutor:
     name = "local"
 
     def __init__(self, jobs: int, *, baselines: Path | None = None, grace_s: float = 10.0,
-                 poll_s: float = 0.05) -> None:
+                 poll_s: float = 0.05, fork: bool = False) -> None:
         self.jobs = max(1, jobs)
         self.baselines = baselines
         self.grace_s = grace_s
         self.poll_s = poll_s
+        #: Fork each worker from this process when that is safe (:func:`fork_safe`).
+        self.fork = fork
 
     def _start(self, spec: RunSpec, out_root: Path) -> _Running:
         job = {**spec.job(), "out_root": str(out_root),
@@ -67,6 +130,8 @@ class LocalExecutor:
         log_file = log_path(out_root, spec)
         log_file.parent.mkdir(parents=True, exist_ok=True)
         log = log_file.open("wb")
+        if self.fork and fork_safe():
+            return _Running(spec, _fork_worker(job, log), log, time.monotonic())
         env = dict(os.environ)
         # the worker imports plug-ins ("module:Class") from here, like `srr run` does
         env["PYTHONPATH"] = os.pathsep.join(p for p in (os.getcwd(), env.get("PYTHONPATH"))
@@ -91,6 +156,7 @@ class LocalExecutor:
     def _outcome(self, r: _Running, out_root: Path) -> RunOutcome:
         r.log.close()
         code = r.proc.returncode
+        assert code is not None  # reaped
         wall = time.monotonic() - r.t0
         log = log_path(out_root, r.spec)
         crash = crash_reason(code) if code < 0 and not r.timed_out else None

@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import hashlib
+from functools import partial
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from harness.bus import Bus, Recorder
-from harness.bus.messages import clock
+from harness.bus import Bus, Deferred, Recorder
+from harness.bus.messages import clock, serialize
+from harness.bus.recorder import digest_update
 from harness.cli import main
+from harness.errors import BagError, SimulationError
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
 
@@ -59,3 +64,58 @@ def test_a_failing_disk_is_one_line_and_leaves_no_run(tmp_path: Path,
     assert "No space left on device" in err and "cannot record" in err
     assert not out.exists()  # nothing half-written is left looking valid
 
+
+
+def _image(ns: int, n: int) -> object:
+    from harness.graph.nodes.camera import rgb_image_message
+
+    rng = np.random.default_rng(n)
+    return rgb_image_message(ns, "cam", rng.integers(0, 255, (120, 200, 3), dtype=np.uint8))
+
+
+def test_deferred_and_large_messages_give_the_bytes_of_the_plain_path(tmp_path: Path) -> None:
+    """Images built on the pool and digested on hash threads, interleaved with small messages
+    on the caller's thread: the same per-topic digests and the same file order as publishing
+    every message built (independent reader: the mcap library)."""
+    from mcap.reader import make_reader
+
+    def record(name: str, deferred: bool) -> tuple[dict[str, str], list[tuple[str, int]]]:
+        now = [0]
+        bus = Bus(lambda: now[0])
+        rec = Recorder(tmp_path / name, queue_size=4)
+        rec.open(bus.qos)
+        bus.add_tap(rec)
+        for i in range(40):
+            now[0] = i * 1000
+            bus.publish("/clock", "rosgraph_msgs/msg/Clock", clock(now[0]))
+            for cam in ("/a", "/b", "/c"):
+                msg = partial(_image, now[0], i * 7 + len(cam) + ord(cam[1]))
+                bus.publish(cam, "sensor_msgs/msg/Image", Deferred(msg) if deferred else msg())
+        stats = rec.close()
+        assert rec.bytes_serialized == sum(s.bytes for s in stats.values())
+        with (tmp_path / name / f"{name}.mcap").open("rb") as f:
+            order = [(c.topic, m.log_time) for _, c, m in make_reader(f).iter_messages(
+                log_time_order=False)]
+        return {t: s.sha256 for t, s in stats.items()}, order
+
+    digests, order = record("plain", deferred=False)
+    assert record("deferred", deferred=True) == (digests, order)
+    h = hashlib.sha256()
+    for i in range(40):
+        digest_update(h, i * 1000, serialize(_image(i * 1000, i * 7 + 2 + ord("b")),
+                                             "sensor_msgs/msg/Image"))
+    assert digests["/b"] == h.hexdigest()  # the hash thread's digest is the documented one
+
+
+def test_a_deferred_message_that_fails_is_one_clear_error(tmp_path: Path) -> None:
+    bus = Bus(lambda: 0)
+    rec = Recorder(tmp_path / "bag")
+    rec.open(bus.qos)
+    bus.add_tap(rec)
+
+    def broken() -> object:
+        raise SimulationError("rendering camera 3 failed: lost the GPU")
+
+    bus.publish("/cam_rgb", "sensor_msgs/msg/Image", Deferred(broken))
+    with pytest.raises(BagError, match="cannot record /cam_rgb: rendering camera 3 failed"):
+        rec.close()

@@ -34,8 +34,11 @@ def test_what_counts_as_the_configuration() -> None:
     # names, health settings
     same = mapping("systems_under_test.route_follower.params.speed=1.0", "name=other",
                    "scoring.tolerances={control.*: {abs: 1}}",
-                   "scoring.health.rate_fraction=0.5")
+                   "scoring.health.rate_fraction=0.5", "render.overlap=false")
     assert config_differences(base, same) == []
+    # how images look does count (rendering on a background thread or not gives the same bytes)
+    assert config_differences(base, mapping("render.shadows=true")) == [
+        "render.shadows: False → True"]
     assert "systems_under_test" not in comparable_config(base)
     many = mapping("routes.dock_approach.waypoints=[[0, 0], [0, 1]]", "duration=1", "seed=1",
                    "srr_gt=false", "world.wall_height=3", "physics.tick_hz=30")
@@ -90,9 +93,11 @@ def test_blessing_records_the_configuration(tmp_path: Path) -> None:
                                   "dock_nominal", "dock_worker_crossing",
                                   "dock_worker_standing"])
 def test_shipped_baselines_record_their_configuration(name: str) -> None:
-    """Blessed before ``graphs:`` existed: the field reads as its default (no graphs)."""
+    """Each is the scenario's configuration; the forklift scenes' baselines were blessed
+    before ``graphs:`` and ``render:`` existed, and those fields read as their defaults."""
     data = json.loads((SCENARIOS.parent / "baselines" / f"{name}.json").read_text())
-    assert "graphs" not in data["config"]
+    if name in ("forklift_warehouse", "two_forklifts"):
+        assert "graphs" not in data["config"] and "render" not in data["config"]
     assert with_defaults(data["config"]) == comparable_config(scenario_to_mapping(
         api.load(SCENARIOS / f"{name}.yaml")))
 

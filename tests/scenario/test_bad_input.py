@@ -40,10 +40,15 @@ def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str]:
          "unsupported version"),
         (GOOD + "recording: {chunk_s: 0}\n", "recording.chunk_s", "must be > 0"),
         (GOOD + "recording: {chunk_sec: 1}\n", "recording.chunk_sec", "did you mean"),
+        (GOOD + "render: {lights: moon}\n", "render.lights", "expected one of 'all', 'sun'"),
+        (GOOD + "render: {shadows: sometimes}\n", "render.shadows", "expected true or false"),
+        (GOOD + "render: {shadow_size: 8}\n", "render.shadow_size", "must be >= 64"),
+        (GOOD + "render: {shadow: true}\n", "render.shadow", "did you mean 'shadows'"),
     ],
     ids=["empty", "yaml-syntax", "misspelt-key", "text-for-number", "negative-duration",
          "unknown-model", "missing-include", "bad-name", "bad-topic", "format-version",
-         "zero-chunk-span", "misspelt-recording-key"],
+         "zero-chunk-span", "misspelt-recording-key", "render-lights", "render-shadows",
+         "render-shadow-size", "misspelt-render-key"],
 )
 def test_bad_scenario_is_one_line_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                          text: str, field: str, words: str) -> None:

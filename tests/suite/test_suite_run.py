@@ -229,3 +229,45 @@ def test_ray_suite_joins_an_existing_cluster(tmp_path: Path,
     finally:
         subprocess.run([ray_bin, "stop", "--force"], capture_output=True, env=env,
                        timeout=120)
+
+
+def test_forked_and_fresh_workers_record_the_same_bytes(tmp_path: Path) -> None:
+    """`srr suite` forks its workers from its own process (it never renders); a fresh
+    interpreter records the same bytes, a rendering scene with its perception included."""
+    from harness.suite.local import LocalExecutor
+    from harness.suite.runner import plan_suite, run_suite
+
+    suite = tmp_path / "suite.yaml"
+    scenario = ROOT / "scenarios" / "dock_worker_crossing.yaml"
+    suite.write_text(f"scenarios:\n  - {{path: {scenario}, set: {{duration: 1.5}}}}\n",
+                     encoding="utf-8")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    forked = tmp_path / "forked"
+    done = subprocess.run([sys.executable, "-m", "harness.cli", "suite", str(suite), "-j", "1",
+                           "--out", str(forked), "-q"], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 1, done.stdout + done.stderr  # 1.5 s: not the baseline's config
+    fresh = tmp_path / "fresh"
+    run_suite(plan_suite([suite]), LocalExecutor(1, fork=False), out=fresh)
+    digests = []
+    for out in (forked, fresh):
+        (run,) = json.loads((out / "summary.json").read_text(encoding="utf-8"))["runs"]
+        summary = json.loads((out / run["run_dir"] / "summary.json").read_text())
+        assert summary["topics"]["/dock_cam_left_depth"]["count"] == 8
+        assert run["peak_rss_mb"] > 80  # the worker's own, measured either way
+        digests.append(summary["digest"])
+    assert digests[0] == digests[1]
+
+
+def test_a_process_that_rendered_does_not_fork(tmp_path: Path) -> None:
+    """Forking after OpenGL was initialized here would leave the child with the driver's
+    locks and no threads: such a process starts fresh interpreters instead."""
+    from harness.sim import World
+    from harness.sim.render import Renderer
+    from harness.suite.local import fork_safe
+
+    sc = api.load(ROOT / "scenarios" / "camera_publishing.yaml")
+    world = World.build(sc)
+    with Renderer(world.model, world.data) as r:
+        r.render(0, 8, 8)
+    assert not fork_safe()

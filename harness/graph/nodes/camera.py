@@ -35,23 +35,36 @@ compatibility and change nothing.
 
 Rendering happens only when a helper that needs pixels executes (so a SimulationGate upstream
 sets the cost), and at most once per camera, size and tick however many helpers publish it.
+With ``render.overlap`` (``auto``: with a GPU) the frame renders on a background thread
+(:mod:`harness.sim.render_pipeline`) and the helpers publish :class:`~harness.bus.Deferred`
+messages built from it when it is needed: by a subscriber (in the same tick, as always) or by
+the recorder (on its own threads). The bytes are the same either way.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from functools import partial
+from typing import Any, Protocol
 
 import numpy as np
 
+from harness.bus.bus import Deferred
 from harness.bus.endpoints import Endpoint, TfEdge
 from harness.bus.messages import header, msg_type
 from harness.errors import GraphError, SimulationError
 from harness.graph import Attr, NodeType, register
 from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, aliases, frame_of, topic_of
 from harness.sim.prims import PrimKind
-from harness.sim.render import CameraFrame, Intrinsics, Renderer, points_from_depth
+from harness.sim.render import (
+    CameraFrame,
+    Intrinsics,
+    Renderer,
+    is_software_renderer,
+    points_from_depth,
+)
+from harness.sim.render_pipeline import RenderThread
 
 __all__ = [
     "CAMERA_TYPES",
@@ -59,10 +72,12 @@ __all__ = [
     "CameraHelper",
     "CameraInfoHelper",
     "CreateRenderProduct",
+    "FrameSource",
     "RenderProduct",
     "RenderProductTable",
     "camera_info_message",
     "depth_image_message",
+    "image_message",
     "point_cloud_message",
     "render_products",
     "rgb_image_message",
@@ -113,6 +128,15 @@ def point_cloud_message(ns: int, frame_id: str, points: np.ndarray) -> Any:
         data=pts.view(np.uint8).reshape(-1), is_dense=True)
 
 
+def image_message(stream: str, ns: int, frame_id: str, src: FrameSource) -> Any:
+    """The ``rgb``, ``depth`` or ``depth_pcl`` message of a frame (waits for it)."""
+    if stream == "rgb":
+        return rgb_image_message(ns, frame_id, src.rgb())
+    if stream == "depth":
+        return depth_image_message(ns, frame_id, src.depth())
+    return point_cloud_message(ns, frame_id, points_from_depth(src.depth(), src.intrinsics))
+
+
 def camera_info_message(ns: int, frame_id: str, intr: Intrinsics) -> Any:
     """``sensor_msgs/CameraInfo`` of an undistorted pinhole (``plumb_bob``, D = 0)."""
     roi = msg_type("sensor_msgs/msg/RegionOfInterest")(
@@ -138,20 +162,59 @@ class RenderProduct:
     height: int
 
 
+class FrameSource(Protocol):
+    """A frame being rendered or rendered: its arrays, waited for on first use."""
+
+    intrinsics: Intrinsics
+
+    def rgb(self) -> np.ndarray: ...
+
+    def depth(self) -> np.ndarray: ...
+
+    def frame(self) -> CameraFrame: ...
+
+
+class _Ready:
+    """A frame rendered on the loop's thread, as a :class:`FrameSource`."""
+
+    __slots__ = ("_frame", "intrinsics")
+
+    def __init__(self, frame: CameraFrame) -> None:
+        self._frame = frame
+        self.intrinsics = frame.intrinsics
+
+    def rgb(self) -> np.ndarray:
+        return self._frame.rgb
+
+    def depth(self) -> np.ndarray:
+        return self._frame.depth
+
+    def frame(self) -> CameraFrame:
+        return self._frame
+
+
 class RenderProductTable(Mapping[str, RenderProduct]):
     """The render products of one run (handle → product) and the frames rendered this tick.
 
     It owns the run's :class:`~harness.sim.render.Renderer`, created on the first frame
-    requested, and caches frames by (camera, size) for one tick, so helpers publishing rgb,
-    depth and a point cloud of the same camera share one render.
+    requested (with ``render.overlap``, on a :class:`~harness.sim.render_pipeline.RenderThread`),
+    and caches frames by (camera, size) for one tick, so helpers publishing rgb, depth and a
+    point cloud of the same camera share one render.
     """
 
     def __init__(self, world: Any) -> None:
         self.world = world
         self._products: dict[str, RenderProduct] = {}
         self._renderer: Renderer | None = None
-        self._frames: dict[tuple[int, int, int], CameraFrame] = {}
+        self._thread: RenderThread | None = None
+        self._frames: dict[tuple[int, int, int], FrameSource] = {}
         self._frames_tick: int | None = None
+        render = getattr(getattr(world, "scenario", None), "render", None)
+        setting = getattr(render, "overlap", False)
+        self._auto = setting == "auto"
+        #: Render on a background thread (``render.overlap``; ``auto`` is decided at the first
+        #: frame, from the OpenGL renderer); helpers then publish Deferred messages.
+        self.overlap = False if self._auto else bool(setting)
 
     def __getitem__(self, path: str) -> RenderProduct:
         return self._products[path]
@@ -200,30 +263,59 @@ class RenderProductTable(Mapping[str, RenderProduct]):
         fovy = float(self.world.model.cam_fovy[cam])
         return Intrinsics.from_fovy(product.width, product.height, fovy)
 
-    def frame(self, product: RenderProduct, tick: int, where: str) -> CameraFrame:
-        """The product's frame for ``tick``: rendered on the first request of the tick."""
+    def source(self, product: RenderProduct, tick: int, where: str) -> FrameSource:
+        """The product's frame for ``tick``, rendered (or submitted, with :attr:`overlap`) on
+        the first request of the tick."""
         cam = self.camera_id(product, where)
         if self._frames_tick != tick:
             self._frames.clear()
             self._frames_tick = tick
         key = (cam, product.width, product.height)
-        frame = self._frames.get(key)
-        if frame is None:
-            if self._renderer is None:
-                self._renderer = Renderer(self.world.model, self.world.data)
+        src = self._frames.get(key)
+        if src is None:
             try:
-                frame = self._renderer.render(cam, product.width, product.height)
+                if self._renderer is None:
+                    self._renderer = self._first_renderer()
+                if self.overlap:
+                    if self._thread is None:
+                        self._thread = RenderThread(self._renderer)
+                    src = self._thread.submit(cam, product.width, product.height)
+                else:
+                    src = _Ready(self._renderer.render(cam, product.width, product.height))
             except SimulationError as err:
                 raise GraphError(f"{where}: {err}") from err
-            self._frames[key] = frame
-        return frame
+            self._frames[key] = src
+        return src
+
+    def _first_renderer(self) -> Renderer:
+        """The run's renderer; with ``overlap: auto`` it also decides :attr:`overlap`: off
+        for a software renderer, on otherwise (the render thread makes its own context)."""
+        renderer = Renderer(self.world.model, self.world.data)
+        if self._auto:
+            self._auto = False
+            self.overlap = not is_software_renderer(renderer.gl_renderer())
+            if self.overlap:  # the context belongs to the render thread: start afresh there
+                renderer.close()
+                renderer = Renderer(self.world.model, self.world.data)
+        return renderer
+
+    def frame(self, product: RenderProduct, tick: int, where: str) -> CameraFrame:
+        """The product's frame for ``tick`` (waits for it with :attr:`overlap`)."""
+        src = self.source(product, tick, where)
+        try:
+            return src.frame()
+        except SimulationError as err:
+            raise GraphError(f"{where}: {err}") from err
 
     def close(self) -> None:
-        """Free the renderer's GL resources (idempotent)."""
+        """Draw what is queued, then free the renderer's GL resources (idempotent)."""
         self._frames.clear()
-        if self._renderer is not None:
+        if self._thread is not None:
+            self._thread.close()  # closes the renderer on its thread
+            self._thread = None
+        elif self._renderer is not None:
             self._renderer.close()
-            self._renderer = None
+        self._renderer = None
 
 
 def render_products(ctx: Any) -> RenderProductTable:
@@ -344,14 +436,9 @@ class _CameraPublisher(NodeType):
         if stream == "camera_info":
             msg = camera_info_message(ns, frame_id, table.intrinsics(product, db.node_path))
         else:
-            frame = table.frame(product, int(ctx.tick), db.node_path)
-            if stream == "rgb":
-                msg = rgb_image_message(ns, frame_id, frame.rgb)
-            elif stream == "depth":
-                msg = depth_image_message(ns, frame_id, frame.depth)
-            else:
-                msg = point_cloud_message(ns, frame_id,
-                                          points_from_depth(frame.depth, frame.intrinsics))
+            build = partial(image_message, stream, ns, frame_id,
+                            table.source(product, int(ctx.tick), db.node_path))
+            msg = Deferred(build) if table.overlap else build()
         self._pub.publish(msg)
         return True
 
