@@ -29,7 +29,7 @@ from harness.sim.cameras import add_mounted_camera
 from harness.sim.geometry import quat_from_rpy_deg, quat_mul, rotate
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import RobotBuild
-from harness.sim.robots.imported import ModelSource
+from harness.sim.robots.paths import ModelSource
 
 __all__ = ["IMU_SENSORS", "MountedSensors", "add_robot_sensors"]
 

@@ -57,7 +57,7 @@ from harness.sim.warehouse import (
     set_headlight,
 )
 from harness.sim.workers import Worker, WorkerDriver, add_workers, plan_workers
-from harness.sim.world_file import LoadedWorld, WorldSource, add_world_file, load_world_file
+from harness.sim.world_file import LoadedWorld, add_world_file, load_world_file
 
 __all__ = ["ImuReading", "JointRef", "RobotInfo", "World"]
 
@@ -314,7 +314,7 @@ class World:
         if scenario.world.model is not None:
             file = scenario.file_for("world", source)
             loaded = load_world_file(scenario.world.model,
-                                     WorldSource(file, Path(file).parent, env))
+                                     ModelSource(file, "world", Path(file).parent, env))
         try:
             spec, builds = _assemble(scenario, prims, source, env, loaded)
             add_workers(spec, workers, prims)

@@ -49,16 +49,15 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from harness.errors import ScenarioError
 from harness.scenario.schema import WorldModel
 from harness.sim.footprints import Footprint, geom_footprint, geom_points
 from harness.sim.geometry import quat_from_rpy_deg
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import COLLISION_GROUP
 from harness.sim.robots.model_file import ModelFileError, one_line, read_model_file
-from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
+from harness.sim.robots.paths import ModelPathError, ModelSource, PackagePath, resolve_uri
 
-__all__ = ["MAP_BAND", "PREFIX", "LoadedWorld", "WorldSource", "add_world_file",
+__all__ = ["MAP_BAND", "PREFIX", "LoadedWorld", "add_world_file",
            "load_world_file", "map_json"]
 
 PREFIX = "world-file/"
@@ -68,20 +67,6 @@ MAP_BAND = (0.01, 2.5)
 _STATIC_GROUP = 0
 _NAME_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-]*$")
 _PLANE = mujoco.mjtGeom.mjGEOM_PLANE
-
-
-@dataclass(frozen=True)
-class WorldSource:
-    """Where the ``world:`` block was written: the scenario file (or include) as shown to the
-    user, the directory its relative paths start from, and the environment (for
-    ``SRR_PACKAGE_PATH`` / ``ROS_PACKAGE_PATH``)."""
-
-    scenario_file: str
-    base_dir: Path
-    environ: Mapping[str, str]
-
-    def error(self, sub: str, message: str) -> ScenarioError:
-        return ScenarioError(self.scenario_file, f"world.{sub}", message)
 
 
 @dataclass(frozen=True)
@@ -146,7 +131,7 @@ def _pose(model: WorldModel) -> tuple[list[float], list[float]]:
 
 
 def _measure(spec: mujoco.MjSpec, assets: Mapping[str, bytes], model: WorldModel,
-             labels: Mapping[str, str], src: WorldSource, shown: str,
+             labels: Mapping[str, str], src: ModelSource, shown: str,
              ) -> tuple[frozenset[str], tuple[Footprint, ...],
                         tuple[float, float, float, float, float] | None]:
     """Compile a copy of the file alone at its pose: static geoms, footprints, bounds."""
@@ -192,7 +177,7 @@ def _measure(spec: mujoco.MjSpec, assets: Mapping[str, bytes], model: WorldModel
     return frozenset(static), tuple(footprints), bounds
 
 
-def load_world_file(model: WorldModel, src: WorldSource) -> LoadedWorld:
+def load_world_file(model: WorldModel, src: ModelSource) -> LoadedWorld:
     """Read ``model``'s file, check it, and measure it at its pose (see the module)."""
     field = f"model.{model.kind}"
     packages = PackagePath.of(src.base_dir, model.package_paths, src.environ)

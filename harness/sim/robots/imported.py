@@ -46,13 +46,11 @@ import difflib
 import math
 import re
 import types
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import mujoco
 
-from harness.errors import ScenarioError
 from harness.scenario.schema import (
     DiffDriveControl,
     DriveSpec,
@@ -69,7 +67,7 @@ from harness.sim.robots.model_file import (
     file_digest,
     load_model_file,
 )
-from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
+from harness.sim.robots.paths import ModelPathError, ModelSource, PackagePath, resolve_uri
 
 __all__ = ["ROBOT_FRONT", "ModelSource", "add_model_robot"]
 
@@ -80,21 +78,6 @@ _POSITION_STIFFNESS = 4.0  # N·m/rad per kg of robot
 _POSITION_FORCE = 2.0  # N·m per kg of robot
 _NAME_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-]*$")
 _SENSOR_MOUNTS = frozenset({"lidar", "imu", "camera"})  # prims harness.sim.sensors adds
-
-
-@dataclass(frozen=True)
-class ModelSource:
-    """Where a robot entry was written: the scenario file (as shown to the user), the entry's
-    field (``robots[1]``), the directory its relative paths start from, and the environment
-    (for ``SRR_PACKAGE_PATH`` / ``ROS_PACKAGE_PATH``)."""
-
-    scenario_file: str
-    field: str
-    base_dir: Path
-    environ: Mapping[str, str]
-
-    def error(self, sub: str, message: str) -> ScenarioError:
-        return ScenarioError(self.scenario_file, f"{self.field}.{sub}", message)
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,24 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["ENV_VARS", "ModelPathError", "PackagePath", "resolve_uri"]
+from harness.errors import ScenarioError
+
+__all__ = ["ENV_VARS", "ModelPathError", "ModelSource", "PackagePath", "resolve_uri"]
+
+
+@dataclass(frozen=True)
+class ModelSource:
+    """Where a model file was named: the scenario file (as shown to the user), the field of
+    the entry that names it (``robots[1]``, ``world``), the directory its relative paths
+    start from, and the environment (for ``SRR_PACKAGE_PATH`` / ``ROS_PACKAGE_PATH``)."""
+
+    scenario_file: str
+    field: str
+    base_dir: Path
+    environ: Mapping[str, str]
+
+    def error(self, sub: str, message: str) -> ScenarioError:
+        return ScenarioError(self.scenario_file, f"{self.field}.{sub}", message)
 
 #: Environment variables that extend the package path, in lookup order.
 ENV_VARS = ("SRR_PACKAGE_PATH", "ROS_PACKAGE_PATH")
