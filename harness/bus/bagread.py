@@ -125,7 +125,26 @@ class Recording:
         return to_ros2(deserialize_ros1(raw, conn.recorded_type), conn.recorded_type)
 
 
-class _Rosbag2(Recording):
+class _Rosbags(Recording):
+    """A recording read through one of rosbags' readers (``_reader``, opened by the subclass,
+    with ``_raw``: connection id → rosbags' connection, ``_by_id``: id → ours)."""
+
+    _reader: Any
+    _raw: dict[int, Any]
+    _by_id: dict[int, Connection]
+
+    def close(self) -> None:
+        self._reader.close()
+
+    def messages(self, connections: Collection[Connection] = (), start: int | None = None,
+                 stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
+        raw = [self._raw[c.id] for c in connections]
+        by_id = self._by_id
+        for conn, t, data in self._reader.messages(connections=raw, start=start, stop=stop):
+            yield by_id[conn.id], t, data
+
+
+class _Rosbag2(_Rosbags):
     kind = "rosbag2"
     encoding: Encoding = "cdr"
 
@@ -143,18 +162,8 @@ class _Rosbag2(Recording):
         self._by_id = {c.id: c for c in self.connections}
         self.start_time, self.end_time = self._reader.start_time, self._reader.end_time
 
-    def close(self) -> None:
-        self._reader.close()
 
-    def messages(self, connections: Collection[Connection] = (), start: int | None = None,
-                 stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
-        raw = [self._raw[c.id] for c in connections]
-        by_id = self._by_id
-        for conn, t, data in self._reader.messages(connections=raw, start=start, stop=stop):
-            yield by_id[conn.id], t, data
-
-
-class _Rosbag1(Recording):
+class _Rosbag1(_Rosbags):
     kind = "bag"
     encoding: Encoding = "ros1"
 
@@ -175,16 +184,6 @@ class _Rosbag1(Recording):
         self._by_id = {c.id: c for c in self.connections}
         if self._reader.message_count:
             self.start_time, self.end_time = self._reader.start_time, self._reader.end_time
-
-    def close(self) -> None:
-        self._reader.close()
-
-    def messages(self, connections: Collection[Connection] = (), start: int | None = None,
-                 stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
-        raw = [self._raw[c.id] for c in connections]
-        by_id = self._by_id
-        for conn, t, data in self._reader.messages(connections=raw, start=start, stop=stop):
-            yield by_id[conn.id], t, data
 
 
 class _Mcap(Recording):
