@@ -109,27 +109,31 @@ def insert_sim_time(annexb: bytes, time_ns: int, index: int) -> bytes:
     return annexb + sei
 
 
+def _ff_decoded(rbsp: bytes, i: int) -> tuple[int, int] | None:
+    """What :func:`_ff_coded` wrote at ``i`` (an SEI payload type or size: a run of 0xFF
+    bytes, 255 each, then the last byte) and the position after it; None when the buffer
+    ends first."""
+    value, n = 0, len(rbsp)
+    while i < n and rbsp[i] == 0xFF:
+        value += 255
+        i += 1
+    if i >= n:
+        return None
+    return value + rbsp[i], i + 1
+
+
 def _sei_messages(rbsp: bytes) -> Iterator[tuple[int, bytes]]:
     i, n = 0, len(rbsp)
     while i < n and rbsp[i] != 0x80:
-        ptype = 0
-        while i < n and rbsp[i] == 0xFF:
-            ptype += 255
-            i += 1
-        if i >= n:
+        ptype = _ff_decoded(rbsp, i)
+        if ptype is None:
             return
-        ptype += rbsp[i]
-        i += 1
-        size = 0
-        while i < n and rbsp[i] == 0xFF:
-            size += 255
-            i += 1
-        if i >= n:
+        size = _ff_decoded(rbsp, ptype[1])
+        if size is None:
             return
-        size += rbsp[i]
-        i += 1
-        yield ptype, rbsp[i:i + size]
-        i += size
+        i = size[1]
+        yield ptype[0], rbsp[i:i + size[0]]
+        i += size[0]
 
 
 def sim_time_of_user_data(payload: bytes) -> SimTime | None:
