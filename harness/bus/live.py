@@ -24,8 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from harness.bus.bus import Envelope, Qos
-from harness.bus.messages import serialize
-from harness.bus.recorder import topic_meta
+from harness.bus.recorder import cdr_bytes, topic_meta
 from harness.errors import LiveViewError
 
 __all__ = ["DEFAULT_PORT", "LATCHED_KEEP", "LiveConfig", "LiveView", "Pacer"]
@@ -228,7 +227,7 @@ class LiveView:
     # -- traffic ------------------------------------------------------------------------------
     def __call__(self, env: Envelope) -> None:
         """As a plain bus tap (no recorder to share serialized bytes with)."""
-        self.log(env, env.raw if env.raw is not None else serialize(env.msg, env.msgtype))
+        self.log(env, cdr_bytes(env))
 
     def log(self, env: Envelope, data: bytes) -> None:
         """Send one message's CDR bytes to the clients subscribed to its topic."""

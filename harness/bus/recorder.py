@@ -56,7 +56,8 @@ from harness.bus.bus import Deferred, Envelope, Qos, resolved
 from harness.bus.messages import TYPESTORE, serialize
 from harness.errors import BagError
 
-__all__ = ["HASH_LANE_MIN_BYTES", "Recorder", "TopicStats", "digest_update", "topic_meta"]
+__all__ = ["HASH_LANE_MIN_BYTES", "Recorder", "TopicStats", "cdr_bytes", "digest_update",
+           "topic_meta"]
 
 #: A topic whose first payload is at least this large is digested on a hash thread.
 HASH_LANE_MIN_BYTES = 64 * 1024
@@ -121,6 +122,14 @@ class _HashLane:
     def close(self) -> None:
         self._queue.put(None)
         self._thread.join()
+
+
+def cdr_bytes(env: Envelope) -> bytes:
+    """A message's CDR bytes: ``env.raw`` when it is CDR (packed by its publisher, or a
+    replayed ROS 2 recording), else the message serialized (a deferred one computed first)."""
+    if env.raw is not None and env.encoding == "cdr":
+        return env.raw
+    return serialize(resolved(env.msg), env.msgtype)
 
 
 def _serialize_deferred(msg: Deferred, msgtype: str) -> memoryview:
@@ -251,8 +260,7 @@ class Recorder:
             _, n = self._skipped.get(env.topic, (env.msgtype, 0))
             self._skipped[env.topic] = (env.msgtype, n + 1)
             if self._forward:
-                data = (env.raw if env.raw is not None
-                        else serialize(resolved(env.msg), env.msgtype))
+                data = cdr_bytes(env)
                 for tap in self._forward:
                     tap(env, data)
             return
@@ -377,10 +385,8 @@ class Recorder:
 
     def _serialize(self, env: Envelope) -> bytes:
         """The bytes recorded for one message (on the caller's thread, in publication order):
-        ``env.raw`` when it is CDR (packed by its publisher, or a replayed ROS 2 recording)."""
-        if env.raw is not None and env.encoding == "cdr":
-            return env.raw
-        return serialize(resolved(env.msg), env.msgtype)
+        its CDR bytes (:func:`cdr_bytes`)."""
+        return cdr_bytes(env)
 
     def _add_topic(self, writer: Any, topic: str, msgtype: str, qos: Qos) -> int:
         """Register a topic with the writer (on the writer thread); returns its channel."""

@@ -38,8 +38,8 @@ from pathlib import Path
 from typing import Any
 
 from harness.bus.bus import Envelope, Qos
-from harness.bus.messages import deserialize, serialize
-from harness.bus.recorder import Recorder
+from harness.bus.messages import deserialize
+from harness.bus.recorder import Recorder, cdr_bytes
 from harness.errors import PluginError, RunStopped, SrrError
 from harness.ros2.domain import DomainLease, lease_domain
 from harness.ros2.processes import ExternalProcess, start_processes, stop_processes
@@ -297,8 +297,7 @@ class Ros2Bridge(SystemUnderTest):
 
     def _forward(self, env: Envelope) -> None:
         if not self._via_recorder:
-            self._forward_bytes(env, env.raw if env.raw is not None
-                                else serialize(env.msg, env.msgtype))
+            self._forward_bytes(env, cdr_bytes(env))
 
     def _forward_bytes(self, env: Envelope, data: bytes) -> None:
         pub = self._publisher(env.topic, env.msgtype, self.ctx.bus.qos(env.topic))
