@@ -7,7 +7,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from harness.geometry import wxyz_to_xyzw
 from harness.graph import GraphStage
+from harness.graph.nodes.ros_bridge import frame_of, relative_pose
 from harness.scenario import RobotSpec, Scenario
 
 __all__ = ["BuildContext", "GraphEdits", "NodeOrigin", "fresh_graph", "gate_step",
@@ -105,9 +107,6 @@ def sensor_frame_tf(bc: BuildContext, robot: RobotSpec, kind: str, frame_id: str
     own frame (else nothing). A ``PublishRawTransformTree`` on the robot's static TF topic,
     driven by the graph's ``OnPlaybackTick`` and stamped by its ``ReadSimTime`` (added
     unless ``read_time`` is False: the graph has one)."""
-    from harness.geometry import wxyz_to_xyzw
-    from harness.graph.nodes.ros_bridge import frame_of, relative_pose
-
     sensor_prim = bc.world.sensor_prim(robot.name, kind)
     link_prim = sensor_prim.rsplit("/", 1)[0]
     if not robot.tf_tree.enabled or frame_id == frame_of(link_prim):
