@@ -116,7 +116,7 @@ def _roles(control: ForkliftControl | DiffDriveControl, shown: str,
     return roles
 
 
-def _check_roles(roles: Sequence[_Role], loaded: LoadedModel, model: ModelFile, shown: str,
+def _check_roles(roles: Sequence[_Role], loaded: LoadedModel, shown: str,
                  src: ModelSource) -> None:
     for role in roles:
         info = loaded.joints.get(role.joint)
@@ -140,9 +140,6 @@ def _check_roles(roles: Sequence[_Role], loaded: LoadedModel, model: ModelFile, 
             raise src.error(role.field, f"joint {role.joint!r} of {shown} has a {mode.value} "
                             f"servo ({name!r}); the controller commands it by "
                             f"{role.mode.value}")
-        if role.joint in model.drives:
-            raise src.error(f"model.drives.{role.joint}", f"joint {role.joint!r} already has "
-                            f"actuator {name!r} in {shown}; set its gains there")
 
 
 def _drive_modes(roles: Sequence[_Role], loaded: LoadedModel, model: ModelFile, shown: str,
@@ -266,7 +263,7 @@ def add_model_robot(spec: mujoco.MjSpec, robot: RobotSpec,
         raise src.error(f"model.{model.kind}", f"{shown}: {err}") from err
     # A robot whose control graph is off is parked: its joints need no role and no drive.
     roles = _roles(control, shown, src) if control.enabled else []
-    _check_roles(roles, loaded, model, shown, src)
+    _check_roles(roles, loaded, shown, src)
     drive_modes = _drive_modes(roles, loaded, model, shown, src)
     _check_links(robot, loaded, shown, src)
 
