@@ -196,10 +196,13 @@ def _graphs(data: RunData) -> tuple[list[Any], str, str | None]:
     from harness.graph import stage_to_dict, stage_to_mermaid
 
     srr_gt = data.summary.get("srr_gt")
+    # Model and world files are named relative to the scenario file the run was started
+    # from (the run's own scenario.yaml keeps those paths as written), as for a replay.
+    source = str(data.summary.get("scenario_file") or data.run_dir / "scenario.yaml")
     sim = None
     try:
         sim = Simulation(data.scenario, srr_gt=srr_gt if isinstance(srr_gt, bool) else None,
-                         source=str(data.run_dir / "scenario.yaml"))
+                         source=source)
         stage = stage_to_dict(sim.stage)
         mermaid = stage_to_mermaid(sim.stage)
     except Exception as err:  # a plug-in that no longer imports must not hide the report

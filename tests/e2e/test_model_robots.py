@@ -43,6 +43,15 @@ def run(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
     return name, out
 
 
+def test_report_rebuilds_the_graphs_with_the_model_file(run: tuple[str, Path]) -> None:
+    """The report rebuilds the action graphs from the run's scenario, with the model file
+    found relative to the scenario file the run was started from (not the run directory)."""
+    name, out = run
+    robot = CASES[name][0]
+    html = (out / "run_1" / "report.html").read_text()
+    assert "could not be rebuilt" not in html and f"/World/{robot}_TfGraph" in html
+
+
 def test_repeats_give_identical_digests_and_pass(run: tuple[str, Path]) -> None:
     _, out = run
     report = json.loads((out / "determinism.json").read_text())

@@ -155,6 +155,8 @@ def test_the_run_keeps_the_files_map_and_the_report_draws_it(run: api.RunResult,
     assert html.count('class="static"') == len(stored)
     assert "wall_east (shelf_world.xml)" in html and "warehouse floor" not in html
     assert "static geometry of shelf_world.xml" in html  # the map's legend
+    # the report rebuilds the action graphs with the world file found from the scenario
+    assert "could not be rebuilt" not in html and "/World/turtlebot3_TfGraph" in html
 
 
 def test_two_runs_give_identical_digests(run: api.RunResult, tmp_path: Path) -> None:
