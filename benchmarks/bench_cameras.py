@@ -40,6 +40,7 @@ import platform
 import shutil
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -221,6 +222,50 @@ class SrrRun:
     in_submit: float = 0.0
     in_record: float = 0.0
     in_draw: float = 0.0  # Renderer.draw (mjr_render + mjr_readPixels), whichever thread
+    # CPU seconds of the run's threads, by name (pool and lane numbers dropped)
+    threads: dict[str, float] = field(default_factory=dict)
+
+
+class ThreadCpu:
+    """Samples the CPU time of every Python thread of this process (Linux: utime + stime of
+    /proc/self/task/<tid>/stat) every 20 ms while it runs; :meth:`stop` gives CPU seconds per
+    thread name, with trailing pool and lane numbers dropped (``srr-cdr_0`` → ``srr-cdr``),
+    so a saturated thread (CPU ≈ the loop's wall time) shows."""
+
+    def __init__(self) -> None:
+        self._last: dict[int, tuple[str, float]] = {}
+        self._stop = threading.Event()
+        self._tick = os.sysconf("SC_CLK_TCK")
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._sample()
+        self._base = {tid: cpu for tid, (_, cpu) in self._last.items()}  # before the run
+        self._thread.start()
+
+    def _sample(self) -> None:
+        for t in threading.enumerate():
+            tid = t.native_id
+            if tid is None or t is self._thread:
+                continue
+            try:
+                fields = Path(f"/proc/self/task/{tid}/stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            self._last[tid] = (t.name, (int(fields[11]) + int(fields[12])) / self._tick)
+
+    def _run(self) -> None:
+        while not self._stop.wait(0.02):
+            self._sample()
+
+    def stop(self) -> dict[str, float]:
+        self._sample()
+        self._stop.set()
+        self._thread.join()
+        groups: dict[str, float] = {}
+        for tid, (name, cpu) in self._last.items():
+            cpu -= self._base.get(tid, 0.0)
+            key = name.rstrip("0123456789").rstrip("_-")
+            groups[key] = groups.get(key, 0.0) + cpu
+        return dict(sorted(groups.items(), key=lambda kv: -kv[1]))
 
 
 def _timed(cls: Any, name: str, acc: list[float]) -> Any:
@@ -251,16 +296,18 @@ def harness_run(sc: Scenario, out: Path) -> SrrRun:
     orig_submit = _timed(RenderThread, "submit", submit)
     orig_write = _timed(Recorder, "write", record)
     orig_draw = _timed(Renderer, "draw", draw)
+    cpu = ThreadCpu() if sys.platform == "linux" else None
     try:
         t0 = time.perf_counter()
         res = api.run_scenario(sc, source=str(SCENARIO), out=out, progress=progress)
         wall = time.perf_counter() - t0
     finally:
+        threads = cpu.stop() if cpu is not None else {}
         RenderThread.submit = orig_submit  # type: ignore[method-assign]
         Recorder.write = orig_write  # type: ignore[method-assign]
         Renderer.draw = orig_draw  # type: ignore[method-assign]
     return SrrRun(wall, marks[sc.n_ticks] - marks[1], sc.n_ticks - 1, res.summary,
-                  submit[0], record[0], draw[0])
+                  submit[0], record[0], draw[0], threads)
 
 
 def gl_renderer_name() -> str:
@@ -336,6 +383,7 @@ def report(args: argparse.Namespace, r: Result) -> dict[str, Any]:
         "srr_loop_thread_s": {"loop": r.srr.loop, "in_render_submit": r.srr.in_submit,
                               "in_recorder_write": r.srr.in_record},
         "srr_draw_ms_per_frame": r.srr.in_draw / r.frames * 1e3,
+        "srr_thread_cpu_s": r.srr.threads,
         "bare_wall_s": r.bare, "bare_rtf": args.duration / r.bare,
         "overhead_srr_over_bare": r.srr.wall / r.bare,
         "bare_ms_per_frame": {"render": ph.render / max(ph.frames, 1) * 1e3,
@@ -358,6 +406,9 @@ def report(args: argparse.Namespace, r: Result) -> dict[str, Any]:
           "CDR + waiting for the writer); a draw took "
           f"{out['srr_draw_ms_per_frame']:.2f} ms a frame in srr (render-only: "
           f"{out['render_only_ms_per_frame']:.2f} ms with the capture)")
+    if r.srr.threads:
+        print(f"  srr threads : CPU s over the {r.srr.wall:.2f} s run: " + ", ".join(
+            f"{name} {cpu:.2f}" for name, cpu in r.srr.threads.items()))
     if math.isnan(r.bare):
         return out
     print(f"  bare loop   : {r.bare:7.2f} s  RTF {out['bare_rtf']:.2f}; srr / bare "

@@ -29,7 +29,7 @@ from mcap.writer import CompressionType
 
 from harness import __version__
 from harness.atomic import write_text_atomic
-from harness.bus.mcap_writer import McapWriter
+from harness.bus.mcap_writer import McapWriter, Payload, payload_size
 
 __all__ = [
     "MESSAGE_OVERHEAD",
@@ -95,9 +95,11 @@ class McapBagWriter:
                  profile: str = "ros2") -> None:
         self.path = Path(path)
         self.policy = policy
-        self._file: IO[bytes] = self.path.open("xb")
-        # The bytes of the mcap library's Writer, cheaper per message (see .mcap_writer);
-        # chunks are closed here, by close_chunk.
+        # Unbuffered: each closed chunk goes to the operating system in one writev, its large
+        # payloads as they were handed over (see .mcap_writer).
+        self._file: IO[bytes] = self.path.open("xb", buffering=0)
+        # The bytes of the mcap library's Writer, cheaper per message and without copies (see
+        # .mcap_writer); chunks are closed here, by close_chunk.
         self._mcap = McapWriter(self._file, _COMPRESSION[policy.compression])
         self._mcap.start(profile=profile,
                          library=f"srr-{__version__}; mcap-python-{version('mcap')}")
@@ -131,9 +133,10 @@ class McapBagWriter:
         assert cid == len(self.topics)
         return cid
 
-    def write(self, channel: int, log_time: int, data: bytes | memoryview) -> None:
+    def write(self, channel: int, log_time: int, data: Payload) -> None:
         """Add one message; closes the chunk first if it would span too much log time, and
-        after if it has grown past the size bound."""
+        after if it has grown past the size bound. Large buffers in ``data`` are written as
+        they are when the chunk closes: they must not change after this call."""
         start = self._chunk_start
         if start is not None and log_time - start >= self.policy.max_span_ns:
             self.close_chunk()
@@ -144,7 +147,7 @@ class McapBagWriter:
         self.counts[channel - 1] += 1
         self.start_ns = log_time if self.start_ns is None else min(self.start_ns, log_time)
         self.end_ns = log_time if self.end_ns is None else max(self.end_ns, log_time)
-        self._chunk_bytes += MESSAGE_OVERHEAD + len(data)
+        self._chunk_bytes += MESSAGE_OVERHEAD + payload_size(data)
         if self._chunk_bytes >= self.policy.max_bytes:
             self.close_chunk()
 

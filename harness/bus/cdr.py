@@ -34,17 +34,20 @@ import struct
 from collections.abc import Callable
 from dataclasses import dataclass
 from operator import attrgetter, itemgetter
-from typing import Any
+from typing import Any, Protocol, Self
 
 import numpy as np
 from rosbags.interfaces import Nodetype
 from rosbags.typesys.store import Typestore
 
-__all__ = ["CDR_HEADER", "Layout", "Packer", "Serializer", "Unsupported"]
+__all__ = ["CDR_HEADER", "LARGE_ARRAY", "Layout", "Packer", "Serializer", "Unsupported"]
 
 #: Encapsulation header of little-endian plain CDR (what ROS 2 publishes).
 CDR_HEADER = b"\x00\x01\x00\x00"
 _HEADER_LEN = len(CDR_HEADER)
+#: :meth:`Serializer.pieces` keeps numeric arrays of at least this many bytes as their own
+#: buffers (an image's pixels), not copied.
+LARGE_ARRAY = 64 * 1024
 
 # Struct codes of the base types, as rosbags packs them (``byte`` signed, ``char`` unsigned).
 _CODES: dict[str, str] = {
@@ -65,6 +68,14 @@ class _Mismatch(Exception):
 
 
 # -- leaves of a run ---------------------------------------------------------------------------
+
+class _Out(Protocol):
+    """Where a message's bytes are written: a ``bytearray``, or :class:`_Pieces`."""
+
+    def __len__(self) -> int: ...
+
+    def __iadd__(self, data: bytes | memoryview, /) -> Self: ...
+
 
 @dataclass(frozen=True)
 class _Leaf:
@@ -102,7 +113,7 @@ class _Run:
                              for i, leaf in enumerate(leaves) if leaf.count)
         self._structs: dict[tuple[int, ...], struct.Struct] = {}
 
-    def write(self, out: bytearray, msg: Any) -> None:
+    def write(self, out: _Out, msg: Any) -> None:
         got = self._get(msg)
         values: list[Any] = [got] if self._single else list(got)
         shape: tuple[int, ...] = ((len(out) - _HEADER_LEN) & 7,)
@@ -178,7 +189,7 @@ class _Sequence:
         self._align = _SIZES[base] if base is not None and base != "string" else 0
         self._layout = element
 
-    def write(self, out: bytearray, msg: Any) -> None:
+    def write(self, out: _Out, msg: Any) -> None:
         items = self._get(msg)
         out += bytes(_pad(len(out) - _HEADER_LEN, 4))
         if self._layout is not None:
@@ -198,7 +209,45 @@ class _Sequence:
             out += _COUNT.pack(len(items))
             if len(view):
                 out += bytes(_pad(len(out) - _HEADER_LEN, self._align))
-                out += view
+                if isinstance(out, _Pieces):
+                    out.keep(view)
+                else:
+                    out += view
+
+
+class _Pieces:
+    """A message's bytes being written as pieces: what :class:`_Run` and :class:`_Sequence`
+    append goes into a ``bytearray``; a large numeric array is kept as its own buffer
+    (:meth:`keep`). ``len`` is the length of everything written so far, as for a
+    ``bytearray``, so the padding comes out the same."""
+
+    __slots__ = ("_done", "_size", "_tail")
+
+    def __init__(self, head: bytes) -> None:
+        self._done: list[bytes | memoryview] = []
+        self._size = 0
+        self._tail = bytearray(head)
+
+    def __len__(self) -> int:
+        return self._size + len(self._tail)
+
+    def __iadd__(self, data: bytes | memoryview, /) -> Self:
+        self._tail += data
+        return self
+
+    def keep(self, view: memoryview) -> None:
+        if len(view) < LARGE_ARRAY:
+            self._tail += view
+            return
+        if self._tail:
+            self._done.append(bytes(self._tail))
+            self._size += len(self._tail)
+            self._tail = bytearray()
+        self._done.append(view.toreadonly())
+        self._size += len(view)
+
+    def pieces(self) -> tuple[bytes | memoryview, ...]:
+        return (*self._done, bytes(self._tail)) if self._tail else tuple(self._done)
 
 
 # -- layouts -----------------------------------------------------------------------------------
@@ -212,7 +261,7 @@ class Layout:
         self.msgtype = msgtype
         self.segments = segments
 
-    def write(self, out: bytearray, msg: Any) -> None:
+    def write(self, out: _Out, msg: Any) -> None:
         """Append ``msg``'s CDR body to ``out`` (which starts with the 4-byte header)."""
         for segment in self.segments:
             segment.write(out, msg)
@@ -223,6 +272,15 @@ class Layout:
         for segment in self.segments:
             segment.write(out, msg)
         return bytes(out)
+
+    def serialize_pieces(self, msg: Any) -> tuple[bytes | memoryview, ...]:
+        """``msg``'s CDR bytes as pieces in order, each numeric array of
+        :data:`LARGE_ARRAY` bytes or more as a read-only view of the message's own array
+        (not copied); raises :class:`_Mismatch` when it does not fit the layout."""
+        out = _Pieces(CDR_HEADER)
+        for segment in self.segments:
+            segment.write(out, msg)
+        return out.pieces()
 
 
 def _fields(typestore: Typestore, msgtype: str) -> list[tuple[str, Nodetype, Any]]:
@@ -315,6 +373,18 @@ class Serializer:
             except Exception:
                 pass
         return self._fallback(msg, msgtype)
+
+    def pieces(self, msg: Any, msgtype: str) -> tuple[bytes | memoryview, ...]:
+        """The same bytes as calling the serializer, as :meth:`Layout.serialize_pieces`
+        gives them (one piece from the fallback). The large pieces are views of the
+        message's arrays: the message must not change while they are in use."""
+        compiled = self._layouts.get(msgtype) or self.layout(msgtype)
+        if compiled is not None:
+            try:
+                return compiled.serialize_pieces(msg)
+            except Exception:
+                pass
+        return (self._fallback(msg, msgtype),)
 
 
 # -- packers: a fixed shape, from values ---------------------------------------------------------

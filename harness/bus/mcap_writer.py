@@ -1,27 +1,40 @@
-"""A chunked MCAP writer whose per-message path is a few bytes appended, not a dozen calls.
+"""A chunked MCAP writer whose per-message path is a few bytes appended, not a dozen calls,
+and which never copies a large payload.
 
 It writes the bytes the ``mcap`` library's ``Writer`` writes with the settings srr uses
 (chunked, every index, schemas and channels repeated in the summary, statistics, summary
 offsets, CRCs of chunks and summary; no data-section CRC), for the same calls in the same
-order: a test checks that byte for byte. What differs is the cost of :meth:`add_message`:
-the library builds a record object and makes some twenty calls per message, here the
-Message record is one ``struct`` pack appended to the chunk being filled, and its index
-entry one tuple. The records written once per chunk or per file (header, schemas,
-channels, chunk, message indexes, metadata, summary, footer) are written with the
-library's own record classes.
+order: a test checks that byte for byte. What differs is the cost:
+
+* per message: the library builds a record object and makes some twenty calls, here the
+  Message record's head is one ``struct`` pack appended to the chunk being filled, and its
+  index entry one tuple;
+* per byte of a large payload (an image: megabytes a frame): the library copies it into a
+  ``BytesIO`` chunk and twice more while building the Chunk record, all holding the GIL. Here a
+  chunk is a list of *pieces*: small records are appended to a ``bytearray``, a payload of
+  :data:`LARGE` bytes or more (or each large piece of a payload handed over in pieces, see
+  :data:`Payload`) is kept as the caller's buffer. The chunk's CRC is computed piece by piece
+  and the chunk goes to the file with ``os.writev``; zlib's CRC and the write release the GIL,
+  so the payload's bytes are never touched by Python code. A caller must not change a buffer
+  after handing it over. A compressed chunk is joined once and compressed.
+
+The records written once per chunk or per file (header, schemas, channels, message indexes,
+metadata, summary, footer) are written with the library's own record classes.
 """
 
 from __future__ import annotations
 
+import os
 import struct
 import zlib
+from collections.abc import Sequence
+from io import FileIO
 from typing import IO, Any
 
 from mcap.data_stream import RecordBuilder
 from mcap.opcode import Opcode
 from mcap.records import (
     Channel,
-    Chunk,
     ChunkIndex,
     DataEnd,
     Footer,
@@ -36,11 +49,27 @@ from mcap.records import (
 )
 from mcap.writer import MCAP0_MAGIC, CompressionType
 
-__all__ = ["McapWriter"]
+__all__ = ["LARGE", "McapWriter", "Payload", "payload_size"]
+
+#: A message's bytes: one buffer, or its pieces in order (a header and an image's pixels).
+Payload = bytes | memoryview | tuple[bytes | memoryview, ...]
+#: Payloads (and pieces) of at least this many bytes are kept as the caller's buffers.
+LARGE = 64 * 1024
 
 # A Message record's head: opcode, record length, channel id, sequence, log and publish time.
 _MESSAGE_HEAD = struct.Struct("<BQHIQQ")
 _MESSAGE_FIELDS = 2 + 4 + 8 + 8
+# A Chunk record up to its compression name: opcode, record length, message start and end
+# time, uncompressed size and CRC.
+_CHUNK_HEAD = struct.Struct("<BQQQQI")
+_IOV_MAX = min(1024, os.sysconf("SC_IOV_MAX")) if hasattr(os, "sysconf") else 16
+
+
+def payload_size(data: Payload) -> int:
+    """The number of bytes in ``data``."""
+    if isinstance(data, tuple):
+        return sum(len(piece) for piece in data)
+    return len(data)
 
 
 def _take(builder: RecordBuilder) -> bytes:
@@ -66,14 +95,36 @@ def _compress(data: bytes, compression: CompressionType) -> tuple[str, bytes]:
     return "", data
 
 
+def _writev(fd: int, pieces: Sequence[bytes | bytearray | memoryview]) -> None:
+    """Write every piece to ``fd`` in order, resuming after partial writes."""
+    todo = [p for p in pieces if len(p)]
+    i = 0
+    while i < len(todo):
+        batch = todo[i:i + _IOV_MAX]
+        done = os.writev(fd, batch)
+        for piece in batch:
+            if done < len(piece):
+                todo[i] = memoryview(piece)[done:]
+                break
+            done -= len(piece)
+            i += 1
+
+
 class McapWriter:
     """Writes one MCAP file to ``stream`` (see the module docstring). Chunks are closed only
     by :meth:`flush` and :meth:`finish`; the caller decides when (see
-    :class:`~harness.bus.bagfile.McapBagWriter`)."""
+    :class:`~harness.bus.bagfile.McapBagWriter`).
+
+    ``stream`` is written from its current position. An unbuffered file (``open(...,
+    buffering=0)``) gets each chunk with ``os.writev`` on its descriptor; any other binary
+    stream gets ``write`` calls.
+    """
 
     def __init__(self, stream: IO[bytes], compression: CompressionType = CompressionType.NONE,
                  ) -> None:
         self._stream = stream
+        self._fd = stream.fileno() if isinstance(stream, FileIO) else None
+        self._pos = stream.tell()
         self._compression = compression
         self._records = RecordBuilder()  # records outside chunks, written out by _flush
         self._schemas: list[Schema] = []
@@ -87,7 +138,9 @@ class McapWriter:
         self._channel_counts: dict[int, int] = {}
         self._chunk_count = 0
         self._metadata_count = 0
-        # the chunk being filled
+        # the chunk being filled: closed pieces, then the small records after them
+        self._pieces: list[bytes | bytearray | memoryview] = []
+        self._pieces_size = 0
         self._chunk = bytearray()
         self._chunk_messages = 0
         self._chunk_start = 0
@@ -97,7 +150,7 @@ class McapWriter:
     # -- the file ----------------------------------------------------------------------------
 
     def start(self, profile: str, library: str) -> None:
-        self._stream.write(MCAP0_MAGIC)
+        self._write((MCAP0_MAGIC,))
         Header(profile, library).write(self._records)
         self._flush()
 
@@ -116,9 +169,10 @@ class McapWriter:
         self._chunk += _record(channel)
         return channel.id
 
-    def add_message(self, channel_id: int, log_time: int, data: bytes | memoryview,
+    def add_message(self, channel_id: int, log_time: int, data: Payload,
                     publish_time: int) -> None:
-        """Append one message (sequence 0) to the chunk being filled."""
+        """Append one message (sequence 0) to the chunk being filled. Large buffers in
+        ``data`` are kept, not copied: they must not change afterwards."""
         if self._message_count == 0 or log_time < self._message_start:
             self._message_start = log_time
         if log_time > self._message_end:
@@ -135,11 +189,28 @@ class McapWriter:
         index = self._indexes.get(channel_id)
         if index is None:
             index = self._indexes[channel_id] = []
-        index.append((log_time, len(chunk)))
+        index.append((log_time, self._pieces_size + len(chunk)))
         self._chunk_messages += 1
-        chunk += _MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIELDS + len(data), channel_id, 0,
-                                    log_time, publish_time)
-        chunk += data
+        if isinstance(data, tuple):
+            chunk += _MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIELDS + payload_size(data),
+                                        channel_id, 0, log_time, publish_time)
+            for piece in data:
+                self._append(piece)
+        else:
+            chunk += _MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIELDS + len(data),
+                                        channel_id, 0, log_time, publish_time)
+            self._append(data)
+
+    def _append(self, data: bytes | memoryview) -> None:
+        if len(data) < LARGE:
+            self._chunk += data
+            return
+        if self._chunk:
+            self._pieces.append(self._chunk)
+            self._pieces_size += len(self._chunk)
+            self._chunk = bytearray()
+        self._pieces.append(data)
+        self._pieces_size += len(data)
 
     def flush(self) -> None:
         """Close the chunk being filled (if it holds a message) and flush the stream."""
@@ -149,7 +220,7 @@ class McapWriter:
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
         self._flush()
-        offset = self._stream.tell()
+        offset = self._pos
         self._metadata_count += 1
         Metadata(name=name, metadata=data).write(self._records)
         self._metadata_indexes.append(
@@ -161,7 +232,7 @@ class McapWriter:
         self._finish_chunk()
         DataEnd(0).write(self._records)
         self._flush()
-        start = self._stream.tell()
+        start = self._pos
         summary = RecordBuilder()
         offsets: list[SummaryOffset] = []
 
@@ -190,11 +261,11 @@ class McapWriter:
         crc = zlib.crc32(data)
         crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4,
                                      0 if not data else start, offsets_start), crc)
-        self._stream.write(data)
+        self._write((data,))
         Footer(summary_start=0 if not data else start, summary_offset_start=offsets_start,
                summary_crc=crc).write(self._records)
         self._flush()
-        self._stream.write(MCAP0_MAGIC)
+        self._write((MCAP0_MAGIC,))
 
     # -- chunks ------------------------------------------------------------------------------
 
@@ -202,32 +273,56 @@ class McapWriter:
         if self._chunk_messages == 0:
             return  # schema and channel records stay for the next chunk, as in the library
         self._chunk_count += 1
-        raw = bytes(self._chunk)
-        compression, data = _compress(raw, self._compression)
-        chunk = Chunk(compression=compression, data=data, message_start_time=self._chunk_start,
-                      message_end_time=self._chunk_end, uncompressed_crc=zlib.crc32(raw),
-                      uncompressed_size=len(raw))
+        pieces = self._pieces
+        if self._chunk:
+            pieces.append(self._chunk)
+        size = self._pieces_size + len(self._chunk)
+        body: Sequence[bytes | bytearray | memoryview]
+        if self._compression == CompressionType.NONE:
+            crc = 0
+            for piece in pieces:
+                crc = zlib.crc32(piece, crc)
+            compression, body = "", pieces
+        else:
+            raw = b"".join(pieces)
+            crc = zlib.crc32(raw)
+            compression, packed = _compress(raw, self._compression)
+            body = (packed,)
+        stored = sum(len(piece) for piece in body)
+        name = compression.encode()
+        length = 8 + 8 + 8 + 4 + 4 + len(name) + 8 + stored
         self._flush()
-        chunk_offset = self._stream.tell()
-        chunk.write(self._records)
+        chunk_offset = self._pos
+        self._write((_CHUNK_HEAD.pack(Opcode.CHUNK, length, self._chunk_start,
+                                      self._chunk_end, size, crc)
+                     + struct.pack("<I", len(name)) + name + struct.pack("<Q", stored),
+                     *body))
         index = ChunkIndex(
-            message_start_time=chunk.message_start_time,
-            message_end_time=chunk.message_end_time, chunk_start_offset=chunk_offset,
-            chunk_length=self._records.count, message_index_offsets={},
-            message_index_length=0, compression=compression, compressed_size=len(data),
-            uncompressed_size=len(raw))
-        self._flush()
-        indexes_offset = self._stream.tell()
+            message_start_time=self._chunk_start, message_end_time=self._chunk_end,
+            chunk_start_offset=chunk_offset, chunk_length=self._pos - chunk_offset,
+            message_index_offsets={}, message_index_length=0, compression=compression,
+            compressed_size=stored, uncompressed_size=size)
+        indexes_offset = self._pos
         for channel_id, records in self._indexes.items():
             index.message_index_offsets[channel_id] = indexes_offset + self._records.count
             MessageIndex(channel_id=channel_id, records=records).write(self._records)
         index.message_index_length = self._records.count
         self._flush()
         self._chunk_indexes.append(index)
+        self._pieces, self._pieces_size = [], 0
         self._chunk = bytearray()
         self._chunk_messages = 0
         self._chunk_start = self._chunk_end = 0
         self._indexes = {}
 
     def _flush(self) -> None:
-        self._stream.write(_take(self._records))
+        if self._records.count:
+            self._write((_take(self._records),))
+
+    def _write(self, pieces: Sequence[bytes | bytearray | memoryview]) -> None:
+        if self._fd is not None:
+            _writev(self._fd, pieces)
+        else:
+            for piece in pieces:
+                self._stream.write(piece)
+        self._pos += sum(len(piece) for piece in pieces)

@@ -130,6 +130,13 @@ def serialize(msg: Any, typename: str) -> bytes:
     return _SERIALIZER(msg, typename)
 
 
+def serialize_pieces(msg: Any, typename: str) -> tuple[bytes | memoryview, ...]:
+    """The bytes of :func:`serialize` in pieces, large numeric arrays (an image's pixels) as
+    views of the message's own arrays instead of copies (see
+    :meth:`harness.bus.cdr.Serializer.pieces`)."""
+    return _SERIALIZER.pieces(msg, typename)
+
+
 def deserialize(data: bytes, typename: str) -> Any:
     return TYPESTORE.deserialize_cdr(data, typename)
 

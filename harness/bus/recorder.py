@@ -53,7 +53,8 @@ from harness.bus.bagfile import (
     write_metadata,
 )
 from harness.bus.bus import Deferred, Envelope, Qos, resolved
-from harness.bus.messages import TYPESTORE, serialize
+from harness.bus.mcap_writer import Payload, payload_size
+from harness.bus.messages import TYPESTORE, serialize, serialize_pieces
 from harness.errors import BagError
 
 __all__ = ["HASH_LANE_MIN_BYTES", "Recorder", "TopicStats", "cdr_bytes", "digest_update",
@@ -80,8 +81,14 @@ class TopicStats:
     durability: str
 
 
-def digest_update(h: Any, stamp_ns: int, data: bytes | memoryview) -> None:
-    """Feed one message into a topic's digest: ``(log time, length, payload)``."""
+def digest_update(h: Any, stamp_ns: int, data: Payload) -> None:
+    """Feed one message into a topic's digest: ``(log time, length, payload)`` (a payload in
+    pieces digests as the pieces joined)."""
+    if isinstance(data, tuple):
+        h.update(struct.pack("<qI", stamp_ns, payload_size(data)))
+        for piece in data:
+            h.update(piece)
+        return
     h.update(struct.pack("<qI", stamp_ns, len(data)))
     h.update(data)
 
@@ -107,12 +114,12 @@ class _HashLane:
     """A thread that digests the payloads of the topics given to it, in the order queued."""
 
     def __init__(self, name: str) -> None:
-        self._queue: queue.Queue[tuple[Any, int, bytes | memoryview] | None] = queue.Queue(
+        self._queue: queue.Queue[tuple[Any, int, Payload] | None] = queue.Queue(
             maxsize=256)
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
 
-    def put(self, digest: Any, stamp_ns: int, data: bytes | memoryview) -> None:
+    def put(self, digest: Any, stamp_ns: int, data: Payload) -> None:
         self._queue.put((digest, stamp_ns, data))
 
     def _run(self) -> None:
@@ -132,10 +139,11 @@ def cdr_bytes(env: Envelope) -> bytes:
     return serialize(resolved(env.msg), env.msgtype)
 
 
-def _serialize_deferred(msg: Deferred, msgtype: str) -> memoryview:
-    """CDR of a deferred message (an image): the typestore's buffer as it is, not copied into
-    a ``bytes`` (megabytes a frame, copied holding the GIL)."""
-    return TYPESTORE.serialize_cdr(msg.resolve(), msgtype)
+def _serialize_deferred(msg: Deferred, msgtype: str) -> Payload:
+    """CDR of a deferred message (an image) in pieces: the pixels stay the message's own
+    array, never copied (megabytes a frame; a copy would hold the GIL). The writer and the
+    digest take the pieces as they are."""
+    return serialize_pieces(msg.resolve(), msgtype)
 
 
 def _bag_qos(qos: Qos) -> BagQos:
@@ -207,10 +215,10 @@ class Recorder:
         self._state: dict[str, _TopicState] = {}
         self._batch_limit = max(1, batch)
         self._batch_bytes_limit = batch_bytes
-        self._batch: list[tuple[_TopicState, int, bytes | memoryview | Future[memoryview]]] = []
+        self._batch: list[tuple[_TopicState, int, bytes | Future[Payload]]] = []
         self._batch_bytes = 0
         self._queue: queue.Queue[
-            list[tuple[_TopicState, int, bytes | memoryview | Future[memoryview]]] | None] = \
+            list[tuple[_TopicState, int, bytes | Future[Payload]]] | None] = \
             queue.Queue(maxsize=max(1, queue_size // self._batch_limit))
         self._thread: threading.Thread | None = None
         self._pool: ThreadPoolExecutor | None = None
@@ -318,21 +326,23 @@ class Recorder:
                 if self._error is not None:
                     break  # keep draining so producers never block on a dead writer
                 try:
-                    data: bytes | memoryview
+                    data: Payload
                     if isinstance(payload, Future):
                         data = payload.result()
-                        self._deferred_bytes += len(data)
+                        size = payload_size(data)
+                        self._deferred_bytes += size
                     else:
                         data = payload
+                        size = len(data)
                     if st.channel is None:
                         st.channel = self._add_topic(writer, st.topic, st.msgtype, st.qos)
-                        st.lane = self._lane(len(data))
+                        st.lane = self._lane(size)
                     writer.write(st.channel, stamp, data)
                 except Exception as err:  # handed to the caller's thread as one clear error
                     self._fail(st.topic, err)
                     break
                 st.count += 1
-                st.bytes += len(data)
+                st.bytes += size
                 if st.lane is None:
                     digest_update(st.digest, stamp, data)
                 else:

@@ -99,7 +99,40 @@ def test_every_type_serializes_as_rosbags_does(msgtype: str) -> None:
     rng = random.Random(msgtype)
     for _ in range(20):
         msg = random_message(rng, msgtype)
-        assert layout.serialize(msg) == rosbags(msg, msgtype)  # the layout itself, no fallback
+        expected = rosbags(msg, msgtype)
+        assert layout.serialize(msg) == expected  # the layout itself, no fallback
+        assert b"".join(layout.serialize_pieces(msg)) == expected
+
+
+def test_large_arrays_stay_the_messages_own_buffers() -> None:
+    """In pieces, a large numeric array is a read-only view of the message's array (not a
+    copy) and the fields after it are laid out as if it had been copied: an image, a point
+    cloud (a bool after its data), a scan (a float array after a float array of odd
+    length)."""
+    from harness.bus.cdr import LARGE_ARRAY
+    from harness.bus.messages import make, serialize_pieces
+
+    rng = np.random.default_rng(7)
+    image = make("sensor_msgs/msg/Image", height=130, width=131, encoding="32FC1", step=524,
+                 data=rng.integers(0, 255, 130 * 524, dtype=np.uint8))
+    cloud = make("sensor_msgs/msg/PointCloud2", height=1, width=7000, point_step=12,
+                 row_step=84000, is_dense=True,
+                 data=rng.integers(0, 255, 84000, dtype=np.uint8))
+    scan = make("sensor_msgs/msg/LaserScan", range_max=9.5,
+                ranges=rng.random(LARGE_ARRAY // 4 + 3, dtype=np.float32),
+                intensities=rng.random(5, dtype=np.float32))
+    for msg, array in ((image, image.data), (cloud, cloud.data), (scan, scan.ranges)):
+        msgtype = msg.__msgtype__
+        pieces = serialize_pieces(msg, msgtype)
+        assert b"".join(pieces) == rosbags(msg, msgtype), msgtype
+        large = [p for p in pieces if len(p) >= LARGE_ARRAY]
+        assert len(large) == 1, msgtype
+        assert isinstance(large[0], memoryview) and large[0].readonly
+        assert np.shares_memory(np.frombuffer(large[0], dtype=np.uint8), array), msgtype
+    small = make("sensor_msgs/msg/Image", height=2, width=2, encoding="mono8", step=2,
+                 data=np.arange(4, dtype=np.uint8))
+    assert serialize_pieces(small, "sensor_msgs/msg/Image") == (
+        rosbags(small, "sensor_msgs/msg/Image"),)
 
 
 def test_every_message_of_a_real_run(tmp_path: Path) -> None:
