@@ -176,7 +176,6 @@ class McapBagWriter:
 
     def abort(self) -> None:
         """Close the file as it is (no summary, no footer)."""
-        self._mcap.close()
         self._file.close()
 
     def _sync(self) -> None:

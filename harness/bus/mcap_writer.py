@@ -17,11 +17,6 @@ order: a test checks that byte for byte. What differs is the cost:
   and the chunk goes to the file with ``os.writev``; zlib's CRC and the write release the GIL,
   so the payload's bytes are never touched by Python code. A caller must not change a buffer
   after handing it over. A compressed chunk is joined once and compressed.
-* once a large payload has been seen, the CRC of an uncompressed chunk is computed on a
-  thread of its own (:class:`_CrcLane`) piece by piece as the pieces arrive, so that the
-  thread calling :meth:`McapWriter.add_message` only waits for it when the chunk closes:
-  for camera bags the CRC is as much work as the write itself (4 GB/s against 4 GB/s on the
-  GPU machine's host).
 
 The records written once per chunk or per file (header, schemas, channels, message indexes,
 metadata, summary, footer) are written with the library's own record classes.
@@ -30,9 +25,7 @@ metadata, summary, footer) are written with the library's own record classes.
 from __future__ import annotations
 
 import os
-import queue
 import struct
-import threading
 import zlib
 from collections.abc import Sequence
 from io import FileIO
@@ -117,48 +110,6 @@ def _writev(fd: int, pieces: Sequence[bytes | bytearray | memoryview]) -> None:
             i += 1
 
 
-class _CrcLane:
-    """The CRC32 of a chunk's pieces, computed on its own thread in the order they are added;
-    :meth:`result` waits for the chunk's value and starts the next chunk at 0."""
-
-    _END = object()
-
-    def __init__(self) -> None:
-        self._pieces: queue.SimpleQueue[bytes | bytearray | memoryview | object | None] = (
-            queue.SimpleQueue())
-        self._results: queue.SimpleQueue[int | BaseException] = queue.SimpleQueue()
-        self._thread = threading.Thread(target=self._run, name="srr-mcap-crc", daemon=True)
-        self._thread.start()
-
-    def add(self, piece: bytes | bytearray | memoryview) -> None:
-        """Add ``piece`` (it must not change until :meth:`result` returns)."""
-        self._pieces.put(piece)
-
-    def result(self) -> int:
-        self._pieces.put(self._END)
-        got = self._results.get()
-        if isinstance(got, BaseException):
-            raise got
-        return got
-
-    def close(self) -> None:
-        self._pieces.put(None)
-        self._thread.join()
-
-    def _run(self) -> None:
-        crc = 0
-        error: BaseException | None = None
-        while (piece := self._pieces.get()) is not None:
-            if piece is self._END:
-                self._results.put(error if error is not None else crc)
-                crc, error = 0, None
-            elif error is None:
-                try:
-                    crc = zlib.crc32(piece, crc)  # type: ignore[arg-type]
-                except Exception as err:  # handed to result()
-                    error = err
-
-
 class McapWriter:
     """Writes one MCAP file to ``stream`` (see the module docstring). Chunks are closed only
     by :meth:`flush` and :meth:`finish`; the caller decides when (see
@@ -190,7 +141,6 @@ class McapWriter:
         # the chunk being filled: closed pieces, then the small records after them
         self._pieces: list[bytes | bytearray | memoryview] = []
         self._pieces_size = 0
-        self._crc_lane: _CrcLane | None = None  # started by the first large payload
         self._chunk = bytearray()
         self._chunk_messages = 0
         self._chunk_start = 0
@@ -255,18 +205,12 @@ class McapWriter:
         if len(data) < LARGE:
             self._chunk += data
             return
-        if self._crc_lane is None and self._compression == CompressionType.NONE:
-            self._crc_lane = _CrcLane()
         if self._chunk:
-            self._add_piece(self._chunk)
+            self._pieces.append(self._chunk)
+            self._pieces_size += len(self._chunk)
             self._chunk = bytearray()
-        self._add_piece(data)
-
-    def _add_piece(self, piece: bytes | bytearray | memoryview) -> None:
-        self._pieces.append(piece)
-        self._pieces_size += len(piece)
-        if self._crc_lane is not None:
-            self._crc_lane.add(piece)
+        self._pieces.append(data)
+        self._pieces_size += len(data)
 
     def flush(self) -> None:
         """Close the chunk being filled (if it holds a message) and flush the stream."""
@@ -322,14 +266,6 @@ class McapWriter:
                summary_crc=crc).write(self._records)
         self._flush()
         self._write((MCAP0_MAGIC,))
-        self.close()
-
-    def close(self) -> None:
-        """Stop the CRC thread, if one was started (:meth:`finish` does; call it when a file
-        is abandoned unfinished). The stream is the caller's to close."""
-        lane, self._crc_lane = self._crc_lane, None
-        if lane is not None:
-            lane.close()
 
     # -- chunks ------------------------------------------------------------------------------
 
@@ -337,17 +273,15 @@ class McapWriter:
         if self._chunk_messages == 0:
             return  # schema and channel records stay for the next chunk, as in the library
         self._chunk_count += 1
+        pieces = self._pieces
         if self._chunk:
-            self._add_piece(self._chunk)
-        pieces, size = self._pieces, self._pieces_size
+            pieces.append(self._chunk)
+        size = self._pieces_size + len(self._chunk)
         body: Sequence[bytes | bytearray | memoryview]
         if self._compression == CompressionType.NONE:
-            if self._crc_lane is not None:
-                crc = self._crc_lane.result()
-            else:
-                crc = 0
-                for piece in pieces:
-                    crc = zlib.crc32(piece, crc)
+            crc = 0
+            for piece in pieces:
+                crc = zlib.crc32(piece, crc)
             compression, body = "", pieces
         else:
             raw = b"".join(pieces)

@@ -64,7 +64,7 @@ __all__ = ["HASH_LANE_MIN_BYTES", "Recorder", "TopicStats", "cdr_bytes", "digest
 HASH_LANE_MIN_BYTES = 64 * 1024
 # Threads that build and serialize deferred messages, and hash threads, at most.
 _POOL_THREADS = max(2, min(4, os.cpu_count() or 1))
-_HASH_LANES = max(1, min(8, os.cpu_count() or 1))
+_HASH_LANES = max(1, min(4, os.cpu_count() or 1))
 
 
 @dataclass(frozen=True)
