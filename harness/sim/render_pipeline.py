@@ -41,7 +41,7 @@ __all__ = ["IN_FLIGHT", "SWITCH_INTERVAL_S", "PendingFrame", "RenderThread"]
 #: Frames captured but not yet drawn, at most (the size of the scene pool).
 IN_FLIGHT = 8
 #: The interpreter's switch interval while a render thread runs (seconds).
-SWITCH_INTERVAL_S = 0.0002
+SWITCH_INTERVAL_S = 0.00005
 
 
 class PendingFrame:
