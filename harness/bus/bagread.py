@@ -4,7 +4,10 @@
   reader;
 * a ROS 1 ``.bag``: rosbags' rosbag1 reader;
 * a plain MCAP file, ``ros2`` or ``ros1`` profile (a ROS 1 run's ``bag/bag.mcap``, a
-  baseline's reference recording): the ``mcap`` library, in file order.
+  baseline's reference recording): through its chunk and message indexes
+  (:class:`~harness.bus.mcapread.McapIndex`), in file order. :func:`open_indexed` reads a
+  rosbag2 directory's one finished MCAP file so too (what scoring and the report's images
+  read: only the payloads they want leave the disk).
 
 A run's ``bag/`` directory holds the first, or (a ROS 1 run) no ``metadata.yaml`` and one
 ``.bag`` or ``ros1``-profile ``.mcap`` file: :func:`ros1_recording` finds it.
