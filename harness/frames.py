@@ -48,26 +48,21 @@ they compare and filter like strings. Tables keep the bag's order (time order pe
 
 from __future__ import annotations
 
-import os
 import re
 import struct
 from array import array
-from collections.abc import Callable, Collection, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import lz4.frame
 import numpy as np
 import pandas as pd
-import yaml
-import zstandard
-from mcap.reader import make_reader
 from pandas.api.types import union_categoricals
 from rosbags.serde import SerdeError
 
 from harness.bag import BAG_READ_ERRORS
-from harness.bus.bagread import Encoding, mcap_profile, open_recording, ros1_recording
+from harness.bus.bagread import Encoding, open_indexed, ros1_recording
 from harness.bus.endpoints import tf_tree_of
 from harness.bus.messages import TYPESTORE
 from harness.bus.ros1 import deserialize_ros1
@@ -83,7 +78,6 @@ __all__ = [
     "TWIST",
     "Frames",
     "decode_batch",
-    "finished_mcap",
     "load_frames",
     "quat_yaw",
 ]
@@ -691,152 +685,6 @@ def _tf_frame(topics: list[tuple[str, list[dict[str, Any]]]]) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
-@dataclass(frozen=True)
-class _Conn:
-    id: int
-    topic: str
-    msgtype: str
-
-
-class _McapFile:
-    """A plain ROS 2 MCAP file (a baseline's reference recording, or a finished bag's one
-    file) read like a rosbag2 directory: ``connections``, ``messages()`` as (connection, log
-    time, raw CDR), start and end."""
-
-    encoding: Encoding = "cdr"
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.connections: list[_Conn] = []
-        self.start_time, self.end_time = 2**63 - 1, 0
-        self._chunks: list[Any] = []
-
-    def __enter__(self) -> _McapFile:
-        if self.connections:  # already opened
-            return self
-        with self.path.open("rb") as f:
-            summary = make_reader(f).get_summary()
-        if summary is None:
-            raise ValueError("no summary section (not a finished MCAP file)")
-        self.connections = [_Conn(c.id, c.topic, summary.schemas[c.schema_id].name)
-                            for c in summary.channels.values()]
-        if summary.statistics is not None and summary.statistics.message_count:
-            self.start_time = summary.statistics.message_start_time
-            # exclusive, as rosbags reports a bag's end: after the last message
-            self.end_time = summary.statistics.message_end_time + 1
-        chunks = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)
-        if all(c.message_index_length > 0 for c in chunks):
-            self._chunks = chunks
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def messages(self, wanted: Collection[int] | None = None
-                 ) -> Iterator[tuple[_Conn, int, bytes | None]]:
-        """Every message, in file order. With ``wanted`` (channel ids) only those messages'
-        payloads are read (the others come with None): through the chunk and message indexes,
-        so a bag's images cost nothing but their index entries."""
-        by_id = {c.id: c for c in self.connections}
-        if wanted is None or not self._chunks:
-            with self.path.open("rb") as f:
-                for _schema, channel, message in make_reader(f).iter_messages(
-                        log_time_order=False):
-                    yield by_id[channel.id], message.log_time, message.data
-            return
-        with self.path.open("rb") as f:
-            fd = f.fileno()
-            for ci in self._chunks:
-                entries = _message_index(os.pread(fd, ci.message_index_length,
-                                                  ci.chunk_start_offset + ci.chunk_length))
-                read = _chunk_reader(fd, ci, sum(1 for cid, _, _ in entries if cid in wanted))
-                for cid, log_time, offset in entries:
-                    yield by_id[cid], log_time, read(offset) if cid in wanted else None
-
-
-def _message_index(buf: bytes) -> list[tuple[int, int, int]]:
-    """(channel id, log time, offset in the chunk's records) of every MessageIndex record in
-    ``buf``, in record order (file order)."""
-    out: list[tuple[int, int, int]] = []
-    pos, end = 0, len(buf)
-    while pos < end:
-        opcode, length = _REC_HEAD.unpack_from(buf, pos)
-        body = pos + 9
-        if opcode == 0x07:  # MessageIndex: channel id, then (log time, offset) pairs
-            cid, n = struct.unpack_from("<HI", buf, body)
-            pairs = np.frombuffer(buf, dtype="<u8", count=n // 8, offset=body + 6)
-            out += [(cid, int(t), int(o)) for t, o in pairs.reshape(-1, 2)]
-        pos = body + length
-    out.sort(key=lambda e: e[2])
-    return out
-
-
-_REC_HEAD = struct.Struct("<BQ")
-_MSG_HEAD = 2 + 4 + 8 + 8  # channel id, sequence, log time, publish time
-
-
-def _chunk_reader(fd: int, ci: Any, n_wanted: int) -> Callable[[int], bytes]:
-    """The payload of the Message record at an offset in chunk ``ci``'s records: read one by
-    one from an uncompressed chunk holding a few wanted messages among large ones (a bag's
-    images stay on disk), else from the whole chunk, read (and decompressed) once."""
-    start = ci.chunk_start_offset + 9 + 8 + 8 + 8 + 4 + 4 + len(ci.compression.encode()) + 8
-    if n_wanted and not ci.compression and n_wanted * 4096 < ci.uncompressed_size:
-        def one(offset: int) -> bytes:
-            head = os.pread(fd, 9 + _MSG_HEAD + 1024, start + offset)
-            _, length = _REC_HEAD.unpack_from(head, 0)
-            if 9 + length > len(head):
-                head = os.pread(fd, 9 + length, start + offset)
-            return head[9 + _MSG_HEAD:9 + length]
-        return one
-    records: bytes = b""
-    if n_wanted:
-        data = os.pread(fd, ci.compressed_size, start)
-        if ci.compression == "zstd":
-            data = zstandard.ZstdDecompressor().decompress(data,
-                                                           max_output_size=ci.uncompressed_size)
-        elif ci.compression == "lz4":
-            data = lz4.frame.decompress(data)
-        elif ci.compression:
-            raise ValueError(f"unknown chunk compression {ci.compression!r}")
-        records = data
-
-    def sliced(offset: int) -> bytes:
-        _, length = _REC_HEAD.unpack_from(records, offset)
-        return records[offset + 9 + _MSG_HEAD:offset + 9 + length]
-    return sliced
-
-
-_YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-
-
-def finished_mcap(bag_dir: Path) -> _McapFile | None:
-    """The bag's one MCAP file, opened, when ``metadata.yaml`` names exactly one and the file
-    is finished (has its summary); else None. (Cheaper than rosbags' Reader, which spends
-    ~0.2 s parsing ``metadata.yaml`` with ruamel; the messages are the same.)"""
-    try:
-        info = yaml.load((bag_dir / "metadata.yaml").read_text(encoding="utf-8"),
-                         Loader=_YamlLoader)["rosbag2_bagfile_information"]
-        files = [bag_dir / str(f) for f in info["relative_file_paths"]]
-        if len(files) != 1 or files[0].suffix != ".mcap" or not files[0].is_file():
-            return None
-        return _McapFile(files[0]).__enter__()
-    except BAG_READ_ERRORS:
-        return None
-
-
-def _open_bag(path: Path) -> Any:
-    """:class:`_McapFile` for a ROS 2 ``.mcap`` or a rosbag2 directory of one finished MCAP
-    file, else :func:`~harness.bus.bagread.open_recording` (a ROS 1 recording, or rosbags'
-    Reader, which says what is wrong with a damaged bag)."""
-    if path.is_file():
-        if path.suffix == ".mcap" and mcap_profile(path) != "ros1":
-            return _McapFile(path)
-        return open_recording(path)
-    if (path / "metadata.yaml").exists():
-        return finished_mcap(path) or open_recording(path)
-    return open_recording(path)
-
-
 #: Messages of one topic decoded at a time by :func:`load_frames`.
 _DECODE_BATCH = 4096
 
@@ -873,7 +721,7 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
     if not p.is_file() and not (p / "metadata.yaml").exists() and ros1_recording(p) is None:
         raise BagError(f"{bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
     try:
-        with _open_bag(p) as reader:
+        with open_indexed(p) as reader:
             encoding: Encoding = reader.encoding
             conns = list(reader.connections)
             wanted: dict[int, str] = {}
@@ -907,9 +755,7 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
                 parts[cid].append(cols)
                 raws[cid] = []
 
-            scan = (reader.messages(set(wanted)) if isinstance(reader, _McapFile)
-                    else reader.messages())
-            for conn, t_ns, raw in scan:
+            for conn, t_ns, raw in reader.scan(set(wanted)):
                 cid = conn.id
                 log[cid].append(t_ns)
                 if cid in wanted:

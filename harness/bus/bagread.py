@@ -4,7 +4,10 @@
   reader;
 * a ROS 1 ``.bag``: rosbags' rosbag1 reader;
 * a plain MCAP file, ``ros2`` or ``ros1`` profile (a ROS 1 run's ``bag/bag.mcap``, a
-  baseline's reference recording): the ``mcap`` library, in file order.
+  baseline's reference recording): through its chunk and message indexes
+  (:class:`~harness.bus.mcapread.McapIndex`), in file order. :func:`open_indexed` reads a
+  rosbag2 directory's one finished MCAP file so too (what scoring and the report's images
+  read: only the payloads they want leave the disk).
 
 A run's ``bag/`` directory holds the first, or (a ROS 1 run) no ``metadata.yaml`` and one
 ``.bag`` or ``ros1``-profile ``.mcap`` file: :func:`ros1_recording` finds it.
@@ -19,34 +22,25 @@ with :data:`harness.bag.BAG_READ_ERRORS`.
 
 from __future__ import annotations
 
-import inspect
-import struct
 from collections.abc import Collection, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
-import lz4.frame
-import zstandard
-from mcap.data_stream import ReadDataStream
-from mcap.reader import SeekingReader, make_reader
-from mcap.records import Chunk
+import yaml
+from mcap.reader import make_reader
 from rosbags.rosbag1 import Reader as Rosbag1Reader
 from rosbags.rosbag2 import Reader as Rosbag2Reader
 from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 
+from harness.bus.mcapread import McapIndex
 from harness.bus.messages import TYPESTORE
 from harness.bus.ros1 import deserialize_ros1, ros2_type, to_ros2
 
-__all__ = ["Connection", "Encoding", "Recording", "mcap_profile", "open_recording",
-           "ros1_recording"]
+__all__ = ["Connection", "Encoding", "Recording", "mcap_profile", "open_indexed",
+           "open_recording", "ros1_recording"]
 
 Encoding = Literal["cdr", "ros1"]
-
-# mcap 1.3 renamed iter_messages' time window (start_time / end_time still work, deprecated)
-_NEW_WINDOW = "starting_at" in inspect.signature(SeekingReader.iter_messages).parameters
-_STARTING_AT = "starting_at" if _NEW_WINDOW else "start_time"  # inclusive
-_ENDING_BEFORE = "ending_before" if _NEW_WINDOW else "end_time"  # exclusive
 
 
 @dataclass(frozen=True)
@@ -118,6 +112,12 @@ class Recording:
         in [start, stop)."""
         raise NotImplementedError
 
+    def scan(self, wanted: Collection[int]) -> Iterator[tuple[Connection, int, bytes | None]]:
+        """Every message in file order: (connection, log time, payload), the payload certain
+        only for the connection ids in ``wanted`` (an MCAP file leaves the others unread:
+        None). For a reader that needs every topic's log times but few topics' payloads."""
+        return self.messages()
+
     def decode(self, raw: bytes, conn: Connection) -> Any:
         """The bus's (ROS 2) message for one payload of ``conn``."""
         if self.encoding == "cdr":
@@ -126,12 +126,25 @@ class Recording:
 
 
 class _Rosbags(Recording):
-    """A recording read through one of rosbags' readers (``_reader``, opened by the subclass,
-    with ``_raw``: connection id → rosbags' connection, ``_by_id``: id → ours)."""
+    """A recording read through one of rosbags' readers (``_reader``, with ``_raw``:
+    connection id → rosbags' connection); subclasses say how one of its connections reads as
+    ours (:meth:`_connection`)."""
 
-    _reader: Any
-    _raw: dict[int, Any]
-    _by_id: dict[int, Connection]
+    _open: ClassVar[Any]  # rosbags' Reader class
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(path)
+        self.profile = "ros2" if self.encoding == "cdr" else "ros1"
+        self._reader = self._open(path)
+        self._reader.open()
+        self._raw = {c.id: c for c in self._reader.connections}
+        self.connections = [self._connection(c) for c in self._reader.connections]
+        self._by_id = {c.id: c for c in self.connections}
+        if self._reader.message_count:  # else rosbags' (max, 0), as ours
+            self.start_time, self.end_time = self._reader.start_time, self._reader.end_time
+
+    def _connection(self, c: Any) -> Connection:
+        raise NotImplementedError
 
     def close(self) -> None:
         self._reader.close()
@@ -147,56 +160,38 @@ class _Rosbags(Recording):
 class _Rosbag2(_Rosbags):
     kind = "rosbag2"
     encoding: Encoding = "cdr"
+    _open = Rosbag2Reader
 
-    def __init__(self, path: Path) -> None:
-        super().__init__(path)
-        self.profile = "ros2"
-        self._reader = Rosbag2Reader(path)
-        self._reader.open()
-        self._raw = {c.id: c for c in self._reader.connections}
-        for c in self._reader.connections:
-            qos = getattr(c.ext, "offered_qos_profiles", []) or []
-            latched = bool(qos) and qos[0].durability.name.lower() == "transient_local"
-            self.connections.append(Connection(c.id, c.topic, c.msgtype, c.msgtype, latched,
-                                               c.msgcount))
-        self._by_id = {c.id: c for c in self.connections}
-        self.start_time, self.end_time = self._reader.start_time, self._reader.end_time
+    def _connection(self, c: Any) -> Connection:
+        qos = getattr(c.ext, "offered_qos_profiles", []) or []
+        latched = bool(qos) and qos[0].durability.name.lower() == "transient_local"
+        return Connection(c.id, c.topic, c.msgtype, c.msgtype, latched, c.msgcount)
 
 
 class _Rosbag1(_Rosbags):
     kind = "bag"
     encoding: Encoding = "ros1"
+    _open = Rosbag1Reader
 
-    def __init__(self, path: Path) -> None:
-        super().__init__(path)
-        self.profile = "ros1"
-        self._reader = Rosbag1Reader(path)
-        self._reader.open()
-        self._raw = {c.id: c for c in self._reader.connections}
-        for c in self._reader.connections:
-            latching = getattr(c.ext, "latching", None)
-            self.connections.append(Connection(
-                c.id, c.topic, ros2_type(c.msgtype), str(denormalize_msgtype(c.msgtype)),
-                bool(latching), c.msgcount,
-                c.msgdef.data.encode(), "ros1msg",
-                {"md5sum": c.digest, "callerid": str(getattr(c.ext, "callerid", "") or ""),
-                 "latching": "true" if latching else "false"}))
-        self._by_id = {c.id: c for c in self.connections}
-        if self._reader.message_count:
-            self.start_time, self.end_time = self._reader.start_time, self._reader.end_time
+    def _connection(self, c: Any) -> Connection:
+        latching = getattr(c.ext, "latching", None)
+        return Connection(
+            c.id, c.topic, ros2_type(c.msgtype), str(denormalize_msgtype(c.msgtype)),
+            bool(latching), c.msgcount, c.msgdef.data.encode(), "ros1msg",
+            {"md5sum": c.digest, "callerid": str(getattr(c.ext, "callerid", "") or ""),
+             "latching": "true" if latching else "false"})
 
 
 class _Mcap(Recording):
+    """A finished MCAP file, ``ros2`` or ``ros1`` profile, read through its index
+    (:class:`~harness.bus.mcapread.McapIndex`)."""
+
     kind = "mcap"
 
     def __init__(self, path: Path) -> None:
         super().__init__(path)
-        with self.path.open("rb") as f:
-            reader = make_reader(f)
-            self.profile = str(reader.get_header().profile)
-            summary = reader.get_summary()
-        if summary is None:
-            raise ValueError("no summary section (not a finished MCAP file)")
+        self._index = index = McapIndex(self.path)
+        self.profile, summary = index.profile, index.summary
         encodings = {c.message_encoding for c in summary.channels.values()}
         self.encoding = "ros1" if encodings == {"ros1"} or (
             not encodings and self.profile == "ros1") else "cdr"
@@ -213,7 +208,6 @@ class _Mcap(Recording):
                 schema.data if schema is not None else b"",
                 schema.encoding if schema is not None else "", dict(c.metadata)))
         self._by_id = {c.id: c for c in self.connections}
-        self._chunks = sorted(summary.chunk_indexes, key=lambda ci: ci.chunk_start_offset)
         if summary.statistics is not None and summary.statistics.message_count:
             self.start_time = summary.statistics.message_start_time
             # exclusive, as rosbags reports a bag's end: after the last message
@@ -221,63 +215,10 @@ class _Mcap(Recording):
 
     def messages(self, connections: Collection[Connection] = (), start: int | None = None,
                  stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
-        if self._chunks:
-            yield from self._chunked(connections, start, stop)
-            return
-        window: dict[str, int] = {}
-        if start is not None:
-            window[_STARTING_AT] = start
-        if stop is not None:
-            window[_ENDING_BEFORE] = stop
-        topics = [c.topic for c in connections] or None
-        by_id = self._by_id
-        with self.path.open("rb") as f:
-            for _schema, channel, message in make_reader(f).iter_messages(
-                    topics=topics, log_time_order=False, **window):  # type: ignore[arg-type]
-                yield by_id[channel.id], message.log_time, message.data
+        return self._index.messages(self._by_id, [c.id for c in connections], start, stop)
 
-    def _chunked(self, connections: Collection[Connection], start: int | None,
-                 stop: int | None) -> Iterator[tuple[Connection, int, bytes]]:
-        """File order, chunk by chunk (from the summary's chunk index), each chunk's records
-        walked in one loop: about 2.5x the mcap reader's own rate on srr's bags."""
-        by_id = self._by_id
-        wanted = {c.id for c in connections} or set(by_id)
-        lo, hi = (-1 if start is None else start), (2**63 if stop is None else stop)
-        with self.path.open("rb") as f:
-            for ci in self._chunks:
-                if ci.message_end_time < lo or ci.message_start_time >= hi:
-                    continue
-                if ci.message_index_offsets and not wanted & set(ci.message_index_offsets):
-                    continue
-                f.seek(ci.chunk_start_offset + 9)  # past the record's opcode and length
-                chunk = Chunk.read(ReadDataStream(f))
-                buf = _decompress(chunk)
-                pos, end = 0, len(buf)
-                while pos < end:
-                    op, length = _RECORD.unpack_from(buf, pos)
-                    pos += 9
-                    if op == _MESSAGE_OP:
-                        cid, _seq, log_time, _pub = _MESSAGE.unpack_from(buf, pos)
-                        if cid in wanted and lo <= log_time < hi:
-                            yield by_id[cid], log_time, buf[pos + 22:pos + length]
-                    pos += length
-                if pos != end:
-                    raise ValueError(f"chunk at {ci.chunk_start_offset}: records overrun it")
-
-
-_RECORD = struct.Struct("<BQ")  # opcode, length
-_MESSAGE = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
-_MESSAGE_OP = 0x05
-
-
-def _decompress(chunk: Chunk) -> bytes:
-    if chunk.compression == "zstd":
-        return bytes(zstandard.decompress(chunk.data, chunk.uncompressed_size))
-    if chunk.compression == "lz4":
-        return bytes(lz4.frame.decompress(chunk.data))
-    if chunk.compression:
-        raise ValueError(f"unknown chunk compression {chunk.compression!r}")
-    return bytes(chunk.data)
+    def scan(self, wanted: Collection[int]) -> Iterator[tuple[Connection, int, bytes | None]]:
+        return self._index.scan(self._by_id, wanted)
 
 
 def open_recording(path: str | Path) -> Recording:
@@ -295,3 +236,25 @@ def open_recording(path: str | Path) -> Recording:
     if p.suffix == ".bag":
         return _Rosbag1(p)
     return _Mcap(p)
+
+
+_YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+def open_indexed(path: str | Path) -> Recording:
+    """:func:`open_recording`, but a rosbag2 directory whose ``metadata.yaml`` names one MCAP
+    file, finished, is read through that file's index as a ``.mcap`` file is: the same
+    messages, without rosbags' parsing of ``metadata.yaml`` (~0.2 s of ruamel), and
+    :meth:`Recording.scan` leaves unwanted payloads on disk. Any other directory, and one
+    whose file is damaged, opens with :func:`open_recording` (rosbags says what is wrong)."""
+    p = Path(path)
+    if p.is_dir() and (p / "metadata.yaml").exists():
+        try:
+            info = yaml.load((p / "metadata.yaml").read_text(encoding="utf-8"),
+                             Loader=_YamlLoader)["rosbag2_bagfile_information"]
+            files = [p / str(f) for f in info["relative_file_paths"]]
+            if len(files) == 1 and files[0].suffix == ".mcap" and files[0].is_file():
+                return _Mcap(files[0])
+        except Exception:  # unreadable here: rosbags' reader says why
+            pass
+    return open_recording(p)

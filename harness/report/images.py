@@ -19,9 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from harness.bus.bagread import Recording, open_recording
+from harness.bus.bagread import Recording, open_indexed
 from harness.errors import VideoError
-from harness.frames import finished_mcap
 from harness.video.codec import H264Decoder, decode_rgb
 from harness.video.sei import nal_units
 
@@ -158,14 +157,14 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
 
     ``max_gap_ns``: topic → largest gap between its messages (the search window around a
     target is that gap); ``topics`` restricts the image topics. ``bag_dir`` holds a ROS 2 or
-    a ROS 1 recording (:func:`harness.bus.bagread.open_recording`). Depth and other non-colour
+    a ROS 1 recording (:func:`harness.bus.bagread.open_indexed`). Depth and other non-colour
     images are skipped. Only the windows around the targets are read. Returns target → list
     sorted by topic."""
     out: dict[int, list[tuple[str, int, np.ndarray]]] = {t: [] for t in targets_ns}
     if not targets_ns:
         return out
     gaps = max_gap_ns or {}
-    with _open(Path(bag_dir)) as reader:
+    with open_indexed(bag_dir) as reader:
         conns = [c for c in reader.connections if c.msgtype in IMAGE_TYPES
                  and (topics is None or c.topic in topics)]
         non_color: set[str] = set()
@@ -190,15 +189,6 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
                     continue
                 out[target].append((conn.topic, best[0], pixels))
     return out
-
-
-def _open(bag_dir: Path) -> Recording:
-    """The recording, opened: a rosbag2 directory of one finished MCAP file is read through
-    that file's chunk index (no ruamel parsing of ``metadata.yaml``; the same messages), any
-    other recording (ROS 1, a damaged bag) as :func:`~harness.bus.bagread.open_recording`
-    reads it."""
-    mcap = finished_mcap(bag_dir) if bag_dir.is_dir() else None
-    return open_recording(mcap.path if mcap is not None else bag_dir)
 
 
 def keyframes(bag_dir: Path, targets_ns: Sequence[int], *, max_gap_ns: dict[str, int]
