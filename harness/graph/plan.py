@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 from harness.errors import GraphError
 from harness.graph.attributes import EXECUTION, Attr, Converter, converter
+from harness.graph.node import OutputSetter
 
 if TYPE_CHECKING:
     from harness.graph.engine import Connection, Node
@@ -105,6 +106,10 @@ class NodePlan:
     with ``__``, which ``db.inputs`` never serves (Python protocol probes such as
     ``__deepcopy__`` must get a plain AttributeError). ``connected`` holds the bare names of the
     inputs with any incoming connection (data or execution).
+
+    ``members`` and ``set_output`` are what the node's ``db`` serves once planned
+    (:meth:`~harness.graph.node.Database.specialize`): each unconnected input's value, each
+    connected input as a property reading its source, and ``db.outputs.__setattr__``.
     """
 
     inputs: Mapping[str, InputEntry]
@@ -112,6 +117,8 @@ class NodePlan:
     outputs: Mapping[str, OutputSlot]
     connected: frozenset[str]
     exec_out: tuple[tuple[str, str], ...]
+    members: Mapping[str, Any]
+    set_output: OutputSetter
 
 
 def build_plan(
@@ -127,6 +134,7 @@ def build_plan(
     }
     inputs: dict[str, InputEntry] = {}
     outputs: dict[str, OutputSlot] = {}
+    members: dict[str, Any] = {}
     for full, attr in node.attributes().items():
         port, _, name = full.partition(":")
         if port == "outputs":
@@ -138,8 +146,12 @@ def build_plan(
             src = nodes[conn.src_node]
             if conn.src_attr.startswith("inputs:"):
                 reader = _input_reader(node, full, attr, src, conn.src_attr, read_input)
+                members[name] = _reader_property(node, reader)
             else:
                 reader = _output_reader(node, full, attr, src, conn.src_attr, pull)
+                members[name] = _output_property(node, full, attr, src, conn.src_attr, pull)
+        else:
+            members[name] = _constant(node._values.get(full, attr.default))
         inputs[name] = (full, attr.default, reader)
     readable = inputs
     if any(name.startswith("__") for name in inputs):
@@ -152,7 +164,8 @@ def build_plan(
         for c in connections
         if c.kind == "exec" and c.src_node == node.name
     )
-    return NodePlan(inputs, readable, outputs, connected, exec_out)
+    return NodePlan(inputs, readable, outputs, connected, exec_out, members,
+                    _output_setter(node, outputs))
 
 
 def _output_slot(full: str, attr: Attr) -> OutputSlot:
@@ -213,6 +226,86 @@ def _input_reader(
             raise _does_not_fit(node, full, attr, src, src_full, err) from err
 
     return read
+
+
+def _constant(value: Any) -> Any:
+    """``value`` as a class attribute of ``db.inputs``: as is, unless it would bind (a
+    function or other descriptor), then a property giving it back unchanged."""
+    if hasattr(type(value), "__get__"):
+        return property(lambda _inputs: value)
+    return value
+
+
+def _reader_property(node: Node, reader: InputReader) -> property:
+    binding = node._binding
+
+    def get(_inputs: object) -> Any:
+        return reader(binding._evaluation)
+
+    return property(get)
+
+
+def _output_property(
+    node: Node, full: str, attr: Attr, src: Node, src_full: str, pull: Pull
+) -> property:
+    """``db.inputs.<name>`` of an input fed by ``src``'s output: :func:`_output_reader`
+    reading the evaluation of the node's run in progress, in one call."""
+    binding = node._binding
+    src_attr = src.attr(src_full)
+    convert = converter(attr.type)
+    src_name = src.name
+    if src.kind != "data" and src_attr is not None and src_attr.type == attr.type:
+
+        def get_stored(_inputs: object) -> Any:
+            return src._outputs[src_full]
+
+        return property(get_stored)
+    same_type = src_attr is not None and src_attr.type == attr.type
+    pulls = src.kind == "data"
+
+    def get(_inputs: object) -> Any:
+        evaluation = binding._evaluation
+        if pulls and evaluation is not None and src_name not in evaluation.done:
+            pull(src, evaluation)
+        raw = src._outputs[src_full]
+        if same_type:
+            return raw
+        try:
+            return convert(raw)
+        except ValueError as err:
+            raise _does_not_fit(node, full, attr, src, src_full, err) from err
+
+    return property(get)
+
+
+def _output_setter(node: Node, outputs: Mapping[str, OutputSlot]) -> OutputSetter:
+    """``db.outputs.__setattr__`` for the planned ``outputs`` (see ``_Binding.write_output``,
+    whose rules it follows in one call)."""
+    binding = node._binding
+    db = node._db
+    slots = dict(outputs)
+
+    def set_output(_outputs: object, name: str, value: Any) -> None:
+        slot = slots.get(name)
+        if slot is None:
+            raise db.unknown_output(name)
+        if type(value) is slot.stored_as:
+            node._outputs[slot.full] = value
+        elif slot.is_execution:
+            fired = binding.fired
+            if fired is None:
+                fired = binding.fired = {}
+            fired[slot.full] = bool(value)
+        else:
+            assert slot.convert is not None
+            try:
+                node._outputs[slot.full] = slot.convert(value)
+            except ValueError as err:
+                raise GraphError(
+                    f"{node.path}.{slot.full} (type {slot.type_name}): {err}"
+                ) from err
+
+    return set_output
 
 
 @dataclass(eq=False, slots=True)
