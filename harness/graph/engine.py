@@ -673,7 +673,7 @@ class Graph:
             node, self._nodes, tuple(self._connections), self._pull, self._input_value
         )
         node._plan = plan
-        node._db.specialize(plan.members, plan.set_output)
+        node._db.specialize(plan.members, plan.set_output, plan.connected)
         return plan
 
     def _build_flow(self) -> Run:

@@ -185,21 +185,25 @@ class Database:
     output (``db.outputs.execOut = True``) selects which execution outputs fire.
     """
 
-    __slots__ = ("_plain", "_port", "inputs", "outputs")
+    __slots__ = ("_connected", "_plain", "_port", "inputs", "outputs")
 
     def __init__(self, port: NodePort) -> None:
         self._port = port
+        self._connected: frozenset[str] = frozenset()  # of the plan, once specialized
         self._plain = (_plain_inputs(port), _plain_outputs(port))
         self.inputs: Any = self._plain[0]()
         self.outputs: Any = self._plain[1]()
 
-    def specialize(self, inputs: Mapping[str, Any], set_output: OutputSetter) -> None:
+    def specialize(self, inputs: Mapping[str, Any], set_output: OutputSetter,
+                   connected: frozenset[str] = frozenset()) -> None:
         """Resolve ``db.inputs`` / ``db.outputs`` for a planned node: ``inputs`` maps input
         names to their value (unconnected) or a ``property`` (connected); ``set_output``
         becomes ``db.outputs.__setattr__``. The same objects change class, so a reference to
         ``db.inputs`` kept across an edit sees the edit. Names starting with ``__`` are
-        never served (Python protocol probes keep the ordinary look-up)."""
+        never served (Python protocol probes keep the ordinary look-up). ``connected``: the
+        connected inputs' names, which :meth:`is_connected` then answers at once."""
         plain_in, plain_out = self._plain
+        self._connected = connected
         members = {k: v for k, v in inputs.items() if k[:2] != "__"}
         _set_class(self.inputs, type("PlannedInputs", (plain_in,), {"__slots__": (), **members}))
         _set_class(self.outputs, type("PlannedOutputs", (plain_out,), {
@@ -208,6 +212,7 @@ class Database:
     def generalize(self) -> None:
         """Back to the plain classes (an edit dropped the node's plan)."""
         plain_in, plain_out = self._plain
+        self._connected = frozenset()
         if type(self.inputs) is not plain_in:
             _set_class(self.inputs, plain_in)
             _set_class(self.outputs, plain_out)
@@ -228,6 +233,8 @@ class Database:
 
     def is_connected(self, input_name: str) -> bool:
         """True when the input (``"x"`` or ``"inputs:x"``) has an upstream connection."""
+        if input_name in self._connected:
+            return True
         if self._port.is_connected(input_name):  # only ever true for a bare input name
             return True
         name = _bare(input_name, "inputs:")
