@@ -327,7 +327,8 @@ class _Binding:
         return tuple(a.name for a in self._node.output_attrs())
 
     def read_input(self, name: str) -> Any:
-        """Fast path of ``db.inputs.<name>``: one plan lookup, then the value or its reader."""
+        """``db.inputs.<name>`` of a node whose ``db`` is not specialized yet (it builds the
+        plan, which specializes it) or for a name it lacks: the value or its reader."""
         node = self._node
         plan = node._plan
         if plan is None:
@@ -344,7 +345,8 @@ class _Binding:
         return self._node.output_value(f"outputs:{name}")
 
     def write_output(self, name: str, value: Any) -> bool:
-        """Fast path of ``db.outputs.<name> = value``; False when there is no such output.
+        """``db.outputs.<name> = value`` before the ``db`` is specialized (the planned
+        setter of :mod:`.plan` follows the same rules); False when there is no such output.
 
         A value already in the stored form of the output's type (a ``float`` for ``double``,
         a ``str`` for ``string``...) is stored as is, which is what its converter would do.

@@ -55,7 +55,8 @@ MISSING: Any = _Missing()
 class NodePort(Protocol):
     """What a :class:`Database` needs from the engine for one node during one evaluation.
 
-    ``read_input`` and ``write_output`` are the per-tick fast paths: they check the name
+    ``read_input`` and ``write_output`` serve a ``db`` the engine has not specialized for
+    a planned node (see :meth:`Database.specialize`): they check the name
     themselves (``read_input`` returns :data:`MISSING`, ``write_output`` False, for a name the
     node does not have, and never serve inputs whose names start with ``__``), so ``db``
     makes one call per access and builds its error messages only on a miss.

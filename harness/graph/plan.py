@@ -13,16 +13,22 @@ does it once per node and :class:`NodePlan` keeps the answers:
   unconnected (or an execution input) — its value is ``node._values.get(full, default)`` —
   and otherwise a closure that pulls the upstream node when needed and converts the value;
 * every output maps to an :class:`OutputSlot` with its converter already chosen;
-* the execution fan-out of the node, as ``(exec output, target node name)`` in connection order.
+* the execution fan-out of the node, as ``(exec output, target node name)`` in connection order;
+* what the node's ``db`` serves once planned (``NodePlan.members`` / ``set_output``, see
+  :meth:`~harness.graph.node.Database.specialize`): an unconnected input's value as a class
+  attribute of ``db.inputs`` (read with no call at all), a connected input as a property
+  doing the reader's work in one call, and one ``db.outputs.__setattr__`` for the outputs.
 
 A :class:`GraphPlan` is built from the node plans (:func:`build_graph_plan`) and follows the
-same invariant: every edit drops it. An edit made *while* the graph evaluates (a compute that
+same invariant: every edit drops it (and the closures :mod:`~harness.graph.runner` compiles
+from it). An edit made *while* the graph evaluates (a compute that
 adds an attribute) is seen by the engine, which then finishes that evaluation resolving each
 step by name, exactly as without a graph plan.
 
 Invariant: a plan describes the graph as it was when the plan was built. It holds source
 *nodes* and declarations, never values: values are read from ``node._values`` /
-``node._outputs`` at read time, so running nodes never make a plan stale. Every graph edit that
+``node._outputs`` at read time (the one exception: an unconnected input's value, which only
+an edit can change), so running nodes never make a plan stale. Every graph edit that
 could change a plan (create or delete a node, connect, disconnect, set a value, create an
 attribute, reset) drops the plans of the whole graph (``Graph._invalidate``); the next read
 builds a fresh one. Readers therefore behave exactly like resolving the binding on every read.
@@ -280,30 +286,31 @@ def _output_property(
 
 def _output_setter(node: Node, outputs: Mapping[str, OutputSlot]) -> OutputSetter:
     """``db.outputs.__setattr__`` for the planned ``outputs`` (see ``_Binding.write_output``,
-    whose rules it follows in one call)."""
+    whose rules it follows in one call). It stores into the node's output dict of the time
+    of planning: only ``Graph.reset`` replaces that dict, and it drops the plan."""
     binding = node._binding
     db = node._db
-    slots = dict(outputs)
+    store = node._outputs
+    slots = {name: (slot.full, slot.stored_as, slot) for name, slot in outputs.items()}
 
     def set_output(_outputs: object, name: str, value: Any) -> None:
-        slot = slots.get(name)
-        if slot is None:
+        entry = slots.get(name)
+        if entry is None:
             raise db.unknown_output(name)
-        if type(value) is slot.stored_as:
-            node._outputs[slot.full] = value
+        full, stored_as, slot = entry
+        if type(value) is stored_as:
+            store[full] = value
         elif slot.is_execution:
             fired = binding.fired
             if fired is None:
                 fired = binding.fired = {}
-            fired[slot.full] = bool(value)
+            fired[full] = bool(value)
         else:
             assert slot.convert is not None
             try:
-                node._outputs[slot.full] = slot.convert(value)
+                store[full] = slot.convert(value)
             except ValueError as err:
-                raise GraphError(
-                    f"{node.path}.{slot.full} (type {slot.type_name}): {err}"
-                ) from err
+                raise GraphError(f"{node.path}.{full} (type {slot.type_name}): {err}") from err
 
     return set_output
 
