@@ -119,18 +119,23 @@ Tap = Callable[[Envelope], None]
 class Publisher:
     """A handle bound to one topic and type; ``publish(msg)`` stamps it with bus time."""
 
+    __slots__ = ("_bus", "_info", "msgtype", "topic")
+
     def __init__(self, bus: Bus, topic: str, msgtype: str) -> None:
         self._bus = bus
         self.topic = topic
         self.msgtype = msgtype
+        self._info = bus._declare(topic, msgtype, None)  # one per topic, kept by the bus
 
     def publish(self, msg: Any) -> None:
         self._bus.publish(self.topic, self.msgtype, msg)
 
     def publish_serialized(self, raw: bytes, build: Callable[[], Any]) -> None:
         """Publish a message given as its CDR bytes and a function making its object (see
-        :meth:`Bus.publish_serialized`)."""
-        self._bus.publish_serialized(self.topic, self.msgtype, raw, build)
+        :meth:`Bus.publish_serialized`; the topic was declared when advertised)."""
+        bus = self._bus
+        bus._send(self._info, Envelope(self.topic, self.msgtype, bus._now_ns(), bus._seq, None,
+                                       raw, build), True)
 
 
 class Bus:

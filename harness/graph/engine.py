@@ -31,11 +31,11 @@ from harness.graph.plan import (
     Evaluation,
     GraphPlan,
     NodePlan,
-    Step,
     build_graph_plan,
     build_plan,
 )
 from harness.graph.registry import DEFAULT_REGISTRY, Registry
+from harness.graph.runner import Run, compile_flow, failure
 
 __all__ = [
     "Attribute",
@@ -224,6 +224,12 @@ class Node:
             )
         return attr
 
+    def _drop_plan(self) -> None:
+        """Forget the plan (an edit): the next access builds a new one."""
+        if self._plan is not None:
+            self._plan = None
+            self._db.generalize()
+
     def _reset_outputs(self) -> None:
         self._outputs = {
             full: attr.default
@@ -321,7 +327,8 @@ class _Binding:
         return tuple(a.name for a in self._node.output_attrs())
 
     def read_input(self, name: str) -> Any:
-        """Fast path of ``db.inputs.<name>``: one plan lookup, then the value or its reader."""
+        """``db.inputs.<name>`` of a node whose ``db`` is not specialized yet (it builds the
+        plan, which specializes it) or for a name it lacks: the value or its reader."""
         node = self._node
         plan = node._plan
         if plan is None:
@@ -338,7 +345,8 @@ class _Binding:
         return self._node.output_value(f"outputs:{name}")
 
     def write_output(self, name: str, value: Any) -> bool:
-        """Fast path of ``db.outputs.<name> = value``; False when there is no such output.
+        """``db.outputs.<name> = value`` before the ``db`` is specialized (the planned
+        setter of :mod:`.plan` follows the same rules); False when there is no such output.
 
         A value already in the stored form of the output's type (a ``float`` for ``double``,
         a ``str`` for ``string``...) is stored as is, which is what its converter would do.
@@ -392,6 +400,7 @@ class Graph:
         self._connections: list[Connection] = []
         self._data_in: dict[tuple[str, str], Connection] | None = None
         self._flow: GraphPlan | None = None  # the execution flow, see .plan
+        self._tick: Run | None = None  # the flow compiled, see .runner
 
     def __repr__(self) -> str:
         return f"Graph({self.path!r}, nodes={len(self._nodes)})"
@@ -461,7 +470,7 @@ class Graph:
         node = self.node(name)
         del self._nodes[name]
         self._connections = [c for c in self._connections if name not in (c.src_node, c.dst_node)]
-        node._plan = None
+        node._drop_plan()
         self._invalidate()
 
     def create_attribute(self, node_name: str, full_name: str, type_name: str) -> Attr:
@@ -578,16 +587,13 @@ class Graph:
     def evaluate(self, ctx: Any) -> None:
         """Run one tick: fire every event node in creation order (see the module docstring).
 
-        Execution follows the graph's plan (:class:`~harness.graph.plan.GraphPlan`). Should a
-        compute edit the graph, the rest of the tick resolves each step by name instead
-        (:meth:`_fire`), so the edit is seen exactly as it would be without a plan."""
-        evaluation = Evaluation(ctx)
-        flow = self._flow if self._flow is not None else self._build_flow()
-        for step in flow.events:
-            if self._flow is flow:
-                self._fire_step(step, evaluation, flow)
-            elif self._nodes.get(step.node.name) is step.node:  # not deleted meanwhile
-                self._fire(step.node, evaluation)
+        Execution follows the graph's plan (:class:`~harness.graph.plan.GraphPlan`), compiled
+        into closures (:mod:`~harness.graph.runner`). Should a compute edit the graph, the rest
+        of the tick resolves each step by name instead (:meth:`_fire`), so the edit is seen
+        exactly as it would be without a plan."""
+        tick = self._tick if self._flow is not None else self._build_flow()
+        assert tick is not None
+        tick(Evaluation(ctx))
 
     def reset(self) -> None:
         """Reset every node: ``NodeType.reset``, outputs back to defaults, re-initialize later."""
@@ -596,26 +602,6 @@ class Graph:
             node._reset_outputs()
             node._initialized = False
         self._invalidate()
-
-    def _fire_step(self, step: Step, evaluation: Evaluation, flow: GraphPlan) -> None:
-        """Run ``step``'s node, then push execution along its planned steps (``flow`` is the
-        plan in use: once an edit has dropped it, the rest goes through :meth:`_fire`)."""
-        node = step.node
-        if not self._run(node, evaluation):
-            return
-        if self._flow is not flow:
-            self._push(node, evaluation)
-            return
-        fired = node._binding.fired
-        for src_attr, child in step.children:
-            if fired and not fired.get(src_attr):  # outputs were selected, not this one
-                continue
-            if self._flow is flow:
-                self._fire_step(child, evaluation, flow)
-            else:
-                target = self._nodes.get(child.node.name)
-                if target is not None:
-                    self._fire(target, evaluation)
 
     def _fire(self, node: Node, evaluation: Evaluation) -> None:
         """Run ``node`` and push execution on, resolving targets by name (after an edit)."""
@@ -657,10 +643,7 @@ class Graph:
         except SrrError:
             raise
         except Exception as err:
-            raise GraphError(
-                f"{node.path} ({node.canonical_type}): compute failed: "
-                f"{type(err).__name__}: {err}"
-            ) from err
+            raise failure(node, err) from err
 
     def _pull(self, node: Node, evaluation: Evaluation) -> None:
         if node.name in evaluation.done:
@@ -692,15 +675,18 @@ class Graph:
             node, self._nodes, tuple(self._connections), self._pull, self._input_value
         )
         node._plan = plan
+        node._db.specialize(plan.members, plan.set_output, plan.connected)
         return plan
 
-    def _build_flow(self) -> GraphPlan:
-        """The graph's execution flow, built now when the last edit dropped it."""
+    def _build_flow(self) -> Run:
+        """The graph's execution flow and its compiled tick, built now when the last edit
+        dropped them."""
         events = tuple(n for n in self._nodes.values() if n.kind == "event")
-        self._flow = build_graph_plan(
+        flow = build_graph_plan(
             events, self._nodes, lambda n: n._plan if n._plan is not None else self._build_plan(n)
         )
-        return self._flow
+        self._flow, self._tick = flow, compile_flow(self, flow)
+        return self._tick
 
     # -- indexes and cycle checks --------------------------------------------------------
 
@@ -708,9 +694,9 @@ class Graph:
         """Drop every cache derived from the graph's structure: the data-input index, the
         execution flow and each node's plan. Called by every edit (see :mod:`.plan`)."""
         self._data_in = None
-        self._flow = None
+        self._flow = self._tick = None
         for node in self._nodes.values():
-            node._plan = None
+            node._drop_plan()
 
     def _index_data_in(self) -> dict[tuple[str, str], Connection]:
         if self._data_in is None:

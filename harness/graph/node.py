@@ -8,7 +8,7 @@ A node type is a subclass of :class:`NodeType` with class-level ``kind``, ``inpu
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol
 
 from harness.errors import GraphError
@@ -55,7 +55,8 @@ MISSING: Any = _Missing()
 class NodePort(Protocol):
     """What a :class:`Database` needs from the engine for one node during one evaluation.
 
-    ``read_input`` and ``write_output`` are the per-tick fast paths: they check the name
+    ``read_input`` and ``write_output`` serve a ``db`` the engine has not specialized for
+    a planned node (see :meth:`Database.specialize`): they check the name
     themselves (``read_input`` returns :data:`MISSING`, ``write_output`` False, for a name the
     node does not have, and never serve inputs whose names start with ``__``), so ``db``
     makes one call per access and builds its error messages only on a miss.
@@ -88,26 +89,42 @@ def _bare(name: str, prefix: str) -> str:
     return name[len(prefix):] if name.startswith(prefix) else name
 
 
-_get = object.__getattribute__
-
-
 class _Inputs:
-    """``db.inputs``: attribute reads pull values; writes are refused.
+    """Base of every ``db.inputs`` class. Instances hold nothing: each node's
+    :class:`Database` makes a subclass whose methods close over the node's port, so every
+    name that does not start with ``__`` is free for an input.
 
-    Reads go straight to :meth:`__getattribute__` (a ``__getattr__`` would first fail the
-    ordinary look-up, which costs an exception per read); names starting with ``__`` keep the
-    ordinary look-up, so copy/pickle probes behave as on any object.
-    """
+    That plain class resolves each read through the port (``__getattr__``: the ordinary
+    look-up fails first). Once the engine has planned the node it swaps the object's class
+    for a planned subclass (:meth:`Database.specialize`) holding each unconnected input's
+    value as a class attribute and each connected input as a property, so a read is one
+    attribute look-up (and one call when connected); any edit swaps the plain class back."""
 
-    __slots__ = ("_port",)
+    __slots__ = ()
 
-    def __init__(self, port: NodePort) -> None:
-        object.__setattr__(self, "_port", port)
 
-    def __getattribute__(self, name: str) -> Any:
+class _Outputs:
+    """Base of every ``db.outputs`` class (see :class:`_Inputs`): writes are coerced and
+    stored on the node, reads give the stored value. A planned subclass replaces the plain
+    ``__setattr__`` by one resolved for the node's outputs."""
+
+    __slots__ = ()
+
+
+def _unknown_output(port: NodePort, name: str) -> AttributeLookupError:
+    known = ", ".join(port.output_names()) or "none"
+    return AttributeLookupError(
+        f"{port.node_path}: no attribute 'outputs:{name}' (outputs: {known})"
+    )
+
+
+def _plain_inputs(port: NodePort) -> type[_Inputs]:
+    """The ``db.inputs`` class of one node before it is planned (its ``__getattr__`` also
+    serves, through the port, names a planned class does not define)."""
+
+    def __getattr__(self: _Inputs, name: str) -> Any:
         if name[:2] == "__":
-            return _get(self, name)
-        port: NodePort = _get(self, "_port")
+            raise AttributeError(name)
         value = port.read_input(name)
         if value is MISSING:
             known = ", ".join(port.input_names()) or "none"
@@ -116,46 +133,48 @@ class _Inputs:
             )
         return value
 
-    def __setattr__(self, name: str, value: Any) -> None:
-        port: NodePort = object.__getattribute__(self, "_port")
+    def __setattr__(self: _Inputs, name: str, value: Any) -> None:
         raise GraphError(f"{port.node_path}.inputs:{name}: inputs are read-only inside compute")
 
-    def __dir__(self) -> list[str]:
-        port: NodePort = object.__getattribute__(self, "_port")
+    def __dir__(self: _Inputs) -> list[str]:
         return list(port.input_names())
 
+    return type("Inputs", (_Inputs,), {
+        "__slots__": (), "__getattr__": __getattr__, "__setattr__": __setattr__,
+        "__dir__": __dir__,
+    })
 
-class _Outputs:
-    """``db.outputs``: writes are coerced and stored on the node; reads give the stored value."""
 
-    __slots__ = ("_port",)
+def _plain_outputs(port: NodePort) -> type[_Outputs]:
+    """The ``db.outputs`` class of one node before it is planned."""
 
-    def __init__(self, port: NodePort) -> None:
-        object.__setattr__(self, "_port", port)
-
-    def __getattr__(self, name: str) -> Any:
+    def __getattr__(self: _Outputs, name: str) -> Any:
         if name.startswith("__"):
             raise AttributeError(name)
-        port: NodePort = object.__getattribute__(self, "_port")
         if port.output_attr(name) is None:
-            raise self._unknown(port, name)
+            raise _unknown_output(port, name)
         return port.read_output(name)
 
-    def __setattr__(self, name: str, value: Any) -> None:
-        port: NodePort = self._port
+    def __setattr__(self: _Outputs, name: str, value: Any) -> None:
         if not port.write_output(name, value):
-            raise self._unknown(port, name)
+            raise _unknown_output(port, name)
 
-    def __dir__(self) -> list[str]:
-        port: NodePort = object.__getattribute__(self, "_port")
+    def __dir__(self: _Outputs) -> list[str]:
         return list(port.output_names())
 
-    @staticmethod
-    def _unknown(port: NodePort, name: str) -> AttributeLookupError:
-        known = ", ".join(port.output_names()) or "none"
-        return AttributeLookupError(
-            f"{port.node_path}: no attribute 'outputs:{name}' (outputs: {known})"
-        )
+    return type("Outputs", (_Outputs,), {
+        "__slots__": (), "__getattr__": __getattr__, "__setattr__": __setattr__,
+        "__dir__": __dir__,
+    })
+
+
+def _set_class(obj: object, cls: type) -> None:
+    """Swap ``obj``'s class (around the classes' own ``__setattr__``, which refuses)."""
+    object.__setattr__(obj, "__class__", cls)
+
+
+#: A planned ``db.outputs.__setattr__``: stores ``value`` on output ``name`` (or raises).
+OutputSetter = Callable[[Any, str, Any], None]
 
 
 class Database:
@@ -167,12 +186,41 @@ class Database:
     output (``db.outputs.execOut = True``) selects which execution outputs fire.
     """
 
-    __slots__ = ("_port", "inputs", "outputs")
+    __slots__ = ("_connected", "_plain", "_port", "inputs", "outputs")
 
     def __init__(self, port: NodePort) -> None:
         self._port = port
-        self.inputs = _Inputs(port)
-        self.outputs = _Outputs(port)
+        self._connected: frozenset[str] = frozenset()  # of the plan, once specialized
+        self._plain = (_plain_inputs(port), _plain_outputs(port))
+        self.inputs: Any = self._plain[0]()
+        self.outputs: Any = self._plain[1]()
+
+    def specialize(self, inputs: Mapping[str, Any], set_output: OutputSetter,
+                   connected: frozenset[str] = frozenset()) -> None:
+        """Resolve ``db.inputs`` / ``db.outputs`` for a planned node: ``inputs`` maps input
+        names to their value (unconnected) or a ``property`` (connected); ``set_output``
+        becomes ``db.outputs.__setattr__``. The same objects change class, so a reference to
+        ``db.inputs`` kept across an edit sees the edit. Names starting with ``__`` are
+        never served (Python protocol probes keep the ordinary look-up). ``connected``: the
+        connected inputs' names, which :meth:`is_connected` then answers at once."""
+        plain_in, plain_out = self._plain
+        self._connected = connected
+        members = {k: v for k, v in inputs.items() if k[:2] != "__"}
+        _set_class(self.inputs, type("PlannedInputs", (plain_in,), {"__slots__": (), **members}))
+        _set_class(self.outputs, type("PlannedOutputs", (plain_out,), {
+            "__slots__": (), "__setattr__": set_output}))
+
+    def generalize(self) -> None:
+        """Back to the plain classes (an edit dropped the node's plan)."""
+        plain_in, plain_out = self._plain
+        self._connected = frozenset()
+        if type(self.inputs) is not plain_in:
+            _set_class(self.inputs, plain_in)
+            _set_class(self.outputs, plain_out)
+
+    def unknown_output(self, name: str) -> AttributeLookupError:
+        """The error for writing an output the node does not have."""
+        return _unknown_output(self._port, name)
 
     @property
     def node_path(self) -> str:
@@ -186,6 +234,8 @@ class Database:
 
     def is_connected(self, input_name: str) -> bool:
         """True when the input (``"x"`` or ``"inputs:x"``) has an upstream connection."""
+        if input_name in self._connected:
+            return True
         if self._port.is_connected(input_name):  # only ever true for a bare input name
             return True
         name = _bare(input_name, "inputs:")

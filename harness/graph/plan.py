@@ -13,16 +13,22 @@ does it once per node and :class:`NodePlan` keeps the answers:
   unconnected (or an execution input) — its value is ``node._values.get(full, default)`` —
   and otherwise a closure that pulls the upstream node when needed and converts the value;
 * every output maps to an :class:`OutputSlot` with its converter already chosen;
-* the execution fan-out of the node, as ``(exec output, target node name)`` in connection order.
+* the execution fan-out of the node, as ``(exec output, target node name)`` in connection order;
+* what the node's ``db`` serves once planned (``NodePlan.members`` / ``set_output``, see
+  :meth:`~harness.graph.node.Database.specialize`): an unconnected input's value as a class
+  attribute of ``db.inputs`` (read with no call at all), a connected input as a property
+  doing the reader's work in one call, and one ``db.outputs.__setattr__`` for the outputs.
 
 A :class:`GraphPlan` is built from the node plans (:func:`build_graph_plan`) and follows the
-same invariant: every edit drops it. An edit made *while* the graph evaluates (a compute that
+same invariant: every edit drops it (and the closures :mod:`~harness.graph.runner` compiles
+from it). An edit made *while* the graph evaluates (a compute that
 adds an attribute) is seen by the engine, which then finishes that evaluation resolving each
 step by name, exactly as without a graph plan.
 
 Invariant: a plan describes the graph as it was when the plan was built. It holds source
 *nodes* and declarations, never values: values are read from ``node._values`` /
-``node._outputs`` at read time, so running nodes never make a plan stale. Every graph edit that
+``node._outputs`` at read time (the one exception: an unconnected input's value, which only
+an edit can change), so running nodes never make a plan stale. Every graph edit that
 could change a plan (create or delete a node, connect, disconnect, set a value, create an
 attribute, reset) drops the plans of the whole graph (``Graph._invalidate``); the next read
 builds a fresh one. Readers therefore behave exactly like resolving the binding on every read.
@@ -36,6 +42,7 @@ from typing import TYPE_CHECKING, Any
 
 from harness.errors import GraphError
 from harness.graph.attributes import EXECUTION, Attr, Converter, converter
+from harness.graph.node import OutputSetter
 
 if TYPE_CHECKING:
     from harness.graph.engine import Connection, Node
@@ -105,6 +112,10 @@ class NodePlan:
     with ``__``, which ``db.inputs`` never serves (Python protocol probes such as
     ``__deepcopy__`` must get a plain AttributeError). ``connected`` holds the bare names of the
     inputs with any incoming connection (data or execution).
+
+    ``members`` and ``set_output`` are what the node's ``db`` serves once planned
+    (:meth:`~harness.graph.node.Database.specialize`): each unconnected input's value, each
+    connected input as a property reading its source, and ``db.outputs.__setattr__``.
     """
 
     inputs: Mapping[str, InputEntry]
@@ -112,6 +123,8 @@ class NodePlan:
     outputs: Mapping[str, OutputSlot]
     connected: frozenset[str]
     exec_out: tuple[tuple[str, str], ...]
+    members: Mapping[str, Any]
+    set_output: OutputSetter
 
 
 def build_plan(
@@ -127,6 +140,7 @@ def build_plan(
     }
     inputs: dict[str, InputEntry] = {}
     outputs: dict[str, OutputSlot] = {}
+    members: dict[str, Any] = {}
     for full, attr in node.attributes().items():
         port, _, name = full.partition(":")
         if port == "outputs":
@@ -138,8 +152,12 @@ def build_plan(
             src = nodes[conn.src_node]
             if conn.src_attr.startswith("inputs:"):
                 reader = _input_reader(node, full, attr, src, conn.src_attr, read_input)
+                members[name] = _reader_property(node, reader)
             else:
                 reader = _output_reader(node, full, attr, src, conn.src_attr, pull)
+                members[name] = _output_property(node, full, attr, src, conn.src_attr, pull)
+        else:
+            members[name] = _constant(node._values.get(full, attr.default))
         inputs[name] = (full, attr.default, reader)
     readable = inputs
     if any(name.startswith("__") for name in inputs):
@@ -152,7 +170,8 @@ def build_plan(
         for c in connections
         if c.kind == "exec" and c.src_node == node.name
     )
-    return NodePlan(inputs, readable, outputs, connected, exec_out)
+    return NodePlan(inputs, readable, outputs, connected, exec_out, members,
+                    _output_setter(node, outputs))
 
 
 def _output_slot(full: str, attr: Attr) -> OutputSlot:
@@ -213,6 +232,87 @@ def _input_reader(
             raise _does_not_fit(node, full, attr, src, src_full, err) from err
 
     return read
+
+
+def _constant(value: Any) -> Any:
+    """``value`` as a class attribute of ``db.inputs``: as is, unless it would bind (a
+    function or other descriptor), then a property giving it back unchanged."""
+    if hasattr(type(value), "__get__"):
+        return property(lambda _inputs: value)
+    return value
+
+
+def _reader_property(node: Node, reader: InputReader) -> property:
+    binding = node._binding
+
+    def get(_inputs: object) -> Any:
+        return reader(binding._evaluation)
+
+    return property(get)
+
+
+def _output_property(
+    node: Node, full: str, attr: Attr, src: Node, src_full: str, pull: Pull
+) -> property:
+    """``db.inputs.<name>`` of an input fed by ``src``'s output: :func:`_output_reader`
+    reading the evaluation of the node's run in progress, in one call."""
+    binding = node._binding
+    src_attr = src.attr(src_full)
+    convert = converter(attr.type)
+    src_name = src.name
+    if src.kind != "data" and src_attr is not None and src_attr.type == attr.type:
+
+        def get_stored(_inputs: object) -> Any:
+            return src._outputs[src_full]
+
+        return property(get_stored)
+    same_type = src_attr is not None and src_attr.type == attr.type
+    pulls = src.kind == "data"
+
+    def get(_inputs: object) -> Any:
+        evaluation = binding._evaluation
+        if pulls and evaluation is not None and src_name not in evaluation.done:
+            pull(src, evaluation)
+        raw = src._outputs[src_full]
+        if same_type:
+            return raw
+        try:
+            return convert(raw)
+        except ValueError as err:
+            raise _does_not_fit(node, full, attr, src, src_full, err) from err
+
+    return property(get)
+
+
+def _output_setter(node: Node, outputs: Mapping[str, OutputSlot]) -> OutputSetter:
+    """``db.outputs.__setattr__`` for the planned ``outputs`` (see ``_Binding.write_output``,
+    whose rules it follows in one call). It stores into the node's output dict of the time
+    of planning: only ``Graph.reset`` replaces that dict, and it drops the plan."""
+    binding = node._binding
+    db = node._db
+    store = node._outputs
+    slots = {name: (slot.full, slot.stored_as, slot) for name, slot in outputs.items()}
+
+    def set_output(_outputs: object, name: str, value: Any) -> None:
+        entry = slots.get(name)
+        if entry is None:
+            raise db.unknown_output(name)
+        full, stored_as, slot = entry
+        if type(value) is stored_as:
+            store[full] = value
+        elif slot.is_execution:
+            fired = binding.fired
+            if fired is None:
+                fired = binding.fired = {}
+            fired[full] = bool(value)
+        else:
+            assert slot.convert is not None
+            try:
+                store[full] = slot.convert(value)
+            except ValueError as err:
+                raise GraphError(f"{node.path}.{full} (type {slot.type_name}): {err}") from err
+
+    return set_output
 
 
 @dataclass(eq=False, slots=True)

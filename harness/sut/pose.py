@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from harness.geometry import quat_mul, quat_rotate, quat_to_yaw, xyzw_to_wxyz
+from harness.geometry import qmul, qrotate, quat_mul, quat_rotate, quat_to_yaw, xyzw_to_wxyz
 from harness.sut.base import SutContext
 
 __all__ = ["OdomPose"]
@@ -70,7 +70,11 @@ class OdomPose:
         if chain is None:
             return None
         p, q = self.odom.pose.pose.position, self.odom.pose.pose.orientation
+        # Python floats: the arithmetic of quat_rotate / quat_mul on arrays, term for term
+        # (see harness.geometry), without building arrays.
         t0, q0 = chain
-        pos = t0 + quat_rotate(q0, [p.x, p.y, p.z])
-        yaw = quat_to_yaw(quat_mul(q0, xyzw_to_wxyz([q.x, q.y, q.z, q.w])))
-        return float(pos[0]), float(pos[1]), yaw
+        tx, ty, _ = t0.tolist()
+        q0f = q0.tolist()
+        rx, ry, _ = qrotate(q0f, (p.x, p.y, p.z))
+        yaw = quat_to_yaw(qmul(q0f, (float(q.w), float(q.x), float(q.y), float(q.z))))
+        return tx + rx, ty + ry, yaw

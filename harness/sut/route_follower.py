@@ -14,9 +14,11 @@ drives several robots.
 
 from __future__ import annotations
 
+import bisect
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -26,7 +28,7 @@ from harness.errors import PluginError
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
 from harness.sut.pose import OdomPose
 
-__all__ = ["RouteFollower", "RouteFollowerParams", "pure_pursuit"]
+__all__ = ["RouteFollower", "RouteFollowerParams", "clip", "pure_pursuit"]
 
 
 @dataclass(frozen=True)
@@ -47,32 +49,70 @@ class RouteFollowerParams:
     alarm_stop_after: int = 4  # commands at reduced speed before stopping
 
 
-def _project(path: np.ndarray, cum: np.ndarray, p: np.ndarray, start: int) -> tuple[float, int]:
-    """Arc length of the point of the path closest to ``p``, searching segments from
+def clip(x: float, lo: float, hi: float) -> float:
+    """``float(np.clip(x, lo, hi))`` for one float, without the array machinery: NaN passes
+    through and a tie keeps ``x`` (so ``-0.0`` stays ``-0.0`` against a bound of ``0.0``)."""
+    if x != x:
+        return x
+    m = lo if x < lo else x
+    return hi if m > hi else m
+
+
+def _norm(v: npt.NDArray[np.float64]) -> float:
+    """``float(np.linalg.norm(v))`` for a 1-d float64 vector: numpy computes it as
+    ``sqrt(v.dot(v))`` (BLAS, which may fuse the multiply-adds, so the dot product stays with
+    numpy) and both square roots are IEEE's correctly rounded one."""
+    return math.sqrt(float(v.dot(v)))
+
+
+class _Route:
+    """A route as the follower walks it: the waypoints, cumulative arc length, and per
+    segment its vector, squared length and length, computed once with the same operations
+    as per call before (so the same values), as arrays where numpy's dot product needs them
+    and as Python floats elsewhere."""
+
+    def __init__(self, waypoints: object) -> None:
+        self.path = np.array(waypoints, dtype=np.float64)
+        seg = np.linalg.norm(np.diff(self.path, axis=0), axis=1)
+        self.cum = np.concatenate([[0.0], np.cumsum(seg)])
+        self.cum_f: list[float] = self.cum.tolist()
+        self.points: list[list[float]] = self.path.tolist()
+        self.segs = [self.path[i + 1] - self.path[i] for i in range(len(self.path) - 1)]
+        self.segs_f: list[list[float]] = [seg.tolist() for seg in self.segs]
+        self.length2 = [float(seg @ seg) for seg in self.segs]
+        self.length = [math.sqrt(l2) for l2 in self.length2]
+        last = self.path[-1] - self.path[-2]
+        self.last_dir: list[float] = (last / max(_norm(last), 1e-9)).tolist()
+
+
+def _project(route: _Route, p: npt.NDArray[np.float64], start: int) -> tuple[float, int]:
+    """Arc length of the point of the route closest to ``p`` (x, y), searching segments from
     ``start`` on (progress never goes backwards)."""
-    best = (math.inf, cum[start], start)
-    for i in range(start, len(path) - 1):
-        a, b = path[i], path[i + 1]
-        seg = b - a
-        length2 = float(seg @ seg)
-        t = 0.0 if length2 == 0 else float(np.clip((p - a) @ seg / length2, 0.0, 1.0))
-        d = float(np.linalg.norm(a + t * seg - p))
+    px, py = p.tolist()
+    best = (math.inf, route.cum_f[start], start)
+    for i in range(start, len(route.points) - 1):
+        (ax, ay), (sx, sy), length2 = route.points[i], route.segs_f[i], route.length2[i]
+        t = 0.0 if length2 == 0 else clip(float((p - route.path[i]) @ route.segs[i]) / length2,
+                                          0.0, 1.0)
+        # a + t * seg - p, element by element, as numpy evaluates it
+        d = _norm(np.array((ax + t * sx - px, ay + t * sy - py)))
         if d < best[0] - 1e-12:
-            best = (d, cum[i] + t * math.sqrt(length2), i)
+            best = (d, route.cum_f[i] + t * route.length[i], i)
     return best[1], best[2]
 
 
-def _point_at(path: np.ndarray, cum: np.ndarray, s: float) -> npt.NDArray[np.float64]:
-    s = min(max(s, 0.0), float(cum[-1]))
-    i = int(np.searchsorted(cum, s, side="right") - 1)
-    i = min(i, len(path) - 2)
+def _point_at(route: _Route, s: float) -> tuple[float, float]:
+    cum = route.cum_f
+    s = min(max(s, 0.0), cum[-1])
+    i = bisect.bisect_right(cum, s) - 1  # np.searchsorted(cum, s, side="right") - 1
+    i = min(i, len(cum) - 2)
     seg = cum[i + 1] - cum[i]
     t = 0.0 if seg == 0 else (s - cum[i]) / seg
-    # Indexing an unshaped array is typed as Any; the rows of ``path`` are float64 points.
-    return cast("npt.NDArray[np.float64]", path[i] + t * (path[i + 1] - path[i]))
+    (ax, ay), (bx, by) = route.points[i], route.points[i + 1]
+    return ax + t * (bx - ax), ay + t * (by - ay)
 
 
-def pure_pursuit(x: float, y: float, yaw: float, target: np.ndarray) -> float:
+def pure_pursuit(x: float, y: float, yaw: float, target: Sequence[float]) -> float:
     """Curvature of the arc from pose (x, y, yaw) through ``target``."""
     dx, dy = target[0] - x, target[1] - y
     local_y = -math.sin(yaw) * dx + math.cos(yaw) * dy
@@ -87,9 +127,8 @@ class RouteFollower(SystemUnderTest):
         if route is None:
             raise PluginError(f"{ctx.field}.params.route: no route named {self.p.route!r} "
                               f"(routes: {', '.join(sorted(ctx.scenario.routes)) or 'none'})")
-        self.path = np.array(route.waypoints, dtype=np.float64)
-        seg = np.linalg.norm(np.diff(self.path, axis=0), axis=1)
-        self.cum = np.concatenate([[0.0], np.cumsum(seg)])
+        self.route = _Route(route.waypoints)
+        self.path, self.cum = self.route.path, self.route.cum
         self.period_ns = round(1e9 / self.p.rate_hz)
         self.next_ns = 0
         self.segment = 0
@@ -110,29 +149,29 @@ class RouteFollower(SystemUnderTest):
         if pose is None or self.done:
             return 0.0, 0.0
         x, y, yaw = pose
+        route, p = self.route, self.p
         here = np.array([x, y])
-        goal_dist = float(np.linalg.norm(self.path[-1] - here))
-        s, self.segment = _project(self.path, self.cum, here, self.segment)
-        remaining = float(self.cum[-1]) - s
-        if goal_dist < self.p.goal_tolerance or (remaining < self.p.goal_tolerance
-                                                 and goal_dist < 2 * self.p.goal_tolerance):
+        goal_dist = _norm(route.path[-1] - here)
+        s, self.segment = _project(route, here, self.segment)
+        end = route.cum_f[-1]
+        remaining = end - s
+        if goal_dist < p.goal_tolerance or (remaining < p.goal_tolerance
+                                            and goal_dist < 2 * p.goal_tolerance):
             self.done = True
             return 0.0, 0.0
-        target = _point_at(self.path, self.cum, s + self.p.lookahead)
-        if s + self.p.lookahead > self.cum[-1]:
+        target = _point_at(route, s + p.lookahead)
+        if s + p.lookahead > end:
             # Past the end of the route: aim along the last segment so the approach stays
             # straight instead of circling the goal.
-            direction = self.path[-1] - self.path[-2]
-            direction = direction / max(float(np.linalg.norm(direction)), 1e-9)
-            target = self.path[-1] + direction * (s + self.p.lookahead - self.cum[-1])
-        v = self.p.speed * min(1.0, max(0.15, remaining / self.p.slow_radius))
+            (gx, gy), (dx, dy), past = route.points[-1], route.last_dir, s + p.lookahead - end
+            target = (gx + dx * past, gy + dy * past)
+        v = p.speed * min(1.0, max(0.15, remaining / p.slow_radius))
         if self.alarm:  # a person where the safety monitor says it matters: creep, then stop
             self.alarm_ticks += 1
-            v = 0.0 if self.alarm_ticks > self.p.alarm_stop_after else v * 0.3
+            v = 0.0 if self.alarm_ticks > p.alarm_stop_after else v * 0.3
         else:
             self.alarm_ticks = 0
-        w = float(np.clip(pure_pursuit(x, y, yaw, target) * v,
-                          -self.p.max_angular, self.p.max_angular))
+        w = clip(pure_pursuit(x, y, yaw, target) * v, -p.max_angular, p.max_angular)
         return v, w
 
     def step(self, now_ns: int) -> None:

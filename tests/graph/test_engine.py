@@ -377,3 +377,76 @@ def test_each_node_keeps_one_db_across_ticks(stage: GraphStage) -> None:
     og.Controller.edit("/G", {keys.CREATE_NODES: [("Other", "test.Record")]})  # drops plans
     run_ticks(stage, 1)
     assert len(seen) == 4 and len(set(seen)) == 1
+
+
+def test_an_edit_by_a_node_with_no_targets_yet_fires_the_new_one(registry: Registry) -> None:
+    """A node whose execution output led nowhere connects a target: it runs in that tick."""
+    registry.register("test.Editor")(type("Editor", (_Editor,), {"edit": "connect"}))
+    with GraphStage(registry=registry) as stage:
+        og.Controller.edit("/G", {
+            keys.CREATE_NODES: [("Tick", TICK), ("E", "test.Editor"), ("B", "test.Record"),
+                                ("Late", "test.Record")],
+            keys.CONNECT: [("Tick.outputs:tick", "E.inputs:execIn"),
+                           ("Tick.outputs:tick", "B.inputs:execIn")],
+        })
+        assert names(run_ticks(stage, 1)) == ["Late", "B"]
+        assert names(run_ticks(stage, 1)) == ["Late", "B"]
+
+
+class _Keeper(NodeType):
+    """Action: keeps ``db.inputs`` / ``db.outputs`` from its first compute and reads through
+    them on every later one; logs ``value`` and the type of ``fn``."""
+
+    kind = "action"
+    inputs = (Attr("execIn", "execution"), Attr("value", "any"), Attr("fn", "any"),
+              Attr("specialize", "int", 7), Attr("_plain", "int", 8))
+    outputs = (Attr("execOut", "execution"), Attr("out", "double"))
+
+    def __init__(self) -> None:
+        self.kept: tuple[Any, Any] | None = None
+
+    def compute(self, db: Database, ctx: Any) -> bool:
+        if self.kept is None:
+            self.kept = (db.inputs, db.outputs)
+        inputs, outputs = self.kept
+        outputs.out = 2  # an int, stored as the double's float
+        ctx.log.append((inputs.value, inputs.fn, inputs.specialize, inputs._plain))
+        return True
+
+
+def test_db_kept_across_edits_sees_them_and_values_come_back_as_set(registry: Registry) -> None:
+    """``db.inputs`` serves set values as they are (a function too, not bound as a method),
+    names that are the db's own internals elsewhere, and a reference kept from an earlier
+    tick sees later edits (a value set, a connection made)."""
+    registry.register("test.Keeper")(_Keeper)
+
+    def fn(x: int) -> int:
+        return x
+
+    with GraphStage(registry=registry) as stage:
+        og.Controller.edit("/G", {
+            keys.CREATE_NODES: [("Tick", TICK), ("K", "test.Keeper")],
+            keys.CONNECT: [("Tick.outputs:tick", "K.inputs:execIn")],
+            keys.SET_VALUES: [("K.inputs:value", 1), ("K.inputs:fn", fn)],
+        })
+        ctx = run_ticks(stage, 2)
+        og.Controller.edit("/G", {keys.SET_VALUES: [("K.inputs:value", 2)]})
+        run_ticks(stage, 1, ctx)
+        og.Controller.edit("/G", {
+            keys.CREATE_NODES: [("T", "omni.graph.nodes.ConstantDouble")],
+            keys.SET_VALUES: [("T.inputs:value", 3.5)],
+            keys.CONNECT: [("T.outputs:value", "K.inputs:value")],
+        })
+        run_ticks(stage, 1, ctx)
+        assert [v for v, *_ in ctx.log] == [1, 1, 2, 3.5]
+        assert [(f, rest) for _, f, *rest in ctx.log] == [(fn, [7, 8])] * 4
+        assert og.Controller.get("/G/K.outputs:out") == 2.0
+        assert type(og.Controller.get("/G/K.outputs:out")) is float
+        with pytest.raises(GraphError, match=r"/G/K: no attribute 'outputs:nope'"):
+            kept_outputs(stage).nope = 1
+
+
+def kept_outputs(stage: GraphStage) -> Any:
+    kept = stage.graph("/G").node("K").impl.kept  # type: ignore[attr-defined]
+    assert kept is not None
+    return kept[1]

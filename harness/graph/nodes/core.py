@@ -58,9 +58,10 @@ class _TickSource(NodeType):
     def _emit(self, db: Database, ctx: Any) -> None:
         now = _time_ns(ctx)
         last = self._last_fire_ns
-        db.outputs.time = now / 1e9
-        db.outputs.frame = float(ctx.tick)
-        db.outputs.deltaSeconds = 0.0 if last is None else (now - last) / 1e9
+        out = db.outputs
+        out.time = now / 1e9
+        out.frame = float(ctx.tick)
+        out.deltaSeconds = 0.0 if last is None else (now - last) / 1e9
         self._last_fire_ns = now
 
     def reset(self) -> None:

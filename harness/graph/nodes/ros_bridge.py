@@ -212,13 +212,19 @@ class _TfPublisher(_Publisher):
 
     def emit(self, ns: int, poses: list[Pose]) -> None:
         """Publish one TF message of ``poses`` stamped ``ns``."""
-        frames = tuple((pose.parent, pose.child) for pose in poses)
+        sec, nanosec = split_ns(ns)
+        if len(poses) == 1:  # the usual case, without the generators
+            pose = poses[0]
+            frames: tuple[tuple[str, str], ...] = ((pose.parent, pose.child),)
+            values: tuple[Any, ...] = (sec, nanosec, *pose.translation, *pose.rotation_xyzw)
+        else:
+            frames = tuple((pose.parent, pose.child) for pose in poses)
+            values = tuple(value for pose in poses for value in (
+                sec, nanosec, *pose.translation, *pose.rotation_xyzw))
         packer = self._packers.get(frames)
         if packer is None:
             packer = self._packers[frames] = tf_packer(frames)
-        sec, nanosec = split_ns(ns)
-        raw = packer.pack(*(value for pose in poses for value in (
-            sec, nanosec, *pose.translation, *pose.rotation_xyzw)))
+        raw = packer.pack(*values)
         self._pub.publish_serialized(raw, partial(tf_message_of, ns, poses))
 
     def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
@@ -257,7 +263,7 @@ class PublishRawTransformTree(_TfPublisher):
         i = db.inputs
         tr, rot = tuple(i.translation), tuple(i.rotation)
         parent, child = i.parentFrameId, i.childFrameId
-        if self.unchanged((parent, child, tr, rot)):
+        if self._static and self.unchanged((parent, child, tr, rot)):
             return True
         self.emit(stamp_of(db, ctx), [Pose(parent, child, tr, rot)])
         return True
