@@ -43,14 +43,24 @@ def child(args: argparse.Namespace, duration: float, out: Path) -> None:
     ns = argparse.Namespace(cameras=args.cameras, width=args.width, height=args.height,
                             fps=args.fps, outputs=["rgb", "depth"], duration=duration)
     sc = bench_cameras.load(ns, {"shadows": False})
+    page = os.sysconf("SC_PAGE_SIZE")
+    rss: list[float] = []  # resident MiB at each tenth of the tick loop
+
+    def progress(k: int, n: int) -> None:
+        if k * 10 // n != (k - 1) * 10 // n:
+            with open("/proc/self/statm") as f:
+                rss.append(int(f.read().split()[1]) * page / 2**20)
+
     t0 = time.perf_counter()
-    res = api.run_scenario(sc, source=str(bench_cameras.SCENARIO), out=out)
+    res = api.run_scenario(sc, source=str(bench_cameras.SCENARIO), out=out,
+                           progress=progress if sys.platform == "linux" else None)
     wall = time.perf_counter() - t0
     bag = sum(p.stat().st_size for p in (out / "bag").rglob("*") if p.is_file())
     frames = sum(v["count"] for t, v in res.summary["topics"].items() if t.endswith("_rgb"))
     print(json.dumps({"duration": duration, "wall_s": wall, "verdict": res.verdict,
                       "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                      "bag_bytes": bag, "frames": frames}))
+                      "bag_bytes": bag, "frames": frames,
+                      "rss_mib_each_tenth_of_loop": [round(v, 1) for v in rss]}))
 
 
 def main() -> None:
@@ -88,6 +98,10 @@ def main() -> None:
                   f"bag {row['bag_bytes'] / 1e9:.2f} GB, {row['verdict']}")
     short, long_ = rows[0], rows[-1]
     ratio = long_["peak_mib"] / short["peak_mib"]
+    for row in rows:
+        if row.get("rss_mib_each_tenth_of_loop"):
+            print(f"  {row['duration']:7g} s: resident MiB at each tenth of the tick loop: "
+                  + ", ".join(f"{v:.0f}" for v in row["rss_mib_each_tenth_of_loop"]))
     print(f"peak {long_['duration']:g} s ÷ {short['duration']:g} s: {ratio:.3f} "
           f"(target <= 1.10)")
     if args.json is not None:

@@ -278,8 +278,9 @@ class Recorder:
         if st is None:
             st = self._state[env.topic] = _TopicState(env.topic, self._recorded_type(
                 env.msgtype), self._qos_of(env.topic))
-        msg = env.msg
-        if type(msg) is Deferred and env.raw is None and self._defer_ok and not self._forward:
+        # env.msg only when no bytes came with it: reading it builds a packed message's object
+        msg = env.msg if env.raw is None else None
+        if type(msg) is Deferred and self._defer_ok and not self._forward:
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(_POOL_THREADS, thread_name_prefix="srr-cdr")
             self._batch.append((st, env.stamp_ns,

@@ -28,6 +28,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 import pandas as pd
 
 from harness.frames import Frames
@@ -176,21 +177,22 @@ _POSE = ["x", "y", "z", "qx", "qy", "qz", "qw"]
 
 def tf_tree_gate(tf: pd.DataFrame) -> list[HealthResult]:
     """``tf``: the frames' TF table (``topic, tree, static, parent, child, t_ns`` and the
-    pose). One gate per tree namespace; none when nothing was published on a TF topic."""
+    pose). One gate per tree namespace; none when nothing was published on a TF topic.
+
+    Works on the categorical columns' codes, so that its memory stays a few integer arrays
+    of the table's length (a long run's ``/tf`` has hundreds of thousands of rows; grouping
+    and de-duplicating them in pandas took more than twice the table's size again)."""
     out = []
-    for tree, t in tf.groupby("tree", sort=True, observed=True):
-        edges = {Edge(str(r.parent), str(r.child), bool(r.static), str(r.topic))
-                 for r in t[["parent", "child", "static", "topic"]].drop_duplicates()
-                 .itertuples(index=False)}
+    cols = {c: _codes(tf[c]) for c in ("tree", "parent", "child", "topic")}
+    static = tf["static"].to_numpy(bool)
+    t_ns = tf["t_ns"].to_numpy(np.int64)
+    for k in np.unique(cols["tree"][0]):
+        rows = np.flatnonzero(cols["tree"][0] == k)
+        tree = str(cols["tree"][1][k])
+        edges = _tf_edges(cols, static, rows)
         problems = [p.detail for p in tree_problems(sorted(edges, key=_edge_key))]
-        dyn = t[~t["static"].to_numpy(bool)]
-        counts = dyn.groupby(["child", "t_ns"], observed=True).size()
-        for child, c in counts[counts > 1].groupby(level=0, observed=True):
-            t0 = int(c.index[0][1])
-            problems.append(f"frame '{child}' published {int(c.iloc[0])} times with the same "
-                            f"stamp at {len(c)} time(s), first at {t0 / 1e9:.3f} s: two "
-                            "sources (tf2 ignores the repeats)")
-        st = t[t["static"].to_numpy(bool)]
+        problems += _repeated_stamps(cols["child"], t_ns, rows[~static[rows]])
+        st = tf.iloc[rows[static[rows]]]
         for child, c in st.groupby("child", observed=True):
             # different beyond float noise (1 µm, 1e-6 of a unit quaternion)
             distinct = len(c[_POSE].round(6).drop_duplicates())
@@ -206,6 +208,62 @@ def tf_tree_gate(tf: pd.DataFrame) -> list[HealthResult]:
             out.append(HealthResult(name, True, f"{len(frames)} frames, one parent each; "
                                     f"root{'s' if len(rts) > 1 else ''}: {', '.join(rts)}"))
     return out
+
+
+def _codes(column: pd.Series) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.object_]]:
+    """A column as integer codes into its sorted distinct values (a categorical's own
+    categories and order, or the values' sorted order)."""
+    if isinstance(column.dtype, pd.CategoricalDtype):
+        return (column.cat.codes.to_numpy(np.int64),
+                np.asarray(column.cat.categories, dtype=object))
+    values, codes = np.unique(column.to_numpy(object).astype(str), return_inverse=True)
+    return codes.astype(np.int64), values.astype(object)
+
+
+def _tf_edges(cols: Mapping[str, tuple[npt.NDArray[np.int64], npt.NDArray[np.object_]]],
+              static: npt.NDArray[np.bool_], rows: npt.NDArray[np.intp]) -> set[Edge]:
+    """The distinct (parent, child, static, topic) of ``rows``, as edges."""
+    key = np.zeros(len(rows), dtype=np.int64)
+    for name in ("parent", "child", "topic"):
+        codes, values = cols[name]
+        key = key * len(values) + codes[rows]
+    key = key * 2 + static[rows]
+    edges = set()
+    for k in np.unique(key).tolist():
+        k, st = divmod(k, 2)
+        k, topic = divmod(k, len(cols["topic"][1]))
+        parent, child = divmod(k, len(cols["child"][1]))
+        edges.add(Edge(str(cols["parent"][1][parent]), str(cols["child"][1][child]),
+                       bool(st), str(cols["topic"][1][topic])))
+    return edges
+
+
+def _repeated_stamps(child: tuple[npt.NDArray[np.int64], npt.NDArray[np.object_]],
+                     t_ns: npt.NDArray[np.int64], rows: npt.NDArray[np.intp]) -> list[str]:
+    """Per child frame (in category order) published more than once with one stamp in
+    ``rows``: how often at its first such stamp, at how many stamps, and the first."""
+    codes, values = child
+    c, t = codes[rows], t_ns[rows]
+    order = np.lexsort((t, c))
+    c, t = c[order], t[order]
+    if len(c) < 2:
+        return []
+    same = (c[1:] == c[:-1]) & (t[1:] == t[:-1])
+    if not same.any():
+        return []
+    starts = np.flatnonzero(np.r_[True, ~same])  # the first row of each (child, stamp)
+    sizes = np.diff(np.r_[starts, len(c)])
+    dup = starts[sizes > 1]
+    dup_sizes = sizes[sizes > 1]
+    problems = []
+    for code in np.unique(c[dup]).tolist():
+        mine = np.flatnonzero(c[dup] == code)
+        first = int(dup[mine[0]])
+        problems.append(f"frame '{values[code]}' published {int(dup_sizes[mine[0]])} times "
+                        f"with the same stamp at {len(mine)} time(s), first at "
+                        f"{int(t[first]) / 1e9:.3f} s: two sources (tf2 ignores the "
+                        "repeats)")
+    return problems
 
 
 def _edge_key(e: Edge) -> tuple[str, str, bool, str]:
