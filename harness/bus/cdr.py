@@ -40,14 +40,13 @@ import numpy as np
 from rosbags.interfaces import Nodetype
 from rosbags.typesys.store import Typestore
 
-__all__ = ["CDR_HEADER", "LARGE_ARRAY", "Layout", "Packer", "Serializer", "Unsupported"]
+from harness.bus.pieces import Piece, Pieces
+
+__all__ = ["CDR_HEADER", "Layout", "Packer", "Serializer", "Unsupported"]
 
 #: Encapsulation header of little-endian plain CDR (what ROS 2 publishes).
 CDR_HEADER = b"\x00\x01\x00\x00"
 _HEADER_LEN = len(CDR_HEADER)
-#: :meth:`Serializer.pieces` keeps numeric arrays of at least this many bytes as their own
-#: buffers (an image's pixels), not copied.
-LARGE_ARRAY = 64 * 1024
 
 # Struct codes of the base types, as rosbags packs them (``byte`` signed, ``char`` unsigned).
 _CODES: dict[str, str] = {
@@ -70,7 +69,7 @@ class _Mismatch(Exception):
 # -- leaves of a run ---------------------------------------------------------------------------
 
 class _Out(Protocol):
-    """Where a message's bytes are written: a ``bytearray``, or :class:`_Pieces`."""
+    """Where a message's bytes are written: a ``bytearray``, or :class:`Pieces`."""
 
     def __len__(self) -> int: ...
 
@@ -209,45 +208,10 @@ class _Sequence:
             out += _COUNT.pack(len(items))
             if len(view):
                 out += bytes(_pad(len(out) - _HEADER_LEN, self._align))
-                if isinstance(out, _Pieces):
-                    out.keep(view)
+                if isinstance(out, Pieces):
+                    out.keep(view.toreadonly())
                 else:
                     out += view
-
-
-class _Pieces:
-    """A message's bytes being written as pieces: what :class:`_Run` and :class:`_Sequence`
-    append goes into a ``bytearray``; a large numeric array is kept as its own buffer
-    (:meth:`keep`). ``len`` is the length of everything written so far, as for a
-    ``bytearray``, so the padding comes out the same."""
-
-    __slots__ = ("_done", "_size", "_tail")
-
-    def __init__(self, head: bytes) -> None:
-        self._done: list[bytes | memoryview] = []
-        self._size = 0
-        self._tail = bytearray(head)
-
-    def __len__(self) -> int:
-        return self._size + len(self._tail)
-
-    def __iadd__(self, data: bytes | memoryview, /) -> Self:
-        self._tail += data
-        return self
-
-    def keep(self, view: memoryview) -> None:
-        if len(view) < LARGE_ARRAY:
-            self._tail += view
-            return
-        if self._tail:
-            self._done.append(bytes(self._tail))
-            self._size += len(self._tail)
-            self._tail = bytearray()
-        self._done.append(view.toreadonly())
-        self._size += len(view)
-
-    def pieces(self) -> tuple[bytes | memoryview, ...]:
-        return (*self._done, bytes(self._tail)) if self._tail else tuple(self._done)
 
 
 # -- layouts -----------------------------------------------------------------------------------
@@ -273,11 +237,11 @@ class Layout:
             segment.write(out, msg)
         return bytes(out)
 
-    def serialize_pieces(self, msg: Any) -> tuple[bytes | memoryview, ...]:
+    def serialize_pieces(self, msg: Any) -> tuple[Piece, ...]:
         """``msg``'s CDR bytes as pieces in order, each numeric array of
-        :data:`LARGE_ARRAY` bytes or more as a read-only view of the message's own array
-        (not copied); raises :class:`_Mismatch` when it does not fit the layout."""
-        out = _Pieces(CDR_HEADER)
+        :data:`~harness.bus.pieces.LARGE` bytes or more as a read-only view of the message's
+        own array (not copied); raises :class:`_Mismatch` when it does not fit the layout."""
+        out = Pieces(CDR_HEADER)
         for segment in self.segments:
             segment.write(out, msg)
         return out.pieces()
@@ -374,7 +338,7 @@ class Serializer:
                 pass
         return self._fallback(msg, msgtype)
 
-    def pieces(self, msg: Any, msgtype: str) -> tuple[bytes | memoryview, ...]:
+    def pieces(self, msg: Any, msgtype: str) -> tuple[Piece, ...]:
         """The same bytes as calling the serializer, as :meth:`Layout.serialize_pieces`
         gives them (one piece from the fallback). The large pieces are views of the
         message's arrays: the message must not change while they are in use."""

@@ -11,12 +11,13 @@ order: a test checks that byte for byte. What differs is the cost:
   index entry one tuple;
 * per byte of a large payload (an image: megabytes a frame): the library copies it into a
   ``BytesIO`` chunk and twice more while building the Chunk record, all holding the GIL. Here a
-  chunk is a list of *pieces*: small records are appended to a ``bytearray``, a payload of
-  :data:`LARGE` bytes or more (or each large piece of a payload handed over in pieces, see
-  :data:`Payload`) is kept as the caller's buffer. The chunk's CRC is computed piece by piece
-  and the chunk goes to the file with ``os.writev``; zlib's CRC and the write release the GIL,
-  so the payload's bytes are never touched by Python code. A caller must not change a buffer
-  after handing it over. A compressed chunk is joined once and compressed.
+  chunk is a list of *pieces* (:class:`~harness.bus.pieces.Pieces`): small records are
+  appended to a ``bytearray``, a payload of 64 KiB or more (or each large piece of a payload
+  handed over in pieces, see :data:`Payload`) is kept as the caller's buffer. The chunk's
+  CRC is computed piece by piece and the chunk goes to the file with ``os.writev``; zlib's CRC
+  and the write release the GIL, so the payload's bytes are never touched by Python code. A
+  caller must not change a buffer after handing it over. A compressed chunk is joined once and
+  compressed.
 
 The records written once per chunk or per file (header, schemas, channels, message indexes,
 metadata, summary, footer) are written with the library's own record classes.
@@ -49,12 +50,12 @@ from mcap.records import (
 )
 from mcap.writer import MCAP0_MAGIC, CompressionType
 
-__all__ = ["LARGE", "McapWriter", "Payload", "payload_size"]
+from harness.bus.pieces import Piece, Pieces
+
+__all__ = ["McapWriter", "Payload", "payload_size"]
 
 #: A message's bytes: one buffer, or its pieces in order (a header and an image's pixels).
-Payload = bytes | memoryview | tuple[bytes | memoryview, ...]
-#: Payloads (and pieces) of at least this many bytes are kept as the caller's buffers.
-LARGE = 64 * 1024
+Payload = bytes | memoryview | tuple[Piece, ...]
 
 # A Message record's head: opcode, record length, channel id, sequence, log and publish time.
 _MESSAGE_HEAD = struct.Struct("<BQHIQQ")
@@ -95,7 +96,7 @@ def _compress(data: bytes, compression: CompressionType) -> tuple[str, bytes]:
     return "", data
 
 
-def _writev(fd: int, pieces: Sequence[bytes | bytearray | memoryview]) -> None:
+def _writev(fd: int, pieces: Sequence[Piece]) -> None:
     """Write every piece to ``fd`` in order, resuming after partial writes."""
     todo = [p for p in pieces if len(p)]
     i = 0
@@ -138,10 +139,8 @@ class McapWriter:
         self._channel_counts: dict[int, int] = {}
         self._chunk_count = 0
         self._metadata_count = 0
-        # the chunk being filled: closed pieces, then the small records after them
-        self._pieces: list[bytes | bytearray | memoryview] = []
-        self._pieces_size = 0
-        self._chunk = bytearray()
+        # the chunk being filled: its records, large payloads kept as handed over
+        self._chunk = Pieces()
         self._chunk_messages = 0
         self._chunk_start = 0
         self._chunk_end = 0
@@ -189,28 +188,17 @@ class McapWriter:
         index = self._indexes.get(channel_id)
         if index is None:
             index = self._indexes[channel_id] = []
-        index.append((log_time, self._pieces_size + len(chunk)))
+        index.append((log_time, len(chunk)))
         self._chunk_messages += 1
         if isinstance(data, tuple):
             chunk += _MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIELDS + payload_size(data),
                                         channel_id, 0, log_time, publish_time)
             for piece in data:
-                self._append(piece)
+                chunk.keep(piece)
         else:
             chunk += _MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIELDS + len(data),
                                         channel_id, 0, log_time, publish_time)
-            self._append(data)
-
-    def _append(self, data: bytes | memoryview) -> None:
-        if len(data) < LARGE:
-            self._chunk += data
-            return
-        if self._chunk:
-            self._pieces.append(self._chunk)
-            self._pieces_size += len(self._chunk)
-            self._chunk = bytearray()
-        self._pieces.append(data)
-        self._pieces_size += len(data)
+            chunk.keep(data)
 
     def flush(self) -> None:
         """Close the chunk being filled (if it holds a message) and flush the stream."""
@@ -273,11 +261,8 @@ class McapWriter:
         if self._chunk_messages == 0:
             return  # schema and channel records stay for the next chunk, as in the library
         self._chunk_count += 1
-        pieces = self._pieces
-        if self._chunk:
-            pieces.append(self._chunk)
-        size = self._pieces_size + len(self._chunk)
-        body: Sequence[bytes | bytearray | memoryview]
+        pieces, size = self._chunk.pieces(), len(self._chunk)
+        body: Sequence[Piece]
         if self._compression == CompressionType.NONE:
             crc = 0
             for piece in pieces:
@@ -309,8 +294,7 @@ class McapWriter:
         index.message_index_length = self._records.count
         self._flush()
         self._chunk_indexes.append(index)
-        self._pieces, self._pieces_size = [], 0
-        self._chunk = bytearray()
+        self._chunk = Pieces()
         self._chunk_messages = 0
         self._chunk_start = self._chunk_end = 0
         self._indexes = {}
@@ -319,7 +303,7 @@ class McapWriter:
         if self._records.count:
             self._write((_take(self._records),))
 
-    def _write(self, pieces: Sequence[bytes | bytearray | memoryview]) -> None:
+    def _write(self, pieces: Sequence[Piece]) -> None:
         if self._fd is not None:
             _writev(self._fd, pieces)
         else:

@@ -21,6 +21,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
 from harness.bus.cdr import Packer, Serializer
+from harness.bus.pieces import Piece
 
 __all__ = [
     "TYPESTORE",
@@ -130,7 +131,7 @@ def serialize(msg: Any, typename: str) -> bytes:
     return _SERIALIZER(msg, typename)
 
 
-def serialize_pieces(msg: Any, typename: str) -> tuple[bytes | memoryview, ...]:
+def serialize_pieces(msg: Any, typename: str) -> tuple[Piece, ...]:
     """The bytes of :func:`serialize` in pieces, large numeric arrays (an image's pixels) as
     views of the message's own arrays instead of copies (see
     :meth:`harness.bus.cdr.Serializer.pieces`)."""

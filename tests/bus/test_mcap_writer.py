@@ -13,7 +13,8 @@ import pytest
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
-from harness.bus.mcap_writer import LARGE, McapWriter, Payload
+from harness.bus.mcap_writer import McapWriter, Payload
+from harness.bus.pieces import LARGE
 
 
 def _calls(seed: int) -> list[tuple[str, tuple[object, ...]]]:
