@@ -98,6 +98,16 @@ def gated_render_product(tick_hz: int, fps: float, prim: str,
     return nodes, connect, values
 
 
+def render_product_helper(name: str) -> list[tuple[str, str]]:
+    """The connections of a helper node ``name`` fed by :func:`gated_render_product`'s head:
+    its execution, the render product path and the ROS 2 context."""
+    return [
+        ("CreateRenderProduct.outputs:execOut", f"{name}.inputs:execIn"),
+        ("CreateRenderProduct.outputs:renderProductPath", f"{name}.inputs:renderProductPath"),
+        ("ROS2Context.outputs:context", f"{name}.inputs:context"),
+    ]
+
+
 
 def sensor_frame_tf(bc: BuildContext, robot: RobotSpec, kind: str, frame_id: str,
                     path: str, node: str = "PublishSensorTF",

@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from harness.builders.base import BuildContext, GraphEdits, gate_step
+from harness.builders.base import BuildContext, GraphEdits, gate_step, render_product_helper
 from harness.bus import resolve_topic
 from harness.graph.nodes.ros_bridge import frame_of
 from harness.graph.nodes.video import COMPRESSED_FORMATS
@@ -133,12 +133,7 @@ def compressed_helpers(bc: BuildContext, path: str, camera: RecordedCamera) -> G
         name, suffix = COMPRESSED[(cs.stream, cs.format)]
         nodes.append((name, "srr.CompressedCameraHelper"))
         bc.annotate(path, name, camera.field, topicName=f"record.{cs.stream}")
-        connect += [
-            ("CreateRenderProduct.outputs:execOut", f"{name}.inputs:execIn"),
-            ("CreateRenderProduct.outputs:renderProductPath",
-             f"{name}.inputs:renderProductPath"),
-            ("ROS2Context.outputs:context", f"{name}.inputs:context"),
-        ]
+        connect += render_product_helper(name)
         values += [
             (f"{name}.inputs:topicName", camera.raw[cs.stream] + suffix),
             (f"{name}.inputs:frameId", camera.frame_id),

@@ -22,7 +22,13 @@ and ``<camera>_depth/compressed``.
 
 from __future__ import annotations
 
-from harness.builders.base import BuildContext, fresh_graph, gate_step, gated_render_product
+from harness.builders.base import (
+    BuildContext,
+    fresh_graph,
+    gate_step,
+    gated_render_product,
+    render_product_helper,
+)
 from harness.builders.camera_record import (
     COMPRESSED,
     CompressedStream,
@@ -69,12 +75,7 @@ def build(bc: BuildContext, camera: CameraSpec) -> str | None:
         name, type_name, stream = HELPERS[out]
         nodes.append((name, type_name))
         bc.annotate(path, name, where, topicName="name")
-        connect += [
-            ("CreateRenderProduct.outputs:execOut", f"{name}.inputs:execIn"),
-            ("CreateRenderProduct.outputs:renderProductPath",
-             f"{name}.inputs:renderProductPath"),
-            ("ROS2Context.outputs:context", f"{name}.inputs:context"),
-        ]
+        connect += render_product_helper(name)
         values += [
             (f"{name}.inputs:topicName", topic),
             (f"{name}.inputs:frameId", frame_of(camera.prim)),

@@ -26,7 +26,13 @@ fixed camera's does (:mod:`harness.builders.camera_record`): ``<topic>/h264``,
 
 from __future__ import annotations
 
-from harness.builders.base import BuildContext, fresh_graph, gated_render_product, sensor_frame_tf
+from harness.builders.base import (
+    BuildContext,
+    fresh_graph,
+    gated_render_product,
+    render_product_helper,
+    sensor_frame_tf,
+)
 from harness.builders.camera_record import compressed_helpers, robot_camera
 from harness.graph import Controller
 from harness.scenario import RobotSpec
@@ -57,11 +63,7 @@ def build(bc: BuildContext, robot: RobotSpec) -> str | None:
     for name, stream, topic, topic_field in streams:
         bc.annotate(path, name, where, topicName=topic_field)
         nodes.append((name, _HELPER))
-        connect += [
-            ("CreateRenderProduct.outputs:execOut", f"{name}.inputs:execIn"),
-            ("CreateRenderProduct.outputs:renderProductPath", f"{name}.inputs:renderProductPath"),
-            ("ROS2Context.outputs:context", f"{name}.inputs:context"),
-        ]
+        connect += render_product_helper(name)
         values += [
             (f"{name}.inputs:type", stream),
             (f"{name}.inputs:topicName", topic),
