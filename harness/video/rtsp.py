@@ -1,13 +1,20 @@
 """RTSP servers for camera streams: GStreamer's gst-rtsp-server, fed with srr's own h264.
 
 One :class:`RtspHub` per run owns a GLib main loop on a thread of its own and one
-``GstRTSPServer`` per port (several mount paths may share a port). Each mount is a shared
-media whose pipeline is ``appsrc ! rtph264pay``: the access units come ready-made
-from :class:`~harness.video.codec.H264Encoder` (with their simulation-time SEI), so GStreamer
-only packetizes them into RTP (RFC 6184) and serves RTSP (RTP over UDP or interleaved in the
-RTSP TCP connection, as the client asks). Nothing is re-encoded, resampled or repeated: each
-frame pushed goes on the wire once per client, and a client joins at a keyframe (the stream
-asks the encoder for one when a client arrives, see :meth:`RtspStream.wants_keyframe`).
+``GstRTSPServer`` per port (several mount paths may share a port). Each client of a mount gets
+a pipeline of its own, ``appsrc ! rtph264pay``: the access units come ready-made from the
+mount's one :class:`~harness.video.codec.H264Encoder` (with their simulation-time SEI), so
+GStreamer only packetizes them into RTP (RFC 6184) and serves RTSP (RTP over UDP or
+interleaved in the RTSP TCP connection, as the client asks). Nothing is re-encoded, resampled
+or repeated: each frame pushed goes on the wire once per client.
+
+Every client starts at a keyframe, at the next frame: its pipeline is made when it asks
+(DESCRIBE), which asks the encoder for a keyframe (:meth:`RtspStream.wants_keyframe`; the
+other clients get that keyframe too), and :meth:`RtspStream.push` hands a pipeline nothing
+before its first keyframe. The pipelines are not shared on purpose: with one pipeline for all
+clients (gst-rtsp-server's shared media) a later client is added to the running pipeline and
+gets whatever it sends next, frames queued before the client came included, so it would start
+on frames that refer to pictures it never had.
 
 The RTP timestamps of a client's stream start at its first frame and advance by simulation
 time (90 kHz clock); the SEI carries the absolute simulation time (:mod:`harness.video.sei`).
@@ -20,7 +27,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from harness.errors import StreamError
@@ -52,7 +59,7 @@ class StreamConfig:
 
 
 class _Media:
-    """One prepared pipeline of a mount (shared by its clients)."""
+    """One prepared pipeline of a mount: one client's."""
 
     __slots__ = ("appsrc", "base_ns", "last_pts", "start_wall", "started")
 
@@ -82,16 +89,21 @@ class RtspStream:
         self.frames_sent = 0  # summed over clients
 
     @property
+    def port(self) -> int:
+        """The port served: ``config.port``, or the one the system picked for port 0."""
+        return self.hub._bound[self.config.port]
+
+    @property
     def url(self) -> str:
-        return self.config.url
+        return self.config.url if self.config.port else replace(self.config, port=self.port).url
 
     @property
     def clients(self) -> int:
-        """Pipelines serving clients now (a shared mount has one for all of its clients).
+        """Clients now (one pipeline each).
 
         A pipeline exists from a client's DESCRIBE on; the server answers that DESCRIBE only
-        once the first keyframe has gone through the payloader (the SDP carries the stream's
-        SPS and PPS), so frames must flow for a client to get to PLAY."""
+        once a keyframe has gone through the payloader (the SDP carries the stream's SPS and
+        PPS), so frames must flow for a client to get to PLAY."""
         with self._lock:
             return len(self._medias)
 
@@ -164,6 +176,7 @@ class RtspHub:
         self._servers: dict[int, tuple[Any, Any]] = {}  # port → (server, source)
         self._streams: dict[tuple[int, str], RtspStream] = {}
         self._host: dict[int, str] = {}
+        self._bound: dict[int, int] = {}  # configured port → bound port (port 0: any free one)
         self._t0: float | None = None
         self._closed = False
 
@@ -199,11 +212,12 @@ class RtspHub:
                                   f"{err.message}") from err
             source.attach(self._context)
             entry = self._servers[config.port] = (server, source)
+            self._bound[config.port] = int(server.get_bound_port())
             self._host[config.port] = config.host
         stream = RtspStream(self, config)
         factory = G.GstRtspServer.RTSPMediaFactory.new()
         factory.set_launch(_LAUNCH)
-        factory.set_shared(True)
+        factory.set_shared(False)  # a pipeline per client: each starts at a keyframe
         factory.connect("media-configure", stream._configure)
         entry[0].get_mount_points().add_factory(config.mount_path, factory)
         self._streams[key] = stream
