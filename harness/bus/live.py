@@ -25,6 +25,7 @@ from typing import Any
 
 from harness.bus.bus import Envelope, Qos
 from harness.bus.recorder import cdr_bytes, topic_meta
+from harness.bus.wsfront import SubprotocolFront
 from harness.errors import LiveViewError
 
 __all__ = ["DEFAULT_PORT", "LATCHED_KEEP", "LiveConfig", "LiveView", "Pacer"]
@@ -127,6 +128,7 @@ class LiveView:
         self._pacer = Pacer(config.rate)
         self._closed = False
         self._port = config.port
+        self._front: SubprotocolFront | None = None
 
     # -- life cycle ---------------------------------------------------------------------------
     @classmethod
@@ -156,13 +158,20 @@ class LiveView:
             def on_subscribe(self, client: Client, channel: ChannelView) -> None:
                 view._subscribed(channel.topic)
 
+        # The SDK's server listens on a loopback port of its own, behind srr's front on the
+        # address asked for, which also lets in clients of the protocol's older name
+        # (foxglove.websocket.v1: Lichtblick, @foxglove/ws-protocol); see harness.bus.wsfront.
         try:
             view._server = foxglove.start_server(
-                name=name, host=config.host, port=config.port, capabilities=[Capability.Time],
+                name=name, host="127.0.0.1", port=0, capabilities=[Capability.Time],
                 server_listener=Listener(), context=context)
-            view._port = int(view._server.port)
+            view._front = SubprotocolFront(config.host, config.port, int(view._server.port))
+            view._port = view._front.port
         except (RuntimeError, OSError, OverflowError, ValueError) as err:
-            text = str(err).removeprefix("FoxgloveError: ")
+            if view._server is not None:
+                view._server.stop()
+            text = (err.strerror if isinstance(err, OSError) and err.strerror else
+                    str(err).removeprefix("FoxgloveError: "))
             hint = ("; another srr run or a Foxglove bridge may be using it: pick another "
                     "--foxglove-port" if "in use" in text else "")
             raise LiveViewError(f"--foxglove: cannot listen on {config.host}:{config.port}: "
@@ -189,8 +198,12 @@ class LiveView:
         if self._closed:
             return
         self._closed = True
+        if self._front is not None:
+            self._front.stop_accepting()
         if self._server is not None:
             self._server.stop()
+        if self._front is not None:
+            self._front.close()  # its connections end as the server closed them
 
     def __enter__(self) -> LiveView:
         return self

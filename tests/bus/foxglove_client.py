@@ -13,9 +13,12 @@ from typing import Any
 
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
+from websockets.typing import Subprotocol
 
-# The subprotocol foxglove-sdk's server accepts (Foxglove offers it with foxglove.websocket.v1).
+# The protocol's two names: foxglove-sdk's, and the ws-protocol specification's, which Lichtblick
+# and @foxglove/ws-protocol clients offer alone (Foxglove offers both).
 SUBPROTOCOL = "foxglove.sdk.v1"
+LEGACY_SUBPROTOCOL = "foxglove.websocket.v1"
 OP_MESSAGE_DATA = 0x01
 OP_TIME = 0x02
 
@@ -27,15 +30,18 @@ class Received:
     messages: dict[str, list[tuple[int, bytes]]] = field(default_factory=dict)  # (ns, CDR)
     times: list[int] = field(default_factory=list)  # server time broadcasts, ns
     texts: list[dict[str, Any]] = field(default_factory=list)  # other JSON messages
+    subprotocol: str | None = None  # the one the server chose
     error: BaseException | None = None
 
 
-def open_client(port: int, timeout: float = 30.0) -> ClientConnection:
-    """Connect to ``ws://127.0.0.1:port``, retrying while the server is not up yet."""
+def open_client(port: int, timeout: float = 30.0,
+                subprotocol: str = SUBPROTOCOL) -> ClientConnection:
+    """Connect to ``ws://127.0.0.1:port`` offering only ``subprotocol``, retrying while the
+    server is not up yet."""
     deadline = time.monotonic() + timeout
     while True:
         try:
-            return connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
+            return connect(f"ws://127.0.0.1:{port}", subprotocols=[Subprotocol(subprotocol)],
                            open_timeout=5, max_size=None)
         except OSError:
             if time.monotonic() > deadline:
@@ -45,10 +51,19 @@ def open_client(port: int, timeout: float = 30.0) -> ClientConnection:
 
 class LiveClient:
     """Connects, waits for ``topics`` to be advertised, subscribes to them and records what
-    arrives, on a thread, until the server closes the connection (or :meth:`close`)."""
+    arrives, on a thread, until the server closes the connection (or :meth:`close`).
 
-    def __init__(self, port: int, topics: Iterable[str], *, timeout: float = 30.0) -> None:
+    ``confirm``: send the subscription twice; the server warns "already subscribed" for each
+    topic of the second once it took the first (it handles a client's messages in order), and
+    :attr:`confirmed` is set when all warnings came (or the client ended: check ``error``)."""
+
+    def __init__(self, port: int, topics: Iterable[str], *, timeout: float = 30.0,
+                 subprotocol: str = SUBPROTOCOL, confirm: bool = False) -> None:
         self.port = port
+        self.subprotocol = subprotocol
+        self.confirm = confirm
+        self.confirmed = threading.Event()
+        self._acks = 0
         self.topics = list(topics)
         self.timeout = timeout
         self.got = Received()
@@ -74,7 +89,8 @@ class LiveClient:
 
     def _run(self) -> None:
         try:
-            self._ws = ws = open_client(self.port, self.timeout)
+            self._ws = ws = open_client(self.port, self.timeout, self.subprotocol)
+            self.got.subprotocol = ws.subprotocol
             with ws:
                 self._handshake(ws)
                 self._receive(ws)
@@ -82,6 +98,8 @@ class LiveClient:
             pass
         except BaseException as err:  # re-raised on the test's thread by join()
             self.got.error = err
+        finally:
+            self.confirmed.set()
 
     def _handshake(self, ws: ClientConnection) -> None:
         deadline = time.monotonic() + self.timeout
@@ -98,9 +116,12 @@ class LiveClient:
             else:
                 self.got.texts.append(data)
         self._subs = {i: topic for i, topic in enumerate(self.topics)}
-        ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+        subscribe = json.dumps({"op": "subscribe", "subscriptions": [
             {"id": i, "channelId": self.got.channels[topic]["id"]}
-            for i, topic in self._subs.items()]}))
+            for i, topic in self._subs.items()]})
+        ws.send(subscribe)
+        if self.confirm:
+            ws.send(subscribe)
         self.subscribed.set()
 
     def _receive(self, ws: ClientConnection) -> None:
@@ -111,6 +132,11 @@ class LiveClient:
                 data = json.loads(msg)
                 if data["op"] == "advertise":
                     self.got.channels.update({c["topic"]: c for c in data["channels"]})
+                elif self.confirm and data["op"] == "status" \
+                        and "already subscribed" in data["message"]:
+                    self._acks += 1
+                    if self._acks == len(self.topics):
+                        self.confirmed.set()
                 else:
                     self.got.texts.append(data)
 

@@ -8,12 +8,15 @@ import time
 from collections.abc import Callable, Iterator
 
 import pytest
+from mcap.records import Schema
+from mcap_ros2.decoder import DecoderFactory
+from websockets.exceptions import InvalidStatus
 
 from harness.bus import TRANSIENT_LOCAL, Bus
 from harness.bus.live import LiveConfig, LiveView, Pacer
 from harness.bus.messages import clock, serialize, tf_message, transform_stamped
 from harness.errors import LiveViewError
-from tests.bus.foxglove_client import LiveClient
+from tests.bus.foxglove_client import LEGACY_SUBPROTOCOL, SUBPROTOCOL, LiveClient, open_client
 
 TF = "tf2_msgs/msg/TFMessage"
 CLOCK = "rosgraph_msgs/msg/Clock"
@@ -100,6 +103,58 @@ def test_wait_holds_until_a_client_subscribes_and_time_follows_the_simulation(
     assert got.times == [k * 16_666_666 for k in range(5)]
     assert [t for t, _ in got.messages["/clock"]] == got.times
     assert notices[-1] == "a Foxglove client is connected; running"
+
+
+def test_clients_of_either_protocol_name_receive_and_decode_the_topics(
+        view: tuple[LiveView, list[str]]) -> None:
+    """One client offers only the specification's name (foxglove.websocket.v1: Lichtblick,
+    @foxglove/ws-protocol), one only the SDK's (foxglove.sdk.v1): each is answered with the
+    name it offered and gets every message, its bytes decoding with the advertised schema."""
+    live, _notices = view
+    now = [0]
+    bus = Bus(lambda: now[0])
+    bus.add_tap(live)
+    live.advertise({"/clock": CLOCK, "/tf": TF}, bus.qos)
+    clients = {name: LiveClient(live.port, ["/clock", "/tf"], subprotocol=name,
+                                confirm=True).start()
+               for name in (LEGACY_SUBPROTOCOL, SUBPROTOCOL)}
+    for c in clients.values():  # the server took both subscriptions of each
+        assert c.confirmed.wait(30)
+        assert c.got.error is None, c.got.error
+    sent: dict[str, list[tuple[int, bytes]]] = {"/clock": [], "/tf": []}
+    for k in range(1, 4):
+        now[0] = k * 10_000_000
+        bus.publish("/clock", CLOCK, clock(now[0]))
+        tf = _static(now[0], "odom", "base_link")
+        bus.publish("/tf", TF, tf)
+        live.tick()
+        sent["/clock"].append((now[0], serialize(clock(now[0]), CLOCK)))
+        sent["/tf"].append((now[0], serialize(tf, TF)))
+    for c in clients.values():
+        _until(lambda c=c: len(c.got.messages.get("/tf", [])) == 3)  # type: ignore[misc]
+    live.close()
+    for name, c in clients.items():
+        got = c.join()
+        assert got.subprotocol == name
+        assert got.server_info["name"] == "srr" and "time" in got.server_info["capabilities"]
+        assert got.messages["/clock"] == sent["/clock"], name
+        assert got.messages["/tf"] == sent["/tf"], name
+        ch = got.channels["/tf"]
+        decode = DecoderFactory().decoder_for(ch["encoding"], Schema(
+            id=0, name=ch["schemaName"], encoding=ch["schemaEncoding"],
+            data=ch["schema"].encode()))
+        assert decode is not None
+        tfs = [decode(data).transforms[0] for _, data in got.messages["/tf"]]
+        assert [(t.header.frame_id, t.child_frame_id, t.transform.translation.x) for t in tfs] \
+            == [("odom", "base_link", 1.0)] * 3
+        assert [t.header.stamp.nanosec for t in tfs] == [10_000_000, 20_000_000, 30_000_000]
+        assert got.times[-3:] == [10_000_000, 20_000_000, 30_000_000]
+
+
+def test_a_client_offering_neither_name_is_refused(view: tuple[LiveView, list[str]]) -> None:
+    live, _notices = view
+    with pytest.raises(InvalidStatus, match="HTTP 400"):
+        open_client(live.port, 10.0, "foxglove.websocket.v2")
 
 
 def test_wait_gives_up_after_its_time_and_says_so() -> None:
