@@ -44,8 +44,9 @@ _LAUNCH = ("( appsrc name=src is-live=true format=time do-timestamp=false "
 
 @dataclass(frozen=True)
 class StreamConfig:
-    """Where one camera is served: ``rtsp://<host>:<port><mount_path>``. ``where`` names the
-    setting in errors (``scenarios/x.yaml: cameras[1].port``)."""
+    """Where one camera is served: ``rtsp://<host>:<port><mount_path>`` (port 0: a free port
+    the system picks, see :attr:`RtspStream.port`). ``where`` names the setting in errors
+    (``scenarios/x.yaml: cameras[1].port``)."""
 
     port: int
     mount_path: str
