@@ -90,6 +90,7 @@ class SubprotocolFront:
         self._backend = ("127.0.0.1", backend_port)
         self._lock = threading.Lock()
         self._sockets: set[socket.socket] = set()
+        self._greeting: set[socket.socket] = set()  # clients whose handshake is not through
         self._threads: list[threading.Thread] = []
         self._closing = False
         self._acceptor = threading.Thread(target=self._accept, name="srr-live-front",
@@ -109,6 +110,7 @@ class SubprotocolFront:
                     client.close()
                     return
                 self._sockets.add(client)
+                self._greeting.add(client)
                 self._threads = [x for x in self._threads if x.is_alive()] + [t]
             t.start()
 
@@ -138,6 +140,8 @@ class SubprotocolFront:
                 if SDK_SUBPROTOCOL in _offered(ahead):
                     ahead = _with_subprotocol(ahead, LEGACY_SUBPROTOCOL)
                 client.sendall(ahead + arest)
+            with self._lock:
+                self._greeting.discard(client)
             back = threading.Thread(target=_pump, args=(backend, client),
                                     name="srr-live-relay", daemon=True)
             back.start()
@@ -150,6 +154,7 @@ class SubprotocolFront:
                 if end is not None:
                     with self._lock:
                         self._sockets.discard(end)
+                        self._greeting.discard(end)
                     end.close()
 
     def stop_accepting(self) -> None:
@@ -171,6 +176,10 @@ class SubprotocolFront:
         deadline = time.monotonic() + timeout_s
         with self._lock:
             threads = list(self._threads)
+            greeting = list(self._greeting)
+        for s in greeting:  # the server never saw these: nothing will end them
+            with contextlib.suppress(OSError):
+                s.shutdown(socket.SHUT_RDWR)
         for t in threads:
             t.join(max(0.0, deadline - time.monotonic()))
         with self._lock:
