@@ -10,7 +10,9 @@ again whenever a client subscribes to them.
 
 Nothing here changes what is recorded: the view only reads the bytes the recorder serialized,
 and pacing (``rate``) only sleeps between ticks. The server listens on localhost unless told
-otherwise, and only while a run that asked for it is going.
+otherwise, and only while a run that asked for it is going. Clients reach it through
+:class:`~harness.bus.wsfront.SubprotocolFront`, so those offering only the protocol's older
+name, ``foxglove.websocket.v1`` (Lichtblick), connect as well as Foxglove's.
 """
 
 from __future__ import annotations

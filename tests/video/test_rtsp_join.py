@@ -16,6 +16,7 @@ import numpy as np
 
 from harness.video import H264Encoder, H264Settings, psnr, read_sim_time, sim_time_of_user_data
 from harness.video.rtsp import RtspHub, StreamConfig
+from harness.video.sei import nal_units
 
 FPS = 30
 PERIOD_NS = 1_000_000_000 // FPS
@@ -42,6 +43,7 @@ class Client:
 
     packets: list[tuple[bool, int | None]] = field(default_factory=list)
     frames: list[tuple[bool, int, float]] = field(default_factory=list)
+    first_nals: set[int] = field(default_factory=set)  # NAL unit types of the first packet
     error: str | None = None
     decoded: threading.Event = field(default_factory=threading.Event)  # FIRST_FRAMES reached
     enough: threading.Event = field(default_factory=threading.Event)  # SECOND_PACKETS reached
@@ -60,7 +62,10 @@ def read(url: str, out: Client) -> None:
         for packet in container.demux(stream):
             if packet.size == 0:
                 continue
-            sim = read_sim_time(bytes(packet))
+            data = bytes(packet)
+            if not out.packets:
+                out.first_nals = {data[head] & 0x1F for _, head, _ in nal_units(data)}
+            sim = read_sim_time(data)
             out.packets.append((bool(packet.is_keyframe), sim.index if sim else None))
             for frame in packet.decode():
                 (sei,) = [t for sd in frame.side_data
@@ -140,6 +145,7 @@ def test_a_client_joining_mid_stream_decodes_its_first_frame() -> None:
     # client 2 joined mid-stream, and its very first packet is a keyframe that decodes
     key, joined = second.packets[0]
     assert key, second.packets[:SECOND_PACKETS]
+    assert {7, 8, 5} <= second.first_nals  # in-band SPS and PPS, then the IDR slice
     assert joined is not None and joined >= start + FIRST_FRAMES
     assert second.frames[0][:2] == (True, joined)
     assert second.frames[0][2] >= 30.0, second.frames[0]
