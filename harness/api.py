@@ -434,7 +434,8 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     # what plug-ins noticed while running (the ROS 2 bridge: topics it could not bridge)
     summary["warnings"] = [*summary["warnings"], *(
         w for _, sut, _ in loop.suts for w in getattr(sut, "warnings", list)())]
-    bdir = baselines_dir(source, baselines)
+    bdir = baselines_dir(source, baselines, scenario)
+    summary["baselines_dir"] = str(bdir)  # where bless writes this run's baseline
     if update_baseline and not interrupted:
         if not all(h.ok for h in scores.health):
             raise InvalidRunError(f"{run_dir}: health gates tripped; an invalid run cannot "
@@ -504,16 +505,18 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
                         *(f"--set {o}" for o in overrides), f"--out {out_dir}"])
     extra = {"warnings": warnings, "command": command,
              "scene_files": dict(summary.get("scene_files") or {}), "replay_of": {
-        "run_dir": str(src), "digest": summary.get("digest"), "mode": "open-loop",
+        "run_dir": str(src.resolve()), "digest": summary.get("digest"), "mode": "open-loop",
         "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
         "overrides": list(overrides), "withheld": sorted(withheld)}}
     if "world_map" in summary:  # the recorded scene, as it was
         extra["world_map"] = summary["world_map"]
     loop = _Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
                  bool(summary.get("srr_gt")), extra, playback.output)
+    judged = summary.get("baselines_dir")  # judged against the recorded run's baselines
     return _record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.get("ticks") or scenario.n_ticks), progress=progress,
-                   baselines=baselines)
+                   baselines=baselines if baselines is not None
+                   else Path(judged) if judged else None)
 
 
 def _check_replay_scene(recorded: Scenario, scenario: Scenario) -> None:
@@ -646,17 +649,35 @@ def baseline_name(scenario: Scenario) -> str:
     return scenario.baseline or scenario.name
 
 
-def baselines_dir(source: str, explicit: Path | None = None) -> Path:
-    """``--baselines`` if given, else the ``baselines/`` folder of the project the scenario
-    file lives in (the nearest ancestor that has one), else ``./baselines``."""
+def baselines_dir(source: str, explicit: Path | None = None,
+                  scenario: Scenario | None = None) -> Path:
+    """The absolute baselines folder of the scenario in file ``source``, the same from any
+    working directory (run, suite, replay and bless all use it):
+
+    1. ``explicit`` (``--baselines``), relative to the working directory;
+    2. the scenario's ``baselines:`` field, relative to the file that sets it;
+    3. the nearest ``baselines/`` folder in the scenario file's folder or a parent, looking
+       no higher than the repository root (a folder with ``.git``) or the filesystem root;
+    4. else ``baselines/`` beside the scenario file (blessing creates it).
+
+    A scenario that comes from no file (``<scenario>``) uses ``./baselines``."""
     if explicit is not None:
-        return Path(explicit)
-    here = Path(source).resolve().parent if source and not source.startswith("<") else None
-    while here is not None and here != here.parent:
+        return Path(explicit).resolve()
+    from_file = bool(source) and not source.startswith("<")
+    if scenario is not None and scenario.baselines is not None:
+        origin = scenario.file_for("baselines", source)
+        base = Path(origin).resolve().parent if not origin.startswith("<") else Path.cwd()
+        return (base / scenario.baselines).resolve()
+    if not from_file:
+        return Path("baselines").resolve()
+    folder = Path(source).resolve().parent
+    here = folder
+    while True:
         if (here / "baselines").is_dir():
             return here / "baselines"
+        if (here / ".git").exists() or here == here.parent:
+            return folder / "baselines"
         here = here.parent
-    return Path("baselines")
 
 
 def reproduce_command(source: str, scenario: Scenario, run_dir: Path) -> str:
@@ -689,7 +710,10 @@ def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Pa
         and "scene_files" in base.config else None  # a baseline from before srr hashed them
     mismatch = [] if base is None or base.config is None else config_differences(
         with_defaults(base.config), scene_config(scenario, files))
-    verdict = decide(scores.health, scores.metrics, cmp, note, mismatch)
+    if cmp is not None and mismatch:  # a baseline of another configuration judges nothing
+        cmp = cmp.not_compared()
+    verdict = decide(scores.health, scores.metrics, cmp, note, mismatch,
+                     record_only=scenario.scoring.record_only)
     summary["verdict"], summary["exit_code"] = verdict.name, verdict.exit_code
     summary["reasons"] = list(verdict.reasons)
     summary["baseline"] = None if base is None else {
@@ -704,14 +728,21 @@ def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Pa
 
 
 def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
-    """Make a finished run the baseline of its scenario (``srr baseline bless``)."""
+    """Make a finished run the baseline of its scenario (``srr baseline bless``), in
+    ``baselines`` if given, else in the folder the run was judged against (its summary's
+    ``baselines_dir``; for runs from before it was recorded, :func:`baselines_dir` of its
+    scenario file). An INVALID or interrupted run is refused (SrrError, exit 2)."""
     summary = read_summary(run_dir)
     if summary.get("verdict") == "INVALID" or summary.get("interrupted"):
-        raise InvalidRunError(f"{run_dir}: the run is {summary.get('verdict', 'invalid')}; "
-                              "only a valid, complete run can become the baseline")
+        why = " ".join("; ".join(str(r) for r in summary.get("reasons") or []).split())
+        raise SrrError(f"{Path(run_dir).resolve()}: not blessed: the run is "
+                       f"{summary.get('verdict', 'invalid')} ({why or 'no reason recorded'}); "
+                       "only a valid, complete run can become the baseline")
     scenario = load_scenario(Path(run_dir) / "scenario.yaml")
-    path = baseline_path(baseline_name(scenario),
-                         baselines_dir(summary.get("scenario_file", ""), baselines))
+    recorded = summary.get("baselines_dir")  # the folder the run was judged against
+    path = baseline_path(baseline_name(scenario), baselines_dir(
+        summary.get("scenario_file", ""), baselines if baselines is not None
+        else Path(recorded) if recorded else None, scenario))
     save_baseline(path, summary, reason=reason, source_run=str(run_dir),
                   config=scene_config(scenario, summary.get("scene_files")),
                   bag=Path(run_dir) / "bag")
