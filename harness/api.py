@@ -649,6 +649,10 @@ def baseline_name(scenario: Scenario) -> str:
     return scenario.baseline or scenario.name
 
 
+#: What makes a folder a project root: the search for ``baselines/`` stops there.
+PROJECT_MARKERS = (".git", "pyproject.toml")
+
+
 def baselines_dir(source: str, explicit: Path | None = None,
                   scenario: Scenario | None = None) -> Path:
     """The absolute baselines folder of the scenario in file ``source``, the same from any
@@ -657,7 +661,8 @@ def baselines_dir(source: str, explicit: Path | None = None,
     1. ``explicit`` (``--baselines``), relative to the working directory;
     2. the scenario's ``baselines:`` field, relative to the file that sets it;
     3. the nearest ``baselines/`` folder in the scenario file's folder or a parent, looking
-       no higher than the repository root (a folder with ``.git``) or the filesystem root;
+       no higher than the project root (a folder with ``.git`` or ``pyproject.toml``) or
+       the filesystem root;
     4. else ``baselines/`` beside the scenario file (blessing creates it).
 
     A scenario that comes from no file (``<scenario>``) uses ``./baselines``."""
@@ -675,7 +680,7 @@ def baselines_dir(source: str, explicit: Path | None = None,
     while True:
         if (here / "baselines").is_dir():
             return here / "baselines"
-        if (here / ".git").exists() or here == here.parent:
+        if any((here / m).exists() for m in PROJECT_MARKERS) or here == here.parent:
             return folder / "baselines"
         here = here.parent
 
