@@ -119,3 +119,18 @@ def test_blessing_an_invalid_run_is_refused_as_bad_input(
     assert line.startswith(f"srr baseline: {tmp_path / 'bad'}: not blessed: the run is INVALID "
                            "(health topic_rate:/clock:")
     assert not (tmp_path / "bl").exists()
+
+
+def test_a_suite_blesses_beside_the_scenario_file(tmp_path: Path,
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    (tmp_path / ".git").mkdir()
+    (tmp_path / "scene").mkdir()
+    (tmp_path / "a").mkdir()
+    (tmp_path / "scene" / "hall.yaml").write_text(
+        "format_version: 1\nname: hall\nduration: 0.25\nclock: {enabled: true}\n"
+        "world: {size: [30.0, 20.0], shelves: [], dock: {enabled: false}}\n")
+    monkeypatch.chdir(tmp_path / "a")
+    assert main(["suite", str(Path("..") / "scene" / "hall.yaml"), "--jobs", "1", "-q",
+                 "--out", "suite", "--update-baselines", "--reason", "kept bags"]) == 1
+    assert (tmp_path / "scene" / "baselines" / "hall.json").is_file()
+    assert not (tmp_path / "a" / "baselines").exists()
