@@ -221,6 +221,9 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     it ends. It changes nothing that is recorded. ``notice`` receives its one-line messages
     for the user."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
+    baselines = baselines_dir(source, baselines, scenario)  # a bad folder stops it here
+    if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
+        scenario = dataclasses.replace(scenario, baselines=str(baselines))
     _prepare(run_dir)
     check_free_space(scenario, run_dir, free_space)
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
@@ -487,6 +490,9 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     _check_replay_scene(recorded, scenario)
     source = str(summary.get("scenario_file") or src / "scenario.yaml")
     check_scoring(scenario, srr_gt=bool(summary.get("srr_gt")), source=source)
+    judged = summary.get("baselines_dir")  # judged against the recorded run's baselines
+    baselines = baselines_dir(source, baselines if baselines is not None
+                              else Path(judged) if judged else None, scenario)
     playback = Playback(src / "bag")
     withheld = _recorded_outputs(summary, recorded, source)
     rep = Replay(scenario, playback, withheld, source)
@@ -512,11 +518,9 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         extra["world_map"] = summary["world_map"]
     loop = _Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
                  bool(summary.get("srr_gt")), extra, playback.output)
-    judged = summary.get("baselines_dir")  # judged against the recorded run's baselines
     return _record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.get("ticks") or scenario.n_ticks), progress=progress,
-                   baselines=baselines if baselines is not None
-                   else Path(judged) if judged else None)
+                   baselines=baselines)
 
 
 def _check_replay_scene(recorded: Scenario, scenario: Scenario) -> None:
@@ -591,6 +595,7 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     setting up the systems under test, and the wiring (topics and TF). Raises the first error;
     returns the warnings."""
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
+    baselines_dir(source, None, scenario)  # a baselines: path that is not a folder
     busy = check_video(scenario, source)
     sim = Simulation(with_ros2_bridge(scenario, None), source=source)
     try:
@@ -667,12 +672,18 @@ def baselines_dir(source: str, explicit: Path | None = None,
 
     A scenario that comes from no file (``<scenario>``) uses ``./baselines``."""
     if explicit is not None:
-        return Path(explicit).resolve()
+        folder = Path(explicit).resolve()
+        if folder.exists() and not folder.is_dir():
+            raise SrrError(f"--baselines: {folder} is not a folder")
+        return folder
     from_file = bool(source) and not source.startswith("<")
     if scenario is not None and scenario.baselines is not None:
         origin = scenario.file_for("baselines", source)
         base = Path(origin).resolve().parent if not origin.startswith("<") else Path.cwd()
-        return (base / scenario.baselines).resolve()
+        folder = (base / scenario.baselines).resolve()
+        if folder.exists() and not folder.is_dir():
+            raise ScenarioError(origin, "baselines", f"{folder} is not a folder")
+        return folder
     if not from_file:
         return Path("baselines").resolve()
     folder = Path(source).resolve().parent

@@ -72,6 +72,8 @@ def test_the_baselines_field_is_relative_to_the_scenario_file(
                            update_baseline=True, update_reason="kept elsewhere")
     assert kept.is_file() and res.summary["baseline"]["path"] == str(kept)
     assert not any((tmp_path / "scene" / "baselines").iterdir())
+    resolved = (tmp_path / "a" / "r1" / "scenario.yaml").read_text()  # absolute once resolved
+    assert f"baselines: {kept.parent}\n" in resolved
     # --baselines still wins, resolved against the working directory
     monkeypatch.chdir(tmp_path / "b")
     path = api.bless(tmp_path / "a" / "r1", "explicit", baselines=Path("mine"))
@@ -134,3 +136,22 @@ def test_a_suite_blesses_beside_the_scenario_file(tmp_path: Path,
                  "--out", "suite", "--update-baselines", "--reason", "kept bags"]) == 1
     assert (tmp_path / "scene" / "baselines" / "hall.json").is_file()
     assert not (tmp_path / "a" / "baselines").exists()
+
+
+def test_a_baselines_path_that_is_a_file_is_refused(tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    src = tmp_path / "hall.yaml"
+    src.write_text("format_version: 1\nname: hall\nduration: 0.25\n"
+                   "world: {size: [30.0, 20.0], shelves: [], dock: {enabled: false}}\n"
+                   "baselines: taken\n")
+    (tmp_path / "taken").write_text("a file")
+    assert main(["run", str(src), "--out", str(tmp_path / "r"), "-q"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert f"{src}: baselines: {tmp_path / 'taken'} is not a folder" in err
+    assert not (tmp_path / "r").exists()  # refused before anything was written
+    assert main(["run", str(src), "--out", str(tmp_path / "r"), "-q", "--baselines",
+                 str(tmp_path / "taken")]) == 2
+    assert f"--baselines: {tmp_path / 'taken'} is not a folder" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
+    assert main(["validate", str(src)]) == 2
+    assert "baselines: " in capsys.readouterr().err
