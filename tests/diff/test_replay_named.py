@@ -17,6 +17,7 @@ SET = "systems_under_test.route_follower.params.speed=1.0"
 SUT = "route_follower=harness.sut.route_follower:RouteFollower"
 
 
+@pytest.mark.slow
 def test_a_replay_and_its_diff_say_what_was_replayed_and_changed(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     a = api.run_scenario(api.load(FW, duration=1.0), source=str(FW), out=tmp_path / "a").run_dir

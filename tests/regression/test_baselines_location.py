@@ -34,6 +34,7 @@ def summary(run: Path) -> dict[str, object]:
     return data
 
 
+@pytest.mark.slow
 def test_bless_in_one_directory_and_run_in_another(tmp_path: Path,
                                                    monkeypatch: pytest.MonkeyPatch) -> None:
     src = scene_copy(tmp_path)
@@ -123,6 +124,7 @@ def test_blessing_an_invalid_run_is_refused_as_bad_input(
     assert not (tmp_path / "bl").exists()
 
 
+@pytest.mark.slow
 def test_a_suite_blesses_beside_the_scenario_file(tmp_path: Path,
                                                    monkeypatch: pytest.MonkeyPatch) -> None:
     (tmp_path / ".git").mkdir()
