@@ -221,6 +221,9 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     it ends. It changes nothing that is recorded. ``notice`` receives its one-line messages
     for the user."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
+    baselines = baselines_dir(source, baselines, scenario)  # a bad folder stops it here
+    if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
+        scenario = dataclasses.replace(scenario, baselines=str(baselines))
     _prepare(run_dir)
     check_free_space(scenario, run_dir, free_space)
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
@@ -434,7 +437,8 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
     # what plug-ins noticed while running (the ROS 2 bridge: topics it could not bridge)
     summary["warnings"] = [*summary["warnings"], *(
         w for _, sut, _ in loop.suts for w in getattr(sut, "warnings", list)())]
-    bdir = baselines_dir(source, baselines)
+    bdir = baselines_dir(source, baselines, scenario)
+    summary["baselines_dir"] = str(bdir)  # where bless writes this run's baseline
     if update_baseline and not interrupted:
         if not all(h.ok for h in scores.health):
             raise InvalidRunError(f"{run_dir}: health gates tripped; an invalid run cannot "
@@ -486,6 +490,9 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     _check_replay_scene(recorded, scenario)
     source = str(summary.get("scenario_file") or src / "scenario.yaml")
     check_scoring(scenario, srr_gt=bool(summary.get("srr_gt")), source=source)
+    judged = summary.get("baselines_dir")  # judged against the recorded run's baselines
+    baselines = baselines_dir(source, baselines if baselines is not None
+                              else Path(judged) if judged else None, scenario)
     playback = Playback(src / "bag")
     withheld = _recorded_outputs(summary, recorded, source)
     rep = Replay(scenario, playback, withheld, source)
@@ -504,7 +511,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
                         *(f"--set {o}" for o in overrides), f"--out {out_dir}"])
     extra = {"warnings": warnings, "command": command,
              "scene_files": dict(summary.get("scene_files") or {}), "replay_of": {
-        "run_dir": str(src), "digest": summary.get("digest"), "mode": "open-loop",
+        "run_dir": str(src.resolve()), "digest": summary.get("digest"), "mode": "open-loop",
         "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
         "overrides": list(overrides), "withheld": sorted(withheld)}}
     if "world_map" in summary:  # the recorded scene, as it was
@@ -588,6 +595,7 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     setting up the systems under test, and the wiring (topics and TF). Raises the first error;
     returns the warnings."""
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
+    baselines_dir(source, None, scenario)  # a baselines: path that is not a folder
     busy = check_video(scenario, source)
     sim = Simulation(with_ros2_bridge(scenario, None), source=source)
     try:
@@ -646,17 +654,46 @@ def baseline_name(scenario: Scenario) -> str:
     return scenario.baseline or scenario.name
 
 
-def baselines_dir(source: str, explicit: Path | None = None) -> Path:
-    """``--baselines`` if given, else the ``baselines/`` folder of the project the scenario
-    file lives in (the nearest ancestor that has one), else ``./baselines``."""
+#: What makes a folder a project root: the search for ``baselines/`` stops there.
+PROJECT_MARKERS = (".git", "pyproject.toml")
+
+
+def baselines_dir(source: str, explicit: Path | None = None,
+                  scenario: Scenario | None = None) -> Path:
+    """The absolute baselines folder of the scenario in file ``source``, the same from any
+    working directory (run, suite, replay and bless all use it):
+
+    1. ``explicit`` (``--baselines``), relative to the working directory;
+    2. the scenario's ``baselines:`` field, relative to the file that sets it;
+    3. the nearest ``baselines/`` folder in the scenario file's folder or a parent, looking
+       no higher than the project root (a folder with ``.git`` or ``pyproject.toml``) or
+       the filesystem root;
+    4. else ``baselines/`` beside the scenario file (blessing creates it).
+
+    A scenario that comes from no file (``<scenario>``) uses ``./baselines``."""
     if explicit is not None:
-        return Path(explicit)
-    here = Path(source).resolve().parent if source and not source.startswith("<") else None
-    while here is not None and here != here.parent:
+        folder = Path(explicit).resolve()
+        if folder.exists() and not folder.is_dir():
+            raise SrrError(f"--baselines: {folder} is not a folder")
+        return folder
+    from_file = bool(source) and not source.startswith("<")
+    if scenario is not None and scenario.baselines is not None:
+        origin = scenario.file_for("baselines", source)
+        base = Path(origin).resolve().parent if not origin.startswith("<") else Path.cwd()
+        folder = (base / scenario.baselines).resolve()
+        if folder.exists() and not folder.is_dir():
+            raise ScenarioError(origin, "baselines", f"{folder} is not a folder")
+        return folder
+    if not from_file:
+        return Path("baselines").resolve()
+    folder = Path(source).resolve().parent
+    here = folder
+    while True:
         if (here / "baselines").is_dir():
             return here / "baselines"
+        if any((here / m).exists() for m in PROJECT_MARKERS) or here == here.parent:
+            return folder / "baselines"
         here = here.parent
-    return Path("baselines")
 
 
 def reproduce_command(source: str, scenario: Scenario, run_dir: Path) -> str:
@@ -689,7 +726,10 @@ def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Pa
         and "scene_files" in base.config else None  # a baseline from before srr hashed them
     mismatch = [] if base is None or base.config is None else config_differences(
         with_defaults(base.config), scene_config(scenario, files))
-    verdict = decide(scores.health, scores.metrics, cmp, note, mismatch)
+    if cmp is not None and mismatch:  # a baseline of another configuration judges nothing
+        cmp = cmp.not_compared()
+    verdict = decide(scores.health, scores.metrics, cmp, note, mismatch,
+                     record_only=scenario.scoring.record_only)
     summary["verdict"], summary["exit_code"] = verdict.name, verdict.exit_code
     summary["reasons"] = list(verdict.reasons)
     summary["baseline"] = None if base is None else {
@@ -704,14 +744,21 @@ def _judge(summary: dict[str, Any], scenario: Scenario, scores: Scores, bdir: Pa
 
 
 def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
-    """Make a finished run the baseline of its scenario (``srr baseline bless``)."""
+    """Make a finished run the baseline of its scenario (``srr baseline bless``), in
+    ``baselines`` if given, else in the folder the run was judged against (its summary's
+    ``baselines_dir``; for runs from before it was recorded, :func:`baselines_dir` of its
+    scenario file). An INVALID or interrupted run is refused (SrrError, exit 2)."""
     summary = read_summary(run_dir)
     if summary.get("verdict") == "INVALID" or summary.get("interrupted"):
-        raise InvalidRunError(f"{run_dir}: the run is {summary.get('verdict', 'invalid')}; "
-                              "only a valid, complete run can become the baseline")
+        why = " ".join("; ".join(str(r) for r in summary.get("reasons") or []).split())
+        raise SrrError(f"{Path(run_dir).resolve()}: not blessed: the run is "
+                       f"{summary.get('verdict', 'invalid')} ({why or 'no reason recorded'}); "
+                       "only a valid, complete run can become the baseline")
     scenario = load_scenario(Path(run_dir) / "scenario.yaml")
-    path = baseline_path(baseline_name(scenario),
-                         baselines_dir(summary.get("scenario_file", ""), baselines))
+    recorded = summary.get("baselines_dir")  # the folder the run was judged against
+    path = baseline_path(baseline_name(scenario), baselines_dir(
+        summary.get("scenario_file", ""), baselines if baselines is not None
+        else Path(recorded) if recorded else None, scenario))
     save_baseline(path, summary, reason=reason, source_run=str(run_dir),
                   config=scene_config(scenario, summary.get("scene_files")),
                   bag=Path(run_dir) / "bag")

@@ -24,6 +24,7 @@ from harness.bus.live import DEFAULT_PORT, LiveConfig
 from harness.diff import DiffResult
 from harness.errors import SrrError
 from harness.interrupt import sigterm_as_interrupt
+from harness.summary import replay_note
 
 __all__ = ["main"]
 
@@ -295,8 +296,7 @@ def _fmt(v: Any) -> str:
 
 def _print_run(res: api.RunResult) -> None:
     s = res.summary
-    what = (f"open-loop replay of {s['replay_of']['run_dir']}, " if s.get("replay_of")
-            else "")
+    what = "open-loop replay, " if s.get("replay_of") else ""
     out = s.get("output") or {}
     ros1 = (f", recorded as ROS 1 ({'.bag' if out.get('format') == 'bag' else 'MCAP'})"
             if out.get("ros") == 1 else "")
@@ -308,14 +308,17 @@ def _print_run(res: api.RunResult) -> None:
         table.add_row(name, t["type"], str(t["count"]), f"{t['rate_hz']:.1f}")
     out_console.print(table)
     if s["comparison"]:
-        mt = Table(title="metrics against the baseline (regressions first)")
+        unjudged = all(e["status"] == "not_compared" for e in s["comparison"])
+        mt = Table(title="metrics beside a baseline of another configuration (not compared)"
+                   if unjudged else "metrics against the baseline (regressions first)")
         for col in ("metric", "value", "baseline", "delta", "tolerance", "status"):
             mt.add_column(col)
         for e in s["comparison"]:
             style = {"regressed": "bold red", "missing": "bold red",
-                     "improved": "green"}.get(e["status"], "")
+                     "improved": "green", "not_compared": "dim"}.get(e["status"], "")
             mt.add_row(e["name"], f"{_fmt(e['value'])} {e['unit']}", _fmt(e["baseline"]),
-                       _fmt(e["delta"]), f"±{e['tolerance']:.3g}", e["status"], style=style)
+                       _fmt(e["delta"]), f"±{e['tolerance']:.3g}",
+                       e["status"].replace("_", " "), style=style)
         out_console.print(mt)
     elif s["metrics"]:
         mt = Table(title="metrics (no baseline)")
@@ -329,6 +332,9 @@ def _print_run(res: api.RunResult) -> None:
     bad = [h for h in s["health"] if not h["ok"]]
     out_console.print(f"health: {len(s['health']) - len(bad)}/{len(s['health'])} gates ok",
                       markup=False)
+    replay = replay_note(s)
+    if replay is not None:
+        out_console.print(f"this run is an {replay}", markup=False)
     out_console.print(f"verdict: {res.verdict}", markup=False)
     for reason in s.get("reasons", []):
         out_console.print(f"  - {reason}", markup=False)
@@ -443,6 +449,8 @@ def _print_diff(r: DiffResult) -> None:
         sim = f"{run.simulated_s:.1f} s" if run.simulated_s is not None else "?"
         out_console.print(f"{label}: {run.path}  ({run.scenario}, seed {run.seed}, {sim}, "
                           f"{run.verdict})", markup=False)
+    for note in r.replay_notes:
+        out_console.print(note, markup=False)
     table = Table(title="recorded topics (messages paired by index)")
     for col in ("topic", "type", "A", "B", "status", "differ", "first divergence"):
         table.add_column(col, justify="right" if col in ("A", "B", "differ") else "left")

@@ -137,6 +137,12 @@ def check_scoring(sc: Scenario, *, srr_gt: bool, source: str = "<scenario>") -> 
     file = sc.file_for("scoring", source)
     need_gt = bool(s.control_blocks) or any(block is not None and block.enabled
                                             for block in (s.perception, s.safety))
+    if s.record_only and need_gt:
+        scored = next(n for n, on in (("control", bool(s.control_blocks)), ("perception",
+                      s.perception is not None and s.perception.enabled),
+                      ("safety", s.safety is not None and s.safety.enabled)) if on)
+        raise ScenarioError(file, "scoring.record_only", f"a record-only scenario scores "
+                            f"nothing, and scoring.{scored} is enabled: remove one of them")
     if need_gt and not srr_gt:
         raise ScenarioError(file, "scoring", "scoring needs ground truth: set srr_gt: true "
                             "or run with --srr-gt")

@@ -15,7 +15,7 @@ from typing import Any
 
 from harness.errors import SrrError
 
-__all__ = ["SUMMARY_NAME", "read_summary"]
+__all__ = ["SUMMARY_NAME", "read_summary", "replay_note"]
 
 SUMMARY_NAME = "summary.json"
 
@@ -67,12 +67,28 @@ OPTIONAL: dict[str, tuple[Check, str]] = {
     "simulated_s": (_is_num, "a number"),
     "srr_gt": (lambda v: isinstance(v, bool), "true or false"),
     "scenario_file": (_str, "a string"),
+    "baselines_dir": (_str, "a string"),
     "sut_endpoints": (lambda v: isinstance(v, dict), "a mapping"),
     "replay_of": (lambda v: isinstance(v, dict), "a mapping"),
     "comparison": (lambda v: isinstance(v, list), "a list"),
     "baseline": (lambda v: v is None or isinstance(v, dict), "a mapping or null"),
     "interrupted": (lambda v: isinstance(v, bool), "true or false"),
 }
+
+
+def replay_note(summary: Mapping[str, Any]) -> str | None:
+    """``open-loop replay of RUN (changed: --set X=Y, --sut NAME=module:Class)``, or None
+    when the summary is not a replay's (its ``replay_of``): what the console, the report
+    and ``srr diff`` say of a replay."""
+    r = summary.get("replay_of")
+    if not isinstance(r, Mapping):
+        return None
+    replaced: Mapping[str, Any] = r["replaced"] if isinstance(r.get("replaced"), Mapping) else {}
+    overrides: list[Any] = r["overrides"] if isinstance(r.get("overrides"), list) else []
+    changes = [f"--set {o}" for o in overrides] + [f"--sut {k}={v}" for k, v in replaced.items()]
+    what = (f"changed: {', '.join(changes)}" if changes else
+            "nothing changed: the recorded systems under test and settings")
+    return f"open-loop replay of {r.get('run_dir', '?')} ({what})"
 
 
 def _fail(path: Path, field: str, message: str) -> SrrError:

@@ -22,6 +22,7 @@ from harness.diff.tolerance import Tolerance, glob_match, parse_tolerance
 from harness.diff.topics import diff_bags
 from harness.errors import BagError, SrrError
 from harness.scenario.schema import ToleranceSpec
+from harness.summary import replay_note
 
 __all__ = ["check_against_summary", "diff_runs", "open_run"]
 
@@ -48,7 +49,7 @@ def _info(path: Path, s: Mapping[str, Any]) -> RunInfo:
     sim = s.get("simulated_s")
     return RunInfo(path, str(s.get("scenario", "?")), s.get("seed"), str(s.get("verdict", "?")),
                    float(sim) if isinstance(sim, (int, float)) else None,
-                   str(s.get("digest", "")))
+                   str(s.get("digest", "")), replay_note(s))
 
 
 def _scenario_tolerances(run: Path) -> tuple[dict[str, ToleranceSpec], str | None]:

@@ -197,6 +197,8 @@ def _run_info(r: Any, data: RunData | None) -> list[tuple[str, str]]:
     sim = f"{r.simulated_s:.1f} s" if r.simulated_s is not None else "?"
     out = [("run directory", str(r.path)), ("scenario", r.scenario), ("seed", str(r.seed)),
            ("verdict", r.verdict), ("simulated", sim), ("digest", r.digest[:16])]
+    if r.replay is not None:
+        out.insert(1, ("replay", r.replay))
     if data is not None and data.summary.get("systems_under_test"):
         out.append(("systems under test", ", ".join(data.summary["systems_under_test"])))
     return out
@@ -258,6 +260,7 @@ def render_diff(result: DiffResult, *, data_a: RunData | None = None,
         "toc": toc,
         "problems": problems,
         "notes": notes,
+        "replay_notes": list(result.replay_notes),
         "runs": [{"key": st.key, "label": st.label, "color": st.color,
                   "info": _run_info(r, d)}
                  for r, d, st in ((result.a, a, BASELINE), (result.b, b, CANDIDATE))],

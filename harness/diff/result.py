@@ -149,6 +149,19 @@ class RunInfo:
     verdict: str
     simulated_s: float | None
     digest: str
+    replay: str | None = None  # harness.summary.replay_note: what the run replays, changed
+
+    def describe_replay(self, label: str, other: RunInfo, other_label: str) -> str | None:
+        """``B is an open-loop replay of A (RUN; changed: …)`` when this run replays
+        ``other``, ``B is an open-loop replay of RUN (changed: …)`` when it replays another
+        run, None when it is no replay."""
+        if self.replay is None:
+            return None
+        of = f"open-loop replay of {other.path.resolve()} "
+        if self.replay.startswith(of):
+            return (f"{label} is an open-loop replay of {other_label} ({other.path.resolve()}; "
+                    f"{self.replay[len(of) + 1:]}")
+        return f"{label} is an {self.replay}"
 
 
 @dataclass(frozen=True)
@@ -171,6 +184,14 @@ class DiffResult:
     @property
     def exit_code(self) -> int:
         return 0 if self.equal else 1
+
+    @property
+    def replay_notes(self) -> tuple[str, ...]:
+        """What either run replays and what the replay changed (``B is an open-loop replay
+        of A (…; changed: --set …)``); empty when neither is a replay."""
+        notes = (self.b.describe_replay("B", self.a, "A"),
+                 self.a.describe_replay("A", self.b, "B"))
+        return tuple(n for n in notes if n is not None)
 
     @property
     def differing(self) -> tuple[TopicDiff, ...]:

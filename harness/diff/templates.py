@@ -70,6 +70,7 @@ DIFF = """<!doctype html>
   <div class="banner-main">
    <h1>{{ a.scenario }} (A, seed {{ a.seed }}) vs {{ b.scenario }} (B, seed {{ b.seed }})</h1>
    <p class="meta">{{ counts | join(" · ") }}</p>
+   {% for n in replay_notes %}<p class="meta replay-note">{{ n }}</p>{% endfor %}
    {% if first %}<div class="first" id="first-divergence" data-topic="{{ first.topic }}"
     data-index="{{ first.index }}" data-path="{{ first.path }}">first divergence:
     {{ first.describe() }}</div>{% endif %}

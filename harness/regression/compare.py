@@ -9,7 +9,9 @@ Each metric gets a status:
 * ``changed``   a metric without a better direction (``direction: none``) moved;
 * ``new``       not in the baseline;
 * ``missing``   in the baseline but not produced by this run (counts as a regression: a
-  metric that silently disappears must not pass).
+  metric that silently disappears must not pass);
+* ``not_compared`` the baseline was recorded with another configuration (verdict MISMATCH):
+  both values are shown, neither judged (:meth:`Comparison.not_compared`).
 
 The tolerance for a metric is the scenario's entry for its exact name, else the most specific
 matching glob (``perception.*``), else the default for its unit.
@@ -20,7 +22,7 @@ from __future__ import annotations
 import fnmatch
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 from harness.metrics.types import MetricResult
@@ -29,7 +31,7 @@ from harness.scenario.schema import ToleranceSpec
 
 __all__ = ["DEFAULT_TOLERANCES", "Comparison", "MetricComparison", "compare", "tolerance_for"]
 
-Status = Literal["ok", "regressed", "improved", "changed", "new", "missing"]
+Status = Literal["ok", "regressed", "improved", "changed", "new", "missing", "not_compared"]
 
 # Per unit: (absolute, relative). The larger of the two applies.
 DEFAULT_TOLERANCES: dict[str, ToleranceSpec] = {
@@ -68,6 +70,9 @@ class MetricComparison:
                    "produced by this run"
         if self.status == "new":
             return f"{self.name}: {fmt(self.value)} {self.unit} (not in the baseline)"
+        if self.status == "not_compared":
+            return (f"{self.name}: {fmt(self.value)} {self.unit}, baseline "
+                    f"{fmt(self.baseline)} {self.unit} of another configuration — not compared")
         better = {"lower": "lower is better", "higher": "higher is better"}.get(
             self.direction, "no better direction")
         return (f"{self.name}: {fmt(self.value)} {self.unit} vs baseline {fmt(self.baseline)} "
@@ -86,6 +91,12 @@ class Comparison:
     @property
     def regressed(self) -> bool:
         return bool(self.regressions)
+
+    def not_compared(self) -> Comparison:
+        """The same rows, judged by nothing: the baseline is of another configuration, so
+        no metric regressed, improved or held against it (no delta either)."""
+        return Comparison(tuple(replace(e, delta=None, status="not_compared")
+                                for e in sorted(self.entries, key=lambda e: e.name)))
 
     def counts(self) -> dict[str, int]:
         out: dict[str, int] = {}

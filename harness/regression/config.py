@@ -28,7 +28,7 @@ from harness.scenario import FORMAT_VERSION, scenario_from_mapping, scenario_to_
 __all__ = ["EXCLUDED", "comparable_config", "config_differences", "with_defaults"]
 
 #: Top-level keys, and ``scoring`` sub-keys, that do not make two configurations different.
-EXCLUDED = frozenset({"format_version", "name", "description", "baseline",
+EXCLUDED = frozenset({"format_version", "name", "description", "baseline", "baselines",
                       "systems_under_test", "recording", "output", "sweep", "ros2",
                       "rtsp"})
 EXCLUDED_SCORING = frozenset({"tolerances", "health"})

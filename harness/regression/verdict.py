@@ -8,7 +8,9 @@ there is no baseline to compare with, or the baseline holds none of the run's me
 UNSCORED (nothing was scored: the run was recorded but not judged, exit 1), PASS (exit 0).
 
 PASS needs something compared that held: at least one metric compared with its baseline
-value and none regressed.
+value and none regressed. RECORDED (exit 0) is the verdict of a scenario that says it only
+records (``scoring: {record_only: true}``) and whose health gates all held: nothing was
+compared, on purpose, and the verdict says so instead of PASS.
 """
 
 from __future__ import annotations
@@ -22,11 +24,15 @@ from harness.metrics.safety import NEAR_AT
 from harness.metrics.types import HealthResult, MetricResult
 from harness.regression.compare import Comparison
 
-__all__ = ["GOAL_REACHED", "GOAL_REACHED_AT", "Verdict", "absolute_failures", "decide"]
+__all__ = ["GOAL_REACHED", "GOAL_REACHED_AT", "OK_VERDICTS", "Verdict", "absolute_failures",
+           "decide"]
 
-VerdictName = Literal["PASS", "FAIL", "REGRESSED", "MISMATCH", "UNSCORED", "INVALID"]
-EXIT_CODES: dict[str, int] = {"PASS": 0, "FAIL": 1, "REGRESSED": 1, "MISMATCH": 1,
-                              "UNSCORED": 1, "INVALID": 3}
+VerdictName = Literal["PASS", "RECORDED", "FAIL", "REGRESSED", "MISMATCH", "UNSCORED",
+                      "INVALID"]
+EXIT_CODES: dict[str, int] = {"PASS": 0, "RECORDED": 0, "FAIL": 1, "REGRESSED": 1,
+                              "MISMATCH": 1, "UNSCORED": 1, "INVALID": 3}
+#: the verdicts that exit 0: compared and held, or recorded on purpose with healthy gates
+OK_VERDICTS = ("PASS", "RECORDED")
 #: ``control.goal_reached`` or ``control.<robot>.goal_reached``.
 GOAL_REACHED = re.compile(r"^control\.(?:[^.]+\.)?goal_reached$")
 #: a goal-reached value below this fails the run (the metric is 1 reached, 0 not)
@@ -54,14 +60,19 @@ def absolute_failures(metrics: Sequence[MetricResult]) -> list[str]:
 
 def decide(health: Sequence[HealthResult], metrics: Sequence[MetricResult],
            comparison: Comparison | None, baseline_note: str | None,
-           mismatch: Sequence[str] = ()) -> Verdict:
+           mismatch: Sequence[str] = (), *, record_only: bool = False) -> Verdict:
     """``comparison`` is None when there is no baseline; ``baseline_note`` then says where
     one was looked for and how to bless one. ``mismatch``: the configuration fields in which
     the run differs from the baseline (:func:`~harness.regression.config.config_differences`);
-    any makes the verdict MISMATCH, whatever the metrics say."""
+    any makes the verdict MISMATCH, whatever the metrics say. ``record_only``: the scenario
+    records on purpose (``scoring.record_only``): RECORDED when every health gate held."""
     tripped = [f"health {h.name}: {h.detail}" for h in health if not h.ok]
     if tripped:
         return Verdict("INVALID", 3, tuple(tripped))
+    if record_only:
+        return Verdict("RECORDED", 0, (
+            f"recorded on purpose (scoring.record_only): nothing was scored or compared; "
+            f"{len(health)} health gates held",))
     if mismatch:
         return Verdict("MISMATCH", 1, (
             "not compared: the baseline was recorded with another configuration ("
@@ -83,5 +94,6 @@ def decide(health: Sequence[HealthResult], metrics: Sequence[MetricResult],
     if not metrics:
         return Verdict("UNSCORED", 1, (
             "nothing was scored: the scenario has no scoring block (control, perception or "
-            "safety), so the run was recorded but not compared with anything",))
+            "safety), so the run was recorded but not compared with anything; a scenario "
+            "that only records says so with scoring: {record_only: true}",))
     return Verdict("PASS", 0, ())

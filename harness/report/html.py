@@ -42,6 +42,7 @@ from harness.report.plots import (
 )
 from harness.report.templates import CSS, MACROS, REPORT
 from harness.scenario import Scenario
+from harness.summary import replay_note
 
 __all__ = ["fmt_value", "fmt_windows", "render_report", "write_report"]
 
@@ -113,6 +114,7 @@ def _comparison_row(e: dict[str, Any], data: RunData) -> dict[str, Any]:
         "delta": fmt_value(e.get("delta"), unit if unit != "bool" else "", signed=True),
         "tolerance": "±" + f"{e.get('tolerance', 0):.3g}",
         "status": e.get("status", ""),
+        "status_text": str(e.get("status", "")).replace("_", " "),
         "better": {"lower": "lower is better", "higher": "higher is better"}.get(
             str(direction), ""),
         "when": fmt_windows(metric_windows(e["name"], data)),
@@ -169,6 +171,9 @@ def _headline(data: RunData) -> _Headline:
         text = "The run was interrupted: the scores cover the recorded part only."
     elif s.get("metrics"):
         text = "No baseline to compare with: the metric values are listed below."
+    elif verdict == "RECORDED":
+        text = (f"Recorded on purpose (scoring.record_only): nothing is scored or compared; "
+                f"{n_gates} health gates ok.")
     else:
         text = "This scenario scores no metrics; health gates below."
     return _Headline("none", text=text)
@@ -309,13 +314,9 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
     reasons = [str(r) for r in s.get("reasons", [])]
     baseline = s.get("baseline")
     meta = [f"seed {s.get('seed', '?')}", f"{float(s.get('simulated_s') or 0):.1f} s simulated"]
-    replay_of = s.get("replay_of")
-    if isinstance(replay_of, dict):
-        replaced = ", ".join(f"{k} → {v}" for k, v in (replay_of.get("replaced") or {}).items())
-        meta.insert(0, f"open-loop replay of {replay_of.get('run_dir', '?')}"
-                    + (f" with {replaced}" if replaced else "")
-                    + (f", {len(replay_of.get('overrides') or [])} override(s)"
-                       if replay_of.get("overrides") else ""))
+    replay = replay_note(s)
+    if replay is not None:
+        meta.insert(0, replay)
     if s.get("duration_s") and s.get("simulated_s") is not None and \
             abs(float(s["duration_s"]) - float(s["simulated_s"])) > 1e-6:
         meta[-1] += f" of {float(s['duration_s']):g} s"
@@ -387,6 +388,8 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
         "moments": data.moments,
         "keyframes": kf_rows,
         "comparison": [_comparison_row(e, data) for e in s.get("comparison") or []],
+        "not_compared": all(isinstance(e, dict) and e.get("status") == "not_compared"
+                            for e in s.get("comparison") or []),
         "metrics": [_metric_row(m, data) for m in s.get("metrics", [])],
         "health": s.get("health", []),
         "health_ok": sum(bool(h.get("ok")) for h in s.get("health", [])),

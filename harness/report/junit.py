@@ -26,13 +26,16 @@ def junit_cases(summary: Mapping[str, Any]) -> list[Case]:
     if summary.get("comparison"):
         for e in summary["comparison"]:
             ok = e["status"] not in ("regressed", "missing")
-            cases.append(Case(e["name"], ok, f"{e['status']}: value {e['value']} "
-                              f"baseline {e['baseline']} tolerance {e['tolerance']}"))
+            cases.append(Case(e["name"], ok, f"{e['status'].replace('_', ' ')}: value "
+                              f"{e['value']} baseline {e['baseline']} tolerance "
+                              f"{e['tolerance']}"))
     else:
         for m in summary.get("metrics", []):
             cases.append(Case(m["name"], True, f"{m['value']} {m['unit']} (no baseline)"))
     if summary.get("verdict") in ("FAIL", "UNSCORED", "MISMATCH"):
         cases.append(Case("verdict", False, "; ".join(summary.get("reasons", []))))
+    if summary.get("verdict") == "RECORDED":  # passes, and says that nothing was judged
+        cases.append(Case("verdict", True, "RECORDED: " + "; ".join(summary.get("reasons", []))))
     return cases
 
 

@@ -44,7 +44,7 @@ __all__ = ["SUITE_PAGE_NAME", "VERDICT_ORDER", "render_suite_page", "write_suite
 SUITE_PAGE_NAME = "index.html"
 #: Group verdicts, worst first (the order of the groups table).
 VERDICT_ORDER = ("INVALID", "FLAKY", "MISMATCH", "REGRESSED", "FAIL", "INTERRUPTED",
-                 "UNSCORED", "PASS")
+                 "UNSCORED", "RECORDED", "PASS")
 MAX_KEY = 3
 
 
@@ -491,7 +491,8 @@ def _history_view(h: Any, groups: Sequence[GroupView],
             strip_label = "suite verdict per night"
         note = ("new tonight: no earlier night ran this group" if all_new else
                 "" if rows else "no metric history for this group")
-        out.append(HistoryGroup(g.id, g.verdict, g.verdict != "PASS", note, strip_label,
+        out.append(HistoryGroup(g.id, g.verdict, g.verdict not in ("PASS", "RECORDED"), note,
+                                strip_label,
                                 Markup(verdict_strip(strip, labels)), tuple(rows)))
     warnings = tuple(str(w) for w in h.get("warnings") or [])
     span = (f"{n} nights from {labels[0]} to tonight, {labels[-1]}; each sparkline's y range "

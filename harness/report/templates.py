@@ -11,6 +11,7 @@ __all__ = ["CSS", "MACROS", "REPORT", "SUITE", "VERDICT_COLORS"]
 
 VERDICT_COLORS = {
     "PASS": "#15803d",
+    "RECORDED": "#0f766e",
     "FAIL": "#b91c1c",
     "REGRESSED": "#c2410c",
     "INVALID": "#6d28d9",
@@ -24,7 +25,7 @@ CSS = """
 :root { --fg:#111827; --muted:#6b7280; --line:#e5e7eb; --bg:#ffffff; --soft:#f8fafc;
   --PASS:#15803d; --FAIL:#b91c1c; --REGRESSED:#c2410c; --INVALID:#6d28d9;
   --INTERRUPTED:#475569; --UNSCORED:#a16207;
-  --MISMATCH:#0e7490; --FLAKY:#be185d; }
+  --MISMATCH:#0e7490; --FLAKY:#be185d; --RECORDED:#0f766e; }
 * { box-sizing: border-box; }
 html, body { margin:0; padding:0; background:var(--bg); color:var(--fg);
   font: 14px/1.4 system-ui, -apple-system, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif; }
@@ -38,7 +39,7 @@ code, pre, .mono { font-family: ui-monospace, "DejaVu Sans Mono", Menlo, Consola
 .banner.v-REGRESSED { background:var(--REGRESSED); } .banner.v-INVALID { background:var(--INVALID); }
 .banner.v-INTERRUPTED { background:var(--INTERRUPTED); }
 .banner.v-UNSCORED { background:var(--UNSCORED); } .banner.v-MISMATCH { background:var(--MISMATCH); }
-.banner.v-FLAKY { background:var(--FLAKY); }
+.banner.v-FLAKY { background:var(--FLAKY); } .banner.v-RECORDED { background:var(--RECORDED); }
 .verdict-word { font-size:30px; font-weight:800; letter-spacing:.04em; min-width:210px;
   line-height:1.1; }
 .verdict-word small { display:block; font-size:12px; font-weight:500; letter-spacing:0;
@@ -82,6 +83,8 @@ tr.st-improved td { background:#f0fdf4; }
 .b-v-UNSCORED { background:var(--UNSCORED); color:#fff; }
 .b-v-MISMATCH { background:var(--MISMATCH); color:#fff; }
 .b-v-FLAKY { background:var(--FLAKY); color:#fff; }
+.b-v-RECORDED { background:var(--RECORDED); color:#fff; }
+.b-not_compared { background:#f1f5f9; color:#64748b; font-style:italic; }
 .headline table { font-size:13.5px; }
 .headline td, .headline th { padding:2px 8px; }
 figure.panel { margin:6px 0 10px 0; }
@@ -347,7 +350,10 @@ REPORT = """<!doctype html>
 {% endif %}
 
 <section id="metrics">
-{% if comparison %}
+{% if comparison and not_compared %}
+ <h2>All metrics beside a baseline of another configuration, not compared <span class="count">({{ comparison | length }})</span></h2>
+ {{ comparison_table(comparison, "metrics-table") }}
+{% elif comparison %}
  <h2>All metrics against the baseline <span class="count">({{ comparison | length }})</span></h2>
  {{ comparison_table(comparison, "metrics-table") }}
 {% elif not metrics %}
@@ -429,7 +435,7 @@ MACROS = """
  <td class="name" title="{{ e.detail }}">{{ e.name }}</td><td class="num">{{ e.value }}</td>
  <td class="num">{{ e.baseline }}</td><td class="num">{{ e.delta }}</td>
  <td class="num">{{ e.tolerance }}</td>
- <td><span class="badge b-{{ e.status }}">{{ e.status }}</span> <span class="note">{{ e.better }}</span></td>
+ <td><span class="badge b-{{ e.status }}">{{ e.status_text }}</span> <span class="note">{{ e.better }}</span></td>
  <td class="when">{{ e.when }}</td></tr>
 {% endfor %}</tbody></table>
 {%- endmacro %}

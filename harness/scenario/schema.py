@@ -695,13 +695,17 @@ class HealthScoring:
 
 @dataclass(frozen=True)
 class ScoringSpec:
-    """What to score and how much each metric may move (keys: metric names or globs)."""
+    """What to score and how much each metric may move (keys: metric names or globs).
+    ``record_only``: the scenario records on purpose and scores nothing (no control,
+    perception or safety block): its verdict is RECORDED, exit 0, when every health gate
+    holds (without it, a scenario that scores nothing is UNSCORED, exit 1)."""
 
     control: ControlScoring | tuple[ControlScoring, ...] | None = None
     perception: PerceptionScoring | None = None
     safety: SafetyScoring | None = None
     health: HealthScoring = HealthScoring()
     tolerances: dict[str, ToleranceSpec] = field(default_factory=dict)
+    record_only: bool = False
 
     @property
     def control_blocks(self) -> tuple[ControlScoring, ...]:
@@ -819,6 +823,9 @@ class Scenario:
     ros2: Ros2Spec = Ros2Spec()
     rtsp: RtspSpec = RtspSpec()
     baseline: str | None = None  # which baselines/<name>.json to compare with (default: name)
+    # The baselines folder, relative to the scenario file (default: found from the scenario
+    # file's folder, harness.api.baselines_dir).
+    baselines: str | None = None
     # Parameters ``srr suite`` sweeps: ``--set`` path → list of values or {from, to, step}
     # (checked by harness.suite.sweep; ``srr run`` runs the scenario as written).
     sweep: dict[str, Any] = field(default_factory=dict)

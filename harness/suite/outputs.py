@@ -46,6 +46,9 @@ def _case(ts: ET.Element, run: RunOutcome, group: GroupResult) -> None:
         ET.SubElement(tc, "failure", type="flaky",
                       message=f"FLAKY: {group.reasons[0] if group.reasons else ''}"[:2000]
                       ).text = detail
+    elif run.verdict == "RECORDED":
+        ET.SubElement(tc, "system-out").text = (
+            f"RECORDED ({'; '.join(run.reasons)}); report: {run.report or '—'}")
     elif run.verdict != "PASS":
         ET.SubElement(tc, "failure", type=run.verdict,
                       message=f"{run.verdict}: {'; '.join(run.reasons)}"[:2000]).text = text
@@ -69,7 +72,7 @@ def write_junit_suite(path: Path, name: str, groups: Sequence[GroupResult]) -> N
             _case(ts, r, g)
         counts = {
             "tests": len(runs),
-            "failures": sum(r.verdict not in ("PASS", "INVALID", "INTERRUPTED") or (
+            "failures": sum(r.verdict not in ("PASS", "RECORDED", "INVALID", "INTERRUPTED") or (
                 g.flaky and r.verdict not in ("INVALID", "INTERRUPTED")) for r, g in runs),
             "errors": sum(r.verdict == "INVALID" for r, _ in runs),
             "skipped": sum(r.verdict == "INTERRUPTED" for r, _ in runs),

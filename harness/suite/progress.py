@@ -20,6 +20,7 @@ __all__ = ["SuiteProgress", "groups_table"]
 
 _STYLE = {
     "PASS": "green",
+    "RECORDED": "green",
     "INVALID": "bold red",
     "FLAKY": "bold magenta",
     "REGRESSED": "bold red",

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from harness.errors import SrrError
+from harness.regression.verdict import OK_VERDICTS
 from harness.suite.plan import RunSpec
 from harness.suite.stats import describe
 from harness.summary import read_summary
@@ -28,7 +29,7 @@ __all__ = ["GROUP_ORDER", "GroupResult", "RunOutcome", "crash_reason", "group_ru
 
 #: Worst first. FLAKY and INVALID are group verdicts a single run can make.
 GROUP_ORDER = ("INVALID", "FLAKY", "MISMATCH", "REGRESSED", "FAIL", "INTERRUPTED", "UNSCORED",
-               "PASS")
+               "RECORDED", "PASS")
 _STATUS_ORDER = ("missing", "regressed", "new", "changed", "improved", "ok")
 _BAND_ORDER = ("FAIL", "NEAR", "PASS")
 
@@ -161,7 +162,7 @@ class GroupResult:
 
     @property
     def exit_code(self) -> int:
-        return {"PASS": 0, "INVALID": 3, "INTERRUPTED": 130}.get(self.verdict, 1)
+        return {"PASS": 0, "RECORDED": 0, "INVALID": 3, "INTERRUPTED": 130}.get(self.verdict, 1)
 
     def to_json(self) -> dict[str, Any]:
         first = self.runs[0].spec
@@ -259,9 +260,9 @@ def group_runs(outcomes: Sequence[RunOutcome], out_root: Path) -> tuple[GroupRes
 
 def suite_exit_code(groups: Sequence[GroupResult], interrupted: bool) -> int:
     """130 interrupted; 3 any INVALID; 1 any regression, failure, mismatch or flaky; 0 all
-    PASS (an empty suite is not a pass)."""
+    PASS or RECORDED (an empty suite is not a pass)."""
     if interrupted:
         return 130
     if not groups or any(g.verdict == "INVALID" for g in groups):
         return 3
-    return 0 if all(g.verdict == "PASS" for g in groups) else 1
+    return 0 if all(g.verdict in OK_VERDICTS for g in groups) else 1

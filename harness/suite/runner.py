@@ -124,8 +124,14 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
     if bless_reason is not None and not interrupted:
         for g in groups:
             if g.verdict not in ("INVALID", "FLAKY", "INTERRUPTED") and g.runs[0].run_dir:
+                # the folder as this process finds it: a run on a Ray cluster judged against
+                # the copy of the project shipped to its node, whose path it recorded
+                spec = g.runs[0].spec
+                here = baselines if baselines is not None else api.baselines_dir(
+                    spec.scenario_file, None, api.load(spec.scenario_file,
+                                                       overrides=spec.overrides))
                 blessed.append(api.bless(out_dir / g.runs[0].run_dir, bless_reason,
-                                         baselines=baselines))
+                                         baselines=here))
     write_outputs(out_dir, summary, ranked)
     return SuiteResult(out_dir, verdict, code, summary, tuple(ranked), tuple(blessed))
 

@@ -18,7 +18,7 @@ from typing import Any
 __all__ = ["GROUP_ORDER", "FakeRun", "SuiteBuilder", "stats_of"]
 
 GROUP_ORDER = ("INVALID", "FLAKY", "MISMATCH", "REGRESSED", "FAIL", "INTERRUPTED", "UNSCORED",
-               "PASS")
+               "RECORDED", "PASS")
 T95 = {2: 12.706, 3: 4.303, 4: 3.182, 5: 2.776, 6: 2.571}
 UNITS = {"safety.match_rate": ("%", "higher", "safety"),
          "safety.under_mute_pct": ("%", "lower", "safety"),
