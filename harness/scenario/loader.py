@@ -22,12 +22,14 @@ from harness.errors import ScenarioError, SrrError
 from harness.scenario.schema import (
     FORMAT_VERSION,
     CameraRecordSpec,
+    ControlScoring,
     DiffDriveControl,
     ForkliftControl,
     GraphSpec,
     H264Spec,
     RobotSpec,
     Scenario,
+    ScoringSpec,
     WorldSpec,
 )
 
@@ -718,7 +720,19 @@ def _check_graphs(sc: Scenario, v: _Validator) -> None:
 
 
 def _check_control_scoring(sc: Scenario, v: _Validator) -> None:
-    """One control block per robot when ``scoring.control`` is a list."""
+    """One control block per robot when ``scoring.control`` is a list; a block (or the
+    safety block) that leaves ``robot`` out needs exactly one enabled robot to default to."""
+    robots = [r.name for r in sc.robots if r.enabled]
+    c = sc.scoring.control
+    blocks = [] if c is None else [("scoring.control", c)] if not isinstance(c, tuple) else \
+        [(f"scoring.control[{i}]", b) for i, b in enumerate(c)]
+    if sc.scoring.safety is not None:
+        blocks.append(("scoring.safety", sc.scoring.safety))
+    for where, block in blocks:
+        if block.enabled and not block.robot and len(robots) != 1:
+            v.fail(f"{where}.robot", "required: the scene has "
+                   f"{len(robots) or 'no'} enabled robots ({', '.join(robots) or 'none'}), "
+                   "so there is no single robot to default to")
     if not isinstance(sc.scoring.control, tuple):
         return
     seen: dict[str, int] = {}
@@ -758,11 +772,25 @@ def resolve_names(sc: Scenario) -> Scenario:
             sut_ns = by_name[sut.robot].ns if sut.robot in by_name else ""
         suts.append(dataclasses.replace(sut, namespace=sut_ns))
     enabled = [r.name for r in robots if r.enabled]
-    graphs = tuple(dataclasses.replace(
-        g, name=graph_name(g), robot=g.robot or (enabled[0] if len(enabled) == 1 else ""))
-        for g in sc.graphs)
+    only = enabled[0] if len(enabled) == 1 else ""
+    graphs = tuple(dataclasses.replace(g, name=graph_name(g), robot=g.robot or only)
+                   for g in sc.graphs)
     return dataclasses.replace(sc, robots=tuple(robots), systems_under_test=tuple(suts),
-                               graphs=graphs)
+                               graphs=graphs, scoring=_default_scored_robot(sc.scoring, only))
+
+
+def _default_scored_robot(scoring: ScoringSpec, only: str) -> ScoringSpec:
+    """``scoring.control`` blocks and ``scoring.safety`` that leave ``robot`` out score the
+    only enabled robot ``only``, as ``graphs:`` entries do."""
+    def fill(block: ControlScoring) -> ControlScoring:
+        return dataclasses.replace(block, robot=block.robot or only)
+
+    c = scoring.control
+    control = None if c is None else fill(c) if not isinstance(c, tuple) else \
+        tuple(fill(b) for b in c)
+    s = scoring.safety
+    safety = None if s is None else dataclasses.replace(s, robot=s.robot or only)
+    return dataclasses.replace(scoring, control=control, safety=safety)
 
 
 def _check_workers_and_zones(sc: Scenario, v: _Validator) -> None:

@@ -653,10 +653,11 @@ class ControlScoring:
     """Score a robot's drive against a route (needs ``/gt/<robot>/tf``, i.e. ``srr_gt``).
 
     ``scoring.control`` is one block (metrics ``control.<metric>``) or a list of blocks, one
-    per robot (metrics ``control.<robot>.<metric>``)."""
+    per robot (metrics ``control.<robot>.<metric>``). ``robot`` left out: the only enabled
+    robot (a scene with several must name it)."""
 
     enabled: bool = True
-    robot: str = "forklift"
+    robot: str = ""
     route: str = ""
     goal_tolerance: float = num(0.5, 0.0, 100.0, lo_open=True)
 
@@ -676,10 +677,11 @@ class PerceptionScoring:
 
 @dataclass(frozen=True)
 class SafetyScoring:
-    """The forklift SIL's mute scoring: expected muted state vs ``/safety/is_muted``."""
+    """The forklift SIL's mute scoring: expected muted state vs ``/safety/is_muted``.
+    ``robot`` left out: the only enabled robot (a scene with several must name it)."""
 
     enabled: bool = True
-    robot: str = "forklift"
+    robot: str = ""
     muted_topic: str = "/safety/is_muted"
     min_window_s: float = num(0.5, 0.0, 60.0)
 
