@@ -54,3 +54,45 @@ def test_control_scoring_without_robot_in_a_two_robot_scene_is_refused(
     assert len(err.splitlines()) == 1
     assert f"{path}: scoring.control.robot: " in err
     assert "tb3" in err and "other" in err
+
+
+PLUGINS = """\
+format_version: 1
+name: t
+duration: 2
+robots:
+  - {name: forklift, model: forklift}
+routes:
+  r: {waypoints: [[0, 0], [1, 0]]}
+zones:
+  loading_roi: [[10, -2], [14, -2], [14, 2], [10, 2]]
+  trailer_tripwire: {a: [12, -1], b: [12, 1]}
+systems_under_test:
+  - {name: sut, plugin: "harness.sut.PLUGIN", params: {PARAMS}}
+"""
+
+
+@pytest.mark.parametrize(("plugin", "params", "field", "words"), [
+    ("safety_monitor:SafetyMonitor", "rate_hz: 0", "rate_hz", "must be > 0"),
+    ("safety_monitor:SafetyMonitor", "reaction_delay: -1", "reaction_delay", "must be >= 0"),
+    ("safety_monitor:SafetyMonitor", "inside: up", "inside", "expected one of"),
+    ("route_follower:RouteFollower", "route: r, rate_hz: 0", "rate_hz", "must be > 0"),
+    ("route_follower:RouteFollower", "route: r, slow_radius: 0", "slow_radius",
+     "must be > 0"),
+    ("route_follower:RouteFollower", "route: r, speed: -1", "speed", "must be > 0"),
+    ("perception:DepthPeopleTracker", "cameras: [], cell: 0", "cell", "must be > 0"),
+    ("perception:DepthPeopleTracker", "cameras: [], pixel_stride: 0", "pixel_stride",
+     "must be >= 1"),
+    ("perception:DepthPeopleTracker", "cameras: [], z_max: 0.1", "z_max", "must be above"),
+    ("teleop:ScriptedTeleop", "segments: [{duration: 1}], rate_hz: 0", "rate_hz",
+     "must be > 0"),
+])
+def test_plugin_parameter_out_of_range_is_one_line_exit_2(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], plugin: str, params: str,
+        field: str, words: str) -> None:
+    path = _write(tmp_path, PLUGINS.replace("PLUGIN", plugin).replace("PARAMS", params))
+    code, _out, err = _validate(capsys, path)
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err
+    assert f"{path}: systems_under_test[0].params.{field}: " in err, err
+    assert words in err, err
