@@ -20,6 +20,7 @@ import yaml
 
 from harness.errors import ScenarioError, SrrError
 from harness.scenario.schema import (
+    BUILTIN_JOINTS,
     FORMAT_VERSION,
     CameraRecordSpec,
     ControlScoring,
@@ -513,6 +514,8 @@ def _check_robots(sc: Scenario, v: _Validator) -> None:
                        "path of the robot's model file)")
             if not model.path.strip():
                 v.fail(f"robots[{i}].model.{model.kind}", "must not be empty")
+        else:
+            _check_builtin_joints(v, f"robots[{i}].control", robot)
         if robot.namespace is not None:
             try:
                 validate_namespace(robot.namespace)
@@ -534,6 +537,27 @@ def _check_robots(sc: Scenario, v: _Validator) -> None:
                     v.fail(f"robots[{i}].articulation_prim",
                            f"{inner.prim} lies inside {outer.prim}, the prim of robots[{k}] "
                            f"({outer.name})")
+
+
+def _check_builtin_joints(v: _Validator, where: str, robot: RobotSpec) -> None:
+    """A built-in model's ``control:`` names joints it has: the TurtleBot3's two wheel
+    joints; the forklift's swivel and drive joints, distinct from each other and from its
+    front wheels' joints."""
+    control, fixed = robot.control, BUILTIN_JOINTS.get(str(robot.model), ())
+    if isinstance(control, DiffDriveControl):
+        unknown = [j for j in control.joint_names if j not in fixed]
+        if unknown:
+            v.fail(f"{where}.joint_names", f"{unknown} are not joints of {robot.model} "
+                   f"(it has {list(fixed)})")
+    elif isinstance(control, ForkliftControl):
+        for sub, name in (("swivel_joint", control.swivel_joint),
+                          ("drive_joint", control.drive_joint)):
+            if name in fixed:
+                v.fail(f"{where}.{sub}", f"{name!r} is a front wheel joint of the forklift; "
+                       "name the swivel and drive joints otherwise")
+        if control.swivel_joint == control.drive_joint:
+            v.fail(f"{where}.drive_joint", f"{control.drive_joint!r} is also the swivel "
+                   "joint: the two joints need distinct names")
 
 
 def _check_cameras(sc: Scenario, v: _Validator) -> None:

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 __all__ = [
+    "BUILTIN_JOINTS",
     "FORMAT_VERSION",
     "ROBOT_MODELS",
     "CameraRecordSpec",
@@ -59,6 +60,12 @@ __all__ = [
 
 FORMAT_VERSION = 1
 ROBOT_MODELS = ("forklift", "turtlebot3_waffle_pi")
+#: The joints a built-in model always has, whatever its ``control:`` names (the forklift's
+#: swivel and drive joints are named by its ``control:`` block; the TurtleBot3 has only these).
+BUILTIN_JOINTS: dict[str, tuple[str, ...]] = {
+    "forklift": ("front_left_wheel_joint", "front_right_wheel_joint"),
+    "turtlebot3_waffle_pi": ("wheel_left_joint", "wheel_right_joint"),
+}
 
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]

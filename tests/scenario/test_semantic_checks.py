@@ -96,3 +96,21 @@ def test_plugin_parameter_out_of_range_is_one_line_exit_2(
     assert len(err.splitlines()) == 1, err
     assert f"{path}: systems_under_test[0].params.{field}: " in err, err
     assert words in err, err
+
+
+@pytest.mark.parametrize(("robot", "field", "words"), [
+    ("{name: tb3, model: turtlebot3_waffle_pi, control: {joint_names: ['ñ/é', "
+     "wheel_right_joint]}}", "robots[0].control.joint_names", "are not joints of"),
+    ("{name: fl, model: forklift, control: {drive_joint: back_wheel_swivel}}",
+     "robots[0].control.drive_joint", "distinct"),
+    ("{name: fl, model: forklift, control: {swivel_joint: front_left_wheel_joint}}",
+     "robots[0].control.swivel_joint", "front wheel joint"),
+])
+def test_builtin_robot_joint_names_are_checked_against_the_file(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], robot: str, field: str,
+        words: str) -> None:
+    path = _write(tmp_path, f"format_version: 1\nname: t\nduration: 2\nrobots:\n  - {robot}\n")
+    code, _out, err = _validate(capsys, path)
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err
+    assert f"{path}: {field}: " in err and words in err, err
