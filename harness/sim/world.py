@@ -45,6 +45,7 @@ from harness.sim.geometry import FloatArray, quat_from_mat, quat_from_rpy_deg
 from harness.sim.prims import PrimKind, PrimRef, PrimTable
 from harness.sim.render import apply_render_settings
 from harness.sim.robots import ActuatorMode, ModelSource, RobotBuild, add_robot
+from harness.sim.layout import check_layout
 from harness.sim.robots.model_file import file_digest
 from harness.sim.sensors import MountedSensors, add_robot_sensors
 from harness.sim.warehouse import (
@@ -307,6 +308,7 @@ class World:
         to the include that holds the robot or the world) and errors about them name it;
         ``environ`` (default: the process environment) holds ``SRR_PACKAGE_PATH`` /
         ``ROS_PACKAGE_PATH``."""
+        check_layout(scenario, source)
         prims = PrimTable()
         workers = plan_workers(scenario)
         env = os.environ if environ is None else environ

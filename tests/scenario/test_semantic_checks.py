@@ -114,3 +114,57 @@ def test_builtin_robot_joint_names_are_checked_against_the_file(
     assert code == 2, err
     assert len(err.splitlines()) == 1, err
     assert f"{path}: {field}: " in err and words in err, err
+
+
+ROOM = """\
+format_version: 1
+name: t
+duration: 2
+world: {size: [30, 20]}
+robots:
+  - {name: forklift, model: forklift, spawn: {position: [0, 0, 0]}}
+"""
+
+
+@pytest.mark.parametrize(("change", "field", "words"), [
+    ("  - {name: far, model: forklift, spawn: {position: [40, 0, 0]}}\n",
+     "robots[1].spawn.position", "(40, 0) is outside the 30 x 20 m room"),
+    ("workers:\n  - {route: [[0, 5], [0, 30]]}\n", "workers[0].route[1]",
+     "(0, 30) is outside"),
+    ("cameras:\n  - {name: cam, spawn: {position: [-20, 0, 3]}, outputs: [rgb]}\n",
+     "cameras[0].spawn.position", "(-20, 0) is outside"),
+])
+def test_things_placed_outside_the_world_are_refused(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], change: str, field: str,
+        words: str) -> None:
+    path = _write(tmp_path, ROOM + change)
+    code, _out, err = _validate(capsys, path)
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err
+    assert f"{path}: {field}: " in err and words in err, err
+
+
+def test_inside_the_trailer_is_inside_the_world(tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    """The default trailer reaches from x = 12 to 24 beyond the east wall (x = 15): a robot
+    and a worker in it stand on the floor."""
+    path = _write(tmp_path, ROOM.replace("[0, 0, 0]", "[20, 0, 0]")
+                  + "workers:\n  - {route: [[10, 0], [22, 0.5]]}\n")
+    code, _out, err = _validate(capsys, path)
+    assert code == 0, err
+
+
+@pytest.mark.parametrize(("world", "field", "words"), [
+    ("{size: [10, 10]}", "world.shelves[0]", "a default shelf"),
+    ("{size: [10, 10], shelves: []}", "world.dock.position", "the default dock"),
+    ("{size: [10, 10], shelves: [{position: [4, 0]}]}", "world.shelves[0]",
+     "reaches outside the 10 x 10 m room"),
+])
+def test_shelves_and_dock_outside_a_smaller_room_are_refused(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], world: str, field: str,
+        words: str) -> None:
+    path = _write(tmp_path, ROOM.replace("{size: [30, 20]}", world))
+    code, _out, err = _validate(capsys, path)
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err
+    assert f"{path}: {field}: " in err and words in err, err
