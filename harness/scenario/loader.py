@@ -29,6 +29,7 @@ from harness.scenario.schema import (
     GraphSpec,
     H264Spec,
     RobotSpec,
+    SafetyScoring,
     Scenario,
     ScoringSpec,
     WorldSpec,
@@ -748,7 +749,8 @@ def _check_control_scoring(sc: Scenario, v: _Validator) -> None:
     safety block) that leaves ``robot`` out needs exactly one enabled robot to default to."""
     robots = [r.name for r in sc.robots if r.enabled]
     c = sc.scoring.control
-    blocks = [] if c is None else [("scoring.control", c)] if not isinstance(c, tuple) else \
+    blocks: list[tuple[str, ControlScoring | SafetyScoring]] = \
+        [] if c is None else [("scoring.control", c)] if not isinstance(c, tuple) else \
         [(f"scoring.control[{i}]", b) for i, b in enumerate(c)]
     if sc.scoring.safety is not None:
         blocks.append(("scoring.safety", sc.scoring.safety))

@@ -99,9 +99,9 @@ def check_layout(scenario: Scenario, source: str = "<scenario>") -> None:
         if robot.enabled and not _on_floor(world, p):
             fail(f"robots[{i}].spawn.position", f"({p[0]:g}, {p[1]:g}) is {_where(world)}")
     for i, worker in enumerate(scenario.workers):
-        for j, p in enumerate(worker.route):
-            if worker.enabled and not _on_floor(world, p):
-                fail(f"workers[{i}].route[{j}]", f"({p[0]:g}, {p[1]:g}) is {_where(world)}")
+        for j, (x, y) in enumerate(worker.route):
+            if worker.enabled and not _on_floor(world, (x, y)):
+                fail(f"workers[{i}].route[{j}]", f"({x:g}, {y:g}) is {_where(world)}")
     for i, cam in enumerate(scenario.cameras):
         p = cam.spawn.position
         if cam.enabled and not _on_floor(world, p):

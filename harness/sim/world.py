@@ -42,10 +42,10 @@ from harness.scenario.schema import Scenario, WorldSpec
 from harness.sim.cameras import add_fixed_camera, world_convention_quat
 from harness.sim.footprints import Footprint
 from harness.sim.geometry import FloatArray, quat_from_mat, quat_from_rpy_deg
+from harness.sim.layout import check_layout
 from harness.sim.prims import PrimKind, PrimRef, PrimTable
 from harness.sim.render import apply_render_settings
 from harness.sim.robots import ActuatorMode, ModelSource, RobotBuild, add_robot
-from harness.sim.layout import check_layout
 from harness.sim.robots.model_file import file_digest
 from harness.sim.sensors import MountedSensors, add_robot_sensors
 from harness.sim.warehouse import (
