@@ -61,7 +61,14 @@ from harness.regression.reference import reference_path
 from harness.replay import Playback, Replay
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
-from harness.scenario import Scenario, SutSpec, load_scenario, parse_override, scenario_to_mapping
+from harness.scenario import (
+    Scenario,
+    SutSpec,
+    load_scenario,
+    parse_override,
+    rate_warnings,
+    scenario_to_mapping,
+)
 from harness.scoring import Scores, check_scoring, scenario_frames, score_frames
 from harness.sim.world_file import map_json
 from harness.summary import read_summary
@@ -231,7 +238,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
             raise SrrError(f"--foxglove: the live view serves ROS 2 messages, and this run "
                            f"records ROS 1 ({output.because})")
         plan = sim.plan()
-        warnings = [*check_wiring(plan, scenario, source),
+        warnings = [*rate_warnings(scenario, source), *check_wiring(plan, scenario, source),
                     *check_output_topics(output, plan.topics, scenario, source)]
         # After the plan, so the server advertises every topic the run will publish at once.
         view = (LiveView.start(live, topics={t.topic: t.msgtype for t in plan.topics
@@ -593,7 +600,7 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     try:
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         plan = sim.plan()
-        return (*check_wiring(plan, scenario, source),
+        return (*rate_warnings(scenario, source), *check_wiring(plan, scenario, source),
                 *check_output_topics(output, plan.topics, scenario, source), *busy)
     finally:
         sim.close()

@@ -33,10 +33,12 @@ from harness.scenario.schema import (
     Scenario,
     ScoringSpec,
     WorldSpec,
+    gated_rate,
 )
 
-__all__ = ["apply_overrides", "graph_name", "load_scenario", "parse_override", "resolve_names",
-           "scenario_from_mapping", "scenario_to_mapping", "validate_dataclass"]
+__all__ = ["RATE_TOLERANCE", "apply_overrides", "graph_name", "load_scenario", "parse_override",
+           "rate_warnings", "resolve_names", "scenario_from_mapping", "scenario_to_mapping",
+           "sensor_rates", "validate_dataclass"]
 
 T = typing.TypeVar("T")
 
@@ -438,6 +440,60 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
     _check_graphs(sc, v)
     _check_control_scoring(sc, v)
     _check_output(sc, v)
+    _check_rates(sc, v)
+
+
+#: How far (relative) the rate a sensor really gets may be from the rate it asks for before
+#: the scenario is refused; closer, ``srr validate`` warns (:func:`rate_warnings`).
+RATE_TOLERANCE = 0.10
+
+
+def sensor_rates(sc: Scenario) -> list[tuple[str, float, float]]:
+    """(field, rate asked for, rate it really gets) of every sensor a built-in graph
+    publishes behind a simulation gate: a sensor publishes every ``gate_step``-th tick, so
+    only ``tick_hz / n`` is possible (:func:`~harness.scenario.schema.gated_rate`)."""
+    hz = sc.physics.tick_hz
+    out: list[tuple[str, float, float]] = []
+    for i, robot in enumerate(sc.robots):
+        if not robot.enabled:
+            continue
+        s = robot.sensors
+        for kind, spec in (("camera", s.camera), ("lidar", s.lidar), ("imu", s.imu)):
+            if spec is not None and spec.enabled and spec.graph:
+                out.append((f"robots[{i}].sensors.{kind}.fps", spec.fps,
+                            gated_rate(hz, spec.fps)))
+    for i, cam in enumerate(sc.cameras):
+        if cam.enabled and cam.outputs:
+            out.append((f"cameras[{i}].fps", cam.fps, gated_rate(hz, cam.fps)))
+    if sc.rtsp.enabled and any(c.enabled and c.port is not None for c in sc.cameras):
+        out.append(("rtsp.fps", sc.rtsp.fps, gated_rate(hz, sc.rtsp.fps)))
+    return out
+
+
+def _possible_rates(tick_hz: int) -> str:
+    return ", ".join(f"{tick_hz / n:.4g}" for n in range(1, 6))
+
+
+def _rate_message(sc: Scenario, asked: float, real: float) -> str:
+    hz = sc.physics.tick_hz
+    return (f"{asked:g} Hz cannot be given on the {hz} Hz tick (physics.tick_hz): a sensor "
+            f"publishes every n-th tick, so it would publish at {real:.4g} Hz")
+
+
+def _check_rates(sc: Scenario, v: _Validator) -> None:
+    """Refuse a sensor rate the tick cannot give within :data:`RATE_TOLERANCE`."""
+    for field, asked, real in sensor_rates(sc):
+        if abs(real - asked) > RATE_TOLERANCE * asked:
+            v.fail(field, f"{_rate_message(sc, asked, real)}; ask for tick_hz / n "
+                   f"({_possible_rates(sc.physics.tick_hz)}, ... Hz) or change "
+                   "physics.tick_hz")
+
+
+def rate_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """One warning per sensor whose real rate differs (by less than
+    :data:`RATE_TOLERANCE`; more is refused) from the rate it asks for."""
+    return tuple(f"{sc.file_for(field, source)}: {field}: {_rate_message(sc, asked, real)}"
+                 for field, asked, real in sensor_rates(sc) if abs(real - asked) > 1e-9)
 
 
 def _check_output(sc: Scenario, v: _Validator) -> None:

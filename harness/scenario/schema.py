@@ -56,6 +56,8 @@ __all__ = [
     "WorldModel",
     "WorldSpec",
     "ZonesSpec",
+    "gate_step",
+    "gated_rate",
 ]
 
 FORMAT_VERSION = 1
@@ -79,6 +81,18 @@ def _range(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
 def num(default: float | None, lo: float | None = None, hi: float | None = None,
         *, lo_open: bool = False) -> Any:
     return field(default=default, metadata=_range(lo, hi, lo_open=lo_open))
+
+
+def gate_step(tick_hz: int, fps: float) -> int:
+    """A sensor publishes every ``gate_step``-th tick (its SimulationGate's ``step``):
+    ``round(tick_hz / fps)``, >= 1 (seed 001's ``step_size = int(60 / freq)``, rounded
+    instead of truncated)."""
+    return max(1, round(tick_hz / fps))
+
+
+def gated_rate(tick_hz: int, fps: float) -> float:
+    """The rate (Hz) a sensor asked for ``fps`` really publishes at on a ``tick_hz`` tick."""
+    return tick_hz / gate_step(tick_hz, fps)
 
 
 @dataclass(frozen=True)

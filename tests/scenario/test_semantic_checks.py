@@ -168,3 +168,61 @@ def test_shelves_and_dock_outside_a_smaller_room_are_refused(
     assert code == 2, err
     assert len(err.splitlines()) == 1, err
     assert f"{path}: {field}: " in err and words in err, err
+
+
+RATES = """\
+format_version: 1
+name: t
+duration: 3
+physics: {tick_hz: TICK}
+robots:
+  - name: tb3
+    model: turtlebot3_waffle_pi
+    sensors: {imu: {fps: IMU}}
+cameras:
+  - {name: cam, outputs: [rgb], fps: CAM}
+"""
+
+
+def _rates(tick: int, imu: float, cam: float) -> str:
+    return (RATES.replace("TICK", str(tick)).replace("IMU", str(imu))
+            .replace("CAM", str(cam)))
+
+
+@pytest.mark.parametrize(("tick", "imu", "cam", "field", "words"), [
+    (7, 7, 30, "cameras[0].fps", "30 Hz cannot be given on the 7 Hz tick"),
+    (60, 50, 30, "robots[0].sensors.imu.fps", "it would publish at 60 Hz"),
+])
+def test_a_sensor_rate_the_tick_cannot_give_is_refused(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], tick: int, imu: float, cam: float,
+        field: str, words: str) -> None:
+    path = _write(tmp_path, _rates(tick, imu, cam))
+    code, _out, err = _validate(capsys, path)
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err
+    assert f"{path}: {field}: " in err and words in err, err
+
+
+def test_a_sensor_rate_slightly_off_is_warned_about(tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    path = _write(tmp_path, _rates(60, 60, 7))
+    code, _out, err = _validate(capsys, path)
+    assert code == 0, err
+    assert f"warning: {path}: cameras[0].fps: 7 Hz" in err and "6.667 Hz" in err, err
+
+
+def test_the_rate_gate_expects_the_rate_asked_for(tmp_path: Path) -> None:
+    """7 Hz on a 60 Hz tick publishes every 9th tick (6.67 Hz): with rate_fraction 1 the
+    gate must trip, not expect the 6.67 Hz the tick delivers."""
+    import pandas as pd
+
+    from harness.metrics.health import topic_rates
+    from harness.scoring import expected_rates
+
+    sc = load_scenario(_write(tmp_path, _rates(60, 60, 7)))
+    expected = expected_rates(sc)
+    assert expected["/cam_rgb"] == 7.0
+    delivered = pd.DataFrame({"name": ["/cam_rgb"], "count": [20]})  # 180 ticks / 9
+    [gate] = topic_rates(delivered, {"/cam_rgb": expected["/cam_rgb"]}, duration_s=3.0,
+                         min_fraction=1.0)
+    assert not gate.ok, gate.detail
