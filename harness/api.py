@@ -40,7 +40,14 @@ from harness.bus.live import LiveConfig, LiveView
 from harness.bus.recover import RecoveredBag, recover_bag
 from harness.diff import DiffResult, Tolerance
 from harness.diff import diff_runs as _diff_runs
-from harness.diskspace import MB, DiskGuard, FreeSpace, check_free_space, disk_free
+from harness.diskspace import (
+    MB,
+    DiskGuard,
+    FreeSpace,
+    check_free_space,
+    disk_free,
+    large_bag_notice,
+)
 from harness.engine import Simulation
 from harness.errors import BagError, InvalidRunError, RunStopped, ScenarioError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
@@ -229,7 +236,9 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     for the user."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
     _prepare(run_dir)
-    check_free_space(scenario, run_dir, free_space)
+    size_note = large_bag_notice(scenario, check_free_space(scenario, run_dir, free_space))
+    if size_note is not None and notice is not None:
+        notice(size_note)
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(with_ros2_bridge(scenario, run_dir), source=source)
     try:
@@ -600,8 +609,10 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     try:
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         plan = sim.plan()
+        size_note = large_bag_notice(scenario)
         return (*rate_warnings(scenario, source), *check_wiring(plan, scenario, source),
-                *check_output_topics(output, plan.topics, scenario, source), *busy)
+                *check_output_topics(output, plan.topics, scenario, source), *busy,
+                *([f"{source}: {size_note}"] if size_note else []))
     finally:
         sim.close()
 

@@ -226,3 +226,44 @@ def test_the_rate_gate_expects_the_rate_asked_for(tmp_path: Path) -> None:
     [gate] = topic_rates(delivered, {"/cam_rgb": expected["/cam_rgb"]}, duration_s=3.0,
                          min_fraction=1.0)
     assert not gate.ok, gate.detail
+
+
+CAMERA = """\
+format_version: 1
+name: t
+duration: 45
+robots:
+  - {name: forklift, model: forklift}
+cameras:
+  - {name: cam, spawn: {position: [0, 0, 3]}}
+"""
+
+
+def test_a_camera_left_to_its_defaults_publishes_no_point_cloud(tmp_path: Path) -> None:
+    from harness.diskspace import estimate_bag_bytes
+
+    sc = load_scenario(_write(tmp_path, CAMERA))
+    assert sc.cameras[0].outputs == ("rgb", "depth", "camera_info")
+    parts = dict(estimate_bag_bytes(sc).parts)
+    assert "cam_pointcloud" not in parts and "cam_rgb" in parts and "cam_depth" in parts
+    assert estimate_bag_bytes(sc).total < 1e9  # 45 s of the default camera: ~0.6 GB
+
+
+def test_a_large_bag_is_announced_by_validate_and_before_a_run(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = _write(tmp_path, CAMERA.replace(
+        "{name: cam,", "{name: cam, outputs: [rgb, depth, pointcloud, camera_info],"))
+    code, _out, err = _validate(capsys, path)
+    assert code == 0, err
+    assert f"warning: {path}: the bag will be up to about 2.0 GB for 45 s (cam_pointcloud" \
+        in err, err
+    # The run announces it before building anything; a plug-in refused while building then
+    # stops it before the first tick (so the test does not record 2 GB).
+    bad = _write(tmp_path, path.read_text() + "systems_under_test:\n  - {name: m, plugin: "
+                 "'harness.sut.teleop:ScriptedTeleop', params: {segments: [], rate_hz: 0}}\n")
+    code = main(["run", str(bad), "--out", str(tmp_path / "run"), "-q"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "srr run: the bag will be up to about 2.0 GB for 45 s" in err, err
+    assert "systems_under_test[0].params.rate_hz" in err, err
+    assert not (tmp_path / "run" / "bag").exists()
