@@ -40,7 +40,14 @@ from harness.bus.live import LiveConfig, LiveView
 from harness.bus.recover import RecoveredBag, recover_bag
 from harness.diff import DiffResult, Tolerance
 from harness.diff import diff_runs as _diff_runs
-from harness.diskspace import MB, DiskGuard, FreeSpace, check_free_space, disk_free
+from harness.diskspace import (
+    MB,
+    DiskGuard,
+    FreeSpace,
+    check_free_space,
+    disk_free,
+    large_bag_notice,
+)
 from harness.engine import Simulation
 from harness.errors import BagError, InvalidRunError, RunStopped, ScenarioError, SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
@@ -61,7 +68,14 @@ from harness.regression.reference import reference_path
 from harness.replay import Playback, Replay
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
-from harness.scenario import Scenario, SutSpec, load_scenario, parse_override, scenario_to_mapping
+from harness.scenario import (
+    Scenario,
+    SutSpec,
+    load_scenario,
+    parse_override,
+    rate_warnings,
+    scenario_to_mapping,
+)
 from harness.scoring import Scores, check_scoring, scenario_frames, score_frames
 from harness.sim.world_file import map_json
 from harness.summary import read_summary
@@ -225,7 +239,9 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
         scenario = dataclasses.replace(scenario, baselines=str(baselines))
     _prepare(run_dir)
-    check_free_space(scenario, run_dir, free_space)
+    size_note = large_bag_notice(scenario, check_free_space(scenario, run_dir, free_space))
+    if size_note is not None and notice is not None:
+        notice(size_note)
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(with_ros2_bridge(scenario, run_dir), source=source)
     try:
@@ -234,7 +250,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
             raise SrrError(f"--foxglove: the live view serves ROS 2 messages, and this run "
                            f"records ROS 1 ({output.because})")
         plan = sim.plan()
-        warnings = [*check_wiring(plan, scenario, source),
+        warnings = [*rate_warnings(scenario, source), *check_wiring(plan, scenario, source),
                     *check_output_topics(output, plan.topics, scenario, source)]
         # After the plan, so the server advertises every topic the run will publish at once.
         view = (LiveView.start(live, topics={t.topic: t.msgtype for t in plan.topics
@@ -601,8 +617,10 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     try:
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         plan = sim.plan()
-        return (*check_wiring(plan, scenario, source),
-                *check_output_topics(output, plan.topics, scenario, source), *busy)
+        size_note = large_bag_notice(scenario)
+        return (*rate_warnings(scenario, source), *check_wiring(plan, scenario, source),
+                *check_output_topics(output, plan.topics, scenario, source), *busy,
+                *([f"{source}: {size_note}"] if size_note else []))
     finally:
         sim.close()
 

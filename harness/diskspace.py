@@ -29,18 +29,22 @@ from harness.errors import DiskSpaceError
 from harness.scenario import Scenario
 
 __all__ = [
+    "LARGE_BAG",
     "BagEstimate",
     "DiskGuard",
     "FreeSpace",
     "check_free_space",
     "disk_free",
     "estimate_bag_bytes",
+    "large_bag_notice",
     "mb",
 ]
 
 FreeSpace = Callable[[Path], int]
 
 MB = 1_000_000
+#: An estimated bag at least this large is announced before the run (and by ``srr validate``).
+LARGE_BAG = 1000 * MB
 # Serialized sizes (CDR payload bytes) of the small messages, as recorded.
 HEADER = 64  # an Image/PointCloud2 header, encoding, dimensions
 CAMERA_INFO = 365
@@ -152,6 +156,17 @@ def estimate_bag_bytes(scenario: Scenario) -> BagEstimate:
     chunks = math.ceil(scenario.duration / scenario.recording.chunk_s)
     parts.append(("file overhead", FILE_OVERHEAD + CHUNK_OVERHEAD * chunks))
     return BagEstimate(sum(size for _, size in parts), tuple(parts))
+
+
+def large_bag_notice(scenario: Scenario, est: BagEstimate | None = None) -> str | None:
+    """One line announcing the bag's estimated size when it is at least :data:`LARGE_BAG`
+    (None below), with its largest streams, so a costly default is seen before it is paid."""
+    est = est or estimate_bag_bytes(scenario)
+    if est.total < LARGE_BAG:
+        return None
+    return (f"the bag will be up to about {est.total / 1e9:,.1f} GB for "
+            f"{scenario.duration:g} s ({est.largest()}); a camera's record: {{rgb: [h264], "
+            "depth: [png]}, a lower fps or resolution, or fewer outputs make it smaller")
 
 
 def disk_free(path: Path) -> int:

@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.builders.base import gate_step
 from harness.builders.camera_record import (
     compressed_streams,
     fixed_camera,
@@ -56,13 +55,12 @@ class Scores:
     health: tuple[HealthResult, ...]
 
 
-def _gate_rate(tick_hz: int, fps: float) -> float:
-    return tick_hz / gate_step(tick_hz, fps)
-
-
 def expected_rates(sc: Scenario) -> dict[str, float]:
     """Topic → expected Hz: what the configuration publishes at a fixed rate, plus the
-    scenario's own ``scoring.health.expected_rates``."""
+    scenario's own ``scoring.health.expected_rates``. A sensor is expected at the rate it
+    asks for (its ``fps``), not at the rate the tick lets it publish: a rate the tick cannot
+    give is refused before the run or warned about (:func:`harness.scenario.rate_warnings`),
+    and the gate does not lower its bar to what the run delivered."""
     hz = sc.physics.tick_hz
     rates: dict[str, float] = {}
     if sc.clock.enabled:
@@ -74,13 +72,13 @@ def expected_rates(sc: Scenario) -> dict[str, float]:
             rates[odom_topic(robot)] = float(hz)
         lidar, imu = robot.sensors.lidar, robot.sensors.imu
         if lidar is not None and lidar.enabled and lidar.graph:
-            rates[resolve_topic(lidar.topic, robot.ns)] = _gate_rate(hz, lidar.fps)
+            rates[resolve_topic(lidar.topic, robot.ns)] = float(lidar.fps)
         if imu is not None and imu.enabled and imu.graph:
-            rates[resolve_topic(imu.topic, robot.ns)] = _gate_rate(hz, imu.fps)
+            rates[resolve_topic(imu.topic, robot.ns)] = float(imu.fps)
         camera = robot_camera(sc, robot)
         if camera is not None:
             for cs in compressed_streams(camera):
-                rates[cs.topic] = _gate_rate(hz, camera.fps)
+                rates[cs.topic] = float(camera.fps)
     unrecorded = unrecorded_topics(sc)
     for cam in sc.cameras:
         if not cam.enabled:
@@ -90,9 +88,9 @@ def expected_rates(sc: Scenario) -> dict[str, float]:
         for out in cam.outputs:
             topic = resolve_topic(f"{cam.name}_{suffix[out]}")
             if topic not in unrecorded:
-                rates[topic] = _gate_rate(hz, cam.fps)
+                rates[topic] = float(cam.fps)
         for cs in compressed_streams(fixed_camera(sc, cam)):
-            rates[cs.topic] = _gate_rate(hz, cam.fps)
+            rates[cs.topic] = float(cam.fps)
     for topic, value in sc.scoring.health.expected_rates.items():
         rates[resolve_topic(topic)] = value
     return rates

@@ -10,7 +10,7 @@ from typing import Any
 from harness.geometry import wxyz_to_xyzw
 from harness.graph import GraphStage
 from harness.graph.nodes.ros_bridge import frame_of, relative_pose
-from harness.scenario import RobotSpec, Scenario
+from harness.scenario import RobotSpec, Scenario, gate_step
 
 __all__ = ["BuildContext", "GraphEdits", "NodeOrigin", "fresh_graph", "gate_step",
            "gated_render_product", "sensor_frame_tf"]
@@ -66,12 +66,6 @@ def fresh_graph(path: str) -> dict[str, str]:
     if stage.has_graph(path):
         stage.delete_graph(path)
     return {"graph_path": path, "evaluator_name": "execution"}
-
-
-def gate_step(tick_hz: int, fps: float) -> int:
-    """SimulationGate step for ``fps`` on a ``tick_hz`` tick: ``round(tick_hz / fps)``, >= 1
-    (seed 001's ``step_size = int(60 / freq)``, rounded instead of truncated)."""
-    return max(1, round(tick_hz / fps))
 
 
 def gated_render_product(tick_hz: int, fps: float, prim: str,

@@ -20,19 +20,25 @@ import yaml
 
 from harness.errors import ScenarioError, SrrError
 from harness.scenario.schema import (
+    BUILTIN_JOINTS,
     FORMAT_VERSION,
     CameraRecordSpec,
+    ControlScoring,
     DiffDriveControl,
     ForkliftControl,
     GraphSpec,
     H264Spec,
     RobotSpec,
+    SafetyScoring,
     Scenario,
+    ScoringSpec,
     WorldSpec,
+    gated_rate,
 )
 
-__all__ = ["apply_overrides", "graph_name", "load_scenario", "parse_override", "resolve_names",
-           "scenario_from_mapping", "scenario_to_mapping", "validate_dataclass"]
+__all__ = ["RATE_TOLERANCE", "apply_overrides", "graph_name", "load_scenario", "parse_override",
+           "rate_warnings", "resolve_names", "scenario_from_mapping", "scenario_to_mapping",
+           "sensor_rates", "validate_dataclass"]
 
 T = typing.TypeVar("T")
 
@@ -434,6 +440,60 @@ def _check_semantics(sc: Scenario, v: _Validator) -> None:
     _check_graphs(sc, v)
     _check_control_scoring(sc, v)
     _check_output(sc, v)
+    _check_rates(sc, v)
+
+
+#: How far (relative) the rate a sensor really gets may be from the rate it asks for before
+#: the scenario is refused; closer, ``srr validate`` warns (:func:`rate_warnings`).
+RATE_TOLERANCE = 0.10
+
+
+def sensor_rates(sc: Scenario) -> list[tuple[str, float, float]]:
+    """(field, rate asked for, rate it really gets) of every sensor a built-in graph
+    publishes behind a simulation gate: a sensor publishes every ``gate_step``-th tick, so
+    only ``tick_hz / n`` is possible (:func:`~harness.scenario.schema.gated_rate`)."""
+    hz = sc.physics.tick_hz
+    out: list[tuple[str, float, float]] = []
+    for i, robot in enumerate(sc.robots):
+        if not robot.enabled:
+            continue
+        s = robot.sensors
+        for kind, spec in (("camera", s.camera), ("lidar", s.lidar), ("imu", s.imu)):
+            if spec is not None and spec.enabled and spec.graph:
+                out.append((f"robots[{i}].sensors.{kind}.fps", spec.fps,
+                            gated_rate(hz, spec.fps)))
+    for i, cam in enumerate(sc.cameras):
+        if cam.enabled and cam.outputs:
+            out.append((f"cameras[{i}].fps", cam.fps, gated_rate(hz, cam.fps)))
+    if sc.rtsp.enabled and any(c.enabled and c.port is not None for c in sc.cameras):
+        out.append(("rtsp.fps", sc.rtsp.fps, gated_rate(hz, sc.rtsp.fps)))
+    return out
+
+
+def _possible_rates(tick_hz: int) -> str:
+    return ", ".join(f"{tick_hz / n:.4g}" for n in range(1, 6))
+
+
+def _rate_message(sc: Scenario, asked: float, real: float) -> str:
+    hz = sc.physics.tick_hz
+    return (f"{asked:g} Hz cannot be given on the {hz} Hz tick (physics.tick_hz): a sensor "
+            f"publishes every n-th tick, so it would publish at {real:.4g} Hz")
+
+
+def _check_rates(sc: Scenario, v: _Validator) -> None:
+    """Refuse a sensor rate the tick cannot give within :data:`RATE_TOLERANCE`."""
+    for field, asked, real in sensor_rates(sc):
+        if abs(real - asked) > RATE_TOLERANCE * asked:
+            v.fail(field, f"{_rate_message(sc, asked, real)}; ask for tick_hz / n "
+                   f"({_possible_rates(sc.physics.tick_hz)}, ... Hz) or change "
+                   "physics.tick_hz")
+
+
+def rate_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """One warning per sensor whose real rate differs (by less than
+    :data:`RATE_TOLERANCE`; more is refused) from the rate it asks for."""
+    return tuple(f"{sc.file_for(field, source)}: {field}: {_rate_message(sc, asked, real)}"
+                 for field, asked, real in sensor_rates(sc) if abs(real - asked) > 1e-9)
 
 
 def _check_output(sc: Scenario, v: _Validator) -> None:
@@ -511,6 +571,8 @@ def _check_robots(sc: Scenario, v: _Validator) -> None:
                        "path of the robot's model file)")
             if not model.path.strip():
                 v.fail(f"robots[{i}].model.{model.kind}", "must not be empty")
+        else:
+            _check_builtin_joints(v, f"robots[{i}].control", robot)
         if robot.namespace is not None:
             try:
                 validate_namespace(robot.namespace)
@@ -532,6 +594,27 @@ def _check_robots(sc: Scenario, v: _Validator) -> None:
                     v.fail(f"robots[{i}].articulation_prim",
                            f"{inner.prim} lies inside {outer.prim}, the prim of robots[{k}] "
                            f"({outer.name})")
+
+
+def _check_builtin_joints(v: _Validator, where: str, robot: RobotSpec) -> None:
+    """A built-in model's ``control:`` names joints it has: the TurtleBot3's two wheel
+    joints; the forklift's swivel and drive joints, distinct from each other and from its
+    front wheels' joints."""
+    control, fixed = robot.control, BUILTIN_JOINTS.get(str(robot.model), ())
+    if isinstance(control, DiffDriveControl):
+        unknown = [j for j in control.joint_names if j not in fixed]
+        if unknown:
+            v.fail(f"{where}.joint_names", f"{unknown} are not joints of {robot.model} "
+                   f"(it has {list(fixed)})")
+    elif isinstance(control, ForkliftControl):
+        for sub, name in (("swivel_joint", control.swivel_joint),
+                          ("drive_joint", control.drive_joint)):
+            if name in fixed:
+                v.fail(f"{where}.{sub}", f"{name!r} is a front wheel joint of the forklift; "
+                       "name the swivel and drive joints otherwise")
+        if control.swivel_joint == control.drive_joint:
+            v.fail(f"{where}.drive_joint", f"{control.drive_joint!r} is also the swivel "
+                   "joint: the two joints need distinct names")
 
 
 def _check_cameras(sc: Scenario, v: _Validator) -> None:
@@ -718,7 +801,20 @@ def _check_graphs(sc: Scenario, v: _Validator) -> None:
 
 
 def _check_control_scoring(sc: Scenario, v: _Validator) -> None:
-    """One control block per robot when ``scoring.control`` is a list."""
+    """One control block per robot when ``scoring.control`` is a list; a block (or the
+    safety block) that leaves ``robot`` out needs exactly one enabled robot to default to."""
+    robots = [r.name for r in sc.robots if r.enabled]
+    c = sc.scoring.control
+    blocks: list[tuple[str, ControlScoring | SafetyScoring]] = \
+        [] if c is None else [("scoring.control", c)] if not isinstance(c, tuple) else \
+        [(f"scoring.control[{i}]", b) for i, b in enumerate(c)]
+    if sc.scoring.safety is not None:
+        blocks.append(("scoring.safety", sc.scoring.safety))
+    for where, block in blocks:
+        if block.enabled and not block.robot and len(robots) != 1:
+            v.fail(f"{where}.robot", "required: the scene has "
+                   f"{len(robots) or 'no'} enabled robots ({', '.join(robots) or 'none'}), "
+                   "so there is no single robot to default to")
     if not isinstance(sc.scoring.control, tuple):
         return
     seen: dict[str, int] = {}
@@ -758,11 +854,25 @@ def resolve_names(sc: Scenario) -> Scenario:
             sut_ns = by_name[sut.robot].ns if sut.robot in by_name else ""
         suts.append(dataclasses.replace(sut, namespace=sut_ns))
     enabled = [r.name for r in robots if r.enabled]
-    graphs = tuple(dataclasses.replace(
-        g, name=graph_name(g), robot=g.robot or (enabled[0] if len(enabled) == 1 else ""))
-        for g in sc.graphs)
+    only = enabled[0] if len(enabled) == 1 else ""
+    graphs = tuple(dataclasses.replace(g, name=graph_name(g), robot=g.robot or only)
+                   for g in sc.graphs)
     return dataclasses.replace(sc, robots=tuple(robots), systems_under_test=tuple(suts),
-                               graphs=graphs)
+                               graphs=graphs, scoring=_default_scored_robot(sc.scoring, only))
+
+
+def _default_scored_robot(scoring: ScoringSpec, only: str) -> ScoringSpec:
+    """``scoring.control`` blocks and ``scoring.safety`` that leave ``robot`` out score the
+    only enabled robot ``only``, as ``graphs:`` entries do."""
+    def fill(block: ControlScoring) -> ControlScoring:
+        return dataclasses.replace(block, robot=block.robot or only)
+
+    c = scoring.control
+    control = None if c is None else fill(c) if not isinstance(c, tuple) else \
+        tuple(fill(b) for b in c)
+    s = scoring.safety
+    safety = None if s is None else dataclasses.replace(s, robot=s.robot or only)
+    return dataclasses.replace(scoring, control=control, safety=safety)
 
 
 def _check_workers_and_zones(sc: Scenario, v: _Validator) -> None:

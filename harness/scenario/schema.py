@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 __all__ = [
+    "BUILTIN_JOINTS",
     "FORMAT_VERSION",
     "ROBOT_MODELS",
     "CameraRecordSpec",
@@ -55,10 +56,18 @@ __all__ = [
     "WorldModel",
     "WorldSpec",
     "ZonesSpec",
+    "gate_step",
+    "gated_rate",
 ]
 
 FORMAT_VERSION = 1
 ROBOT_MODELS = ("forklift", "turtlebot3_waffle_pi")
+#: The joints a built-in model always has, whatever its ``control:`` names (the forklift's
+#: swivel and drive joints are named by its ``control:`` block; the TurtleBot3 has only these).
+BUILTIN_JOINTS: dict[str, tuple[str, ...]] = {
+    "forklift": ("front_left_wheel_joint", "front_right_wheel_joint"),
+    "turtlebot3_waffle_pi": ("wheel_left_joint", "wheel_right_joint"),
+}
 
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
@@ -72,6 +81,18 @@ def _range(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
 def num(default: float | None, lo: float | None = None, hi: float | None = None,
         *, lo_open: bool = False) -> Any:
     return field(default=default, metadata=_range(lo, hi, lo_open=lo_open))
+
+
+def gate_step(tick_hz: int, fps: float) -> int:
+    """A sensor publishes every ``gate_step``-th tick (its SimulationGate's ``step``):
+    ``round(tick_hz / fps)``, >= 1 (seed 001's ``step_size = int(60 / freq)``, rounded
+    instead of truncated)."""
+    return max(1, round(tick_hz / fps))
+
+
+def gated_rate(tick_hz: int, fps: float) -> float:
+    """The rate (Hz) a sensor asked for ``fps`` really publishes at on a ``tick_hz`` tick."""
+    return tick_hz / gate_step(tick_hz, fps)
 
 
 @dataclass(frozen=True)
@@ -527,7 +548,9 @@ class CameraSpec:
     """One entry of ``cameras:`` (forklift seed's cameras.yaml shape) for a fixed camera.
 
     ``port`` and ``mount_path`` (default ``/<name>``) serve the camera over RTSP when the
-    ``rtsp:`` block is enabled; ``record`` says how the bag holds its images."""
+    ``rtsp:`` block is enabled; ``record`` says how the bag holds its images. ``outputs``
+    left out publishes rgb, depth and camera_info: a point cloud (16 bytes a pixel, four
+    times the depth image it is computed from) only when asked for."""
 
     name: str
     enabled: bool = True
@@ -537,7 +560,7 @@ class CameraSpec:
     fovy_deg: float = num(60.0, 1.0, 170.0)
     fps: float = num(30.0, 0.0, 60.0, lo_open=True)
     outputs: tuple[Literal["rgb", "depth", "pointcloud", "camera_info"], ...] = (
-        "rgb", "depth", "pointcloud", "camera_info")
+        "rgb", "depth", "camera_info")
     port: int | None = num(None, 1, 65535)
     mount_path: str | None = None
     record: CameraRecordSpec = CameraRecordSpec()
@@ -653,10 +676,11 @@ class ControlScoring:
     """Score a robot's drive against a route (needs ``/gt/<robot>/tf``, i.e. ``srr_gt``).
 
     ``scoring.control`` is one block (metrics ``control.<metric>``) or a list of blocks, one
-    per robot (metrics ``control.<robot>.<metric>``)."""
+    per robot (metrics ``control.<robot>.<metric>``). ``robot`` left out: the only enabled
+    robot (a scene with several must name it)."""
 
     enabled: bool = True
-    robot: str = "forklift"
+    robot: str = ""
     route: str = ""
     goal_tolerance: float = num(0.5, 0.0, 100.0, lo_open=True)
 
@@ -676,10 +700,11 @@ class PerceptionScoring:
 
 @dataclass(frozen=True)
 class SafetyScoring:
-    """The forklift SIL's mute scoring: expected muted state vs ``/safety/is_muted``."""
+    """The forklift SIL's mute scoring: expected muted state vs ``/safety/is_muted``.
+    ``robot`` left out: the only enabled robot (a scene with several must name it)."""
 
     enabled: bool = True
-    robot: str = "forklift"
+    robot: str = ""
     muted_topic: str = "/safety/is_muted"
     min_window_s: float = num(0.5, 0.0, 60.0)
 

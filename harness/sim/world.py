@@ -42,6 +42,7 @@ from harness.scenario.schema import Scenario, WorldSpec
 from harness.sim.cameras import add_fixed_camera, world_convention_quat
 from harness.sim.footprints import Footprint
 from harness.sim.geometry import FloatArray, quat_from_mat, quat_from_rpy_deg
+from harness.sim.layout import check_layout
 from harness.sim.prims import PrimKind, PrimRef, PrimTable
 from harness.sim.render import apply_render_settings
 from harness.sim.robots import ActuatorMode, ModelSource, RobotBuild, add_robot
@@ -307,6 +308,7 @@ class World:
         to the include that holds the robot or the world) and errors about them name it;
         ``environ`` (default: the process environment) holds ``SRR_PACKAGE_PATH`` /
         ``ROS_PACKAGE_PATH``."""
+        check_layout(scenario, source)
         prims = PrimTable()
         workers = plan_workers(scenario)
         env = os.environ if environ is None else environ

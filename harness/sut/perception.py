@@ -26,7 +26,9 @@ from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
 
 from harness.bus.messages import header, make
+from harness.errors import PluginError
 from harness.geometry import xyzw_to_wxyz
+from harness.scenario.schema import num
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
 from harness.sut.zones import points_in_polygon
 
@@ -40,17 +42,17 @@ class PerceptionParams:
     tracks_topic: str = "/perception/tracks"
     world_frame: str = "world"
     tf_topic: str = "/tf"
-    max_range: float = 12.0
-    z_min: float = 0.3
-    z_max: float = 2.2
-    cell: float = 0.15
-    min_points: int = 12
-    person_max_extent: float = 1.1
-    person_min_height: float = 1.2
-    gate: float = 1.0
-    min_hits: int = 2
-    max_missed: int = 5
-    pixel_stride: int = 1
+    max_range: float = num(12.0, 0.0, 1000.0, lo_open=True)
+    z_min: float = num(0.3, -100.0, 100.0)
+    z_max: float = num(2.2, -100.0, 100.0)
+    cell: float = num(0.15, 0.0, 10.0, lo_open=True)
+    min_points: int = num(12, 1, 10_000_000)
+    person_max_extent: float = num(1.1, 0.0, 100.0, lo_open=True)
+    person_min_height: float = num(1.2, -100.0, 100.0)
+    gate: float = num(1.0, 0.0, 100.0, lo_open=True)
+    min_hits: int = num(2, 1, 1_000_000)
+    max_missed: int = num(5, 0, 1_000_000)
+    pixel_stride: int = num(1, 1, 1024)
 
 
 @dataclass
@@ -101,6 +103,12 @@ class _Camera:
 class DepthPeopleTracker(SystemUnderTest):
     def setup(self, ctx: SutContext) -> None:
         self.p: PerceptionParams = sut_params(PerceptionParams, ctx)
+        if self.p.z_max <= self.p.z_min:
+            raise PluginError(f"{ctx.field}.params.z_max: must be above z_min "
+                              f"({self.p.z_min:g}), got {self.p.z_max:g}")
+        if self.p.watch_area and len(self.p.watch_area) < 3:
+            raise PluginError(f"{ctx.field}.params.watch_area: a polygon needs at least "
+                              f"three points, got {len(self.p.watch_area)}")
         self.cams = {name: _Camera() for name in self.p.cameras}
         for name, cam in self.cams.items():
             # Named callbacks rather than lambdas: mypy cannot type a lambda's default argument.

@@ -25,6 +25,7 @@ import numpy.typing as npt
 
 from harness.bus.messages import twist
 from harness.errors import PluginError
+from harness.scenario.schema import num
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
 from harness.sut.pose import OdomPose
 
@@ -34,19 +35,19 @@ __all__ = ["RouteFollower", "RouteFollowerParams", "clip", "pure_pursuit"]
 @dataclass(frozen=True)
 class RouteFollowerParams:
     route: str
-    speed: float = 1.2
-    lookahead: float = 1.5
-    rate_hz: float = 20.0
-    goal_tolerance: float = 0.3
-    max_angular: float = 0.8
-    slow_radius: float = 3.0
+    speed: float = num(1.2, 0.0, 20.0, lo_open=True)
+    lookahead: float = num(1.5, 0.0, 100.0, lo_open=True)
+    rate_hz: float = num(20.0, 0.0, 1000.0, lo_open=True)
+    goal_tolerance: float = num(0.3, 0.0, 100.0, lo_open=True)
+    max_angular: float = num(0.8, 0.0, 20.0)
+    slow_radius: float = num(3.0, 0.0, 1000.0, lo_open=True)
     odom_topic: str = "odom"
     cmd_vel_topic: str = "cmd_vel"
     tf_static_topic: str = "/tf_static"
     world_frame: str = "world"
     odom_frame: str = ""  # "": the frame the odometry names in its header
     alarm_topic: str = ""  # e.g. /safety/alarm: slow down, then stop while it is true
-    alarm_stop_after: int = 4  # commands at reduced speed before stopping
+    alarm_stop_after: int = num(4, 0, 1_000_000)  # commands at reduced speed before stopping
 
 
 def clip(x: float, lo: float, hi: float) -> float:

@@ -10,10 +10,11 @@ slower monitor is one parameter away. Zones default to the scenario's ``zones`` 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 from harness.bus.messages import make
 from harness.errors import PluginError
+from harness.scenario.schema import num
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
 from harness.sut.pose import OdomPose
 from harness.sut.zones import point_in_polygon, side_of_line
@@ -28,11 +29,11 @@ class SafetyMonitorParams:
     muted_topic: str = "/safety/is_muted"
     alarm_topic: str = "/safety/alarm"
     person_class: str = "person"
-    rate_hz: float = 20.0
-    reaction_delay: float = 0.0
+    rate_hz: float = num(20.0, 0.0, 1000.0, lo_open=True)
+    reaction_delay: float = num(0.0, 0.0, 3600.0)
     roi: tuple[tuple[float, float], ...] = ()
     tripwire: tuple[tuple[float, float], ...] = ()
-    inside: str = ""
+    inside: Literal["", "left", "right"] = ""
 
 
 class SafetyMonitor(SystemUnderTest):
@@ -53,7 +54,9 @@ class SafetyMonitor(SystemUnderTest):
                               "zones.trailer_tripwire")
         if len(self.roi) < 3:
             raise PluginError(f"{ctx.field}.params.roi: not set and the scenario has no "
-                              "zones.loading_roi")
+                              "zones.loading_roi" if not self.roi else
+                              f"{ctx.field}.params.roi: a polygon needs at least three "
+                              f"points, got {len(self.roi)}")
         self.pose = OdomPose(ctx, self.p.odom_topic).pose
         self.people: list[tuple[float, float]] = []
         ctx.subscribe(self.p.tracks_topic, "visualization_msgs/msg/MarkerArray", self._on_tracks)

@@ -128,7 +128,8 @@ def test_point_cloud_moved_by_the_published_tf_lies_on_the_floor_and_walls(
     moved into the world with the /tf transform of the same stamp, lies on one of them; and
     world → cam → cam_world composes to the camera's world-axes pose."""
     cam = CameraSpec(name="cam", spawn=Pose(position=(10.0, 0.0, 1.5), rpy_deg=(0.0, 20.0, 40.0)),
-                     resolution=(64, 48), fps=30.0)
+                     resolution=(64, 48), fps=30.0,
+                     outputs=("rgb", "depth", "pointcloud", "camera_info"))
     sc = Scenario(format_version=1, name="hall_cloud", world=HALL, cameras=(cam,), duration=0.05)
     res = api.run_scenario(sc, out=tmp_path / "run")
     assert res.verdict == "UNSCORED" and res.exit_code == 1

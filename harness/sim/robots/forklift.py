@@ -27,7 +27,7 @@ import types
 import mujoco
 
 from harness.errors import SimulationError
-from harness.scenario.schema import ForkliftControl, RobotSpec
+from harness.scenario.schema import BUILTIN_JOINTS, ForkliftControl, RobotSpec
 from harness.sim.geometry import FloatArray
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import (
@@ -83,8 +83,7 @@ _RGBA_TYRE = (0.05, 0.05, 0.05, 1.0)
 _RGBA_HIDDEN = (0.5, 0.5, 0.5, 0.3)
 
 
-FRONT_LEFT_JOINT = "front_left_wheel_joint"
-FRONT_RIGHT_JOINT = "front_right_wheel_joint"
+FRONT_LEFT_JOINT, FRONT_RIGHT_JOINT = BUILTIN_JOINTS["forklift"]
 
 
 def indicator_prim(robot: RobotSpec) -> str:

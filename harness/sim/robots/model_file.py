@@ -40,7 +40,7 @@ from harness.sim.robots.common import ActuatorMode
 from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
 
 __all__ = ["JointInfo", "LoadedModel", "ModelFileError", "ParsedModel", "file_digest",
-           "load_model_file", "one_line", "read_model_file"]
+           "included_files", "load_model_file", "one_line", "read_model_file"]
 
 _URDF_COMPILER = {"discardvisual": "false", "fusestatic": "false", "strippath": "false"}
 _JOINT_KINDS = {
@@ -284,10 +284,48 @@ def load_model_file(path: Path, kind: Literal["urdf", "mjcf"],
         mass=float(model.body_mass[1:].sum()), joint_inertia=types.MappingProxyType(inertia))
 
 
+def included_files(path: Path) -> list[tuple[str, Path]]:
+    """Every file an MJCF file pulls in with ``<include file=...>``, recursively, in document
+    order, each once: (the path as written, the file MuJoCo reads). MuJoCo looks for an
+    included file in the main file's directory first, then in the including file's; an
+    absolute path is taken as it is. A file that cannot be read or parsed is skipped (MuJoCo
+    has already read the model, so it is none MuJoCo used)."""
+    found: list[tuple[str, Path]] = []
+    seen: set[Path] = set()
+
+    def visit(file: Path) -> None:
+        try:
+            root = ET.fromstring(file.read_bytes())
+        except (OSError, ET.ParseError):
+            return
+        for inc in root.iter("include"):
+            name = inc.get("file")
+            if not name:
+                continue
+            written = Path(name)
+            candidates = [written] if written.is_absolute() else \
+                [path.parent / written, file.parent / written]
+            target = next((c for c in candidates if c.is_file()), None)
+            if target is None or target.resolve() in seen:
+                continue
+            seen.add(target.resolve())
+            found.append((name, target))
+            visit(target)
+
+    visit(path)
+    return found
+
+
 def file_digest(path: Path, assets: Mapping[str, bytes]) -> str:
-    """SHA-256 over a model file's bytes and its assets' names (content hashes, see
-    :func:`_take_assets`): what changes when the file or any mesh or texture it uses does."""
+    """SHA-256 over a model file's bytes, its assets' names (content hashes, see
+    :func:`_take_assets`: every mesh, texture and height field, wherever it is named) and
+    the bytes of every file it includes (:func:`included_files`): what changes when any file
+    that shapes the model does. A file without includes has the digest it had before srr
+    hashed includes."""
     digest = hashlib.sha256(path.read_bytes())
     for key in sorted(assets):
         digest.update(key.encode())
+    for name, file in included_files(path):
+        digest.update(f"\0include {name}\0".encode())
+        digest.update(hashlib.sha256(file.read_bytes()).digest())
     return digest.hexdigest()

@@ -19,7 +19,7 @@ import types
 import mujoco
 
 from harness.errors import SimulationError
-from harness.scenario.schema import DiffDriveControl, RobotSpec
+from harness.scenario.schema import BUILTIN_JOINTS, DiffDriveControl, RobotSpec
 from harness.sim.geometry import FloatArray
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import (
@@ -75,7 +75,7 @@ def add_turtlebot3(spec: mujoco.MjSpec, robot: RobotSpec, control: DiffDriveCont
                    prims: PrimTable) -> RobotBuild:
     """Add a TurtleBot3 Waffle Pi whose base_footprint (on the floor) is at ``pos``/``quat``."""
     n, prim = robot.name, robot.prim
-    wheel_joints = ("wheel_left_joint", "wheel_right_joint")
+    wheel_joints = BUILTIN_JOINTS["turtlebot3_waffle_pi"]
     unknown = [j for j in control.joint_names if j not in wheel_joints]
     if unknown:
         raise SimulationError(
