@@ -203,12 +203,20 @@ def _cmd_replay(args: argparse.Namespace) -> int:
             task = bar.add_task(f"replay {args.run_dir.name}", total=None, sim="")
         try:
             res = api.replay(args.run_dir, suts=args.suts, overrides=args.overrides,
-                             out=args.out, progress=tick, baselines=args.baselines)
+                             out=args.out, progress=tick, baselines=args.baselines,
+                             started=_started)
         finally:
             if bar is not None:
                 bar.stop()
     _print_run(res)
     return res.exit_code
+
+
+def _started(run_dir: Path) -> None:
+    """The run directory, as soon as it exists (with or without ``-q``): the one to give
+    ``srr recover`` should the run be killed. On stdout, above a progress bar, so an error
+    on stderr stays one line."""
+    out_console.print(f"run directory: {run_dir}", markup=False)
 
 
 def _live_config(args: argparse.Namespace) -> LiveConfig | None:
@@ -260,14 +268,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
         try:
             if args.repeat != 1:
                 rep = api.run_repeat(scenario, args.repeat, source=str(args.scenario),
-                                     out=args.out, progress=tick, baselines=args.baselines)
+                                     out=args.out, progress=tick, baselines=args.baselines,
+                                     started=_started)
             else:
                 res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
                                        progress=tick, baselines=args.baselines,
                                        update_baseline=args.update_baseline,
                                        update_reason=args.reason, live=live,
                                        notice=lambda text: err_console.print(
-                                           f"srr run: {text}", markup=False))
+                                           f"srr run: {text}", markup=False),
+                                       started=_started)
         finally:
             if bar is not None:
                 bar.stop()
