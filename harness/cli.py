@@ -204,7 +204,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         try:
             res = api.replay(args.run_dir, suts=args.suts, overrides=args.overrides,
                              out=args.out, progress=tick, baselines=args.baselines,
-                             started=_started)
+                             started=_started(bar))
         finally:
             if bar is not None:
                 bar.stop()
@@ -212,11 +212,15 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     return res.exit_code
 
 
-def _started(run_dir: Path) -> None:
-    """The run directory, as soon as it exists (with or without ``-q``): the one to give
-    ``srr recover`` should the run be killed. On stdout, above a progress bar, so an error
-    on stderr stays one line."""
-    out_console.print(f"run directory: {run_dir}", markup=False)
+def _started(bar: Any) -> Any:
+    """What prints the run directory as soon as it exists (with or without ``-q``): the one to
+    give ``srr recover`` should the run be killed. On stdout, so an error on stderr stays one
+    line; above the progress bar, on its console, while one is shown (a line printed on
+    stdout would land inside the bar's line on the terminal)."""
+    def say(run_dir: Path) -> None:
+        (out_console if bar is None else bar.console).print(f"run directory: {run_dir}",
+                                                             markup=False)
+    return say
 
 
 def _live_config(args: argparse.Namespace) -> LiveConfig | None:
@@ -269,7 +273,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             if args.repeat != 1:
                 rep = api.run_repeat(scenario, args.repeat, source=str(args.scenario),
                                      out=args.out, progress=tick, baselines=args.baselines,
-                                     started=_started)
+                                     started=_started(bar))
             else:
                 res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
                                        progress=tick, baselines=args.baselines,
@@ -277,7 +281,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                                        update_reason=args.reason, live=live,
                                        notice=lambda text: err_console.print(
                                            f"srr run: {text}", markup=False),
-                                       started=_started)
+                                       started=_started(bar))
         finally:
             if bar is not None:
                 bar.stop()
