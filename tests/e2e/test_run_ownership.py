@@ -130,3 +130,12 @@ def test_a_live_run_is_refused_by_every_reader_then_recovered_once_killed(
     assert summary["recovery"]["dropped_bytes"] >= 0
     assert not (out / runmarker.MARKER).exists() and not (out / runlock.LOCK).exists()
     assert main(["report", str(out)]) == 0  # a finished (recovered) run reads again
+
+
+def test_a_replay_names_its_run_directory_first(finished: Path, tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "replayed"
+    assert main(["replay", str(finished), "--out", str(out), "-q"]) in (0, 1)  # 1 s: no PASS
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[0] == f"run directory: {out}" and lines[-1] == str(out)
+    assert not (out / runlock.LOCK).exists() and not (finished / runlock.LOCK).exists()
