@@ -19,6 +19,7 @@ import fcntl
 import json
 import os
 import socket
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -84,6 +85,20 @@ def refuse_if_live(run_dir: str | Path) -> None:
         raise RunInUseError(owner.refusal(Path(run_dir)))
 
 
+def _lock_exclusive(fd: int, tries: int = 20) -> None:
+    """``flock(LOCK_EX)`` without waiting for an owner. A reader's shared lock
+    (:func:`live_owner`) lasts microseconds, so a refusal is tried again for a moment
+    (0.1 s) before it is taken as an owner's: a reader looking never stops a run."""
+    for attempt in range(tries):
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return
+        except BlockingIOError:
+            if attempt == tries - 1:
+                raise
+            time.sleep(0.005)
+
+
 @contextlib.contextmanager
 def owning(run_dir: Path, activity: Activity, *, fresh: bool) -> Iterator[Path]:
     """Hold ``run_dir``'s lock for the block, then remove the lock file and release it.
@@ -106,7 +121,7 @@ def owning(run_dir: Path, activity: Activity, *, fresh: bool) -> Iterator[Path]:
         raise SrrError(f"{path}: cannot open the run directory's lock: "
                        f"{err.strerror or err}") from err
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        _lock_exclusive(fd)
     except BlockingIOError:
         owner = _owner_of(fd)
         os.close(fd)
