@@ -103,10 +103,11 @@ def _lock_exclusive(fd: int, tries: int = 20) -> None:
 def owning(run_dir: Path, activity: Activity, *, fresh: bool) -> Iterator[Path]:
     """Hold ``run_dir``'s lock for the block, then remove the lock file and release it.
 
-    ``fresh``: the directory is created if need be and must hold nothing else (a new run);
+    ``fresh``: the directory is created if need be (a new run: the caller has checked it is
+    empty or absent; the ROS 2 bridge's external processes may have logged in it since);
     otherwise it must exist. Raises :class:`RunInUseError` when another process holds the
-    lock, :class:`SrrError` when the lock cannot be taken or a fresh directory is not empty;
-    nothing is changed then (but a directory created for a fresh run)."""
+    lock, :class:`SrrError` when the lock cannot be taken; nothing is changed then (but a
+    directory created for a fresh run)."""
     path = run_dir / LOCK
     if fresh:
         run_dir.mkdir(parents=True, exist_ok=True)
@@ -132,16 +133,11 @@ def owning(run_dir: Path, activity: Activity, *, fresh: bool) -> Iterator[Path]:
             path.unlink(missing_ok=True)
         raise SrrError(f"{path}: cannot lock the run directory: "
                        f"{err.strerror or err}") from err
-    remove = True
     try:
-        if fresh and any(p.name != LOCK for p in run_dir.iterdir()):
-            remove = created
-            raise SrrError(f"--out {run_dir}: directory exists and is not empty")
         me = {"pid": os.getpid(), "host": socket.gethostname(), "activity": activity}
         os.ftruncate(fd, 0)
         os.pwrite(fd, json.dumps(me).encode("utf-8"), 0)
         yield run_dir
     finally:
-        if remove:  # while still holding it: whoever opens it now finds it free
-            path.unlink(missing_ok=True)
+        path.unlink(missing_ok=True)  # while still holding it: whoever opens it finds it free
         os.close(fd)
