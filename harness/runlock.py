@@ -15,6 +15,7 @@ nothing is touched. A reader takes the lock shared, non-blocking, and drops it a
 from __future__ import annotations
 
 import contextlib
+import errno
 import fcntl
 import json
 import os
@@ -107,7 +108,8 @@ def owning(run_dir: Path, activity: Activity, *, fresh: bool) -> Iterator[Path]:
     empty or absent; the ROS 2 bridge's external processes may have logged in it since);
     otherwise it must exist. Raises :class:`RunInUseError` when another process holds the
     lock, :class:`SrrError` when the lock cannot be taken; nothing is changed then (but a
-    directory created for a fresh run)."""
+    directory created for a fresh run). An existing directory this process may not write
+    (read-only media) is only checked for a live owner: it cannot be changed from here."""
     path = run_dir / LOCK
     if fresh:
         run_dir.mkdir(parents=True, exist_ok=True)
@@ -119,6 +121,10 @@ def owning(run_dir: Path, activity: Activity, *, fresh: bool) -> Iterator[Path]:
             created = False
             fd = os.open(path, os.O_RDWR | os.O_CLOEXEC)
     except OSError as err:
+        if not fresh and err.errno in (errno.EROFS, errno.EACCES, errno.EPERM):
+            refuse_if_live(run_dir)
+            yield run_dir
+            return
         raise SrrError(f"{path}: cannot open the run directory's lock: "
                        f"{err.strerror or err}") from err
     try:

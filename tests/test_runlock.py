@@ -86,3 +86,4 @@ def test_no_directory_or_no_lock_file_means_no_owner(tmp_path: Path) -> None:
     assert runlock.live_owner(tmp_path) is None
     (tmp_path / "file").write_text("not a directory")
     runlock.refuse_if_live(tmp_path / "file")
+
