@@ -333,8 +333,8 @@ def _sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any
 def _record(scenario: Scenario, loop: _Loop, *, run_dir: Path, started: Started | None = None,
             **kw: Any) -> RunResult:
     """:func:`_write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
-    created and locked first (a live owner, or anything in it, is refused), and released,
-    its lock file removed, however the run ends (``kill -9`` releases the lock too)."""
+    created and locked first (a live owner is refused), and released, its lock file
+    removed, however the run ends (``kill -9`` releases the lock too)."""
     with runlock.owning(run_dir, "written", fresh=True):
         if started is not None:
             started(run_dir)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -212,7 +212,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     return res.exit_code
 
 
-def _started(bar: Any) -> Any:
+def _started(bar: Any) -> Callable[[Path], None]:
     """What prints the run directory as soon as it exists (with or without ``-q``): the one to
     give ``srr recover`` should the run be killed. On stdout, so an error on stderr stays one
     line; above the progress bar, on its console, while one is shown (a line printed on
