@@ -335,9 +335,14 @@ def _record(scenario: Scenario, loop: _Loop, *, run_dir: Path, started: Started 
     """:func:`_write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
     created and locked first (a live owner is refused), and released, its lock file
     removed, however the run ends (``kill -9`` releases the lock too)."""
-    with runlock.owning(run_dir, "written", fresh=True):
-        if started is not None:
-            started(run_dir)
+    with contextlib.ExitStack() as owned:
+        try:
+            owned.enter_context(runlock.owning(run_dir, "written", fresh=True))
+            if started is not None:
+                started(run_dir)
+        except BaseException:
+            loop.close()  # which _write_run does once it runs
+            raise
         return _write_run(scenario, loop, run_dir=run_dir, **kw)
 
 
