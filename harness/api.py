@@ -12,6 +12,8 @@ that every published message was recorded, and writes the run directory:
     report.html     the reviewer's page (harness.report), written last
     incomplete.json only while the run has not finished (harness.runmarker): a killed run
                     keeps it, and ``recover`` turns such a directory back into a valid one
+    run.lock        only while a process writes the directory (harness.runlock): its lock
+                    says the run is live, and every command that reads a run refuses it then
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from typing import Any
 
 import yaml
 
-from harness import __version__, runmarker
+from harness import __version__, runlock, runmarker
 from harness.atomic import write_json_atomic
 from harness.builders.camera_record import recorded_cameras, unrecorded_topics
 from harness.bus import Bus, TopicStats
@@ -109,6 +111,7 @@ __all__ = [
 
 Progress = Callable[[int, int], None]
 Notice = Callable[[str], None]
+Started = Callable[[Path], None]  # told the run directory once it is created and owned
 
 
 @dataclass(frozen=True)
@@ -213,6 +216,7 @@ class _Loop:
 
 
 def _prepare(run_dir: Path) -> None:
+    runlock.refuse_if_live(run_dir)
     if run_dir.exists() and any(run_dir.iterdir()):
         raise SrrError(f"--out {run_dir}: directory exists and is not empty")
 
@@ -221,7 +225,8 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
                  progress: Progress | None = None, baselines: Path | None = None,
                  update_baseline: bool = False, update_reason: str = "updated with "
                  "--update-baseline", free_space: FreeSpace = disk_free,
-                 live: LiveConfig | None = None, notice: Notice | None = None) -> RunResult:
+                 live: LiveConfig | None = None, notice: Notice | None = None,
+                 started: Started | None = None) -> RunResult:
     """Build, run and record ``scenario``; write the run directory and return its verdict.
 
     ``free_space`` measures the free bytes on a path's filesystem (``shutil.disk_usage`` by
@@ -233,7 +238,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     (:mod:`harness.bus.live`): the server starts once the scene is built and wired (a port
     in use is refused then, before anything is written) and stops when the run ends, however
     it ends. It changes nothing that is recorded. ``notice`` receives its one-line messages
-    for the user."""
+    for the user; ``started`` the run directory, once it is created and owned."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
     baselines = baselines_dir(source, baselines, scenario)  # a bad folder stops it here
     if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
@@ -277,7 +282,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         return _record(scenario, loop, source=source, run_dir=run_dir,
                        n_ticks=scenario.n_ticks, progress=progress, baselines=baselines,
                        update_baseline=update_baseline, update_reason=update_reason,
-                       free_space=free_space, view=view)
+                       free_space=free_space, view=view, started=started)
     finally:
         if view is not None:
             view.close()
@@ -344,16 +349,31 @@ def _sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any
     return out
 
 
-def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ticks: int,
-            progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
-            update_reason: str = "", free_space: FreeSpace = disk_free,
-            view: LiveView | None = None) -> RunResult:
+def _record(scenario: Scenario, loop: _Loop, *, run_dir: Path, started: Started | None = None,
+            **kw: Any) -> RunResult:
+    """:func:`_write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
+    created and locked first (a live owner is refused), and released, its lock file
+    removed, however the run ends (``kill -9`` releases the lock too)."""
+    with contextlib.ExitStack() as owned:
+        try:
+            owned.enter_context(runlock.owning(run_dir, "written", fresh=True))
+            if started is not None:
+                started(run_dir)
+        except BaseException:
+            loop.close()  # which _write_run does once it runs
+            raise
+        return _write_run(scenario, loop, run_dir=run_dir, **kw)
+
+
+def _write_run(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ticks: int,
+               progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
+               update_reason: str = "", free_space: FreeSpace = disk_free,
+               view: LiveView | None = None) -> RunResult:
     """Record ``loop`` into ``run_dir``, score it and write the run directory (shared by
     :func:`run_scenario` and :func:`replay`). Until ``summary.json`` is written the directory
     holds ``incomplete.json`` (:mod:`harness.runmarker`), so a killed run never looks done.
     ``view`` (a started live view) gets every message the recorder serializes and, after each
     tick, the simulation time; it may hold the first tick for a client and pace the loop."""
-    run_dir.mkdir(parents=True, exist_ok=True)
     command = str(loop.extra.get("command", ""))
     runmarker.mark(run_dir, "recording", scenario_file=source, command=command)
     (run_dir / "scenario.yaml").write_text(
@@ -482,7 +502,7 @@ def _record(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n_ti
 
 def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence[str] = (),
            out: Path | None = None, progress: Progress | None = None,
-           baselines: Path | None = None) -> RunResult:
+           baselines: Path | None = None, started: Started | None = None) -> RunResult:
     """Open-loop replay of a recorded run (``srr replay``): its bag played back, in
     publication order, into its systems under test — or into replacements (``suts``:
     ``NAME=module:Class``) and changed parameters (``overrides``: ``--set`` on the systems
@@ -490,6 +510,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     everything else is the recording's bytes. The new run directory is scored and judged
     like a run of the recorded scenario (:mod:`harness.replay`)."""
     src = Path(run_dir)
+    runlock.refuse_if_live(src)
     summary = read_summary(src)
     recorded = load_scenario(src / "scenario.yaml")
     pairs = [parse_override(o) for o in overrides]
@@ -536,7 +557,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
                  bool(summary.get("srr_gt")), extra, playback.output)
     return _record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.get("ticks") or scenario.n_ticks), progress=progress,
-                   baselines=baselines)
+                   baselines=baselines, started=started)
 
 
 def _check_replay_scene(recorded: Scenario, scenario: Scenario) -> None:
@@ -597,6 +618,7 @@ def report(run_dir: str | Path) -> Path:
     renderer, which notes what it could not read, this refuses a run directory whose
     summary, scenario or bag does not read back (SrrError, exit 2) and writes nothing then."""
     run = Path(run_dir)
+    runlock.refuse_if_live(run)
     summary = read_summary(run)
     scenario = load_scenario(run / "scenario.yaml")
     if not (run / "bag" / "metadata.yaml").is_file() and ros1_recording(run / "bag") is None:
@@ -766,6 +788,7 @@ def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
     ``baselines`` if given, else in the folder the run was judged against (its summary's
     ``baselines_dir``; for runs from before it was recorded, :func:`baselines_dir` of its
     scenario file). An INVALID or interrupted run is refused (SrrError, exit 2)."""
+    runlock.refuse_if_live(run_dir)
     summary = read_summary(run_dir)
     if summary.get("verdict") == "INVALID" or summary.get("interrupted"):
         why = " ".join("; ".join(str(r) for r in summary.get("reasons") or []).split())
@@ -785,13 +808,14 @@ def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
 
 def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
                out: Path | None = None, progress: Progress | None = None,
-               baselines: Path | None = None) -> RepeatResult:
+               baselines: Path | None = None, started: Started | None = None) -> RepeatResult:
     """Run ``n`` times (``run_1`` … ``run_n`` under one directory) and compare digests."""
     if n < 1:
         raise SrrError(f"--repeat: must be >= 1, got {n}")
     out_dir = Path(out) if out is not None else default_run_dir(scenario)
     runs = tuple(run_scenario(scenario, source=source, out=out_dir / f"run_{i + 1}",
-                              progress=progress, baselines=baselines) for i in range(n))
+                              progress=progress, baselines=baselines, started=started)
+                 for i in range(n))
     first = runs[0].summary["topics"]
     differing = sorted({t for r in runs[1:] for t in set(first) | set(r.summary["topics"])
                         if first.get(t, {}).get("sha256")
@@ -844,9 +868,21 @@ def recover(path: str | Path) -> RecoverResult:
     verdict INVALID: per-topic counts and digests of what was kept, no scores (the run did not
     finish, so nothing is compared with the baseline). A finished run with a valid bag is left
     as it is. Raises :class:`~harness.errors.BagError` (nothing written) when the bag cannot
-    be recovered."""
+    be recovered, and :class:`~harness.errors.RunInUseError` (nothing touched) when the run
+    is still being written: its lock is held (:mod:`harness.runlock`); a lock left by a dead
+    process is free. The run directory is owned while it is recovered."""
     p = Path(path)
-    run_dir = _run_dir_of(p.parent if p.is_file() else p)
+    base = p.parent if p.is_file() else p
+    for cand in (base, base.parent):  # a run directory, or its bag/
+        runlock.refuse_if_live(cand)
+    run_dir = _run_dir_of(base)
+    if run_dir is None:
+        return _recover(p, None)
+    with runlock.owning(run_dir, "recovered", fresh=False):
+        return _recover(p, run_dir)
+
+
+def _recover(p: Path, run_dir: Path | None) -> RecoverResult:
     marker = runmarker.read(run_dir) if run_dir is not None else None
     scenario = load_scenario(run_dir / "scenario.yaml") if run_dir is not None else None
     bag = recover_bag(p)
@@ -925,7 +961,10 @@ def diff_runs(a: str | Path, b: str | Path, *,
     divergence and per-field differences against ``tolerances``
     (``TOPIC_GLOB[:FIELD_GLOB]=ABS[,REL]`` strings or :class:`Tolerance`), and both runs'
     metrics side by side. ``result.exit_code`` is 0 when the recorded data are equal within
-    tolerance, 1 when not; bad input raises :class:`SrrError` (exit 2)."""
+    tolerance, 1 when not; bad input raises :class:`SrrError` (exit 2), and so does a run
+    still being written (:mod:`harness.runlock`)."""
+    for run in (a, b):
+        runlock.refuse_if_live(run)
     return _diff_runs(a, b, tolerances=tolerances)
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -204,12 +204,24 @@ def _cmd_replay(args: argparse.Namespace) -> int:
             task = bar.add_task(f"replay {args.run_dir.name}", total=None, sim="")
         try:
             res = api.replay(args.run_dir, suts=args.suts, overrides=args.overrides,
-                             out=args.out, progress=tick, baselines=args.baselines)
+                             out=args.out, progress=tick, baselines=args.baselines,
+                             started=_started(bar))
         finally:
             if bar is not None:
                 bar.stop()
     _print_run(res)
     return res.exit_code
+
+
+def _started(bar: Any) -> Callable[[Path], None]:
+    """What prints the run directory as soon as it exists (with or without ``-q``): the one to
+    give ``srr recover`` should the run be killed. On stdout, so an error on stderr stays one
+    line; above the progress bar, on its console, while one is shown (a line printed on
+    stdout would land inside the bar's line on the terminal)."""
+    def say(run_dir: Path) -> None:
+        (out_console if bar is None else bar.console).print(f"run directory: {run_dir}",
+                                                             markup=False)
+    return say
 
 
 def _live_config(args: argparse.Namespace) -> LiveConfig | None:
@@ -261,14 +273,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
         try:
             if args.repeat != 1:
                 rep = api.run_repeat(scenario, args.repeat, source=str(args.scenario),
-                                     out=args.out, progress=tick, baselines=args.baselines)
+                                     out=args.out, progress=tick, baselines=args.baselines,
+                                     started=_started(bar))
             else:
                 res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
                                        progress=tick, baselines=args.baselines,
                                        update_baseline=args.update_baseline,
                                        update_reason=args.reason, live=live,
                                        notice=lambda text: err_console.print(
-                                           f"srr run: {text}", markup=False))
+                                           f"srr run: {text}", markup=False),
+                                       started=_started(bar))
         finally:
             if bar is not None:
                 bar.stop()

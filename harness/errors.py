@@ -13,6 +13,7 @@ __all__ = [
     "InvalidRunError",
     "LiveViewError",
     "PluginError",
+    "RunInUseError",
     "RunStopped",
     "ScenarioError",
     "SimulationError",
@@ -84,6 +85,11 @@ class InvalidRunError(SrrError):
     """A health gate tripped, so the run's scores cannot be trusted."""
 
     exit_code = 3
+
+
+class RunInUseError(SrrError):
+    """A run directory is owned by a live process (harness.runlock): it is still being
+    written, so it can be neither read nor changed yet."""
 
 
 class RunStopped(SrrError):

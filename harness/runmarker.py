@@ -3,14 +3,17 @@
 A run writes it before anything else and removes it right after ``summary.json`` is in place,
 so a directory that holds it is a run that did not finish (it is still going, or it was
 killed). It says how far the run got (``phase``: ``recording`` during the tick loop,
-``finalizing`` from the end of the tick loop until the summary is written), the scenario file
-and the command that reproduces the run; ``srr recover`` reads it. It holds no wall-clock
-time.
+``finalizing`` from the end of the tick loop until the summary is written), which process
+writes the run (``pid`` and ``host``; whether it is alive is its lock's to say,
+:mod:`harness.runlock`), the scenario file and the command that reproduces the run;
+``srr recover`` reads it. It holds no wall-clock time.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import socket
 from pathlib import Path
 from typing import Any, Literal
 
@@ -23,8 +26,9 @@ Phase = Literal["recording", "finalizing"]
 
 
 def mark(run_dir: Path, phase: Phase, **info: Any) -> None:
-    """Write (atomically) or update the marker."""
-    write_json_atomic(Path(run_dir) / MARKER, {"phase": phase, **info})
+    """Write (atomically) or update the marker, naming this process as the writer."""
+    write_json_atomic(Path(run_dir) / MARKER, {"phase": phase, "pid": os.getpid(),
+                                               "host": socket.gethostname(), **info})
 
 
 def read(run_dir: Path) -> dict[str, Any] | None:

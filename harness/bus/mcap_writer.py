@@ -149,9 +149,9 @@ class McapWriter:
     # -- the file ----------------------------------------------------------------------------
 
     def start(self, profile: str, library: str) -> None:
-        self._write((MCAP0_MAGIC,))
+        # One write: a file killed now is empty or holds the whole header, never the magic alone
         Header(profile, library).write(self._records)
-        self._flush()
+        self._write((MCAP0_MAGIC, _take(self._records)))
 
     def register_schema(self, name: str, encoding: str, data: bytes) -> int:
         schema = Schema(id=len(self._schemas) + 1, data=data, encoding=encoding, name=name)

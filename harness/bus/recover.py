@@ -7,7 +7,8 @@ stream reader, keeps every chunk that is whole and passes its CRC, and writes a 
 file from their messages (the same writer as the recorder), then ``metadata.yaml`` with the
 kept counts. The original is kept beside it as ``<name>.mcap.damaged``; the new file is
 written under a temporary name and renamed into place, so the bag directory never holds a
-half-written ``.mcap``.
+half-written ``.mcap``. The file's length is measured once, before it is read, and nothing
+after it is read: a file that something still appends to cannot make the two passes disagree.
 
 What is refused (:class:`~harness.errors.BagError`, nothing written): an empty file, a file
 that is not MCAP, one cut inside its header, and a file that is corrupt rather than cut short
@@ -27,7 +28,7 @@ import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, BinaryIO, Literal
 
 import yaml
 from mcap.exceptions import McapError
@@ -136,16 +137,35 @@ def _ends_with_footer(path: Path, size: int) -> bool:
     return tail[-8:] == MAGIC and tail[:9] == _FOOTER_HEAD
 
 
-def _scan(path: Path, visit: Callable[[_Scan, list[Any]], None]) -> _Scan:
-    """Read ``path`` record by record; ``visit`` gets the records of each whole, CRC-valid
-    chunk (or a top-level message) in file order, up to the first unreadable byte."""
-    size = path.stat().st_size
+class _Prefix:
+    """The first ``size`` bytes of a binary file, read as a stream (the end of the file is
+    where the caller measured it, whatever is appended later)."""
+
+    def __init__(self, f: BinaryIO, size: int) -> None:
+        self._f = f
+        self._left = size
+
+    def read(self, n: int = -1) -> bytes:
+        data = self._f.read(self._left if n < 0 else min(n, self._left))
+        self._left -= len(data)
+        return data
+
+    def tell(self) -> int:
+        return self._f.tell()
+
+
+def _scan(path: Path, visit: Callable[[_Scan, list[Any]], None], size: int) -> _Scan:
+    """Read the first ``size`` bytes of ``path`` record by record; ``visit`` gets the records
+    of each whole, CRC-valid chunk (or a top-level message) in file order, up to the first
+    unreadable byte."""
     _check_start(path, size)
     finished_file = _ends_with_footer(path, size)
     scan = _Scan()
     bad: str | None = None  # the first chunk that could not be used
-    with path.open("rb") as f:
-        records = iter(StreamReader(f, emit_chunks=True, record_size_limit=size).records)
+    with path.open("rb") as raw:
+        f = _Prefix(raw, size)
+        records = iter(StreamReader(f, emit_chunks=True,  # type: ignore[arg-type]
+                                    record_size_limit=size).records)
         first = True
         while True:
             try:
@@ -188,7 +208,7 @@ def _scan(path: Path, visit: Callable[[_Scan, list[Any]], None]) -> _Scan:
         raise BagError(f"{path}: corrupt: {bad}; the file was finished, so this is not a "
                        "crash: not recovered")
     if scan.finished:
-        _check_summary(path, scan)
+        _check_summary(path, scan, size)
     return scan
 
 
@@ -204,15 +224,15 @@ def _describe(err: BaseException) -> str:
     return str(err) or type(err).__name__
 
 
-def _check_summary(path: Path, scan: _Scan) -> None:
+def _check_summary(path: Path, scan: _Scan, size: int) -> None:
     """A finished file's summary must pass its CRC (when it has one) and its index must agree
     with what was read from the chunks."""
     with path.open("rb") as f:
-        f.seek(-37, os.SEEK_END)
+        f.seek(size - 37)
         summary_start, _, crc = struct.unpack("<QQI", f.read(37)[9:29])
         if crc and summary_start:
             f.seek(summary_start)
-            if zlib.crc32(f.read(path.stat().st_size - 8 - 4 - summary_start)) != crc:
+            if zlib.crc32(f.read(size - 8 - 4 - summary_start)) != crc:
                 raise BagError(f"{path}: corrupt: the summary section fails its CRC check; "
                                "not recovered")
     total = sum(t.count for t in scan.channels.values())
@@ -324,11 +344,11 @@ def recover_bag(path: str | Path) -> RecoveredBag:
     _refuse_ros1(Path(path))
     bag_dir, mcap = locate_mcap(path)
     try:
-        scan = _scan(mcap, _collect())
+        size = mcap.stat().st_size  # once: both passes read this much, no more
+        scan = _scan(mcap, _collect(), size)
     except OSError as err:
         raise BagError(f"{mcap}: cannot read: {err.strerror or err}") from err
     stats = {t.meta.name: t.stats() for t in scan.channels.values()}
-    size = mcap.stat().st_size
     if scan.finished:
         if _metadata_agrees(bag_dir, mcap, scan):
             return RecoveredBag(bag_dir, mcap, "valid", stats, scan.chunks, 0)
@@ -349,7 +369,7 @@ def recover_bag(path: str | Path) -> RecoveredBag:
                 new = ids[channel] = writer.add_topic(topic.meta)
             writer.write(new, msg.log_time, msg.data)
 
-        again = _scan(mcap, _collect(write))
+        again = _scan(mcap, _collect(write), size)
         topics = [t for t in again.channels.values() if t.count]
         info = _metadata_of(mcap.name, [again.channels[c] for c in ids])
         writer.finish(dump_metadata(info))

@@ -220,3 +220,35 @@ def test_a_message_on_an_undefined_channel_is_refused(tmp_path: Path,
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and str(bag / "bag.mcap") in err and "channel 7" in err
     assert sorted(p.name for p in bag.iterdir()) == ["bag.mcap"]
+
+
+def test_what_is_appended_while_a_bag_is_read_is_not_read(small_bag: Path,
+                                                          tmp_path: Path) -> None:
+    """The file's length is measured once: a writer appending during the scan (the rest of the
+    recording, here written by the scan's own visitor) changes neither what is kept nor the
+    bytes said to be dropped, which are never negative."""
+    from harness.bus.recover import _collect, _scan
+
+    data = (small_bag / "bag.mcap").read_bytes()
+    cut = len(data) // 2
+    alone = tmp_path / "alone.mcap"
+    alone.write_bytes(data[:cut])
+    expected = _scan(alone, _collect(), cut)
+
+    growing = tmp_path / "growing.mcap"
+    growing.write_bytes(data[:cut])
+    collect = _collect()
+    appended: list[int] = []
+
+    def visit(scan: object, records: list[object]) -> None:
+        if not appended:  # the recorder writes on while the file is read
+            with growing.open("ab") as f:
+                appended.append(f.write(data[cut:]))
+        collect(scan, records)  # type: ignore[arg-type]
+
+    scan = _scan(growing, visit, cut)
+    assert appended and growing.stat().st_size == len(data)
+    assert not scan.finished and scan.chunks == expected.chunks < 8
+    assert scan.tail_start == expected.tail_start <= cut
+    assert {t.meta.name: t.count for t in scan.channels.values()} == {
+        t.meta.name: t.count for t in expected.channels.values()}
