@@ -521,6 +521,7 @@ class Graph:
         program. Called by every edit; a tick in progress finishes with the program it has."""
         self._data_in = None
         self._program = None
+        self._stage._forget_programs()
 
     def _index_data_in(self) -> dict[tuple[str, str], Connection]:
         if self._data_in is None:
@@ -575,6 +576,8 @@ class GraphStage:
         self._registry = registry if registry is not None else DEFAULT_REGISTRY
         self._graphs: dict[str, Graph] = {}
         self._tokens: list[Token[GraphStage | None]] = []
+        # Every graph's program, in order, for the next tick; dropped by any edit.
+        self._programs: tuple[Program, ...] | None = None
 
     def __repr__(self) -> str:
         return f"GraphStage(graphs={list(self._graphs)})"
@@ -622,6 +625,7 @@ class GraphStage:
             raise GraphError(f"{path}: a node already lives at that path")
         graph = Graph(self, path, evaluator_name=evaluator_name, pipeline_stage=pipeline_stage)
         self._graphs[path] = graph
+        self._programs = None
         return graph
 
     def graph(self, path: str) -> Graph:
@@ -642,6 +646,7 @@ class GraphStage:
         """Remove the graph at ``path``; unknown paths raise GraphError."""
         self.graph(path)
         del self._graphs[path]
+        self._programs = None
 
     def adopt(self, graph: Graph) -> None:
         """Move ``graph``, built on another stage with this stage's registry, onto this one
@@ -655,15 +660,24 @@ class GraphStage:
         other = graph.stage
         if other._graphs.get(graph.path) is graph:
             del other._graphs[graph.path]
+        other._programs = None
         graph._stage = self
         self._graphs[graph.path] = graph
+        self._programs = None
 
     def evaluate(self, ctx: Any) -> None:
         """Evaluate every graph once, in insertion order. Each graph's program is taken
         before any graph runs, so an edit made during the tick, of any graph of the stage,
         takes effect at the next tick (see :mod:`~harness.graph.program`)."""
-        for program in [graph.program() for graph in self._graphs.values()]:
+        programs = self._programs
+        if programs is None:
+            programs = self._programs = tuple(graph.program() for graph in self._graphs.values())
+        for program in programs:
             program.run(ctx)
+
+    def _forget_programs(self) -> None:
+        """A graph of the stage was edited: the next tick takes the programs anew."""
+        self._programs = None
 
     def reset(self) -> None:
         """Reset every node of every graph (see :meth:`Graph.reset`)."""

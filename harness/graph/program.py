@@ -63,14 +63,13 @@ __all__ = [
 
 
 class Evaluation:
-    """Book-keeping of one :meth:`Program.run`."""
+    """One :meth:`Program.run`: its context, and by its identity which data nodes it has
+    computed already (:attr:`NodeRuntime.pulled`)."""
 
-    __slots__ = ("computing", "ctx", "done")
+    __slots__ = ("ctx",)
 
     def __init__(self, ctx: Any) -> None:
         self.ctx = ctx
-        self.done: set[str] = set()
-        self.computing: set[str] = set()
 
 
 #: Reads one connected input during a run (the evaluation of the run).
@@ -141,8 +140,8 @@ class NodeRuntime:
     and writes serve only what the specialized ``db`` does not (names the node lacks, for the
     error messages)."""
 
-    __slots__ = ("bindings", "db", "decl", "evaluation", "fired", "impl", "initialized",
-                 "outputs")
+    __slots__ = ("bindings", "computing", "db", "decl", "evaluation", "fired", "impl",
+                 "initialized", "outputs", "pulled")
 
     def __init__(self, decl: NodeDeclarations, impl: NodeType) -> None:
         self.decl = decl
@@ -153,6 +152,9 @@ class NodeRuntime:
         self.evaluation: Evaluation | None = None
         # Execution outputs written by the compute in progress, by full name (made on demand).
         self.fired: dict[str, bool] | None = None
+        # A data node: the run that last computed it, and whether its compute is under way.
+        self.pulled: Evaluation | None = None
+        self.computing = False
         self.db = Database(self)
         self.reset_outputs()
 
@@ -315,6 +317,7 @@ def compile_program(graph: CompiledGraph) -> Program:
         connected.setdefault(c.dst_node, set()).add(c.dst_attr.partition(":")[2])
         if c.kind == "exec":
             exec_out.setdefault(c.src_node, []).append((c.src_attr, c.dst_node))
+    reading = {dst_node for dst_node, _ in data_in}
     entries: dict[tuple[str, str], _Resolved] = {}
     values = {name: node.values for name, node in nodes.items()}
     pulls = {name: _pull(graph.path, node) for name, node in nodes.items()
@@ -353,7 +356,7 @@ def compile_program(graph: CompiledGraph) -> Program:
         if made is None:
             children = tuple((src_attr, run_of(nodes[dst]))
                              for src_attr, dst in exec_out.get(node.name, ()) if dst in nodes)
-            made = runs[node.name] = _step(node, children)
+            made = runs[node.name] = _step(node, children, node.name in reading)
         return made
 
     return Program(tuple(run_of(node) for node in nodes.values() if node.kind == "event"))
@@ -400,11 +403,11 @@ def _pull(graph_path: str, node: CompiledNode) -> Pull:
     impl, db = runtime.impl, runtime.db
 
     def pull(evaluation: Evaluation) -> None:
-        if name in evaluation.done:
+        if runtime.pulled is evaluation:
             return
-        if name in evaluation.computing:
+        if runtime.computing:
             raise GraphError(f"{graph_path}: data cycle through {name}")
-        evaluation.computing.add(name)
+        runtime.computing = True
         runtime.evaluation = evaluation
         runtime.fired = None
         try:
@@ -417,8 +420,8 @@ def _pull(graph_path: str, node: CompiledNode) -> Pull:
         except Exception as err:
             raise failure(node, err) from err
         finally:
-            evaluation.computing.discard(name)
-        evaluation.done.add(name)
+            runtime.computing = False
+        runtime.pulled = evaluation
 
     return pull
 
@@ -431,12 +434,12 @@ def _output_reader(node: CompiledNode, full: str, attr: Attr, src: CompiledNode,
     src_attr = src.attr(src_full)
     same_type = src_attr is not None and src_attr.type == attr.type
     convert = converter(attr.type)
-    store = src.runtime.outputs
+    src_runtime = src.runtime
+    store = src_runtime.outputs
     runtime = node.runtime
-    src_name = src.name
 
     def read(evaluation: Evaluation | None) -> Any:
-        if pull is not None and evaluation is not None and src_name not in evaluation.done:
+        if pull is not None and evaluation is not None and src_runtime.pulled is not evaluation:
             pull(evaluation)
         raw = store[src_full]
         if same_type:
@@ -506,19 +509,45 @@ def _output_setter(runtime: NodeRuntime, outputs: Mapping[str, OutputSlot]) -> O
         full, stored_as, slot = entry
         if type(value) is stored_as:
             store[full] = value
+        elif slot.is_execution:
+            fired = runtime.fired
+            if fired is None:
+                fired = runtime.fired = {}
+            fired[full] = bool(value)
         else:
-            _store(runtime, slot, value)
+            assert slot.convert is not None
+            try:
+                store[full] = slot.convert(value)
+            except ValueError as err:
+                raise GraphError(f"{runtime.decl.path}.{full} (type {slot.type_name}): "
+                                 f"{err}") from err
 
     return set_output
 
 
-def _step(node: CompiledNode, children: tuple[tuple[str, Run], ...]) -> Run:
-    """The closure running the action or event ``node`` and the execution it lets through."""
+def _step(node: CompiledNode, children: tuple[tuple[str, Run], ...], reads: bool) -> Run:
+    """The closure running the action or event ``node`` and the execution it lets through.
+    ``reads``: the node has connected data inputs (their readers need the run in progress).
+    A node without execution targets never has its selection read, so it is not reset."""
     runtime = node.runtime
     impl, db = runtime.impl, runtime.db
 
+    def leaf(evaluation: Evaluation) -> None:
+        if reads:
+            runtime.evaluation = evaluation
+        try:
+            if not runtime.initialized:
+                impl.initialize(db, evaluation.ctx)
+                runtime.initialized = True
+            impl.compute(db, evaluation.ctx)
+        except SrrError:
+            raise
+        except Exception as err:
+            raise failure(node, err) from err
+
     def run(evaluation: Evaluation) -> None:
-        runtime.evaluation = evaluation
+        if reads:
+            runtime.evaluation = evaluation
         runtime.fired = None
         try:
             if not runtime.initialized:
@@ -530,12 +559,10 @@ def _step(node: CompiledNode, children: tuple[tuple[str, Run], ...]) -> Run:
             raise
         except Exception as err:
             raise failure(node, err) from err
-        if not children:
-            return
         fired = runtime.fired
         for src_attr, child in children:
             if fired and not fired.get(src_attr):  # outputs were selected, not this one
                 continue
             child(evaluation)
 
-    return run
+    return run if children else leaf
