@@ -200,9 +200,10 @@ class Database:
         """Resolve ``db.inputs`` / ``db.outputs`` for a planned node: ``inputs`` maps input
         names to their value (unconnected) or a ``property`` (connected); ``set_output``
         becomes ``db.outputs.__setattr__``. The same objects change class, so a reference to
-        ``db.inputs`` kept across an edit sees the edit. Names starting with ``__`` are
-        never served (Python protocol probes keep the ordinary look-up). ``connected``: the
-        connected inputs' names, which :meth:`is_connected` then answers at once."""
+        ``db.inputs`` kept across an edit sees it once the graph's program is compiled anew.
+        Names starting with ``__`` are never served (Python protocol probes keep the ordinary
+        look-up). ``connected``: the connected inputs' names, which :meth:`is_connected` then
+        answers at once."""
         plain_in, plain_out = self._plain
         self._connected = connected
         members = {k: v for k, v in inputs.items() if k[:2] != "__"}

@@ -402,6 +402,19 @@ def test_an_edit_of_a_later_graph_during_a_tick_takes_effect_at_the_next_tick(
         assert names(run_ticks(stage, 1)) == ["B", "C"]
 
 
+def test_a_graph_compiles_one_program_per_edit(stage: GraphStage) -> None:
+    og.Controller.edit("/G", {
+        keys.CREATE_NODES: [("Tick", TICK), ("A", "test.Record")],
+        keys.CONNECT: [("Tick.outputs:tick", "A.inputs:execIn")],
+    })
+    graph = stage.graph("/G")
+    first = graph.program()
+    run_ticks(stage, 2)
+    assert graph.program() is first
+    og.Controller.edit("/G", {keys.SET_VALUES: [("A.inputs:value", 1)]})
+    assert graph.program() is not first
+
+
 def test_each_node_keeps_one_db_across_ticks(stage: GraphStage) -> None:
     seen: list[int] = []
 
