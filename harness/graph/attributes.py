@@ -246,7 +246,7 @@ def converter(type_name: str) -> Converter:
     """``coerce`` with the type already dispatched: ``converter(t)(v) == coerce(t, v)``.
 
     The engine resolves one per attribute when it plans a node (see
-    :mod:`harness.graph.plan`), so per-tick writes and reads skip the type dispatch.
+    :mod:`harness.graph.program`), so per-tick writes and reads skip the type dispatch.
     Unknown type names raise ValueError, as :func:`coerce` does.
     """
     found = _CONVERTERS.get(type_name)

@@ -1,17 +1,11 @@
-"""Graphs, nodes, connections and the action-graph evaluator.
+"""Graphs, nodes, connections and the stage holding them: the graph as users edit it.
 
 A :class:`GraphStage` holds graphs keyed by path (insertion ordered); ``with stage:`` makes it
-the current stage the :class:`~harness.graph.controller.Controller` edits. ``Graph.evaluate``
-runs one tick with OmniGraph action-graph semantics:
-
-* every event node fires, in creation order: its compute runs and, when it returns True,
-  execution is pushed from its execution outputs along their connections, depth-first in
-  connection order;
-* an action node reached by execution computes (pulling its data inputs) and, when compute
-  returns True, pushes on; a node reached twice (fan-in) runs twice;
-* data nodes compute lazily when one of their outputs is pulled, at most once per evaluation.
-
-Execution cycles and data-pull cycles are refused when connected (and guarded at run time).
+the current stage the :class:`~harness.graph.controller.Controller` edits. Every edit checks
+its arguments (execution cycles and data-pull cycles are refused when connected) and drops the
+graph's compiled program; ``Graph.evaluate`` runs one tick with the program, compiled anew
+after an edit (:mod:`harness.graph.program`, which also says when an edit made during a tick
+takes effect).
 """
 
 from __future__ import annotations
@@ -24,18 +18,18 @@ from dataclasses import dataclass
 from types import MappingProxyType, TracebackType
 from typing import Any, Literal
 
-from harness.errors import GraphError, SrrError
-from harness.graph.attributes import EXECUTION, Attr, coerce, compatible, is_valid_attr_name
-from harness.graph.node import MISSING, Database, NodeType
-from harness.graph.plan import (
-    Evaluation,
-    GraphPlan,
-    NodePlan,
-    build_graph_plan,
-    build_plan,
+from harness.errors import GraphError
+from harness.graph.attributes import (
+    EXECUTION,
+    Attr,
+    coerce,
+    compatible,
+    converter,
+    is_valid_attr_name,
 )
+from harness.graph.node import NodeType
+from harness.graph.program import NodeRuntime, Program, compile_program
 from harness.graph.registry import DEFAULT_REGISTRY, Registry
-from harness.graph.runner import Run, compile_flow, failure
 
 __all__ = [
     "Attribute",
@@ -118,24 +112,23 @@ class Node:
         self.name = name
         self.type_name = type_name
         self.canonical_type = canonical_type
-        self.impl: NodeType = cls()
         self._static: dict[str, Attr] = {}
         for port, attrs in (("inputs", cls.inputs), ("outputs", cls.outputs)):
             for attr in attrs:
                 self._static[f"{port}:{attr.name}"] = attr
         self._dynamic: dict[str, Attr] = {}
         self._values: dict[str, Any] = {}
-        self._outputs: dict[str, Any] = {}
-        self._initialized = False
-        # Resolved bindings, built by Graph._build_plan and dropped by Graph._invalidate.
-        self._plan: NodePlan | None = None
-        # The port and ``db`` every compute of this node gets (one pair, reused every run).
-        self._binding = _Binding(self)
-        self._db = Database(self._binding)
-        self._reset_outputs()
+        #: The node's evaluation state (implementation, ``db``, output values), which the
+        #: graph's programs run; it outlives every program.
+        self.runtime = NodeRuntime(self, cls())
 
     def __repr__(self) -> str:
         return f"Node({self.path!r}, {self.type_name!r})"
+
+    @property
+    def impl(self) -> NodeType:
+        """The node-type instance holding per-node state."""
+        return self.runtime.impl
 
     @property
     def graph(self) -> Graph:
@@ -207,7 +200,7 @@ class Node:
 
     def output_value(self, full_name: str) -> Any:
         """The value last stored on output ``full_name``."""
-        return self._outputs[full_name]
+        return self.runtime.outputs[full_name]
 
     def require_attr(self, full_name: str) -> Attr:
         """The declaration of ``full_name``; unknown names raise GraphError with a suggestion."""
@@ -223,19 +216,6 @@ class Node:
                 f"{full_name!r}{_suggest(full_name, known)}"
             )
         return attr
-
-    def _drop_plan(self) -> None:
-        """Forget the plan (an edit): the next access builds a new one."""
-        if self._plan is not None:
-            self._plan = None
-            self._db.generalize()
-
-    def _reset_outputs(self) -> None:
-        self._outputs = {
-            full: attr.default
-            for full, attr in self.attributes().items()
-            if full.startswith("outputs:")
-        }
 
 
 class Attribute:
@@ -286,101 +266,6 @@ class Attribute:
         return self.name
 
 
-class _Binding:
-    """Implements :class:`~harness.graph.node.NodePort` for one node.
-
-    Each node has one, made with the node and reused by every run: :meth:`Graph._run` points
-    it at the evaluation in progress and clears :attr:`fired` before each compute (a node
-    never runs inside its own compute: execution and data cycles are refused).
-
-    Reads and writes go through the node's :class:`~harness.graph.plan.NodePlan`, fetched
-    from the node on every access (never kept here): a compute that edits the graph (e.g. adds
-    an attribute to its own node) drops the plan, and the next access sees the new bindings.
-    """
-
-    __slots__ = ("_evaluation", "_node", "fired")
-
-    def __init__(self, node: Node) -> None:
-        self._node = node
-        self._evaluation: Evaluation | None = None
-        # Execution outputs written by this run, by full name (created on the first write).
-        self.fired: dict[str, bool] | None = None
-
-    @property
-    def node_path(self) -> str:
-        return self._node.path
-
-    @property
-    def graph_path(self) -> str:
-        return self._node.graph_path
-
-    def input_attr(self, name: str) -> Attr | None:
-        return self._node.attr(f"inputs:{name}")
-
-    def output_attr(self, name: str) -> Attr | None:
-        return self._node.attr(f"outputs:{name}")
-
-    def input_names(self) -> tuple[str, ...]:
-        return tuple(a.name for a in self._node.input_attrs())
-
-    def output_names(self) -> tuple[str, ...]:
-        return tuple(a.name for a in self._node.output_attrs())
-
-    def read_input(self, name: str) -> Any:
-        """``db.inputs.<name>`` of a node whose ``db`` is not specialized yet (it builds the
-        plan, which specializes it) or for a name it lacks: the value or its reader."""
-        node = self._node
-        plan = node._plan
-        if plan is None:
-            plan = node._graph._build_plan(node)
-        entry = plan.readable.get(name)
-        if entry is None:
-            return MISSING
-        full, default, reader = entry
-        if reader is None:
-            return node._values.get(full, default)
-        return reader(self._evaluation)
-
-    def read_output(self, name: str) -> Any:
-        return self._node.output_value(f"outputs:{name}")
-
-    def write_output(self, name: str, value: Any) -> bool:
-        """``db.outputs.<name> = value`` before the ``db`` is specialized (the planned
-        setter of :mod:`.plan` follows the same rules); False when there is no such output.
-
-        A value already in the stored form of the output's type (a ``float`` for ``double``,
-        a ``str`` for ``string``...) is stored as is, which is what its converter would do.
-        """
-        node = self._node
-        plan = node._plan
-        if plan is None:
-            plan = node._graph._build_plan(node)
-        slot = plan.outputs.get(name)
-        if slot is None:
-            return False
-        if slot.is_execution:
-            if self.fired is None:
-                self.fired = {}
-            self.fired[slot.full] = bool(value)
-            return True
-        if type(value) is slot.stored_as:
-            node._outputs[slot.full] = value
-            return True
-        assert slot.convert is not None
-        try:
-            node._outputs[slot.full] = slot.convert(value)
-        except ValueError as err:
-            raise GraphError(f"{node.path}.{slot.full} (type {slot.type_name}): {err}") from err
-        return True
-
-    def is_connected(self, name: str) -> bool:
-        node = self._node
-        plan = node._plan
-        if plan is None:
-            plan = node._graph._build_plan(node)
-        return name in plan.connected
-
-
 class Graph:
     """An action graph: nodes in creation order and the connections between them."""
 
@@ -399,8 +284,7 @@ class Graph:
         self._nodes: dict[str, Node] = {}
         self._connections: list[Connection] = []
         self._data_in: dict[tuple[str, str], Connection] | None = None
-        self._flow: GraphPlan | None = None  # the execution flow, see .plan
-        self._tick: Run | None = None  # the flow compiled, see .runner
+        self._program: Program | None = None  # dropped by every edit
 
     def __repr__(self) -> str:
         return f"Graph({self.path!r}, nodes={len(self._nodes)})"
@@ -467,10 +351,9 @@ class Graph:
 
     def delete_node(self, name: str) -> None:
         """Delete a node and every connection touching it."""
-        node = self.node(name)
+        self.node(name)
         del self._nodes[name]
         self._connections = [c for c in self._connections if name not in (c.src_node, c.dst_node)]
-        node._drop_plan()
         self._invalidate()
 
     def create_attribute(self, node_name: str, full_name: str, type_name: str) -> Attr:
@@ -493,7 +376,7 @@ class Graph:
             raise GraphError(f"{where}: a {node.kind} node cannot have this execution attribute")
         node._dynamic[full_name] = attr
         if port == "outputs":
-            node._outputs[full_name] = attr.default
+            node.runtime.outputs[full_name] = attr.default
         self._invalidate()
         return attr
 
@@ -567,7 +450,7 @@ class Graph:
         if full_name.startswith("inputs:"):
             node._values[full_name] = coerced
         else:
-            node._outputs[full_name] = coerced
+            node.runtime.outputs[full_name] = coerced
         self._invalidate()
 
     def get_value(self, node_name: str, full_name: str) -> Any:
@@ -580,123 +463,65 @@ class Graph:
         node.require_attr(full_name)
         if full_name.startswith("outputs:"):
             return node.output_value(full_name)
-        return self._input_value(node, full_name, None)
+        return self._input_value(node, full_name)
+
+    def _input_value(self, node: Node, full_name: str) -> Any:
+        """An input's value now: its source's stored value (converted as a read in a tick
+        converts it) when connected, else the value set on it, else its default."""
+        attr = node.require_attr(full_name)
+        if attr.type == EXECUTION:
+            return None
+        conn = self._index_data_in().get((node.name, full_name))
+        if conn is None:
+            return node._values.get(full_name, attr.default)
+        src = self._nodes[conn.src_node]
+        if conn.src_attr.startswith("outputs:"):
+            raw = src.output_value(conn.src_attr)
+            src_decl = src.attr(conn.src_attr)
+            if src_decl is not None and src_decl.type == attr.type:
+                return raw
+        else:
+            raw = self._input_value(src, conn.src_attr)
+        try:
+            return converter(attr.type)(raw)
+        except ValueError as err:
+            raise GraphError(
+                f"{node.path}.{full_name} (type {attr.type}): value from "
+                f"{src.path}.{conn.src_attr} does not fit: {err}"
+            ) from err
 
     # -- evaluation ----------------------------------------------------------------------
 
-    def evaluate(self, ctx: Any) -> None:
-        """Run one tick: fire every event node in creation order (see the module docstring).
+    def program(self) -> Program:
+        """The graph compiled as it is now (:mod:`~harness.graph.program`): compiled at the
+        first call after an edit, then the same object until the next edit."""
+        program = self._program
+        if program is None:
+            program = self._program = compile_program(self)
+        return program
 
-        Execution follows the graph's plan (:class:`~harness.graph.plan.GraphPlan`), compiled
-        into closures (:mod:`~harness.graph.runner`). Should a compute edit the graph, the rest
-        of the tick resolves each step by name instead (:meth:`_fire`), so the edit is seen
-        exactly as it would be without a plan."""
-        tick = self._tick if self._flow is not None else self._build_flow()
-        assert tick is not None
-        tick(Evaluation(ctx))
+    def evaluate(self, ctx: Any) -> None:
+        """Run one tick with the graph's program (see :mod:`~harness.graph.program`; an edit
+        made during the tick takes effect at the next one)."""
+        self.program().run(ctx)
 
     def reset(self) -> None:
         """Reset every node: ``NodeType.reset``, outputs back to defaults, re-initialize later."""
         for node in self._nodes.values():
-            node.impl.reset()
-            node._reset_outputs()
-            node._initialized = False
+            runtime = node.runtime
+            runtime.impl.reset()
+            runtime.reset_outputs()
+            runtime.initialized = False
         self._invalidate()
-
-    def _fire(self, node: Node, evaluation: Evaluation) -> None:
-        """Run ``node`` and push execution on, resolving targets by name (after an edit)."""
-        stack = evaluation.exec_stack
-        if node.name in stack:
-            chain = " -> ".join([*stack, node.name])
-            raise GraphError(f"{self.path}: execution cycle {chain}")
-        stack.append(node.name)
-        try:
-            if self._run(node, evaluation):
-                self._push(node, evaluation)
-        finally:
-            stack.pop()
-
-    def _push(self, node: Node, evaluation: Evaluation) -> None:
-        """Fire the targets of the execution outputs ``node``'s last compute let through."""
-        fired = node._binding.fired
-        selected = {name for name, on in fired.items() if on} if fired else None
-        # The plan is fetched after compute, which may have edited the graph; its exec_out
-        # is an immutable snapshot, like the copy of the connection list it replaces.
-        plan = node._plan if node._plan is not None else self._build_plan(node)
-        for src_attr, dst_name in plan.exec_out:
-            if selected is not None and src_attr not in selected:
-                continue
-            target = self._nodes.get(dst_name)
-            if target is not None:
-                self._fire(target, evaluation)
-
-    def _run(self, node: Node, evaluation: Evaluation) -> bool:
-        binding = node._binding
-        binding._evaluation = evaluation
-        binding.fired = None
-        db = node._db
-        try:
-            if not node._initialized:
-                node.impl.initialize(db, evaluation.ctx)
-                node._initialized = True
-            return bool(node.impl.compute(db, evaluation.ctx))
-        except SrrError:
-            raise
-        except Exception as err:
-            raise failure(node, err) from err
-
-    def _pull(self, node: Node, evaluation: Evaluation) -> None:
-        if node.name in evaluation.done:
-            return
-        if node.name in evaluation.computing:
-            raise GraphError(f"{self.path}: data cycle through {node.name}")
-        evaluation.computing.add(node.name)
-        try:
-            self._run(node, evaluation)
-        finally:
-            evaluation.computing.discard(node.name)
-        evaluation.done.add(node.name)
-
-    def _input_value(self, node: Node, full_name: str, evaluation: Evaluation | None) -> Any:
-        attr = node.require_attr(full_name)
-        if attr.type == EXECUTION:
-            return None
-        plan = node._plan if node._plan is not None else self._build_plan(node)
-        _, default, reader = plan.inputs[full_name.partition(":")[2]]
-        if reader is None:
-            return node._values.get(full_name, default)
-        return reader(evaluation)
-
-    # -- plans -----------------------------------------------------------------------------
-
-    def _build_plan(self, node: Node) -> NodePlan:
-        """The node's resolved bindings, built now when the last edit dropped them."""
-        plan = build_plan(
-            node, self._nodes, tuple(self._connections), self._pull, self._input_value
-        )
-        node._plan = plan
-        node._db.specialize(plan.members, plan.set_output, plan.connected)
-        return plan
-
-    def _build_flow(self) -> Run:
-        """The graph's execution flow and its compiled tick, built now when the last edit
-        dropped them."""
-        events = tuple(n for n in self._nodes.values() if n.kind == "event")
-        flow = build_graph_plan(
-            events, self._nodes, lambda n: n._plan if n._plan is not None else self._build_plan(n)
-        )
-        self._flow, self._tick = flow, compile_flow(self, flow)
-        return self._tick
 
     # -- indexes and cycle checks --------------------------------------------------------
 
     def _invalidate(self) -> None:
-        """Drop every cache derived from the graph's structure: the data-input index, the
-        execution flow and each node's plan. Called by every edit (see :mod:`.plan`)."""
+        """Drop every cache derived from the graph's structure: the data-input index and the
+        program. Called by every edit; a tick in progress finishes with the program it has."""
         self._data_in = None
-        self._flow = self._tick = None
-        for node in self._nodes.values():
-            node._drop_plan()
+        self._program = None
+        self._stage._forget_programs()
 
     def _index_data_in(self) -> dict[tuple[str, str], Connection]:
         if self._data_in is None:
@@ -751,6 +576,8 @@ class GraphStage:
         self._registry = registry if registry is not None else DEFAULT_REGISTRY
         self._graphs: dict[str, Graph] = {}
         self._tokens: list[Token[GraphStage | None]] = []
+        # Every graph's program, in order, for the next tick; dropped by any edit.
+        self._programs: tuple[Program, ...] | None = None
 
     def __repr__(self) -> str:
         return f"GraphStage(graphs={list(self._graphs)})"
@@ -798,6 +625,7 @@ class GraphStage:
             raise GraphError(f"{path}: a node already lives at that path")
         graph = Graph(self, path, evaluator_name=evaluator_name, pipeline_stage=pipeline_stage)
         self._graphs[path] = graph
+        self._programs = None
         return graph
 
     def graph(self, path: str) -> Graph:
@@ -818,6 +646,7 @@ class GraphStage:
         """Remove the graph at ``path``; unknown paths raise GraphError."""
         self.graph(path)
         del self._graphs[path]
+        self._programs = None
 
     def adopt(self, graph: Graph) -> None:
         """Move ``graph``, built on another stage with this stage's registry, onto this one
@@ -831,13 +660,24 @@ class GraphStage:
         other = graph.stage
         if other._graphs.get(graph.path) is graph:
             del other._graphs[graph.path]
+        other._programs = None
         graph._stage = self
         self._graphs[graph.path] = graph
+        self._programs = None
 
     def evaluate(self, ctx: Any) -> None:
-        """Evaluate every graph once, in insertion order."""
-        for graph in list(self._graphs.values()):
-            graph.evaluate(ctx)
+        """Evaluate every graph once, in insertion order. Each graph's program is taken
+        before any graph runs, so an edit made during the tick, of any graph of the stage,
+        takes effect at the next tick (see :mod:`~harness.graph.program`)."""
+        programs = self._programs
+        if programs is None:
+            programs = self._programs = tuple(graph.program() for graph in self._graphs.values())
+        for program in programs:
+            program.run(ctx)
+
+    def _forget_programs(self) -> None:
+        """A graph of the stage was edited: the next tick takes the programs anew."""
+        self._programs = None
 
     def reset(self) -> None:
         """Reset every node of every graph (see :meth:`Graph.reset`)."""

@@ -55,8 +55,8 @@ MISSING: Any = _Missing()
 class NodePort(Protocol):
     """What a :class:`Database` needs from the engine for one node during one evaluation.
 
-    ``read_input`` and ``write_output`` serve a ``db`` the engine has not specialized for
-    a planned node (see :meth:`Database.specialize`): they check the name
+    ``read_input`` and ``write_output`` serve what a specialized ``db`` does not (see
+    :meth:`Database.specialize`): they check the name
     themselves (``read_input`` returns :data:`MISSING`, ``write_output`` False, for a name the
     node does not have, and never serve inputs whose names start with ``__``), so ``db``
     makes one call per access and builds its error messages only on a miss.
@@ -95,10 +95,10 @@ class _Inputs:
     name that does not start with ``__`` is free for an input.
 
     That plain class resolves each read through the port (``__getattr__``: the ordinary
-    look-up fails first). Once the engine has planned the node it swaps the object's class
-    for a planned subclass (:meth:`Database.specialize`) holding each unconnected input's
-    value as a class attribute and each connected input as a property, so a read is one
-    attribute look-up (and one call when connected); any edit swaps the plain class back."""
+    look-up fails first). Each program compiled for the node's graph swaps the object's class
+    for a subclass (:meth:`Database.specialize`) holding each unconnected input's value as a
+    class attribute and each connected input as a property, so a read is one attribute
+    look-up (and one call when connected); the port then serves only names the node lacks."""
 
     __slots__ = ()
 
@@ -200,23 +200,16 @@ class Database:
         """Resolve ``db.inputs`` / ``db.outputs`` for a planned node: ``inputs`` maps input
         names to their value (unconnected) or a ``property`` (connected); ``set_output``
         becomes ``db.outputs.__setattr__``. The same objects change class, so a reference to
-        ``db.inputs`` kept across an edit sees the edit. Names starting with ``__`` are
-        never served (Python protocol probes keep the ordinary look-up). ``connected``: the
-        connected inputs' names, which :meth:`is_connected` then answers at once."""
+        ``db.inputs`` kept across an edit sees it once the graph's program is compiled anew.
+        Names starting with ``__`` are never served (Python protocol probes keep the ordinary
+        look-up). ``connected``: the connected inputs' names, which :meth:`is_connected` then
+        answers at once."""
         plain_in, plain_out = self._plain
         self._connected = connected
         members = {k: v for k, v in inputs.items() if k[:2] != "__"}
         _set_class(self.inputs, type("PlannedInputs", (plain_in,), {"__slots__": (), **members}))
         _set_class(self.outputs, type("PlannedOutputs", (plain_out,), {
             "__slots__": (), "__setattr__": set_output}))
-
-    def generalize(self) -> None:
-        """Back to the plain classes (an edit dropped the node's plan)."""
-        plain_in, plain_out = self._plain
-        self._connected = frozenset()
-        if type(self.inputs) is not plain_in:
-            _set_class(self.inputs, plain_in)
-            _set_class(self.outputs, plain_out)
 
     def unknown_output(self, name: str) -> AttributeLookupError:
         """The error for writing an output the node does not have."""

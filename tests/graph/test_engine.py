@@ -332,18 +332,24 @@ class _Editor(NodeType):
                 graph.delete_node("B")
             elif self.edit == "attribute":  # the ROS 2 Subscriber's way: outputs of its own
                 graph.create_attribute("E", "outputs:extra", "double")
+            elif self.edit == "value":  # an input of a node that runs later in this tick
+                graph.set_value("B", "inputs:value", "set")
+            elif self.edit == "other graph":  # a graph that evaluates after this one
+                og.Controller.edit("/H", {keys.CONNECT: [("Tick.outputs:tick",
+                                                          "C.inputs:execIn")]})
         return True
 
 
 @pytest.mark.parametrize(("edit", "first", "then"), [
-    ("connect", ["A", "Late", "B"], ["A", "Late", "B"]),
-    ("delete", ["A"], ["A"]),
+    ("connect", ["A", "B"], ["A", "Late", "B"]),
+    ("delete", ["A", "B"], ["A"]),
     ("attribute", ["A", "B"], ["A", "B"]),
 ])
-def test_an_edit_made_by_a_compute_shows_at_once(registry: Registry, edit: str,
-                                                 first: list[str], then: list[str]) -> None:
-    """The graph's plan is dropped mid-tick: the rest of the tick sees the edit, as when each
-    step was resolved by name."""
+def test_an_edit_made_by_a_compute_takes_effect_at_the_next_tick(
+        registry: Registry, edit: str, first: list[str], then: list[str]) -> None:
+    """The tick in progress finishes with the program it started with (a node deleted meanwhile
+    still runs, a new connection is not followed); the next tick runs the edited graph. The
+    edit itself shows at once to queries."""
     registry.register("test.Editor")(type("Editor", (_Editor,), {"edit": edit}))
     with GraphStage(registry=registry) as stage:
         og.Controller.edit("/G", {
@@ -354,7 +360,59 @@ def test_an_edit_made_by_a_compute_shows_at_once(registry: Registry, edit: str,
                            ("Tick.outputs:tick", "B.inputs:execIn")],
         })
         assert names(run_ticks(stage, 1)) == first
+        graph = stage.graph("/G")
+        if edit == "connect":
+            assert [c.dst_node for c in graph.node("E").connections
+                    if c.src_node == "E"] == ["A", "Late"]
+        elif edit == "delete":
+            assert not graph.has_node("B")
         assert names(run_ticks(stage, 1)) == then
+
+
+def test_a_value_set_during_a_tick_is_read_from_the_next_tick(registry: Registry) -> None:
+    registry.register("test.Editor")(type("Editor", (_Editor,), {"edit": "value"}))
+    with GraphStage(registry=registry) as stage:
+        og.Controller.edit("/G", {
+            keys.CREATE_NODES: [("Tick", TICK), ("E", "test.Editor"), ("B", "test.Record")],
+            keys.CONNECT: [("Tick.outputs:tick", "E.inputs:execIn"),
+                           ("Tick.outputs:tick", "B.inputs:execIn")],
+            keys.SET_VALUES: [("B.inputs:value", "before")],
+        })
+        ctx = run_ticks(stage, 1)
+        assert og.Controller.get("/G/B.inputs:value") == "set"  # the graph has it at once
+        run_ticks(stage, 1, ctx)
+        assert ctx.log == [("B", "before"), ("B", "set")]
+
+
+def test_an_edit_of_a_later_graph_during_a_tick_takes_effect_at_the_next_tick(
+        registry: Registry) -> None:
+    """Every graph of the stage runs the program it had when the tick began, including a graph
+    that evaluates after the one whose node edited it."""
+    registry.register("test.Editor")(type("Editor", (_Editor,), {"edit": "other graph"}))
+    with GraphStage(registry=registry) as stage:
+        og.Controller.edit("/G", {
+            keys.CREATE_NODES: [("Tick", TICK), ("E", "test.Editor")],
+            keys.CONNECT: [("Tick.outputs:tick", "E.inputs:execIn")],
+        })
+        og.Controller.edit("/H", {
+            keys.CREATE_NODES: [("Tick", TICK), ("B", "test.Record"), ("C", "test.Record")],
+            keys.CONNECT: [("Tick.outputs:tick", "B.inputs:execIn")],
+        })
+        assert names(run_ticks(stage, 1)) == ["B"]
+        assert names(run_ticks(stage, 1)) == ["B", "C"]
+
+
+def test_a_graph_compiles_one_program_per_edit(stage: GraphStage) -> None:
+    og.Controller.edit("/G", {
+        keys.CREATE_NODES: [("Tick", TICK), ("A", "test.Record")],
+        keys.CONNECT: [("Tick.outputs:tick", "A.inputs:execIn")],
+    })
+    graph = stage.graph("/G")
+    first = graph.program()
+    run_ticks(stage, 2)
+    assert graph.program() is first
+    og.Controller.edit("/G", {keys.SET_VALUES: [("A.inputs:value", 1)]})
+    assert graph.program() is not first
 
 
 def test_each_node_keeps_one_db_across_ticks(stage: GraphStage) -> None:
@@ -379,8 +437,10 @@ def test_each_node_keeps_one_db_across_ticks(stage: GraphStage) -> None:
     assert len(seen) == 4 and len(set(seen)) == 1
 
 
-def test_an_edit_by_a_node_with_no_targets_yet_fires_the_new_one(registry: Registry) -> None:
-    """A node whose execution output led nowhere connects a target: it runs in that tick."""
+def test_an_edit_by_a_node_with_no_targets_yet_fires_the_new_one_next_tick(
+        registry: Registry) -> None:
+    """A node whose execution output led nowhere connects a target: it runs from the next
+    tick on."""
     registry.register("test.Editor")(type("Editor", (_Editor,), {"edit": "connect"}))
     with GraphStage(registry=registry) as stage:
         og.Controller.edit("/G", {
@@ -389,7 +449,7 @@ def test_an_edit_by_a_node_with_no_targets_yet_fires_the_new_one(registry: Regis
             keys.CONNECT: [("Tick.outputs:tick", "E.inputs:execIn"),
                            ("Tick.outputs:tick", "B.inputs:execIn")],
         })
-        assert names(run_ticks(stage, 1)) == ["Late", "B"]
+        assert names(run_ticks(stage, 1)) == ["B"]
         assert names(run_ticks(stage, 1)) == ["Late", "B"]
 
 
