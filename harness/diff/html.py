@@ -21,13 +21,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from jinja2 import Environment, StrictUndefined
 from markupsafe import Markup
 
 from harness import __version__
 from harness.atomic import write_text_atomic
 from harness.diff.result import DiffResult, TopicDiff
-from harness.diff.templates import DELTA_MACRO, DIFF, DIFF_CSS
 from harness.report.data import Moment, RunData, load_run
 from harness.report.html import fmt_value
 from harness.report.images import (
@@ -39,7 +37,7 @@ from harness.report.images import (
     nearest_images,
 )
 from harness.report.plots import BASELINE, CANDIDATE, map_legend, map_svg, time_panels
-from harness.report.templates import CSS, MACROS
+from harness.report.templates import template
 
 __all__ = ["diff_moments", "render_diff", "write_diff"]
 
@@ -249,7 +247,6 @@ def render_diff(result: DiffResult, *, data_a: RunData | None = None,
         toc.append(("timeseries", "Time series"))
     toc.append(("fields", "Numeric differences"))
     ctx = {
-        "css": Markup(CSS + DIFF_CSS),
         "verdict": result.verdict,
         "verdict_text": result.verdict.replace("_", " "),
         "exit_code": result.exit_code,
@@ -279,9 +276,7 @@ def render_diff(result: DiffResult, *, data_a: RunData | None = None,
         "fields_more": max(0, len(fields) - MAX_FIELDS),
         "srr_version": __version__,
     }
-    env = Environment(autoescape=True, undefined=StrictUndefined, trim_blocks=True,
-                      lstrip_blocks=True)
-    return env.from_string(MACROS + DELTA_MACRO + DIFF).render(**ctx)
+    return template("diff.html").render(**ctx)
 
 
 def write_diff(result: DiffResult, path: str | Path) -> Path:

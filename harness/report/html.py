@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from jinja2 import Environment, StrictUndefined
 from markupsafe import Markup
 
 from harness import __version__
@@ -40,7 +39,7 @@ from harness.report.plots import (
     map_svg,
     time_panels,
 )
-from harness.report.templates import CSS, MACROS, REPORT
+from harness.report.templates import template
 from harness.scenario import Scenario
 from harness.summary import replay_note
 
@@ -280,11 +279,6 @@ def _exact_command(data: RunData) -> str:
     return " ".join(shlex.quote(p) for p in parts)
 
 
-def _environment() -> Environment:
-    return Environment(autoescape=True, undefined=StrictUndefined, trim_blocks=True,
-                       lstrip_blocks=True)
-
-
 def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
                   scenario: Scenario | None = None, frames: Frames | None = None) -> str:
     """The HTML text of a run directory's report.
@@ -366,7 +360,6 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
                      ("baseline digest", f"{baseline.get('digest', '')} ("
                       + ("same" if baseline.get("digest_matches") else "differs") + ")")]
     ctx = {
-        "css": Markup(CSS),
         "verdict": verdict,
         "exit_code": s.get("exit_code", ""),
         "scenario_name": s.get("scenario", data.run_dir.name),
@@ -406,7 +399,7 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
         "srr_version": __version__,
         "run_dir": str(data.run_dir),
     }
-    return _environment().from_string(MACROS + REPORT).render(**ctx)
+    return template("report.html").render(**ctx)
 
 
 def write_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,

@@ -21,7 +21,6 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 from urllib.parse import quote
 
-from jinja2 import Environment, StrictUndefined
 from markupsafe import Markup
 
 from harness import __version__
@@ -37,7 +36,7 @@ from harness.report.suite_plots import (
     sweep_figure,
     verdict_strip,
 )
-from harness.report.templates import CSS, MACROS, SUITE
+from harness.report.templates import template
 
 __all__ = ["SUITE_PAGE_NAME", "VERDICT_ORDER", "render_suite_page", "write_suite_page"]
 
@@ -518,13 +517,16 @@ def render_suite_page(summary: Mapping[str, Any], *, root: Path | None = None) -
     sweeps = [v for v in (_sweep_view(sw, by_id, runs_by_id)
                           for sw in summary.get("sweeps") or [] if isinstance(sw, Mapping))
               if v is not None]
-    env = Environment(autoescape=True, undefined=StrictUndefined, trim_blocks=True,
-                      lstrip_blocks=True)
-    template = env.from_string(MACROS + SUITE)
-    return template.render(
-        css=Markup(CSS), b=_banner(summary, views, len(runs_by_id)), groups=views,
-        sweeps=sweeps, history=_history_view(summary.get("history"), views, by_id),
-        srr_version=__version__)
+    banner = _banner(summary, views, len(runs_by_id))
+    history = _history_view(summary.get("history"), views, by_id)
+    toc = [("groups", "Groups"), ("stats", "Metric statistics")]
+    if sweeps:
+        toc.append(("sweeps", "Sweeps"))
+    if history:
+        toc.append(("history", "History"))
+    return template("suite.html").render(
+        verdict=banner.verdict, exit_code=banner.exit_code, toc=toc, b=banner, groups=views,
+        sweeps=sweeps, history=history, srr_version=__version__)
 
 
 def write_suite_page(out_dir: Path, summary: Mapping[str, Any]) -> Path:
