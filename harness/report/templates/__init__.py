@@ -3,13 +3,14 @@
 The templates are the files in this folder (``harness/report/templates/``), shipped as
 package data:
 
-* ``page.html`` the frame of every page: head, stylesheet, body and footer;
+* ``page.html`` the frame every page extends: head and stylesheet, verdict banner, table of
+  contents, footer;
 * ``page.css`` the stylesheet of every page (its verdict colours are :data:`VERDICT_COLORS`),
   ``diff.css`` what the ``srr diff --html`` page adds to it;
-* ``macros.html`` the pieces the pages share: verdict banner, table of contents, notices,
-  map with its moments, series-plot panels and their legends, metric tables, run cards;
+* ``macros.html`` the pieces the pages share: notices, the map with its moments, series-plot
+  panels and their legends, key-value lists and run cards, metric tables;
 * ``report.html`` (a run's ``report.html``), ``diff.html`` (``srr diff --html``) and
-  ``suite.html`` (``srr suite``'s ``index.html``), each extending ``page.html``.
+  ``suite.html`` (``srr suite``'s ``index.html``).
 
 Autoescaping is on: every value is text unless wrapped in ``Markup`` (the SVGs the report
 builds itself).
