@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Collection, Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Literal
@@ -202,7 +202,7 @@ class Recording:
         return deserialize(raw, conn.msgtype if self.encoding == "cdr" else conn.recorded_type,
                            self.encoding)
 
-    def _read(self) -> Any:
+    def _read(self) -> AbstractContextManager[None]:
         """The translation of read errors for this recording (:func:`reading`)."""
         return reading(self.shown, self.what)
 
