@@ -61,12 +61,11 @@ import pandas as pd
 from pandas.api.types import union_categoricals
 from rosbags.serde import SerdeError
 
-from harness.bag import BAG_READ_ERRORS
 from harness.bus.bagread import Encoding, open_indexed, ros1_recording
 from harness.bus.endpoints import tf_tree_of
 from harness.bus.messages import TYPESTORE
 from harness.bus.ros1 import deserialize_ros1
-from harness.errors import BagError, reason
+from harness.errors import BagError
 
 __all__ = [
     "CLOCK",
@@ -720,55 +719,52 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
         p = p / "bag"
     if not p.is_file() and not (p / "metadata.yaml").exists() and ros1_recording(p) is None:
         raise BagError(f"{bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
-    try:
-        with open_indexed(p) as reader:
-            encoding: Encoding = reader.encoding
-            conns = list(reader.connections)
-            wanted: dict[int, str] = {}
-            for c in conns:
-                keep = (
-                    (c.topic == clock_topic and c.msgtype == CLOCK)
-                    or (c.topic == muted_topic and c.msgtype == BOOL)
-                    or (c.msgtype == TF_MESSAGE and (tf_tree_of(c.topic) is not None
-                                                     or GT_TOPIC.match(c.topic) is not None))
-                    or c.msgtype in (ODOMETRY, TWIST)
-                    or (c.msgtype == MARKER_ARRAY
-                        and (marker_topics is None or c.topic in marker_topics)))
-                if keep:
-                    wanted[c.id] = c.topic
-            # Memory stays flat in the bag's length: log times go into compact arrays and
-            # the wanted payloads are decoded every _DECODE_BATCH messages, not kept.
-            # the transform tree's topics go straight into the tf table's columns
-            tree = {cid for cid, topic in wanted.items()
-                    if tf_tree_of(topic) is not None and GT_TOPIC.match(topic) is None}
-            log: dict[int, array[int]] = {c.id: array("q") for c in conns}
-            raws: dict[int, list[bytes]] = {cid: [] for cid in wanted}
-            parts: dict[int, list[dict[str, Any]]] = {cid: [] for cid in wanted}
-            types = {c.id: c.msgtype for c in conns}
+    with open_indexed(p, shown=bag_dir) as reader:
+        encoding: Encoding = reader.encoding
+        conns = list(reader.connections)
+        wanted: dict[int, str] = {}
+        for c in conns:
+            keep = (
+                (c.topic == clock_topic and c.msgtype == CLOCK)
+                or (c.topic == muted_topic and c.msgtype == BOOL)
+                or (c.msgtype == TF_MESSAGE and (tf_tree_of(c.topic) is not None
+                                                 or GT_TOPIC.match(c.topic) is not None))
+                or c.msgtype in (ODOMETRY, TWIST)
+                or (c.msgtype == MARKER_ARRAY
+                    and (marker_topics is None or c.topic in marker_topics)))
+            if keep:
+                wanted[c.id] = c.topic
+        # Memory stays flat in the bag's length: log times go into compact arrays and
+        # the wanted payloads are decoded every _DECODE_BATCH messages, not kept.
+        # the transform tree's topics go straight into the tf table's columns
+        tree = {cid for cid, topic in wanted.items()
+                if tf_tree_of(topic) is not None and GT_TOPIC.match(topic) is None}
+        log: dict[int, array[int]] = {c.id: array("q") for c in conns}
+        raws: dict[int, list[bytes]] = {cid: [] for cid in wanted}
+        parts: dict[int, list[dict[str, Any]]] = {cid: [] for cid in wanted}
+        types = {c.id: c.msgtype for c in conns}
 
-            def flush(cid: int) -> None:
-                batch, first = raws[cid], len(log[cid]) - len(raws[cid])
-                cols = _decode_part(batch, types[cid], fast, first, encoding)
-                if cid in tree:
-                    batch_log = np.frombuffer(log[cid][first:], dtype=np.int64)
-                    cols = _tf_part(cols, batch_log[cols["msg"] - first])
-                parts[cid].append(cols)
-                raws[cid] = []
+        def flush(cid: int) -> None:
+            batch, first = raws[cid], len(log[cid]) - len(raws[cid])
+            cols = _decode_part(batch, types[cid], fast, first, encoding)
+            if cid in tree:
+                batch_log = np.frombuffer(log[cid][first:], dtype=np.int64)
+                cols = _tf_part(cols, batch_log[cols["msg"] - first])
+            parts[cid].append(cols)
+            raws[cid] = []
 
-            for conn, t_ns, raw in reader.scan(set(wanted)):
-                cid = conn.id
-                log[cid].append(t_ns)
-                if cid in wanted:
-                    assert raw is not None
-                    raws[cid].append(raw)
-                    if len(raws[cid]) >= _DECODE_BATCH:
-                        flush(cid)
-            for cid in wanted:
-                if raws[cid] or not parts[cid]:
+        for conn, t_ns, raw in reader.scan(set(wanted)):
+            cid = conn.id
+            log[cid].append(t_ns)
+            if cid in wanted:
+                assert raw is not None
+                raws[cid].append(raw)
+                if len(raws[cid]) >= _DECODE_BATCH:
                     flush(cid)
-            start_ns, end_ns = int(reader.start_time), int(reader.end_time)
-    except BAG_READ_ERRORS as err:
-        raise BagError(f"{bag_dir}: cannot read bag: {reason(err)}") from err
+        for cid in wanted:
+            if raws[cid] or not parts[cid]:
+                flush(cid)
+        start_ns, end_ns = int(reader.start_time), int(reader.end_time)
     if start_ns > end_ns:  # empty bag: rosbags reports (max, 0)
         start_ns = end_ns = 0
 

@@ -29,15 +29,18 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from mcap.reader import make_reader
-from rosbags.serde import SerdeError
 
-from harness.bag import BAG_READ_ERRORS
 from harness.builders.camera_record import CompressedStream, compressed_streams, recorded_cameras
 from harness.bus import Bus, Qos
-from harness.bus.bagread import open_recording, ros1_recording
-from harness.bus.messages import TYPESTORE
-from harness.bus.ros1 import Ros1TypeError, deserialize_ros1, ros1_type, to_ros2
+from harness.bus.bagread import (
+    DECODE_ERRORS,
+    deserialize,
+    mcap_records,
+    open_recording,
+    reading,
+    ros1_recording,
+)
+from harness.bus.ros1 import ros1_type
 from harness.errors import BagError, VideoError, reason
 from harness.graph.nodes.camera import depth_image_message, rgb_image_message
 from harness.output import ROS2_OUTPUT, OutputKind
@@ -59,19 +62,42 @@ class RecordedTopic:
     qos: Qos
 
 
+def _key(node: Any, key: str) -> Any:
+    """``node[key]`` of a parsed ``metadata.yaml``; ``ValueError`` naming the key when
+    ``node`` is not a mapping that has it."""
+    if not isinstance(node, dict) or key not in node:
+        raise ValueError(repr(key))
+    return node[key]
+
+
+def _items(node: Any, key: str) -> list[Any]:
+    """The list ``node[key]`` of a parsed ``metadata.yaml`` (``ValueError`` if it is not
+    one)."""
+    value = _key(node, key)
+    if not isinstance(value, list):
+        raise ValueError(f"{key}: not a list")
+    return value
+
+
 def _qos(profiles: Any) -> Qos:
     """The first offered QoS profile of a rosbag2 ``topic_metadata`` (a list of mappings in
-    metadata version 9, a YAML string in older ones)."""
+    metadata version 9, a YAML string in older ones); ``ValueError`` (or a YAML error) for
+    one that is neither."""
     if isinstance(profiles, str):
         profiles = yaml.safe_load(profiles)
     if not profiles:
         return Qos()
+    if not isinstance(profiles, list):
+        raise ValueError("offered_qos_profiles: not a list")
     p = profiles[0]
-    return Qos(durability="transient_local" if str(p["durability"]).lower() in (
+    depth = p.get("depth", 10) if isinstance(p, dict) else None
+    if not isinstance(depth, int | float | str):
+        raise ValueError(f"offered_qos_profiles: depth {depth!r} is not a number")
+    return Qos(durability="transient_local" if str(_key(p, "durability")).lower() in (
                    "transient_local", "1") else "volatile",
-               reliability="best_effort" if str(p["reliability"]).lower() in (
+               reliability="best_effort" if str(_key(p, "reliability")).lower() in (
                    "best_effort", "2") else "reliable",
-               depth=max(int(p.get("depth", 10)), 1))
+               depth=max(int(depth), 1))
 
 
 #: A latched ROS 1 topic is played back transient-local, keeping as many messages as srr's
@@ -96,18 +122,16 @@ class Playback:
         if not (self.bag_dir / "metadata.yaml").is_file():
             raise BagError(f"{self.bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
         meta_file = self.bag_dir / "metadata.yaml"
-        try:
-            info = yaml.load(meta_file.read_text(encoding="utf-8"), Loader=_YamlLoader)[
-                "rosbag2_bagfile_information"]
+        with reading(meta_file, "not a rosbag2 metadata file"):
+            info = _key(yaml.load(meta_file.read_text(encoding="utf-8"), Loader=_YamlLoader),
+                        "rosbag2_bagfile_information")
             self.topics = {}
-            for entry in info["topics_with_message_count"]:
-                t = entry["topic_metadata"]
-                self.topics[str(t["name"])] = RecordedTopic(
-                    str(t["name"]), str(t["type"]), _qos(t.get("offered_qos_profiles")))
-            files = [self.bag_dir / str(p) for p in info["relative_file_paths"]]
-        except (OSError, KeyError, IndexError, ValueError, TypeError, UnicodeDecodeError,
-                yaml.YAMLError) as err:
-            raise BagError(f"{meta_file}: not a rosbag2 metadata file: {reason(err)}") from err
+            for entry in _items(info, "topics_with_message_count"):
+                t = _key(entry, "topic_metadata")
+                name, msgtype = str(_key(t, "name")), str(_key(t, "type"))
+                self.topics[name] = RecordedTopic(name, msgtype,
+                                                  _qos(t.get("offered_qos_profiles")))
+            files = [self.bag_dir / str(p) for p in _items(info, "relative_file_paths")]
         if len(files) != 1 or files[0].suffix != ".mcap":
             raise BagError(f"{self.bag_dir}: expected one .mcap file, found "
                            f"{', '.join(p.name for p in files) or 'none'}")
@@ -115,55 +139,43 @@ class Playback:
 
     def _open_ros1(self, file: Path) -> None:
         self.file = file
-        try:
-            with open_recording(file) as rec:
-                self.topics = {c.topic: RecordedTopic(c.topic, c.msgtype,
-                                                      _LATCHED if c.latched else Qos())
-                               for c in rec.connections}
-        except BAG_READ_ERRORS as err:
-            raise BagError(f"{file}: cannot read recording: {reason(err)}") from err
+        with open_recording(file, what="cannot read recording") as rec:
+            self.topics = {c.topic: RecordedTopic(c.topic, c.msgtype,
+                                                  _LATCHED if c.latched else Qos())
+                           for c in rec.connections}
         self.output = OutputKind(1, "bag" if file.suffix == ".bag" else "mcap",
                                  f"the recording {file.name} is ROS 1")
 
     def _messages(self) -> Iterator[tuple[str, int, bytes]]:
         """(topic, log time, payload) in file order (a .bag: in time order)."""
         if self.file.suffix == ".bag":
-            with open_recording(self.file) as rec:
+            with open_recording(self.file, what="cannot read recording") as rec:
                 for conn, t, raw in rec.messages():
                     yield conn.topic, t, raw
             return
-        with self.file.open("rb") as f:
-            for _schema, channel, message in make_reader(f).iter_messages(
-                    log_time_order=False):
-                yield channel.topic, message.log_time, message.data
+        for _schema, channel, message in mcap_records(self.file, what="cannot read recording"):
+            yield channel.topic, message.log_time, message.data
 
     def by_time(self) -> Iterator[tuple[int, list[tuple[str, str, bytes]]]]:
         """(log time, [(topic, type, raw bytes), ...]) in file order, one group per log
         time; the type is the bus's (ROS 2) name."""
         where = "metadata.yaml" if self.output.ros == 2 else "the recording's index"
-        try:
-            stamp: int | None = None
-            group: list[tuple[str, str, bytes]] = []
-            for topic, log_time, data in self._messages():
-                if stamp is not None and log_time != stamp:
-                    if log_time < stamp:
-                        raise BagError(f"{self.file}: log time goes back from {stamp} to "
-                                       f"{log_time} ns (not an srr recording)")
-                    yield stamp, group
-                    group = []
-                stamp = log_time
-                rec = self.topics.get(topic)
-                if rec is None:
-                    raise BagError(f"{self.file}: topic {topic} is not in {where}")
-                group.append((topic, rec.msgtype, data))
-            if stamp is not None:
+        stamp: int | None = None
+        group: list[tuple[str, str, bytes]] = []
+        for topic, log_time, data in self._messages():
+            if stamp is not None and log_time != stamp:
+                if log_time < stamp:
+                    raise BagError(f"{self.file}: log time goes back from {stamp} to "
+                                   f"{log_time} ns (not an srr recording)")
                 yield stamp, group
-        except BAG_READ_ERRORS as err:
-            raise BagError(f"{self.file}: cannot read recording: {reason(err)}") from err
-
-
-_DECODE_ERRORS: tuple[type[BaseException], ...] = (SerdeError, Ros1TypeError,
-                                                    *BAG_READ_ERRORS)
+                group = []
+            stamp = log_time
+            rec = self.topics.get(topic)
+            if rec is None:
+                raise BagError(f"{self.file}: topic {topic} is not in {where}")
+            group.append((topic, rec.msgtype, data))
+        if stamp is not None:
+            yield stamp, group
 
 
 class _RawFromCompressed:
@@ -200,9 +212,9 @@ def _decoder(file: Path, now_ns: Callable[[], int], ros1: bool = False
     def decode(raw: bytes, msgtype: str) -> Any:
         try:
             if ros1:
-                return to_ros2(deserialize_ros1(raw, ros1_type(msgtype)), ros1_type(msgtype))
-            return TYPESTORE.deserialize_cdr(raw, msgtype)
-        except _DECODE_ERRORS as err:
+                return deserialize(raw, ros1_type(msgtype), "ros1")
+            return deserialize(raw, msgtype, "cdr")
+        except DECODE_ERRORS as err:
             raise BagError(f"{file}: a {msgtype} message at {now_ns() / 1e9:.3f} s does not "
                            f"decode: {reason(err)}") from err
     return decode

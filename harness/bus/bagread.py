@@ -15,32 +15,97 @@ A run's ``bag/`` directory holds the first, or (a ROS 1 run) no ``metadata.yaml`
 Every :class:`Connection` names its type as the bus does (ROS 2's ``pkg/msg/Name``, with
 ``tf/tfMessage`` read as ``tf2_msgs/msg/TFMessage``) and as recorded; :attr:`Recording.encoding`
 says how the payloads are serialized (``cdr`` or ``ros1``), and :meth:`Recording.decode` turns
-one into the bus's ROS 2 message. Readers raise their own errors on damaged files (rosbags',
-mcap's, ``OSError``...): callers turn them into one :class:`~harness.errors.BagError` line
-with :data:`harness.bag.BAG_READ_ERRORS`.
+one into the bus's ROS 2 message.
+
+This module is the one place where a recording's read errors are translated: what the readers
+raise on a damaged, truncated or foreign file (:data:`READ_ERRORS`: rosbags', mcap's, the
+decompressors', ``struct.error``, ``ValueError``, ``OSError``...) becomes one
+:class:`~harness.errors.BagReadError` line naming the file, raised ``from`` the reader's error,
+when the recording is opened and while its messages are read (:func:`mcap_records` for a
+byte-for-byte copy of an MCAP file's records). A programming error (``TypeError``,
+``AttributeError``, ``AssertionError``...) is not translated: it is a bug, with its traceback.
+The few library behaviours that raise a broader exception on bad bytes are caught around that
+library call alone (lz4, rosbags' ROS 1 and MCAP readers, mcap's reader:
+:func:`harness.bus.mcapread.guarded`).
 """
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Collection, Iterator
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 import yaml
+import zstandard
+from mcap.exceptions import McapError
 from mcap.reader import make_reader
+from mcap.records import Channel, Message, Schema
 from rosbags.rosbag1 import Reader as Rosbag1Reader
+from rosbags.rosbag1 import ReaderError as Rosbag1ReaderError
 from rosbags.rosbag2 import Reader as Rosbag2Reader
+from rosbags.rosbag2.errors import ReaderError as Rosbag2ReaderError
+from rosbags.serde import SerdeError
 from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 
-from harness.bus.mcapread import McapIndex
+from harness.bus.mcapread import McapIndex, guarded, lz4_failure
 from harness.bus.messages import TYPESTORE
-from harness.bus.ros1 import deserialize_ros1, ros2_type, to_ros2
+from harness.bus.ros1 import Ros1TypeError, deserialize_ros1, ros2_type, to_ros2
+from harness.errors import BagReadError, reason
 
-__all__ = ["Connection", "Encoding", "Recording", "mcap_profile", "open_indexed",
-           "open_recording", "ros1_recording"]
+try:  # rosbags decompresses zstd with the standard library's module (Python 3.14) or its backport
+    from compression.zstd import ZstdError as _StdZstdError  # type: ignore[import-not-found,unused-ignore]
+except ImportError:
+    from backports.zstd import ZstdError as _StdZstdError
+
+__all__ = ["DATA_ERRORS", "DECODE_ERRORS", "READ_ERRORS", "Connection", "Encoding",
+           "Recording", "deserialize", "mcap_profile", "mcap_records", "open_indexed",
+           "open_recording", "reading", "ros1_recording"]
 
 Encoding = Literal["cdr", "ros1"]
+
+#: What the parsers under a recording raise on bytes that do not parse (damaged, truncated,
+#: foreign): rosbags' and mcap's own errors, ``struct.error`` and ``EOFError`` on a short
+#: read, ``ValueError`` (among them ``UnicodeDecodeError`` and srr's MCAP index reader's),
+#: the zstd decompressors' errors, ``OverflowError`` and ``MemoryError`` for a length field
+#: larger than memory, a YAML error in ``metadata.yaml``. Not ``OSError``: an I/O error is not
+#: a damaged byte (``srr recover`` must not cut a file where the disk failed).
+DATA_ERRORS: tuple[type[Exception], ...] = (
+    Rosbag2ReaderError, Rosbag1ReaderError, McapError, struct.error, EOFError, ValueError,
+    zstandard.ZstdError, _StdZstdError, OverflowError, MemoryError, yaml.YAMLError)
+
+#: :data:`DATA_ERRORS` and ``OSError`` (a file missing, unreadable, or a directory): every
+#: error a reader raises for the file rather than for a bug, translated into
+#: :class:`~harness.errors.BagReadError`.
+READ_ERRORS: tuple[type[Exception], ...] = (*DATA_ERRORS, OSError)
+
+#: What decoding one recorded payload (:func:`deserialize`) raises when its bytes or its type
+#: do not decode.
+DECODE_ERRORS: tuple[type[Exception], ...] = (SerdeError, Ros1TypeError, *DATA_ERRORS)
+
+
+@contextmanager
+def reading(file: object, what: str = "cannot read bag") -> Iterator[None]:
+    """Translate :data:`READ_ERRORS` raised inside into one
+    :class:`~harness.errors.BagReadError` line, ``<file>: <what>: <reason>``."""
+    try:
+        yield
+    except READ_ERRORS as err:
+        raise BagReadError(file, what, reason(err)) from err
+
+
+def deserialize(raw: bytes, msgtype: str, encoding: Encoding) -> Any:
+    """The bus's (ROS 2) message of one recorded payload: CDR of the ROS 2 type ``msgtype``,
+    or (``ros1``) ROS 1 bytes of the ROS 1 type ``msgtype``, converted. Raises
+    :data:`DECODE_ERRORS`."""
+    try:
+        msg = (TYPESTORE.deserialize_cdr(raw, msgtype) if encoding == "cdr"
+               else deserialize_ros1(raw, msgtype))
+    except KeyError as err:  # rosbags' typestores: a type name (read from the file) unknown
+        raise ValueError(str(err)) from err
+    return msg if encoding == "cdr" else to_ros2(msg, msgtype)
 
 
 @dataclass(frozen=True)
@@ -57,6 +122,7 @@ class Connection:
     schema: bytes = b""
     schema_encoding: str = ""
     metadata: dict[str, str] = field(default_factory=dict)
+    durability: str = "volatile"  # of its first offered QoS profile (ROS 1: latched or not)
 
 
 def mcap_profile(path: Path) -> str | None:
@@ -64,8 +130,18 @@ def mcap_profile(path: Path) -> str | None:
     try:
         with Path(path).open("rb") as f:
             return str(make_reader(f).get_header().profile)
-    except Exception:  # not MCAP, empty, unreadable: not a ROS 1 recording
+    except READ_ERRORS:  # not MCAP, empty, unreadable: not a ROS 1 recording
         return None
+
+
+def mcap_records(file: Path, shown: object = None, what: str = "cannot read bag"
+                 ) -> Iterator[tuple[Schema | None, Channel, Message]]:
+    """Every message of an MCAP file with its schema and channel, in file order, as the
+    ``mcap`` library reads them (publish times and sequence numbers included: what a
+    byte-for-byte copy needs); read errors become :class:`~harness.errors.BagReadError`
+    naming ``shown`` (default: the file)."""
+    with reading(file if shown is None else shown, what), Path(file).open("rb") as f:
+        yield from guarded(make_reader(f).iter_messages(log_time_order=False))
 
 
 def ros1_recording(bag_dir: Path) -> Path | None:
@@ -90,8 +166,10 @@ class Recording:
     kind: Literal["rosbag2", "bag", "mcap"]
     encoding: Encoding
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, shown: object = None, what: str = "cannot read bag") -> None:
         self.path = Path(path)
+        self.shown = self.path if shown is None else shown  # the file as its errors name it
+        self.what = what
         self.connections: list[Connection] = []
         self.start_time = 2**63 - 1
         self.end_time = 0
@@ -119,10 +197,14 @@ class Recording:
         return self.messages()
 
     def decode(self, raw: bytes, conn: Connection) -> Any:
-        """The bus's (ROS 2) message for one payload of ``conn``."""
-        if self.encoding == "cdr":
-            return TYPESTORE.deserialize_cdr(raw, conn.msgtype)
-        return to_ros2(deserialize_ros1(raw, conn.recorded_type), conn.recorded_type)
+        """The bus's (ROS 2) message for one payload of ``conn``; raises
+        :data:`DECODE_ERRORS`."""
+        return deserialize(raw, conn.msgtype if self.encoding == "cdr" else conn.recorded_type,
+                           self.encoding)
+
+    def _read(self) -> AbstractContextManager[None]:
+        """The translation of read errors for this recording (:func:`reading`)."""
+        return reading(self.shown, self.what)
 
 
 class _Rosbags(Recording):
@@ -131,12 +213,19 @@ class _Rosbags(Recording):
     ours (:meth:`_connection`)."""
 
     _open: ClassVar[Any]  # rosbags' Reader class
+    #: What this rosbags reader raises on bad bytes beyond :data:`DATA_ERRORS` (caught
+    #: around its own calls only, see :meth:`_quirk`).
+    _quirks: ClassVar[tuple[type[Exception], ...]] = ()
 
-    def __init__(self, path: Path) -> None:
-        super().__init__(path)
+    def __init__(self, path: Path, shown: object = None, what: str = "cannot read bag") -> None:
+        super().__init__(path, shown, what)
         self.profile = "ros2" if self.encoding == "cdr" else "ros1"
-        self._reader = self._open(path)
-        self._reader.open()
+        with self._read():
+            self._reader = self._open(path)
+            try:
+                self._reader.open()
+            except self._quirks as err:
+                raise self._quirk(err) from err
         self._raw = {c.id: c for c in self._reader.connections}
         self.connections = [self._connection(c) for c in self._reader.connections]
         self._by_id = {c.id: c for c in self.connections}
@@ -146,6 +235,11 @@ class _Rosbags(Recording):
     def _connection(self, c: Any) -> Connection:
         raise NotImplementedError
 
+    def _quirk(self, err: Exception) -> Exception:
+        """``err``, one of :attr:`_quirks` raised by rosbags' reader itself, as the
+        ``ValueError`` it stands for (re-raised when it is not such a case)."""
+        raise err
+
     def close(self) -> None:
         self._reader.close()
 
@@ -153,25 +247,52 @@ class _Rosbags(Recording):
                  stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
         raw = [self._raw[c.id] for c in connections]
         by_id = self._by_id
-        for conn, t, data in self._reader.messages(connections=raw, start=start, stop=stop):
-            yield by_id[conn.id], t, data
+        with self._read():
+            it = iter(self._reader.messages(connections=raw, start=start, stop=stop))
+            while True:
+                try:
+                    conn, t, data = next(it)
+                except StopIteration:
+                    return
+                except self._quirks as err:  # rosbags' reader's own step only
+                    raise self._quirk(err) from err
+                yield by_id[conn.id], t, data
 
 
 class _Rosbag2(_Rosbags):
     kind = "rosbag2"
     encoding: Encoding = "cdr"
     _open = Rosbag2Reader
+    # rosbags' MCAP storage: KeyError for a channel's QoS profile missing a key, or a
+    # schema it does not list; lz4's RuntimeError for a chunk that does not decompress
+    _quirks = (KeyError, RuntimeError)
+
+    def _quirk(self, err: Exception) -> Exception:
+        if isinstance(err, RuntimeError) and not lz4_failure(err):
+            raise err
+        return ValueError(f"{'missing ' if isinstance(err, KeyError) else ''}{err}")
 
     def _connection(self, c: Any) -> Connection:
         qos = getattr(c.ext, "offered_qos_profiles", []) or []
         latched = bool(qos) and qos[0].durability.name.lower() == "transient_local"
-        return Connection(c.id, c.topic, c.msgtype, c.msgtype, latched, c.msgcount)
+        durability = qos[0].durability.name.lower() if qos else "volatile"
+        return Connection(c.id, c.topic, c.msgtype, c.msgtype, latched, c.msgcount,
+                          durability=durability)
 
 
 class _Rosbag1(_Rosbags):
     kind = "bag"
     encoding: Encoding = "ros1"
     _open = Rosbag1Reader
+    # rosbags' ROS 1 reader, on a damaged .bag, asserts that a record's time is its index
+    # entry's (AssertionError) and looks a record's connection id up (KeyError)
+    _quirks = (AssertionError, KeyError)
+
+    def _quirk(self, err: Exception) -> Exception:
+        if isinstance(err, AssertionError):
+            return ValueError("a message record's time is not its index entry's")
+        return ValueError(f"a message record names connection {err}, which the bag does "
+                          "not define")
 
     def _connection(self, c: Any) -> Connection:
         latching = getattr(c.ext, "latching", None)
@@ -179,7 +300,8 @@ class _Rosbag1(_Rosbags):
             c.id, c.topic, ros2_type(c.msgtype), str(denormalize_msgtype(c.msgtype)),
             bool(latching), c.msgcount, c.msgdef.data.encode(), "ros1msg",
             {"md5sum": c.digest, "callerid": str(getattr(c.ext, "callerid", "") or ""),
-             "latching": "true" if latching else "false"})
+             "latching": "true" if latching else "false"},
+            "transient_local" if latching else "volatile")
 
 
 class _Mcap(Recording):
@@ -188,9 +310,10 @@ class _Mcap(Recording):
 
     kind = "mcap"
 
-    def __init__(self, path: Path) -> None:
-        super().__init__(path)
-        self._index = index = McapIndex(self.path)
+    def __init__(self, path: Path, shown: object = None, what: str = "cannot read bag") -> None:
+        super().__init__(path, shown, what)
+        with self._read():
+            self._index = index = McapIndex(self.path)
         self.profile, summary = index.profile, index.summary
         encodings = {c.message_encoding for c in summary.channels.values()}
         self.encoding = "ros1" if encodings == {"ros1"} or (
@@ -206,7 +329,8 @@ class _Mcap(Recording):
             self.connections.append(Connection(
                 c.id, c.topic, bus_type, name, latched, count,
                 schema.data if schema is not None else b"",
-                schema.encoding if schema is not None else "", dict(c.metadata)))
+                schema.encoding if schema is not None else "", dict(c.metadata),
+                "transient_local" if latched else "volatile"))
         self._by_id = {c.id: c for c in self.connections}
         if summary.statistics is not None and summary.statistics.message_count:
             self.start_time = summary.statistics.message_start_time
@@ -215,33 +339,41 @@ class _Mcap(Recording):
 
     def messages(self, connections: Collection[Connection] = (), start: int | None = None,
                  stop: int | None = None) -> Iterator[tuple[Connection, int, bytes]]:
-        return self._index.messages(self._by_id, [c.id for c in connections], start, stop)
+        with self._read():
+            yield from self._index.messages(self._by_id, [c.id for c in connections], start,
+                                            stop)
 
     def scan(self, wanted: Collection[int]) -> Iterator[tuple[Connection, int, bytes | None]]:
-        return self._index.scan(self._by_id, wanted)
+        with self._read():
+            yield from self._index.scan(self._by_id, wanted)
 
 
-def open_recording(path: str | Path) -> Recording:
+def open_recording(path: str | Path, *, shown: object = None, what: str = "cannot read bag"
+                   ) -> Recording:
     """Open a rosbag2 directory, a ``.bag`` or ``.mcap`` file, or a run's ``bag/`` directory
-    holding a ROS 1 recording. Raises the readers' own errors (see the module docstring);
-    ``FileNotFoundError`` when ``path`` holds none of these."""
+    holding a ROS 1 recording. What is wrong with the file, when it is opened or while its
+    messages are read, is raised as one :class:`~harness.errors.BagReadError` line
+    ``<shown>: <what>: <reason>`` (``shown``: the path as the user named it; default the
+    file read); a ``path`` that holds none of these is one too (``metadata.yaml: missing``)."""
     p = Path(path)
     if p.is_dir():
         if (p / "metadata.yaml").exists():
-            return _Rosbag2(p)
+            return _Rosbag2(p, shown, what)
         found = ros1_recording(p)
         if found is None:
-            raise FileNotFoundError(f"{p}: metadata.yaml: missing (not a rosbag2 directory)")
+            raise BagReadError(p if shown is None else shown, what,
+                               f"{p}: metadata.yaml: missing (not a rosbag2 directory)")
         p = found
     if p.suffix == ".bag":
-        return _Rosbag1(p)
-    return _Mcap(p)
+        return _Rosbag1(p, shown, what)
+    return _Mcap(p, shown, what)
 
 
 _YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
-def open_indexed(path: str | Path) -> Recording:
+def open_indexed(path: str | Path, *, shown: object = None, what: str = "cannot read bag"
+                 ) -> Recording:
     """:func:`open_recording`, but a rosbag2 directory whose ``metadata.yaml`` names one MCAP
     file, finished, is read through that file's index as a ``.mcap`` file is: the same
     messages, without rosbags' parsing of ``metadata.yaml`` (~0.2 s of ruamel), and
@@ -249,12 +381,26 @@ def open_indexed(path: str | Path) -> Recording:
     whose file is damaged, opens with :func:`open_recording` (rosbags says what is wrong)."""
     p = Path(path)
     if p.is_dir() and (p / "metadata.yaml").exists():
-        try:
-            info = yaml.load((p / "metadata.yaml").read_text(encoding="utf-8"),
-                             Loader=_YamlLoader)["rosbag2_bagfile_information"]
-            files = [p / str(f) for f in info["relative_file_paths"]]
-            if len(files) == 1 and files[0].suffix == ".mcap" and files[0].is_file():
-                return _Mcap(files[0])
-        except Exception:  # unreadable here: rosbags' reader says why
-            pass
-    return open_recording(p)
+        file = _one_mcap(p)
+        if file is not None:
+            try:
+                return _Mcap(file, shown, what)
+            except BagReadError:  # damaged: rosbags' reader says why
+                pass
+    return open_recording(p, shown=shown, what=what)
+
+
+def _one_mcap(bag_dir: Path) -> Path | None:
+    """The one ``.mcap`` file a rosbag2 directory's ``metadata.yaml`` names, if it names one
+    that exists (None for anything else, unreadable metadata included)."""
+    try:
+        meta = yaml.load((bag_dir / "metadata.yaml").read_text(encoding="utf-8"),
+                         Loader=_YamlLoader)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return None
+    info = meta.get("rosbag2_bagfile_information") if isinstance(meta, dict) else None
+    files = info.get("relative_file_paths") if isinstance(info, dict) else None
+    if not isinstance(files, list) or len(files) != 1:
+        return None
+    file = bag_dir / str(files[0])
+    return file if file.suffix == ".mcap" and file.is_file() else None

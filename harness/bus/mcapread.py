@@ -13,9 +13,10 @@ Messages come in file order, chunk by chunk, and each chunk is read the cheaper 
 A file without chunk indexes is read by the ``mcap`` library. The format is only what
 ROS-agnostic readers need: channel ids, log times, payload bytes; :mod:`harness.bus.bagread`
 names the channels' ROS types. Damage raises ``ValueError`` (no summary section, a chunk
-whose records or message index do not agree with its chunk index), the ``mcap`` library's
-errors, ``struct.error`` or ``OSError``: callers turn these into one
-:class:`~harness.errors.BagError` line naming the file (:data:`harness.bag.BAG_READ_ERRORS`).
+whose records or message index do not agree with its chunk index, a message on a channel the
+summary does not list, a chunk that does not decompress), the ``mcap`` library's errors, the
+zstd decompressor's, ``struct.error`` or ``OSError``: :mod:`harness.bus.bagread` turns these
+into one :class:`~harness.errors.BagReadError` line naming the file.
 Chunk CRCs are not checked: that would cost 5 % of scoring's time (rosbags' reader, which
 ``srr inspect`` and ``srr diff`` use for a rosbag2 directory, checks them).
 """
@@ -25,7 +26,7 @@ from __future__ import annotations
 import inspect
 import os
 import struct
-from collections.abc import Callable, Collection, Iterator, Mapping
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import TypeVar, cast
 
@@ -36,7 +37,7 @@ from mcap.reader import SeekingReader, make_reader
 from mcap.records import ChunkIndex
 from mcap.summary import Summary
 
-__all__ = ["McapIndex"]
+__all__ = ["McapIndex", "guarded", "lz4_failure"]
 
 T = TypeVar("T")
 
@@ -51,6 +52,35 @@ _MESSAGE_SIZE = 2 + 4 + 8 + 8  # channel id, sequence, log time, publish time
 _INDEX_HEAD = struct.Struct("<HI")  # MessageIndex: channel id, length of its (time, offset)s
 _MESSAGE_OP, _MESSAGE_INDEX_OP = 0x05, 0x07
 _NEVER, _FOREVER = -1, 2**63
+
+
+def lz4_failure(err: RuntimeError) -> bool:
+    """Whether ``err`` is lz4's report of bytes that do not decompress: ``lz4.frame`` raises
+    a bare ``RuntimeError`` (``LZ4F_decompress failed ...``, ``Frame incomplete.
+    LZ4F_decompress returned ...``) for a damaged or cut lz4 frame."""
+    return "LZ4F_" in str(err)
+
+
+def guarded(records: Iterable[T]) -> Iterator[T]:
+    """``records`` from the ``mcap`` library's reader, whose two broader exceptions on bad
+    bytes become ``ValueError``: ``KeyError`` for a message on a channel (or a channel of a
+    schema) its summary does not list, lz4's ``RuntimeError`` for a chunk that does not
+    decompress (:func:`lz4_failure`). Only the library's own step is guarded: the code that
+    consumes each record runs outside."""
+    it = iter(records)
+    while True:
+        try:
+            item = next(it)
+        except StopIteration:
+            return
+        except KeyError as err:  # mcap's reader: summary.channels[id] of a damaged file
+            raise ValueError(f"a record names channel or schema {err}, which the file "
+                             "does not define") from err
+        except RuntimeError as err:
+            if not lz4_failure(err):
+                raise
+            raise ValueError(str(err)) from err
+        yield item
 
 
 class McapIndex:
@@ -104,8 +134,8 @@ class McapIndex:
         if stop is not None:
             window[_ENDING_BEFORE] = stop
         with self.path.open("rb") as f:
-            for _schema, channel, message in make_reader(f).iter_messages(
-                    log_time_order=False, **window):  # type: ignore[arg-type]
+            for _schema, channel, message in guarded(make_reader(f).iter_messages(
+                    log_time_order=False, **window)):  # type: ignore[arg-type]
                 if channel.id in wanted:
                     yield channel.id, message.log_time, message.data
 
@@ -123,7 +153,7 @@ class McapIndex:
                 if present and wanted.isdisjoint(present):
                     if every:
                         for cid, t, _ in _message_index(fd, ci, None):
-                            yield channels[cid], t, None
+                            yield _channel(channels, cid, ci), t, None
                     continue
                 if _few_wanted(ci, wanted):
                     read = _one_by_one(fd, ci)
@@ -131,7 +161,7 @@ class McapIndex:
                         if cid in wanted and lo <= t < hi:
                             yield channels[cid], t, read(offset)
                         elif every:
-                            yield channels[cid], t, None
+                            yield _channel(channels, cid, ci), t, None
                     continue
                 records = _chunk_records(fd, ci)
                 pos, end = 0, len(records)
@@ -143,11 +173,21 @@ class McapIndex:
                         if cid in wanted and lo <= t < hi:
                             yield channels[cid], t, records[pos + _MESSAGE_SIZE:pos + length]
                         elif every:
-                            yield channels[cid], t, None
+                            yield _channel(channels, cid, ci), t, None
                     pos += length
                 if pos != end:
                     raise ValueError(f"chunk at byte {ci.chunk_start_offset}: its records "
                                      "overrun it")
+
+
+def _channel(channels: Mapping[int, T], cid: int, ci: ChunkIndex) -> T:
+    """``channels[cid]`` of a message in chunk ``ci``; ``ValueError`` when the summary does
+    not list that channel."""
+    channel = channels.get(cid)
+    if channel is None:
+        raise ValueError(f"chunk at byte {ci.chunk_start_offset}: a message on channel {cid}, "
+                         "which the file does not define")
+    return channel
 
 
 def _message_index(fd: int, ci: ChunkIndex, wanted: set[int] | None
@@ -203,7 +243,12 @@ def _chunk_records(fd: int, ci: ChunkIndex) -> bytes:
         data = zstandard.ZstdDecompressor().decompress(data,
                                                        max_output_size=ci.uncompressed_size)
     elif ci.compression == "lz4":
-        data = lz4.frame.decompress(data)
+        try:
+            data = lz4.frame.decompress(data)
+        except RuntimeError as err:  # lz4's report of a damaged frame (lz4_failure)
+            if not lz4_failure(err):
+                raise
+            raise ValueError(f"chunk at byte {ci.chunk_start_offset}: {err}") from err
     elif ci.compression:
         raise ValueError(f"chunk at byte {ci.chunk_start_offset}: unknown compression "
                          f"{ci.compression!r}")

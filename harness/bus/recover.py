@@ -31,7 +31,6 @@ from pathlib import Path
 from typing import Any, BinaryIO, Literal
 
 import yaml
-from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.records import Channel, Chunk, Footer, Header, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
@@ -44,7 +43,8 @@ from harness.bus.bagfile import (
     dump_metadata,
     write_metadata,
 )
-from harness.bus.bagread import mcap_profile, ros1_recording
+from harness.bus.bagread import DATA_ERRORS, mcap_profile, ros1_recording
+from harness.bus.mcapread import lz4_failure
 from harness.bus.recorder import TopicStats, digest_update
 from harness.errors import BagError
 
@@ -52,8 +52,11 @@ __all__ = ["RecoveredBag", "locate_mcap", "recover_bag"]
 
 MAGIC = b"\x89MCAP0\r\n"
 _FOOTER_HEAD = bytes([0x02]) + struct.pack("<Q", 20)
-# What the mcap reader raises on bytes that do not parse (short reads, bad lengths, bad text).
-_UNREADABLE = (McapError, struct.error, ValueError, UnicodeDecodeError, EOFError, MemoryError)
+# What the mcap reader raises on bytes that do not parse (short reads, bad lengths, bad text,
+# a chunk that does not decompress); not OSError: a read that fails is not a cut in the file.
+_UNREADABLE = DATA_ERRORS
+# mcap's summary parsing also raises KeyError on a damaged summary section
+_SUMMARY_UNREADABLE: tuple[type[Exception], ...] = (*DATA_ERRORS, KeyError)
 
 
 @dataclass(frozen=True)
@@ -190,8 +193,8 @@ def _scan(path: Path, visit: Callable[[_Scan, list[Any]], None], size: int) -> _
                 scan.tail_start = f.tell()
             if isinstance(rec, Chunk):
                 try:
-                    inner = breakup_chunk(rec, validate_crc=True)
-                except (*_UNREADABLE, KeyError) as err:
+                    inner = _breakup(rec)
+                except _UNREADABLE as err:
                     bad = bad or f"the chunk at byte {offset} is unreadable ({_describe(err)})"
                     continue
                 if bad is not None:
@@ -210,6 +213,20 @@ def _scan(path: Path, visit: Callable[[_Scan, list[Any]], None], size: int) -> _
     if scan.finished:
         _check_summary(path, scan, size)
     return scan
+
+
+def _breakup(chunk: Chunk) -> list[Any]:
+    """The records of a chunk, its CRC checked (mcap's ``breakup_chunk``), with the library's
+    broader exceptions on bad bytes as ``ValueError``: ``KeyError`` from its record parsing,
+    lz4's ``RuntimeError`` for a chunk that does not decompress."""
+    try:
+        return breakup_chunk(chunk, validate_crc=True)
+    except KeyError as err:  # mcap's record parsing of a damaged chunk
+        raise ValueError(str(err)) from err
+    except RuntimeError as err:
+        if not lz4_failure(err):
+            raise
+        raise ValueError(str(err)) from err
 
 
 def _visit(path: Path, visit: Callable[[_Scan, list[Any]], None], scan: _Scan,
@@ -239,7 +256,7 @@ def _check_summary(path: Path, scan: _Scan, size: int) -> None:
     try:
         with path.open("rb") as f:
             summary = make_reader(f).get_summary()
-    except (*_UNREADABLE, KeyError) as err:
+    except _SUMMARY_UNREADABLE as err:
         raise BagError(f"{path}: corrupt summary section ({err}): not recovered") from err
     stats = summary.statistics if summary is not None else None
     chunks = len(summary.chunk_indexes) if summary is not None else -1

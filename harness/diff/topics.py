@@ -28,12 +28,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from rosbags.serde import SerdeError
 
-from harness.bag import BAG_READ_ERRORS
-from harness.bus.bagread import open_recording
-from harness.bus.messages import TYPESTORE
-from harness.bus.ros1 import Ros1TypeError, deserialize_ros1, to_ros2
+from harness.bus.bagread import DECODE_ERRORS, deserialize, open_recording
 from harness.diff.fields import as_float, walk
 from harness.diff.result import Divergence, FieldDiff, TopicDiff, TopicStatus, Worst
 from harness.diff.tolerance import Tolerance, glob_match, tolerance_for
@@ -41,17 +37,11 @@ from harness.errors import BagError, reason
 
 __all__ = ["diff_bags", "message_stream"]
 
-_READ_ERRORS = BAG_READ_ERRORS
-_DECODE_ERRORS: tuple[type[BaseException], ...] = (SerdeError, Ros1TypeError,
-                                                    *BAG_READ_ERRORS)
-
 
 def _decode(raw: bytes, msgtype: str) -> Any:
     """The ROS 2 message of a payload of ``msgtype`` as recorded: ``pkg/msg/Name`` is CDR,
     ``pkg/Name`` (a ROS 1 recording) ROS 1."""
-    if "/msg/" in msgtype:
-        return TYPESTORE.deserialize_cdr(raw, msgtype)
-    return to_ros2(deserialize_ros1(raw, msgtype), msgtype)
+    return deserialize(raw, msgtype, "cdr" if "/msg/" in msgtype else "ros1")
 
 
 def _num(v: float) -> str:
@@ -222,7 +212,7 @@ class _Topic:
             for bag, raw in zip(bags, (raw_a, raw_b), strict=True):
                 try:
                     msgs.append(_decode(raw, msgtype))
-                except _DECODE_ERRORS as err:
+                except DECODE_ERRORS as err:
                     raise BagError(f"{bag}: {self.name} message #{i} ({msgtype}) does not "
                                    f"decode: {reason(err)}") from err
             noted = self._noted
@@ -304,19 +294,14 @@ def message_stream(bag: Path
     """The topics of a rosbag2 directory or a ROS 1 run's ``bag/`` (name → type as
     recorded) and an iterator of ``(topic, type, log time, payload)`` over every message, in
     the reader's order, which closes the bag when exhausted. Read errors (when opening or
-    later) become :class:`BagError` naming the bag."""
-    try:
-        reader = open_recording(bag)
-    except _READ_ERRORS as err:
-        raise BagError(f"{bag}: cannot read bag: {reason(err)}") from err
+    later) are :class:`~harness.errors.BagReadError` naming the bag."""
+    reader = open_recording(bag, shown=bag)
     types = {c.topic: c.recorded_type for c in reader.connections}
 
     def messages() -> Generator[tuple[str, str, int, bytes], None, None]:
         try:
             for conn, ns, raw in reader.messages():
                 yield conn.topic, conn.recorded_type, int(ns), bytes(raw)
-        except _READ_ERRORS as err:
-            raise BagError(f"{bag}: cannot read bag: {reason(err)}") from err
         finally:
             reader.close()
 

@@ -17,11 +17,9 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
-from harness.bag import BAG_READ_ERRORS
-from harness.bus.bagread import open_recording, ros1_recording
+from harness.bus.bagread import mcap_records, open_recording, ros1_recording
 from harness.bus.ros1 import ros2_type
 from harness.errors import BagError, reason
 
@@ -68,15 +66,15 @@ def write_reference(bag_dir: Path, path: Path) -> ReferenceInfo:
                        f"from, found {len(mcaps)}")
     tmp = path.with_name(path.name + ".tmp")
     counts: dict[str, int] = {}
+    what = f"cannot write the reference recording {path}"
     try:
-        with mcaps[0].open("rb") as src, tmp.open("wb") as dst:
+        with tmp.open("wb") as dst:
             writer = Writer(dst, compression=CompressionType.ZSTD, chunk_size=1 << 20)
             writer.start(profile="ros1" if ros1 is not None else "ros2",
                          library="srr reference recording")
             schemas: dict[int, int] = {}
             channels: dict[int, int] = {}
-            for schema, channel, message in make_reader(src).iter_messages(
-                    log_time_order=False):
+            for schema, channel, message in mcap_records(mcaps[0], what=what):
                 if schema is None or not kept(channel.topic, schema.name):
                     continue
                 if channel.id not in channels:
@@ -91,10 +89,10 @@ def write_reference(bag_dir: Path, path: Path) -> ReferenceInfo:
                 counts[channel.topic] = counts.get(channel.topic, 0) + 1
             writer.finish()  # type: ignore[no-untyped-call]  # mcap leaves it unannotated
         os.replace(tmp, path)
-    except BAG_READ_ERRORS as err:
+    except OSError as err:
+        raise BagError(f"{mcaps[0]}: {what}: {reason(err)}") from err
+    finally:
         tmp.unlink(missing_ok=True)
-        raise BagError(f"{mcaps[0]}: cannot write the reference recording {path}: {reason(err)}") \
-            from err
     return ReferenceInfo(path, path.stat().st_size, dict(sorted(counts.items())))
 
 
@@ -103,8 +101,9 @@ def _reference_from_bag(bag: Path, path: Path) -> ReferenceInfo:
     schemas and ``ros1`` channels (callerid, latching), messages byte for byte."""
     tmp = path.with_name(path.name + ".tmp")
     counts: dict[str, int] = {}
+    what = f"cannot write the reference recording {path}"
     try:
-        with open_recording(bag) as rec, tmp.open("wb") as dst:
+        with open_recording(bag, what=what) as rec, tmp.open("wb") as dst:
             writer = Writer(dst, compression=CompressionType.ZSTD, chunk_size=1 << 20)
             writer.start(profile="ros1", library="srr reference recording")
             conns = [c for c in rec.connections if kept(c.topic, c.recorded_type)]
@@ -123,8 +122,8 @@ def _reference_from_bag(bag: Path, path: Path) -> ReferenceInfo:
                 counts[conn.topic] = counts.get(conn.topic, 0) + 1
             writer.finish()  # type: ignore[no-untyped-call]  # mcap leaves it unannotated
         os.replace(tmp, path)
-    except BAG_READ_ERRORS as err:
+    except OSError as err:
+        raise BagError(f"{bag}: {what}: {reason(err)}") from err
+    finally:
         tmp.unlink(missing_ok=True)
-        raise BagError(f"{bag}: cannot write the reference recording {path}: {reason(err)}") \
-            from err
     return ReferenceInfo(path, path.stat().st_size, dict(sorted(counts.items())))
