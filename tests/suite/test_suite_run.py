@@ -262,6 +262,19 @@ def test_bundled_scenarios_are_not_flaky(tmp_path: Path, monkeypatch: pytest.Mon
         assert all(st["std"] in (None, 0.0) for st in g["stats"].values())
 
 
+def _in_use(port: int) -> bool:
+    """Whether another socket holds ``port`` on the loopback interface now."""
+    import errno
+    import socket
+
+    with socket.socket() as sock:
+        try:
+            sock.bind(("127.0.0.1", port))
+        except OSError as err:
+            return err.errno == errno.EADDRINUSE
+    return False
+
+
 @pytest.mark.ray
 def test_ray_suite_joins_an_existing_cluster(tmp_path: Path,
                                              monkeypatch: pytest.MonkeyPatch) -> None:
@@ -271,16 +284,22 @@ def test_ray_suite_joins_an_existing_cluster(tmp_path: Path,
     import socket
 
     monkeypatch.chdir(ROOT)
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port = sock.getsockname()[1]
     ray_bin = str(Path(sys.executable).parent / "ray")
     # one machine, loopback only: no token to share between `ray start` and this driver
     monkeypatch.setenv("RAY_AUTH_MODE", "disabled")
     env = {**os.environ, "RAY_USAGE_STATS_ENABLED": "0"}
-    subprocess.run([ray_bin, "start", "--head", f"--port={port}", "--num-cpus=1",
-                    "--include-dashboard=false", "--node-ip-address=127.0.0.1"], check=True,
-                   capture_output=True, env=env, timeout=120)
+    for _ in range(5):
+        # `ray start` takes a port number, not 0: one that was free a moment ago may be taken
+        # by another process before Ray binds it; then `ray start` fails, and another is tried
+        with socket.socket() as sock:
+            sock.bind(("127.0.0.1", 0))
+            port = sock.getsockname()[1]
+        started = subprocess.run([ray_bin, "start", "--head", f"--port={port}", "--num-cpus=1",
+                                  "--include-dashboard=false", "--node-ip-address=127.0.0.1"],
+                                 capture_output=True, text=True, env=env, timeout=120)
+        if started.returncode == 0 or not _in_use(port):
+            break
+    assert started.returncode == 0, started.stdout + started.stderr
     try:
         suite = tmp_path / "suite.yaml"
         suite.write_text(f"scenarios: [{{path: {FORKLIFT}, "
