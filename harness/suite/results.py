@@ -4,10 +4,10 @@ A run's outcome comes from its run directory's ``summary.json`` plus what the ex
 (exit status, signal, timeout). A run whose worker crashed (a signal such as SIGSEGV, an
 out-of-memory kill), timed out, or could not start is INVALID with that reason; its run
 directory is settled (:mod:`harness.suite.unfinished`): whatever it left is recovered (``srr
-recover``) and kept for the reviewer, and one that left nothing gets a directory with an INVALID
-summary saying what happened. A group — one scenario or sweep
-point, all its repeats — is INVALID when any repeat is, FLAKY when its repeats' digests or
-verdicts differ (the first divergence comes from ``srr diff``), else the repeats' verdict.
+recover``) and kept for the reviewer, and one that left nothing gets a directory with an
+INVALID summary saying what happened. A group — one scenario or sweep point, all its repeats —
+is INVALID when any repeat is, FLAKY when its repeats' digests or verdicts differ (the first
+divergence comes from ``srr diff``), else the repeats' verdict.
 """
 
 from __future__ import annotations
