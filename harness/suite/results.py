@@ -2,15 +2,16 @@
 
 A run's outcome comes from its run directory's ``summary.json`` plus what the executor saw
 (exit status, signal, timeout). A run whose worker crashed (a signal such as SIGSEGV, an
-out-of-memory kill), timed out, or could not start is INVALID with that reason; whatever it
-left is recovered (``srr recover``) and kept for the reviewer. A group — one scenario or sweep
-point, all its repeats — is INVALID when any repeat is, FLAKY when its repeats' digests or
-verdicts differ (the first divergence comes from ``srr diff``), else the repeats' verdict.
+out-of-memory kill), timed out, or could not start is INVALID with that reason; its run
+directory is settled (:mod:`harness.suite.unfinished`): whatever it left is recovered (``srr
+recover``) and kept for the reviewer, and one that left nothing gets a directory with an
+INVALID summary saying what happened. A group — one scenario or sweep point, all its repeats —
+is INVALID when any repeat is, FLAKY when its repeats' digests or verdicts differ (the first
+divergence comes from ``srr diff``), else the repeats' verdict.
 """
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import signal
 from collections.abc import Mapping, Sequence
@@ -22,7 +23,8 @@ from harness.errors import SrrError
 from harness.regression.verdict import OK_VERDICTS
 from harness.suite.plan import RunSpec
 from harness.suite.stats import describe
-from harness.summary import read_summary
+from harness.suite.unfinished import Settled, settle
+from harness.summary import SUMMARY_NAME, read_summary
 
 __all__ = ["GROUP_ORDER", "GroupResult", "RunOutcome", "crash_reason", "group_runs",
            "outcome_of", "suite_exit_code", "worst"]
@@ -88,23 +90,6 @@ def _rel(path: Path, root: Path) -> str:
     return path.relative_to(root).as_posix()
 
 
-def _salvage(run_path: Path) -> str | None:
-    """Recover what a killed run left (bag from its complete chunks, a summary marked
-    recovered) and render its report; a note on what happened, None when nothing was left."""
-    if not (run_path / "incomplete.json").is_file():
-        return None
-    from harness import api
-
-    try:
-        res = api.recover(run_path)
-    except SrrError as err:
-        return f"its recording could not be recovered ({err})"
-    with contextlib.suppress(SrrError):
-        api.report(run_path)
-    kept = sum(t.count for t in res.bag.topics.values())
-    return f"{kept} recorded messages were recovered from its complete chunks"
-
-
 def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | None,
                wall_s: float, timed_out: bool = False, crash: str | None = None,
                log: Path | None = None, peak_rss_mb: float | None = None) -> RunOutcome:
@@ -116,16 +101,18 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
                    if spec.timeout_s is not None else "timed out")
     elif crash is not None:
         problem = f"the worker crashed: {crash}"
-    salvaged = _salvage(run_path) if problem is not None or exit_code not in (0, 1, 3) else None
+    elif not (run_path / SUMMARY_NAME).is_file():
+        problem = (f"it could not run: {error}" if error else
+                   f"the worker exited with status {exit_code} without writing summary.json")
+    settled = (settle(run_path, spec, problem or f"the worker exited with status {exit_code}")
+               if problem is not None or exit_code not in (0, 1, 3) else Settled(None))
     summary: dict[str, Any] | None = None
-    if (run_path / "summary.json").is_file():
+    if (run_path / SUMMARY_NAME).is_file() and not settled.written:
         try:
             summary = read_summary(run_path)
         except SrrError as err:
             problem = problem or f"its summary.json is unreadable ({err})"
-    if summary is None and problem is None:
-        problem = (f"it could not run: {error}" if error else
-                   f"the worker exited with status {exit_code} without writing summary.json")
+    salvaged = settled.note
     report = run_path / "report.html"
     base = RunOutcome(
         spec=spec, verdict="INVALID", exit_code=3, reasons=(), wall_s=wall_s,

@@ -4,7 +4,11 @@ served over the Foxglove WebSocket protocol to a real client, and bad live-view 
 from __future__ import annotations
 
 import json
+import os
+import re
 import socket
+import subprocess
+import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,16 +23,11 @@ from harness.cli import main
 from tests.bus.foxglove_client import LiveClient, Received
 from tests.e2e.bagread import mcap_file
 
-SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "dock_worker_crossing.yaml"
+ROOT = Path(__file__).resolve().parents[2]
+SCENARIO = ROOT / "scenarios" / "dock_worker_crossing.yaml"
 SHORT = ["--set", "duration=2", "-q"]
 WATCHED = ["/clock", "/tf", "/tf_static", "/odom", "/dock_cam_left_rgb", "/gt/forklift/tf",
            "/perception/tracks"]
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 @dataclass(frozen=True)
@@ -43,10 +42,25 @@ class LiveRun:
 @pytest.fixture(scope="module")
 def live_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveRun]:
     tmp = tmp_path_factory.mktemp("live")
-    port = _free_port()
-    client = LiveClient(port, WATCHED).start()
-    code = main(["run", str(SCENARIO), "--out", str(tmp / "live"), *SHORT, "--foxglove",
-                 "--foxglove-port", str(port), "--foxglove-wait", "30", "--rate", "4"])
+    # port 0: the live view binds a port the system picks and says which (a port picked here
+    # beforehand could be taken by another process before the run binds it); the client
+    # connects once it is known, while the run waits for it
+    proc = subprocess.Popen([sys.executable, "-m", "harness.cli", "run", str(SCENARIO),
+                             "--out", str(tmp / "live"), *SHORT, "--foxglove",
+                             "--foxglove-port", "0", "--foxglove-wait", "30", "--rate", "4"],
+                            cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    assert proc.stderr is not None
+    said = []
+    for line in proc.stderr:
+        said.append(line)
+        if (bound := re.search(r"live view on ws://127\.0\.0\.1:(\d+)", line)) is not None:
+            break
+    assert bound is not None, "".join(said) + proc.communicate()[1]
+    client = LiveClient(int(bound.group(1)), WATCHED).start()
+    said.append(proc.communicate()[1])
+    code = proc.returncode
+    assert code in (0, 1), "".join(said)
     got = client.join()
     assert main(["run", str(SCENARIO), "--out", str(tmp / "plain"), *SHORT]) == code
     yield LiveRun(code, json.loads((tmp / "live" / "summary.json").read_text()), tmp / "live",

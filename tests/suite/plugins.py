@@ -1,13 +1,42 @@
 """Systems under test that misbehave the ways a nightly suite must survive: a segfault, a
-hang past the timeout, and output that depends on something outside the simulation."""
+hang before the first tick or in the middle of a run, a worker that is killed, and output that
+depends on something outside the simulation.
+
+The hangs block until the process is interrupted or killed (they never end on their own), so
+a test that stops them does not depend on how fast the machine is."""
 
 from __future__ import annotations
 
 import ctypes
 import os
+import signal
 import time
+from pathlib import Path
 
+from harness.errors import PluginError
+from harness.sut.base import SutContext
 from harness.sut.route_follower import RouteFollower
+
+#: Environment variable naming a file :class:`Staller` creates once it blocks.
+STALLED_FILE = "SRR_TEST_STALLED_FILE"
+#: Environment variable holding the id of the process that plans the suite. Planning sets up
+#: every entry's plug-ins (as ``srr validate`` does); the set-ups below misbehave only in
+#: other processes: the suite's workers.
+PLANNER_PID = "SRR_TEST_PLANNER_PID"
+
+
+def in_a_worker() -> bool:
+    planner = os.environ.get(PLANNER_PID)
+    if planner is None:
+        raise PluginError(f"set ${PLANNER_PID} to the id of the process that plans the suite")
+    return int(planner) != os.getpid()
+
+
+def block_forever() -> None:
+    """Block until interrupted (SIGTERM/SIGINT as KeyboardInterrupt, Ray's cancel) or killed.
+    Short sleeps, so an interrupt raised between bytecodes (Ray's) is seen too."""
+    while True:
+        time.sleep(0.05)
 
 
 class Segfaulter(RouteFollower):
@@ -19,11 +48,35 @@ class Segfaulter(RouteFollower):
         super().step(now_ns)
 
 
-class Sleeper(RouteFollower):
-    """Spends 50 ms of wall-clock time per tick: a 3 s scenario takes ~9 s."""
+class BlockedAtStart(RouteFollower):
+    """Never gets past its set-up in a worker: the run blocks before its first tick, before
+    it has written anything."""
+
+    def setup(self, ctx: SutContext) -> None:
+        super().setup(ctx)
+        if in_a_worker():
+            block_forever()
+
+
+class KilledAtStart(RouteFollower):
+    """Its worker process is killed (SIGKILL) during set-up, before the first tick."""
+
+    def setup(self, ctx: SutContext) -> None:
+        super().setup(ctx)
+        if in_a_worker():
+            os.kill(os.getpid(), signal.SIGKILL)
+
+
+class Staller(RouteFollower):
+    """Follows the route for 0.5 s of simulated time, then blocks forever (after creating the
+    file named by ``$SRR_TEST_STALLED_FILE``, when set): a run stuck mid-way."""
 
     def step(self, now_ns: int) -> None:
-        time.sleep(0.05)
+        if now_ns >= 500_000_000:
+            stalled = os.environ.get(STALLED_FILE)
+            if stalled:
+                Path(stalled).touch()
+            block_forever()
         super().step(now_ns)
 
 

@@ -17,6 +17,7 @@ import pytest
 
 from harness import api
 from harness.cli import main
+from harness.errors import StreamError
 from harness.graph.nodes.video import RTSP_HUB
 from harness.video import psnr, read_sim_time, sim_time_of_user_data
 from tests.e2e.bagread import decoded
@@ -27,7 +28,10 @@ PERIOD_NS = 1_000_000_000 // FPS  # the gate's step (6 ticks of 60 Hz) in simula
 DURATION_S = 1.5
 
 
-def _free_ports(n: int) -> list[int]:
+def _unused_ports(n: int) -> list[int]:
+    """``n`` ports that no socket here held a moment ago. Scenario ports are 1..65535 (no 0
+    for "any"), so a server binding them later may find one taken by then: see
+    :func:`streamed` picks others then."""
     socks = []
     for _ in range(n):
         s = socket.socket()
@@ -84,27 +88,46 @@ def _client(url: str, out: Received, deadline: float) -> None:
         container.close()
 
 
-@pytest.fixture(scope="module")
-def streamed(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Received], Path,
-                                                              dict[str, Any]]:
-    ports = _free_ports(2)
-    run_dir = tmp_path_factory.mktemp("rtsp") / "run"
+def _serve(run_dir: Path, ports: list[int]) -> tuple[dict[str, Received], Any] | None:
+    """Run the two-camera scene serving on ``ports``, with a client per URL started once the
+    run serves them all (so a client never reaches another server); None when a port was
+    taken by then (the run stopped before writing anything)."""
     scenario = api.load(SCENARIO, overrides=[
         f"cameras.0.port={ports[0]}", f"cameras.1.port={ports[1]}", "rtsp.wait_s=60"])
     urls = [f"rtsp://127.0.0.1:{ports[0]}/dock_cam_left",
             f"rtsp://127.0.0.1:{ports[1]}/right/camera"]
     got = {u: Received(u) for u in urls}
-    deadline = time.monotonic() + 60
-    threads = [threading.Thread(target=_client, args=(u, got[u], deadline), daemon=True)
-               for u in urls]
-    for t in threads:
-        t.start()
+    threads = [threading.Thread(target=_client, args=(u, got[u], time.monotonic() + 60),
+                                daemon=True) for u in urls]
     notices: list[str] = []
-    res = api.run_scenario(scenario, source=str(SCENARIO), out=run_dir, notice=notices.append)
+
+    def notice(text: str) -> None:
+        notices.append(text)
+        if text.startswith("rtsp: serving "):  # every port is bound now
+            for t in threads:
+                t.start()
+
+    try:
+        res = api.run_scenario(scenario, source=str(SCENARIO), out=run_dir, notice=notice)
+    except StreamError as err:
+        if "Address already in use" not in str(err):
+            raise
+        return None
     for t in threads:
         t.join(30)
     assert any("serving " + urls[0] in n for n in notices), notices
-    return got, run_dir, res.summary
+    return got, res.summary
+
+
+@pytest.fixture(scope="module")
+def streamed(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Received], Path,
+                                                              dict[str, Any]]:
+    run_dir = tmp_path_factory.mktemp("rtsp") / "run"
+    for _ in range(5):  # a port taken since it was picked: pick others
+        served = _serve(run_dir, _unused_ports(2))
+        if served is not None:
+            return served[0], run_dir, served[1]
+    pytest.fail("five pairs of ports were all taken before the run could bind them")
 
 
 def _raw_frames(run_dir: Path) -> dict[str, dict[int, np.ndarray]]:
@@ -149,10 +172,10 @@ def test_frames_match_the_raw_frames_rendered_at_the_same_time(streamed: Any) ->
 
 def test_a_port_in_use_is_one_clear_line(tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str]) -> None:
-    (busy,) = _free_ports(1)
     with socket.socket() as blocker:
-        blocker.bind(("127.0.0.1", busy))
+        blocker.bind(("127.0.0.1", 0))
         blocker.listen()
+        busy = blocker.getsockname()[1]
         code = main(["run", str(SCENARIO), "--out", str(tmp_path / "run"), "-q",
                      "--set", f"cameras.1.port={busy}"])
     err = capsys.readouterr().err.strip()

@@ -1,0 +1,119 @@
+"""A run that did not finish, as the suite leaves it: every run of a suite ends with its run
+directory and a ``summary.json`` in it, however it ended.
+
+The suite's own process settles each run after its worker has ended (exited, crashed, been
+killed at its timeout or on Ctrl-C, or — on Ray — been cancelled before it even started):
+
+* a run directory that still holds ``incomplete.json`` is recovered (``srr recover``: the bag
+  from its complete chunks, a summary marked recovered, its report);
+* a run that left no summary — stopped or dead before its first tick, before it wrote
+  anything, or with nothing that could be recovered — gets its directory written here: the
+  resolved ``scenario.yaml``, a ``summary.json`` with verdict INVALID, no topics and no scores,
+  whose reason says what happened, and ``junit.xml``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from harness import runmarker
+from harness.atomic import write_json_atomic
+from harness.errors import SrrError
+from harness.suite.plan import RunSpec
+from harness.summary import SUMMARY_NAME
+
+__all__ = ["Settled", "settle"]
+
+#: The health gate a settled run fails, as a recovered one does.
+GATE = "recording_complete"
+
+
+@dataclass(frozen=True)
+class Settled:
+    """What :func:`settle` did: ``note`` says it for the run's reasons (None: nothing to say);
+    ``written`` is True when the summary was written here (nothing was recorded)."""
+
+    note: str | None
+    written: bool = False
+
+
+def _salvage(run_path: Path) -> str | None:
+    """Recover what a killed run left (bag from its complete chunks, a summary marked
+    recovered) and render its report; a note on what happened, None when nothing was left.
+    Raises :class:`SrrError` when there was something that could not be recovered."""
+    if runmarker.read(run_path) is None or not (run_path / "bag").is_dir():
+        return None  # not even the recorder was made: nothing to recover
+    from harness import api
+
+    res = api.recover(run_path)
+    with contextlib.suppress(SrrError):
+        api.report(run_path)
+    kept = sum(t.count for t in res.bag.topics.values())
+    return f"{kept} recorded messages were recovered from its complete chunks"
+
+
+def settle(run_path: Path, spec: RunSpec, problem: str) -> Settled:
+    """Leave ``run_path`` (run ``spec``'s directory; its worker has ended, for ``problem``) with
+    a ``summary.json``: what the run left, recovered; else one written here, INVALID, saying
+    ``problem`` and how far the run got."""
+    try:
+        note = _salvage(run_path)
+        if (run_path / SUMMARY_NAME).is_file():
+            return Settled(note)
+        what = "it ended before its first tick: nothing was recorded"
+    except SrrError as err:
+        what = f"what it recorded could not be recovered ({err})"
+    try:
+        _write(run_path, spec, f"{problem}; {what}")
+    except (SrrError, OSError) as err:
+        return Settled(f"{what}; its run directory could not be written ({err})")
+    return Settled(f"{what}; the suite wrote its run directory with an INVALID summary",
+                   written=True)
+
+
+def _write(run_path: Path, spec: RunSpec, detail: str) -> None:
+    """The resolved scenario, an INVALID ``summary.json`` (no topics, no scores) whose one
+    failed health gate says ``detail``, and its ``junit.xml``; the in-progress marker, if any,
+    removed."""
+    from harness import api
+    from harness.report.junit import junit_cases, write_junit
+    from harness.scenario import scenario_to_mapping
+
+    scenario = api.load(spec.scenario_file, overrides=list(spec.overrides))
+    run_path.mkdir(parents=True, exist_ok=True)
+    (run_path / "scenario.yaml").write_text(
+        yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
+    summary: dict[str, Any] = {
+        "scenario": scenario.name,
+        "scenario_file": spec.scenario_file,
+        "seed": scenario.seed,
+        "srr_gt": scenario.srr_gt,
+        "duration_s": scenario.duration,
+        "simulated_s": 0.0,
+        "ticks": 0,
+        "tick_hz": scenario.physics.tick_hz,
+        "interrupted": True,
+        "stopped": None,
+        "warnings": [],
+        "health": [{"name": GATE, "ok": False, "detail": detail}],
+        "metrics": [],
+        "graphs": [],
+        "systems_under_test": [s.name for s in scenario.systems_under_test if s.enabled],
+        "topics": {},
+        "digest": api.combined_digest({}),
+        "versions": api.versions(),
+        "command": api.reproduce_command(spec.scenario_file, scenario, run_path),
+        "verdict": "INVALID",
+        "exit_code": 3,
+        "reasons": [f"health {GATE}: {detail}"],
+        "baseline": None,
+        "comparison": [],
+    }
+    write_junit(run_path / "junit.xml", scenario.name, junit_cases(summary))
+    write_json_atomic(run_path / SUMMARY_NAME, summary)
+    runmarker.clear(run_path)

@@ -1,0 +1,61 @@
+"""A run's directory settled by the suite's process after its worker ended without a summary:
+nothing there at all, or a recording that cannot be recovered."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from harness import api, runmarker
+from harness.suite.plan import RunSpec
+from harness.suite.unfinished import settle
+from harness.summary import read_summary
+
+FORKLIFT = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
+
+
+def _spec() -> RunSpec:
+    return RunSpec(id="f#1", group="f", entry="f", scenario="forklift_warehouse",
+                   scenario_file=str(FORKLIFT), overrides=("duration=2", "seed=11"), params=(),
+                   sweep=False, repeat=1, repeats=1, timeout_s=5.0, run_dir="runs/f/nominal/r1",
+                   renders=False)
+
+
+def test_a_run_that_left_nothing_gets_its_directory(tmp_path: Path) -> None:
+    run = tmp_path / "runs" / "f" / "nominal" / "r1"
+    settled = settle(run, _spec(), "timed out after 5 s of wall-clock time and was stopped")
+    assert settled.written and "before its first tick" in str(settled.note)
+    summary = read_summary(run)
+    assert summary["verdict"] == "INVALID" and summary["exit_code"] == 3
+    assert summary["seed"] == 11 and summary["duration_s"] == 2  # the run's own overrides
+    assert summary["reasons"] == ["health recording_complete: timed out after 5 s of "
+                                  "wall-clock time and was stopped; it ended before its first "
+                                  "tick: nothing was recorded"]
+    assert summary["topics"] == {} and summary["metrics"] == []
+    assert api.load(run / "scenario.yaml").seed == 11
+    assert "health.recording_complete" in (run / "junit.xml").read_text()
+
+
+def test_a_recording_that_cannot_be_recovered_is_said_so(tmp_path: Path) -> None:
+    run = tmp_path / "r1"
+    (run / "bag").mkdir(parents=True)
+    (run / "bag" / "bag.mcap").write_bytes(b"\x89MCAP0\r\n" + b"\x00" * 5)  # cut in its header
+    runmarker.mark(run, "recording", scenario_file=str(FORKLIFT), command="srr run ...")
+    settled = settle(run, _spec(), "the worker crashed: killed by signal SIGKILL")
+    assert settled.written and "could not be recovered" in str(settled.note)
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["verdict"] == "INVALID"
+    assert summary["reasons"][0].startswith("health recording_complete: the worker crashed: "
+                                            "killed by signal SIGKILL; what it recorded could "
+                                            "not be recovered (")
+    assert runmarker.read(run) is None  # settled: no longer in progress
+    assert (run / "bag" / "bag.mcap").read_bytes().startswith(b"\x89MCAP0")  # left as it was
+
+
+def test_a_finished_run_is_left_alone(tmp_path: Path) -> None:
+    run = tmp_path / "r1"
+    run.mkdir()
+    (run / "summary.json").write_text('{"verdict": "INTERRUPTED"}')
+    assert settle(run, _spec(), "the worker exited with status 130").note is None
+    assert sorted(p.name for p in run.iterdir()) == ["summary.json"]
+    assert (run / "summary.json").read_text() == '{"verdict": "INTERRUPTED"}'
