@@ -67,6 +67,7 @@ from harness.bus.endpoints import tf_tree_of
 from harness.bus.messages import TYPESTORE
 from harness.bus.ros1 import deserialize_ros1
 from harness.errors import BagError, reason
+from harness.geometry import yaw_from_quat_xyzw_columns
 
 __all__ = [
     "CLOCK",
@@ -79,7 +80,6 @@ __all__ = [
     "Frames",
     "decode_batch",
     "load_frames",
-    "quat_yaw",
 ]
 
 CLOCK = "rosgraph_msgs/msg/Clock"
@@ -129,11 +129,6 @@ class Frames:
     @property
     def duration_s(self) -> float:
         return (self.end_ns - self.start_ns) / 1e9
-
-
-def quat_yaw(qx: Any, qy: Any, qz: Any, qw: Any) -> Any:
-    """Yaw (rad) of (x, y, z, w) quaternions; works on scalars and numpy arrays."""
-    return np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
 # --------------------------------------------------------------------------- CDR layout walk
@@ -591,7 +586,7 @@ def _gt_table(name: str, cols: dict[str, np.ndarray]) -> pd.DataFrame:
     return pd.DataFrame({
         "t_ns": _stamp(c), "name": np.full(c["msg"].size, name, dtype=object),
         "x": c["x"], "y": c["y"], "z": c["z"],
-        "yaw": quat_yaw(c["qx"], c["qy"], c["qz"], c["qw"]),
+        "yaw": yaw_from_quat_xyzw_columns(c["qx"], c["qy"], c["qz"], c["qw"]),
     })
 
 
@@ -612,7 +607,7 @@ def _odom_table(topic: str, cols: dict[str, np.ndarray],
     return pd.DataFrame({
         "t_ns": _stamp(cols), "topic": np.full(n, topic, dtype=object), "frame": frame,
         "x": pos[:, 0], "y": pos[:, 1],
-        "yaw": quat_yaw(quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]),
+        "yaw": yaw_from_quat_xyzw_columns(quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]),
         "vx": cols["vx"], "wz": cols["wz"],
     })
 

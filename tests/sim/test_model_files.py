@@ -16,9 +16,9 @@ import yaml
 from harness import api
 from harness.cli import main
 from harness.errors import ScenarioError
+from harness.geometry import rpy_from_quat_wxyz
 from harness.scenario import load_scenario
 from harness.sim import World
-from harness.sim.geometry import rpy_from_quat
 from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
 from tests.conftest import SCENARIOS
 from tests.e2e.bagread import decoded
@@ -230,7 +230,7 @@ def test_instances_of_one_file_coexist_at_their_spawn_poses(tmp_path: Path) -> N
                           ("truck", (-4.0, 2.0), 180.0)):
         pos, quat = world.prim_pose(world.base_prim(name))
         assert pos == pytest.approx((*xy, 0.0), abs=1e-9)
-        assert math.degrees(rpy_from_quat(quat)[2]) % 360 == pytest.approx(yaw % 360)
+        assert math.degrees(rpy_from_quat_wxyz(quat)[2]) % 360 == pytest.approx(yaw % 360)
     a, b = world.robot("bot_a"), world.robot("bot_b")
     assert set(a.links) == set(b.links) == DIFFBOT_LINKS
     assert set(a.body_ids).isdisjoint(b.body_ids)
