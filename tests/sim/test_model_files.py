@@ -16,7 +16,7 @@ import yaml
 from harness import api
 from harness.cli import main
 from harness.errors import ScenarioError
-from harness.geometry import rpy_from_quat_wxyz
+from harness.geometry import rpy_from_quat_wxyz, yaw_from_quat_wxyz
 from harness.scenario import load_scenario
 from harness.sim import World
 from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
@@ -311,8 +311,7 @@ def odometry(run_dir: Path) -> np.ndarray:
     for topic, _, _, msg in decoded(run_dir):
         if topic == "/odom":
             p, q = msg.pose.pose.position, msg.pose.pose.orientation
-            rows.append((p.x, p.y, math.atan2(2 * (q.w * q.z + q.x * q.y),
-                                              1 - 2 * (q.y * q.y + q.z * q.z)),
+            rows.append((p.x, p.y, yaw_from_quat_wxyz((q.w, q.x, q.y, q.z)),
                          msg.twist.twist.linear.x, msg.twist.twist.angular.z))
     return np.asarray(rows)
 
