@@ -209,18 +209,12 @@ def yaw_between(front: FloatVec) -> float:
 
 
 def mat_from_quat_wxyz(q: FloatVec) -> FloatArray:
-    """3x3 rotation matrix of a unit (w, x, y, z) quaternion (``mju_quat2Mat``'s expressions;
-    its compiled code may round differently in the last bit)."""
+    """3x3 rotation matrix of a unit (w, x, y, z) quaternion (columns: its rotated axes)."""
     w, x, y, z = (float(c) for c in q)
-    if w == 1 and x == 0 and y == 0 and z == 0:
-        return np.eye(3)
-    q00, q01, q02, q03 = w * w, w * x, w * y, w * z
-    q11, q12, q13 = x * x, x * y, x * z
-    q22, q23, q33 = y * y, y * z, z * z
     return np.array([
-        [q00 + q11 - q22 - q33, 2 * (q12 - q03), 2 * (q13 + q02)],
-        [2 * (q12 + q03), q00 - q11 + q22 - q33, 2 * (q23 - q01)],
-        [2 * (q13 - q02), 2 * (q23 + q01), q00 - q11 - q22 + q33],
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
     ])
 
 
