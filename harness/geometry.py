@@ -21,7 +21,9 @@ Recorded data depends on the exact order of each floating-point operation, so ea
 written once, in the order its results were first recorded in. :func:`yaw_from_quat_wxyz`
 (``math.atan2``, one quaternion, as the systems under test use it) and
 :func:`yaw_from_quat_xyzw_columns` (``numpy.arctan2``, table columns, as the metrics use it)
-share one expression; the two ``atan2`` may differ in the last bit. MuJoCo's compiled
+share one expression; the two ``atan2`` may differ in the last bit. The tables' columns
+(``*_columns``) share the product with the tuple functions, and rotate in the cross-product
+form they were first computed in. MuJoCo's compiled
 ``mju_mulQuat``, ``mju_mat2Quat`` and ``mju_rotVecQuat`` round differently from the same
 formulas in Python for some inputs, so quaternions that go into a MuJoCo model or come out
 of its poses are computed by MuJoCo itself, in :mod:`harness.sim.mjquat` (which passes
@@ -53,6 +55,8 @@ __all__ = [
     "quat_wxyz_mul_floats",
     "quat_wxyz_rotate",
     "quat_wxyz_rotate_floats",
+    "quat_xyzw_mul_columns",
+    "quat_xyzw_rotate_columns",
     "rpy_from_quat_wxyz",
     "wxyz_to_xyzw",
     "xyzw_to_wxyz",
@@ -101,8 +105,9 @@ def _as_floats(q: FloatVec) -> Sequence[float] | FloatArray:
 # --------------------------------------------------------------------------- products
 
 
-def quat_wxyz_mul_floats(a: FloatVec, b: FloatVec) -> QuatTuple:
-    """Hamilton product ``a ⊗ b`` of two (w, x, y, z) quaternions (apply ``b``, then ``a``)."""
+def _hamilton(a: Any, b: Any) -> tuple[Any, Any, Any, Any]:
+    """Hamilton product ``a ⊗ b`` of (w, x, y, z) components: numbers, or numpy arrays of
+    them (elementwise, the same IEEE operations in the same order)."""
     aw, ax, ay, az = a
     bw, bx, by, bz = b
     return (
@@ -111,6 +116,11 @@ def quat_wxyz_mul_floats(a: FloatVec, b: FloatVec) -> QuatTuple:
         aw * by - ax * bz + ay * bw + az * bx,
         aw * bz + ax * by - ay * bx + az * bw,
     )
+
+
+def quat_wxyz_mul_floats(a: FloatVec, b: FloatVec) -> QuatTuple:
+    """Hamilton product ``a ⊗ b`` of two (w, x, y, z) quaternions (apply ``b``, then ``a``)."""
+    return _hamilton(a, b)
 
 
 def quat_wxyz_conj_floats(q: FloatVec) -> QuatTuple:
@@ -154,6 +164,26 @@ def quat_wxyz_rotate(q: FloatVec, v: FloatVec) -> FloatArray:
         p = np.array([0.0, v[0], v[1], v[2]])
         return quat_wxyz_mul(quat_wxyz_mul(q, p), quat_wxyz_conj(q))[1:]
     return np.array(quat_wxyz_rotate_floats(qf, v), dtype=np.float64)
+
+
+def quat_xyzw_mul_columns(a: FloatArray, b: FloatArray) -> FloatArray:
+    """:func:`quat_wxyz_mul_floats` of (x, y, z, w) quaternions along the last axis of ``a`` and
+    ``b`` (broadcasting over the leading axes)."""
+    ax, ay, az, aw = np.moveaxis(a, -1, 0)
+    bx, by, bz, bw = np.moveaxis(b, -1, 0)
+    w, x, y, z = _hamilton((aw, ax, ay, az), (bw, bx, by, bz))
+    return np.stack([x, y, z, w], axis=-1)
+
+
+def quat_xyzw_rotate_columns(q: FloatArray, v: FloatArray) -> FloatArray:
+    """Vectors ``v`` (..., 3) rotated by (x, y, z, w) quaternions ``q`` (..., 4), in the
+    cross-product form ``v + w t + q⃗ × t`` with ``t = 2 q⃗ × v`` (the tables' arithmetic; the
+    same rotation as :func:`quat_wxyz_rotate` to rounding)."""
+    u = q[..., :3]
+    w = q[..., 3:4]
+    t = 2.0 * np.cross(u, v)
+    out: FloatArray = v + w * t + np.cross(u, t)
+    return out
 
 
 # --------------------------------------------------------------------------- angles

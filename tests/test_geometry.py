@@ -24,6 +24,8 @@ from harness.geometry import (
     quat_wxyz_mul_floats,
     quat_wxyz_rotate,
     quat_wxyz_rotate_floats,
+    quat_xyzw_mul_columns,
+    quat_xyzw_rotate_columns,
     rpy_from_quat_wxyz,
     wxyz_to_xyzw,
     xyzw_to_wxyz,
@@ -162,3 +164,23 @@ def test_yaw_of_columns_is_the_yaw_of_each_quaternion() -> None:
     np.testing.assert_allclose(
         yaw_from_quat_xyzw_columns(flat[:, 0], flat[:, 1], flat[:, 2], flat[:, 3]), yaws,
         atol=1e-12)
+
+
+def test_columns_are_the_one_quaternion_functions_row_by_row() -> None:
+    """The tables' (x, y, z, w) columns: the product is the tuple product's, bit for bit, in
+    the other component order; the rotation is the same rotation (to rounding) and scipy's."""
+    rng = np.random.default_rng(14)
+    a, b = _unit_quats(3_000, 15), _unit_quats(3_000, 16)
+    a[::50] = rng.choice(_SPECIAL, size=a[::50].shape)
+    v = rng.normal(size=(3_000, 3)) * 5
+    xyzw_a = np.stack([wxyz_to_xyzw(q) for q in a])
+    xyzw_b = np.stack([wxyz_to_xyzw(q) for q in b])
+    prod = quat_xyzw_mul_columns(xyzw_a, xyzw_b)
+    rot = quat_xyzw_rotate_columns(xyzw_b, v)
+    for i in range(len(a)):
+        assert _bits(xyzw_to_wxyz(prod[i])) == _bits(quat_wxyz_mul_floats(a[i].tolist(),
+                                                                          b[i].tolist()))
+        np.testing.assert_allclose(rot[i], quat_wxyz_rotate(b[i], v[i]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(rot, Rotation.from_quat(xyzw_b).apply(v), rtol=0, atol=1e-12)
+    one = quat_xyzw_rotate_columns(xyzw_b[0], v)  # one rotation broadcast over many vectors
+    np.testing.assert_allclose(one, Rotation.from_quat(xyzw_b[0]).apply(v), rtol=0, atol=1e-12)
