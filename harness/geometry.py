@@ -3,27 +3,27 @@ in. Pure numpy and Python floats, no MuJoCo.
 
 Component order is part of every name that takes or gives a quaternion:
 
-* ``wxyz`` — scalar first, MuJoCo's order. Every function here computes in this order.
+* ``wxyz`` — scalar first, MuJoCo's order, the one the functions here compute in.
 * ``xyzw`` — scalar last, the order of ROS ``geometry_msgs/Quaternion`` fields and of Isaac's
-  ``quatd`` attributes (IJKR). Convert at the edge with :func:`wxyz_to_xyzw` and
-  :func:`xyzw_to_wxyz`.
+  ``quatd`` attributes (IJKR), and of the recorded tables' columns (``*_xyzw_columns``).
+  Convert at the edge with :func:`wxyz_to_xyzw` and :func:`xyzw_to_wxyz`.
 
 Angles are radians unless the name ends in ``_deg``. Roll/pitch/yaw are extrinsic X-Y-Z
 (``R = Rz(yaw) @ Ry(pitch) @ Rx(roll)``), the REP-103 convention. Products are Hamilton
 products: ``quat_wxyz_mul(a, b)`` applies ``b`` first, then ``a``.
 
-Two kinds of values: numpy float64 arrays (``quat_wxyz_*``), and tuples of Python floats
-(``*_floats``) for code that runs every tick. Python floats are IEEE doubles, so a tuple
-function and its array twin give the same values bit for bit: the array functions call the
-tuple ones.
+Three kinds of values: numpy float64 arrays (``quat_wxyz_*``); tuples of Python floats
+(``*_floats``) for code that runs every tick; columns of tables (``*_columns``). Python floats
+are IEEE doubles and numpy works elementwise, so the three give the same values bit for bit:
+they share one expression per formula.
 
 Recorded data depends on the exact order of each floating-point operation, so each formula is
 written once, in the order its results were first recorded in. :func:`yaw_from_quat_wxyz`
 (``math.atan2``, one quaternion, as the systems under test use it) and
 :func:`yaw_from_quat_xyzw_columns` (``numpy.arctan2``, table columns, as the metrics use it)
-share one expression; the two ``atan2`` may differ in the last bit. The tables' columns
-(``*_columns``) share the product with the tuple functions, and rotate in the cross-product
-form they were first computed in. MuJoCo's compiled
+share one expression; the two ``atan2`` may differ in the last bit. The tables rotate in the
+cross-product form they were first computed in (:func:`quat_xyzw_rotate_columns`), the rest
+by Hamilton products. MuJoCo's compiled
 ``mju_mulQuat``, ``mju_mat2Quat`` and ``mju_rotVecQuat`` round differently from the same
 formulas in Python for some inputs, so quaternions that go into a MuJoCo model or come out
 of its poses are computed by MuJoCo itself, in :mod:`harness.sim.mjquat` (which passes
@@ -130,20 +130,10 @@ def quat_wxyz_conj_floats(q: FloatVec) -> QuatTuple:
 
 def quat_wxyz_rotate_floats(q: FloatVec, v: FloatVec) -> Vec3:
     """Rotate ``v`` by the (w, x, y, z) quaternion ``q``: the products
-    ``q ⊗ (0, v) ⊗ conj(q)``, term for term as :func:`quat_wxyz_mul_floats` (so signed zeros
-    and rounding come out the same), written out to save the calls."""
-    aw, ax, ay, az = q
-    bw, bx, by, bz = 0.0, float(v[0]), float(v[1]), float(v[2])
-    tw = aw * bw - ax * bx - ay * by - az * bz
-    tx = aw * bx + ax * bw + ay * bz - az * by
-    ty = aw * by - ax * bz + ay * bw + az * bx
-    tz = aw * bz + ax * by - ay * bx + az * bw
-    cw, cx, cy, cz = aw, -ax, -ay, -az
-    return (
-        tw * cx + tx * cw + ty * cz - tz * cy,
-        tw * cy - tx * cz + ty * cw + tz * cx,
-        tw * cz + tx * cy - ty * cx + tz * cw,
-    )
+    ``q ⊗ (0, v) ⊗ conj(q)``."""
+    _, x, y, z = _hamilton(_hamilton(q, (0.0, float(v[0]), float(v[1]), float(v[2]))),
+                           quat_wxyz_conj_floats(q))
+    return (x, y, z)
 
 
 def quat_wxyz_mul(a: FloatVec, b: FloatVec) -> FloatArray:
@@ -153,14 +143,14 @@ def quat_wxyz_mul(a: FloatVec, b: FloatVec) -> FloatArray:
 
 def quat_wxyz_conj(q: FloatVec) -> FloatArray:
     """:func:`quat_wxyz_conj_floats` on an array or a sequence."""
-    return np.array([q[0], -q[1], -q[2], -q[3]], dtype=np.float64)
+    return np.array(quat_wxyz_conj_floats(q), dtype=np.float64)
 
 
 def quat_wxyz_rotate(q: FloatVec, v: FloatVec) -> FloatArray:
     """Rotate vector ``v`` by the (w, x, y, z) quaternion ``q``:
     :func:`quat_wxyz_rotate_floats` on arrays or sequences."""
     qf = _as_floats(q)
-    if qf is q:  # not float64: numpy's promotion, as the products on arrays
+    if qf is q:  # not a 1-d float64 array: numpy's promotion rules, on arrays
         p = np.array([0.0, v[0], v[1], v[2]])
         return quat_wxyz_mul(quat_wxyz_mul(q, p), quat_wxyz_conj(q))[1:]
     return np.array(quat_wxyz_rotate_floats(qf, v), dtype=np.float64)
