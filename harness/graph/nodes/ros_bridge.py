@@ -34,7 +34,7 @@ from harness.bus.messages import (
     tf_packer,
 )
 from harness.errors import GraphError
-from harness.geometry import quat_conj, quat_mul, quat_rotate, wxyz_to_xyzw
+from harness.geometry import quat_wxyz_conj, quat_wxyz_mul, quat_wxyz_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
 from harness.sim.cameras import optical_quat
 from harness.sim.prims import PrimKind
@@ -293,8 +293,8 @@ def relative_pose(world: Any, parent: str | None, child: str) -> tuple[np.ndarra
     if not parent:
         return pos, quat
     ppos, pquat = frame_pose(world, parent)
-    inv = quat_conj(pquat)
-    return quat_rotate(inv, np.asarray(pos) - np.asarray(ppos)), quat_mul(inv, quat)
+    inv = quat_wxyz_conj(pquat)
+    return quat_wxyz_rotate(inv, np.asarray(pos) - np.asarray(ppos)), quat_wxyz_mul(inv, quat)
 
 
 @register("srr.PublishTransformTree", aliases=aliases("PublishTransformTree"))
