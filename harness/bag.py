@@ -15,6 +15,7 @@ from rosbags.rosbag1 import ReaderError as Rosbag1ReaderError
 from rosbags.rosbag2 import Reader
 from rosbags.rosbag2.errors import ReaderError
 
+from harness import yamlio
 from harness.bus.bagread import open_recording, ros1_recording
 from harness.errors import BagError, reason
 
@@ -74,7 +75,7 @@ def inspect_bag(path: str | Path) -> BagInfo:
                 durability = qos[0].durability.name.lower() if qos else "volatile"
                 topics.append(BagTopic(conn.topic, conn.msgtype, counts.get(conn.topic, 0),
                                        durability))
-            meta = yaml.safe_load((p / "metadata.yaml").read_text(encoding="utf-8"))
+            meta = yamlio.load((p / "metadata.yaml").read_text(encoding="utf-8"))
             storage = str(meta["rosbag2_bagfile_information"]["storage_identifier"])
             return BagInfo(p, storage,
                            sum(counts.values()), reader.start_time, reader.end_time,

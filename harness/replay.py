@@ -32,6 +32,7 @@ import yaml
 from mcap.reader import make_reader
 from rosbags.serde import SerdeError
 
+from harness import yamlio
 from harness.bag import BAG_READ_ERRORS
 from harness.builders.camera_record import CompressedStream, compressed_streams, recorded_cameras
 from harness.bus import Bus, Qos
@@ -49,8 +50,6 @@ __all__ = ["Playback", "RecordedTopic", "Replay"]
 
 IMAGE = "sensor_msgs/msg/Image"
 
-_YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-
 
 @dataclass(frozen=True)
 class RecordedTopic:
@@ -63,7 +62,7 @@ def _qos(profiles: Any) -> Qos:
     """The first offered QoS profile of a rosbag2 ``topic_metadata`` (a list of mappings in
     metadata version 9, a YAML string in older ones)."""
     if isinstance(profiles, str):
-        profiles = yaml.safe_load(profiles)
+        profiles = yamlio.load(profiles)
     if not profiles:
         return Qos()
     p = profiles[0]
@@ -97,7 +96,7 @@ class Playback:
             raise BagError(f"{self.bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
         meta_file = self.bag_dir / "metadata.yaml"
         try:
-            info = yaml.load(meta_file.read_text(encoding="utf-8"), Loader=_YamlLoader)[
+            info = yamlio.load(meta_file.read_text(encoding="utf-8"))[
                 "rosbag2_bagfile_information"]
             self.topics = {}
             for entry in info["topics_with_message_count"]:

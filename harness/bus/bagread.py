@@ -27,12 +27,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Literal
 
-import yaml
 from mcap.reader import make_reader
 from rosbags.rosbag1 import Reader as Rosbag1Reader
 from rosbags.rosbag2 import Reader as Rosbag2Reader
 from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 
+from harness import yamlio
 from harness.bus.mcapread import McapIndex
 from harness.bus.messages import TYPESTORE
 from harness.bus.ros1 import deserialize_ros1, ros2_type, to_ros2
@@ -238,9 +238,6 @@ def open_recording(path: str | Path) -> Recording:
     return _Mcap(p)
 
 
-_YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-
-
 def open_indexed(path: str | Path) -> Recording:
     """:func:`open_recording`, but a rosbag2 directory whose ``metadata.yaml`` names one MCAP
     file, finished, is read through that file's index as a ``.mcap`` file is: the same
@@ -250,8 +247,8 @@ def open_indexed(path: str | Path) -> Recording:
     p = Path(path)
     if p.is_dir() and (p / "metadata.yaml").exists():
         try:
-            info = yaml.load((p / "metadata.yaml").read_text(encoding="utf-8"),
-                             Loader=_YamlLoader)["rosbag2_bagfile_information"]
+            info = yamlio.load((p / "metadata.yaml").read_text(encoding="utf-8"))[
+                "rosbag2_bagfile_information"]
             files = [p / str(f) for f in info["relative_file_paths"]]
             if len(files) == 1 and files[0].suffix == ".mcap" and files[0].is_file():
                 return _Mcap(files[0])

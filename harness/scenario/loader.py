@@ -18,7 +18,8 @@ from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
 import yaml
 
-from harness.errors import ScenarioError, SrrError
+from harness import yamlio
+from harness.errors import ScenarioError, SrrError, reason
 from harness.scenario.schema import (
     FORMAT_VERSION,
     CameraRecordSpec,
@@ -62,21 +63,22 @@ class _Origins:
 
 
 def _read_yaml(path: Path, shown: str, field: str = "") -> dict[str, Any]:
-    if not path.exists():
-        raise ScenarioError(shown, field, "file not found")
-    if path.is_dir():
-        raise ScenarioError(shown, field, "is a directory, not a scenario file")
     try:
+        if not path.exists():
+            raise ScenarioError(shown, field, "file not found")
+        if path.is_dir():
+            raise ScenarioError(shown, field, "is a directory, not a scenario file")
         text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise ScenarioError(shown, field, f"cannot read: {err}") from err
+    except (OSError, ValueError) as err:  # a name too long, a NUL byte, no permission
+        why = err.strerror if isinstance(err, OSError) and err.strerror else reason(err)
+        raise ScenarioError(shown, field, f"cannot read: {why}") from err
     try:
-        data = yaml.safe_load(text)
+        data = yamlio.load(text)
+    except yamlio.DuplicateKeyError as err:
+        raise ScenarioError(shown, err.field, f"set twice (lines {err.first_line} and "
+                            f"{err.line}): remove one") from err
     except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
-        problem = getattr(err, "problem", None) or str(err).splitlines()[0]
-        raise ScenarioError(shown, "", f"YAML syntax error at {where}{problem}") from err
+        raise ScenarioError(shown, "", f"YAML syntax error at {yamlio.describe(err)}") from err
     if data is None:
         raise ScenarioError(shown, "", "file is empty")
     if not isinstance(data, dict):
@@ -186,9 +188,10 @@ def parse_override(text: str) -> tuple[str, Any]:
     if not sep or not key:
         raise ScenarioError("--set", text, "expected KEY=VALUE")
     try:
-        parsed = yaml.safe_load(value) if value.strip() else ""
+        parsed = yamlio.load(value) if value.strip() else ""
     except yaml.YAMLError as err:
-        raise ScenarioError("--set", key, f"value is not valid YAML: {value!r}") from err
+        raise ScenarioError("--set", key, f"value is not valid YAML ({yamlio.describe(err)}): "
+                            f"{value!r}") from err
     return key, parsed
 
 

@@ -29,6 +29,7 @@ from typing import Any
 
 import yaml
 
+from harness import yamlio
 from harness.errors import ScenarioError, SrrError
 from harness.scenario import load_scenario, parse_override
 from harness.suite.sweep import SweepParam, parse_sweep
@@ -66,11 +67,12 @@ def _read(path: Path) -> Any:
     except (OSError, UnicodeDecodeError) as err:
         raise SrrError(f"{path}: cannot be read ({err})") from err
     try:
-        return yaml.safe_load(text)
+        return yamlio.load(text)
+    except yamlio.DuplicateKeyError as err:
+        raise ScenarioError(str(path), err.field, f"set twice (lines {err.first_line} and "
+                            f"{err.line}): remove one") from err
     except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise ScenarioError(str(path), "", f"not valid YAML{where}") from err
+        raise ScenarioError(str(path), "", f"not valid YAML: {yamlio.describe(err)}") from err
 
 
 def is_suite_file(data: Any) -> bool:
@@ -94,7 +96,7 @@ def _overrides(raw: Any, file: str, field: str) -> tuple[str, ...]:
     if raw is None:
         return ()
     if isinstance(raw, Mapping):
-        items = [f"{k}={yaml.safe_dump(v, default_flow_style=True).strip().removesuffix('...')}"
+        items = [f"{k}={yamlio.dump(v, default_flow_style=True).strip().removesuffix('...')}"
                  .strip() for k, v in raw.items()]
     elif isinstance(raw, list) and all(isinstance(x, str) for x in raw):
         items = list(raw)
