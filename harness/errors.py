@@ -87,7 +87,7 @@ def shorten(text: str, limit: int = VALUE_LIMIT) -> str:
                 i = end
                 continue
         j = i + 1
-        while j < len(text) and not text[j].isspace() and not (
+        while j < len(text) and not text[j].isspace() and text[j] != "…" and not (
                 text[j] in _OPENERS and text[j - 1] in _VALUE_START):
             j += 1
         word = text[i:j]
