@@ -65,6 +65,13 @@ def _span_end(text: str, start: int) -> int:
     return -1
 
 
+def printable(text: str) -> str:
+    """``text`` on one line: a character that is not printable (a newline in a key, a NUL in
+    a file name) written as Python writes it in a string (``\\n``, ``\\x00``)."""
+    return text if text.isprintable() else "".join(
+        c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
 def shorten(text: str, limit: int = VALUE_LIMIT) -> str:
     """``text`` with every value longer than ``limit`` cut (see :data:`VALUE_LIMIT`): a
     quoted string or a bracketed list or mapping to ``limit`` characters, "…" and its closing
@@ -111,8 +118,9 @@ class ScenarioError(SrrError):
     def __init__(self, file: str, field: str, message: str) -> None:
         self.file = file
         self.field = field
-        self.message = shorten(message)
-        where = f"{shorten(file)}: {shorten(field)}" if field else shorten(file)
+        self.message = shorten(printable(message))
+        where = (f"{shorten(printable(file))}: {shorten(printable(field))}" if field
+                 else shorten(printable(file)))
         super().__init__(f"{where}: {self.message}")
 
 

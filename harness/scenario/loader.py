@@ -104,9 +104,11 @@ def _expand_includes(path: Path, data: dict[str, Any], origins: _Origins) -> dic
             raise ScenarioError(shown, "include", "expected a file name or a list of file names")
     merged: dict[str, Any] = {}
     for i, rel in enumerate(includes):
+        field = "include" if isinstance(raw, str) else f"include[{i}]"
+        if not rel or "\0" in rel:
+            raise ScenarioError(shown, field, f"not a file name: {rel!r}")
         inc_path = (path.parent / rel).resolve()
         inc_shown = str(path.parent / rel)
-        field = "include" if isinstance(raw, str) else f"include[{i}]"
         inc = _read_yaml(inc_path, inc_shown, field)
         if "include" in inc:
             raise ScenarioError(inc_shown, "include", "nested includes are not supported")
@@ -258,6 +260,11 @@ def _typename(tp: Any) -> str:
     return str(tp)
 
 
+#: The least value a field that must be > 0 takes: lengths, rates and times below it are
+#: zero in practice (MuJoCo refuses geom sizes under 1e-15).
+_TINY = 1e-9
+
+
 class _Validator:
     def __init__(self, origins: _Origins) -> None:
         self.origins = origins
@@ -319,6 +326,8 @@ class _Validator:
         lo, hi, lo_open = rng
         if lo is not None and (raw <= lo if lo_open else raw < lo):
             self.fail(path, f"must be {'>' if lo_open else '>='} {lo:g}, got {raw!r}")
+        if lo == 0 and lo_open and raw < _TINY:  # a size of 5e-324 m is 0 to MuJoCo
+            self.fail(path, f"must be > 0 (at least {_TINY:g}), got {raw!r}")
         if hi is not None and raw > hi:
             self.fail(path, f"must be <= {hi:g}, got {raw!r}")
 
@@ -505,8 +514,14 @@ def _check_robots(sc: Scenario, v: _Validator) -> None:
         validate_frame_id,
         validate_namespace,
     )
+    from harness.sim.prims import check_prim_path
 
     for i, robot in enumerate(sc.robots):
+        if robot.articulation_prim:
+            try:
+                check_prim_path(robot.prim)
+            except SrrError as err:
+                v.fail(f"robots[{i}].articulation_prim", str(err))
         model = robot.model_file
         if model is not None:
             if (model.urdf is None) == (model.mjcf is None):
@@ -539,6 +554,8 @@ def _check_robots(sc: Scenario, v: _Validator) -> None:
 
 def _check_cameras(sc: Scenario, v: _Validator) -> None:
     """Unique names and resolutions in range; no camera on another camera's or a robot's prim."""
+    from harness.sim.prims import check_prim_path
+
     cams: dict[str, int] = {}
     prims: dict[str, str] = {r.prim: f"robots[{i}] ({r.name})"
                              for i, r in enumerate(sc.robots) if r.enabled}
@@ -549,6 +566,11 @@ def _check_cameras(sc: Scenario, v: _Validator) -> None:
                    f"cameras[{j}], from {v.origins.file_for(f'cameras[{j}]')})")
         cams[cam.name] = i
         _check_name(v, f"cameras[{i}].name", cam.name)
+        if cam.camera_prim:
+            try:
+                check_prim_path(cam.prim)
+            except SrrError as err:
+                v.fail(f"cameras[{i}].camera_prim", str(err))
         w, h = cam.resolution
         if not (1 <= w <= 8192 and 1 <= h <= 8192):
             v.fail(f"cameras[{i}].resolution", f"must be within 1..8192, got {w}x{h}")
@@ -816,7 +838,7 @@ def _name_rule(field: str) -> Callable[[str], None] | None:
 def _check_names(v: _Validator, obj: Any, path: str) -> None:
     """Every topic field must be a valid ROS 2 topic name and every frame field a frame id
     tf2 accepts (see :func:`_name_rule`)."""
-    from harness.bus.names import FrameIdError, TopicNameError
+    from harness.bus.names import FrameIdError, TopicNameError, validate_topic
 
     if isinstance(obj, tuple):
         for i, item in enumerate(obj):
@@ -833,8 +855,21 @@ def _check_names(v: _Validator, obj: Any, path: str) -> None:
                 rule(value)
             except (TopicNameError, FrameIdError) as err:
                 v.fail(sub, str(err))
+        elif f.name in _TOPIC_LISTS or f.name in _TOPIC_KEYED:
+            names = value if f.name in _TOPIC_LISTS else tuple(value)
+            for i, name in enumerate(names):
+                try:
+                    validate_topic(name)
+                except TopicNameError as err:
+                    v.fail(f"{sub}[{i}]" if f.name in _TOPIC_LISTS else f"{sub}.{name}",
+                           str(err))
         else:
             _check_names(v, value, sub)
+
+
+#: Fields that hold a list of topic names, and mappings keyed by topic names.
+_TOPIC_LISTS = frozenset({"marker_topics"})
+_TOPIC_KEYED = frozenset({"expected_rates", "sut_outputs"})
 
 def _check_name(v: _Validator, path: str, name: str) -> None:
     if not name or not all(c.isalnum() or c == "_" for c in name) or name[0].isdigit():

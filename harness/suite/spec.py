@@ -83,12 +83,18 @@ def _is_scenario(data: Any) -> bool:
     return isinstance(data, Mapping) and "name" in data and not is_suite_file(data)
 
 
+#: More repeats of one scenario than this is a typo (and would not fit in memory as runs).
+MAX_REPEAT = 1000
+
+
 def _count(value: Any, file: str, field: str, *, integer: bool) -> Any:
     ok = (isinstance(value, int) if integer else isinstance(value, (int, float))) \
         and not isinstance(value, bool) and math.isfinite(value) and value > 0
     if not ok:
         kind = "a whole number" if integer else "a number of seconds"
         raise ScenarioError(file, field, f"expected {kind} > 0, got {value!r}")
+    if integer and value > MAX_REPEAT:
+        raise ScenarioError(file, field, f"at most {MAX_REPEAT} repeats, got {value!r}")
     return value
 
 
@@ -134,7 +140,12 @@ def _entry(raw: Any, base: Path, file: str, field: str, cli: _Defaults,
     if not isinstance(path, str) or not path:
         raise ScenarioError(file, f"{field}.path", "expected the path of a scenario file")
     scenario_file = base / path
-    if not scenario_file.is_file():
+    try:
+        is_file = scenario_file.is_file()
+    except OSError as err:  # a name too long for the file system
+        raise ScenarioError(file, f"{field}.path", f"cannot read {path!r}: "
+                            f"{err.strerror or err}") from None
+    if not is_file:
         raise ScenarioError(file, f"{field}.path", f"no such file: {scenario_file}")
     repeat = raw.get("repeat")
     repeat = (_count(repeat, file, f"{field}.repeat", integer=True) if repeat is not None
