@@ -249,7 +249,7 @@ def test_a_mutated_set_value_validates_or_fails_in_one_line(
     one_line_naming_the_file(err, "validate", tree, codes=(), code=code)
 
 
-@settings(max_examples=max(5, BUDGET // 2), suppress_health_check=[
+@settings(max_examples=max(5, BUDGET // 4), suppress_health_check=[
     HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(m=mutations(SUITE))
 def test_a_mutated_suite_plans_or_fails_in_one_line(tree: Path, m: Mutation) -> None:
@@ -268,15 +268,46 @@ def test_a_mutated_suite_plans_or_fails_in_one_line(tree: Path, m: Mutation) -> 
             assert m.kind != "duplicate", m
 
 
+def _numbers(node: Any, prefix: Path_ = ()) -> list[tuple[Path_, float]]:
+    """Every number in ``node`` (not true/false), with its path."""
+    if isinstance(node, bool):
+        return []
+    if isinstance(node, int | float):
+        return [(prefix, node)]
+    items = node.items() if isinstance(node, dict) else \
+        enumerate(node) if isinstance(node, list) else ()
+    return [found for key, value in items for found in _numbers(value, (*prefix, key))]
+
+
+def _scaled(number: tuple[Path_, float], factor: float, form: str) -> tuple[Path_, str]:
+    path, value = number
+    new = value * factor
+    if isinstance(value, int):
+        return path, str(round(new))
+    return path, format(new, form)
+
+
+#: A run is worth its time when the value gets past validation: most of the runs take a
+#: number of the scenario scaled (written as YAML 1.2 reads it, 1e3 included), the rest
+#: anything.
+LIGHT_PATHS = PATHS[LIGHT] + PATHS["forklift/robots.yaml"]
+run_settings = st.one_of(
+    st.builds(_scaled, st.sampled_from(_numbers(DOCS[LIGHT]) + _numbers(
+        DOCS["forklift/robots.yaml"])), st.sampled_from([0.0, 0.5, 0.9, 1.1, 2.0, 10.0, -1.0]),
+        st.sampled_from(["g", "e", ".3f"])),
+    st.tuples(st.sampled_from(LIGHT_PATHS), set_texts))
+
+
 @pytest.mark.slow
-@settings(max_examples=max(4, BUDGET // 20), suppress_health_check=[
+@settings(max_examples=max(4, BUDGET // 5), suppress_health_check=[
     HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-@given(path=st.sampled_from(PATHS[LIGHT]), text=set_texts)
+@given(setting=run_settings)
 def test_a_short_run_with_a_mutated_set_value_ends_cleanly(
-        tree: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], path: Path_,
-        text: str) -> None:
+        tree: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        setting: tuple[Path_, str]) -> None:
     """0 pass, 1 fail (a mutated run against the baseline), 3 invalid, or 2 in one line with
     nothing written."""
+    path, text = setting
     if _known(path):
         return
     out = tmp_path / "run"
