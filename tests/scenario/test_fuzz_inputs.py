@@ -317,3 +317,16 @@ def test_a_short_run_with_a_mutated_set_value_ends_cleanly(
     one_line_naming_the_file(err, "run", tree, codes=(1, 3), code=code)
     if code == 2:
         assert not (out / "summary.json").exists()
+
+
+def test_the_nightly_workflow_fuzzes_with_the_nightly_profile() -> None:
+    import yaml
+
+    wf = yaml.safe_load((SCENARIOS.parent / ".github" / "workflows" / "nightly.yml")
+                        .read_text(encoding="utf-8"))
+    step = next(s for s in wf["jobs"]["fuzz"]["steps"] if "test_fuzz_inputs.py" in
+                s.get("run", ""))
+    assert step["env"]["HYPOTHESIS_PROFILE"] == "nightly"
+    assert settings.get_profile("nightly").max_examples > 20 * settings.get_profile(
+        "ci").max_examples
+    assert settings.get_profile("ci").derandomize
