@@ -37,7 +37,8 @@ class _Parser(argparse.ArgumentParser):
     """argparse that reports bad arguments as one line and exit code 2."""
 
     def error(self, message: str) -> NoReturn:
-        err_console.print(f"srr {self.prog.split()[-1]}: error: {message}", markup=False)
+        err_console.print(f"srr {self.prog.split()[-1]}: error: {shorten(message)}",
+                          markup=False)
         raise SystemExit(2)
 
 

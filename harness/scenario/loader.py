@@ -299,7 +299,9 @@ class _Validator:
             return raw
         if tp is bool:
             if not isinstance(raw, bool):
-                self.fail(path, f"expected true or false, got {raw!r}")
+                hint = " (YAML 1.2 booleans are true and false only)" if isinstance(
+                    raw, str) and raw.lower() in ("yes", "no", "on", "off", "y", "n") else ""
+                self.fail(path, f"expected true or false, got {raw!r}{hint}")
             return raw
         if tp is int:
             if isinstance(raw, bool) or not isinstance(raw, int):

@@ -93,7 +93,7 @@ def test_yes_and_on_are_text_not_booleans(
     path = tmp_path / "s.yaml"
     path.write_text(GOOD + "render: {shadows: yes}\n")
     err = _refused(capsys, "validate", str(path))
-    assert "render.shadows: expected true or false, got 'yes'" in err
+    assert "render.shadows: expected true or false, got 'yes' (YAML 1.2 booleans" in err
 
 
 def test_a_text_that_looks_like_a_number_stays_text_through_a_suite_set(
@@ -172,3 +172,11 @@ def test_yaml_values_srr_cannot_hold_are_yaml_errors(text: str, words: str) -> N
     with pytest.raises(yaml.YAMLError) as caught:
         yamlio.load(text)
     assert words in yamlio.describe(caught.value)
+
+
+def test_a_long_command_line_value_is_cut(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as stop:  # argparse's error: exit 2
+        main(["run", "s.yaml", "--compression", "z" * 5000])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "…" in err and len(err) < 300, err
