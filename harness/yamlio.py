@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 from typing import Any
 
 import yaml
@@ -35,6 +36,9 @@ from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 __all__ = ["DuplicateKeyError", "describe", "dump", "load"]
 
 _BaseLoader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+#: The largest integer read: every number srr reads may become a float.
+_MAX_INT = int(sys.float_info.max)
 
 _NULL = "tag:yaml.org,2002:null"
 _BOOL = "tag:yaml.org,2002:bool"
@@ -99,10 +103,15 @@ class _Loader(_BaseLoader):  # type: ignore[misc]
             raise self._bad(node, "an integer")
         try:
             if text.startswith(("0o", "0x")):
-                return int(text[2:], 8 if text[1] == "o" else 16)
-            return int(text, 10)
+                value = int(text[2:], 8 if text[1] == "o" else 16)
+            else:
+                value = int(text, 10)
         except ValueError:  # more digits than Python converts (sys.get_int_max_str_digits)
             raise self._bad(node, "an integer srr can hold (too many digits)") from None
+        if abs(value) > _MAX_INT:
+            raise self._bad(node, "an integer srr can hold (beyond ±1.8e308, the largest "
+                            "number)")
+        return value
 
     def construct_float(self, node: Node) -> float:
         text = self._scalar(node)

@@ -318,6 +318,8 @@ class _Validator:
         if tp is str:
             if not isinstance(raw, str):
                 self.fail(path, f"expected a string, got {raw!r}")
+            if "\0" in raw:  # C libraries (MuJoCo) and file systems end a name there
+                self.fail(path, f"contains a NUL character: {raw!r}")
             return raw
         raise TypeError(f"schema type {tp!r} at {path} is not supported by the loader")
 

@@ -89,7 +89,7 @@ MAX_REPEAT = 1000
 
 def _count(value: Any, file: str, field: str, *, integer: bool) -> Any:
     ok = (isinstance(value, int) if integer else isinstance(value, (int, float))) \
-        and not isinstance(value, bool) and math.isfinite(value) and value > 0
+        and not isinstance(value, bool) and math.isfinite(min(value, math.inf)) and value > 0
     if not ok:
         kind = "a whole number" if integer else "a number of seconds"
         raise ScenarioError(file, field, f"expected {kind} > 0, got {value!r}")

@@ -69,7 +69,9 @@ def test_a_bad_prim_path_is_exit_2_naming_the_field(
     ("    control: {wheel_radius: 5.0e-324}\n",
      "robots[0].control.wheel_radius: must be > 0 (at least 1e-09), got 5e-324"),
     ('"render\\n": 1\n', "render\\n: unknown field"),
-], ids=["nul-in-include", "subnormal-size", "newline-in-key"])
+    ('    control: {drive_joint: "a\\0"}\n',
+     "robots[0].control.drive_joint: contains a NUL character: 'a\\x00'"),
+], ids=["nul-in-include", "subnormal-size", "newline-in-key", "nul-in-a-name"])
 def test_fuzzed_values_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                     extra: str, words: str) -> None:
     path = tmp_path / "s.yaml"
@@ -80,7 +82,13 @@ def test_fuzzed_values_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixtur
 @pytest.mark.parametrize(("entry", "words"), [
     ("{path: " + "x" * 5000 + ".yaml}", "scenarios[0].path: cannot read 'xxx"),
     ("{path: s.yaml, repeat: 1000000000000}", "scenarios[0].repeat: at most 1000 repeats"),
-], ids=["path-too-long", "huge-repeat"])
+    ("{path: s.yaml, sweep: {seed: {from: -1e308, to: 1e308, step: 1}}}",
+     "scenarios[0].sweep.seed.step: gives too many values (at most 1000)"),
+    ("{path: s.yaml, sweep: {seed: {from: 0, to: 1" + "0" * 400 + ", step: 1}}}",
+     "suite.yaml: not valid YAML: line 2, column 56:"),
+    ("{path: s.yaml, repeat: 1" + "0" * 400 + "}", "beyond ±1.8e308"),
+], ids=["path-too-long", "huge-repeat", "infinite-sweep", "huge-int-sweep",
+    "huge-int-repeat"])
 def test_a_suite_entry_the_os_or_memory_cannot_take(tmp_path: Path, entry: str,
                                                     words: str) -> None:
     """A path too long escaped as OSError; a huge repeat built that many runs in memory."""
