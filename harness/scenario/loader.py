@@ -876,8 +876,10 @@ _TOPIC_LISTS = frozenset({"marker_topics"})
 _TOPIC_KEYED = frozenset({"expected_rates", "sut_outputs"})
 
 def _check_name(v: _Validator, path: str, name: str) -> None:
-    if not name or not all(c.isalnum() or c == "_" for c in name) or name[0].isdigit():
-        v.fail(path, f"must be letters, digits and '_' and not start with a digit, got {name!r}")
+    if not name or not all(c.isascii() and (c.isalnum() or c == "_") for c in name) \
+            or name[0].isdigit():  # names become prim paths and ROS names: ASCII only
+        v.fail(path, f"must be letters, digits and '_' and not start with a digit (ASCII "
+               f"only), got {name!r}")
 
 
 def validate_dataclass(cls: type[T], raw: Any, file: str, field: str) -> T:

@@ -79,6 +79,13 @@ def test_fuzzed_values_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert words in _refused(capsys, path)
 
 
+def test_a_name_is_ascii(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """'º' is a letter to str.isalnum, not to a prim path: validate exited 3."""
+    path = tmp_path / "s.yaml"
+    path.write_text(GOOD.replace("name: forklift", "name: º"))
+    assert "robots[0].name: must be letters, digits and '_'" in _refused(capsys, path)
+
+
 @pytest.mark.parametrize(("entry", "words"), [
     ("{path: " + "x" * 5000 + ".yaml}", "scenarios[0].path: cannot read 'xxx"),
     ("{path: s.yaml, repeat: 1000000000000}", "scenarios[0].repeat: at most 1000 repeats"),
