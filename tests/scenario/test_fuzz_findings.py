@@ -105,3 +105,15 @@ def test_a_suite_entry_the_os_or_memory_cannot_take(tmp_path: Path, entry: str,
     with pytest.raises(ScenarioError) as caught:
         load_suite([suite])
     assert words in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_a_robot_camera_resolution_is_in_range(tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    """A robot camera's resolution went unchecked to the render product: a graph error that
+    named neither the file nor the field."""
+    text = (SCENARIOS / "turtlebot3_room.yaml").read_text()
+    assert "resolution: [320, 240]" in text
+    path = tmp_path / "t.yaml"
+    path.write_text(text.replace("resolution: [320, 240]", "resolution: [-1, 240]", 1))
+    err = _refused(capsys, path)
+    assert "robots[0].sensors.camera.resolution: must be within 1..8192, got -1x240" in err
