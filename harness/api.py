@@ -30,9 +30,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from harness import __version__, runlock, runmarker
+from harness import __version__, runlock, runmarker, yamlio
 from harness.atomic import write_json_atomic
 from harness.builders.camera_record import recorded_cameras, unrecorded_topics
 from harness.bus import Bus, TopicStats
@@ -377,7 +375,7 @@ def _write_run(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n
     command = str(loop.extra.get("command", ""))
     runmarker.mark(run_dir, "recording", scenario_file=source, command=command)
     (run_dir / "scenario.yaml").write_text(
-        yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
+        yamlio.dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
     rec = scenario.recording
     recorder = loop.output.recorder(run_dir / "bag", ChunkPolicy(
         max_bytes=round(rec.chunk_mb * MB), max_span_ns=round(rec.chunk_s * 1e9),

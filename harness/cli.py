@@ -22,7 +22,7 @@ from harness.atomic import write_json_atomic
 from harness.bag import inspect_bag
 from harness.bus.live import DEFAULT_PORT, LiveConfig
 from harness.diff import DiffResult
-from harness.errors import SrrError
+from harness.errors import SrrError, shorten
 from harness.interrupt import sigterm_as_interrupt
 from harness.summary import replay_note
 
@@ -38,7 +38,8 @@ class _Parser(argparse.ArgumentParser):
     """argparse that reports bad arguments as one line and exit code 2."""
 
     def error(self, message: str) -> NoReturn:
-        err_console.print(f"srr {self.prog.split()[-1]}: error: {message}", markup=False)
+        err_console.print(f"srr {self.prog.split()[-1]}: error: {shorten(message)}",
+                          markup=False)
         raise SystemExit(2)
 
 
@@ -582,7 +583,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return COMMANDS[args.command](args)
     except SrrError as err:
-        one_line = " ".join(part.strip() for part in str(err).splitlines() if part.strip())
+        one_line = shorten(" ".join(part.strip() for part in str(err).splitlines()
+                                    if part.strip()))
         err_console.print(f"srr {args.command}: {one_line}", markup=False)
         return err.exit_code
     except KeyboardInterrupt:
