@@ -33,11 +33,11 @@ from mcap.reader import make_reader
 from rosbags.serde import SerdeError
 
 from harness.bag import BAG_READ_ERRORS
-from harness.builders.camera_record import CompressedStream, compressed_streams, recorded_cameras
 from harness.bus import Bus, Qos
 from harness.bus.bagread import open_recording, ros1_recording
 from harness.bus.messages import TYPESTORE
 from harness.bus.ros1 import Ros1TypeError, deserialize_ros1, ros1_type, to_ros2
+from harness.camera_topics import CompressedStream, compressed_streams, recorded_cameras
 from harness.errors import BagError, VideoError, reason
 from harness.graph.nodes.camera import depth_image_message, rgb_image_message
 from harness.output import ROS2_OUTPUT, OutputKind

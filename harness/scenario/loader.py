@@ -521,7 +521,7 @@ def _check_world(sc: Scenario, v: _Validator) -> None:
     """A world file: exactly one of ``mjcf``/``urdf``; with ``mode: replace`` no procedural
     field set to anything but its default (it would be silently unused); a valid prim that no
     robot or camera lies in (or holds)."""
-    from harness.sim.prims import check_prim_path
+    from harness.scenario.prims import check_prim_path
 
     model = sc.world.model
     if model is None:
