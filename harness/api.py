@@ -9,6 +9,8 @@ that every published message was recorded, and writes the run directory:
     summary.json    verdict and reasons, health gates, metrics, baseline comparison,
                     per-topic count/rate/bytes/sha256, versions, seed, command to reproduce
     junit.xml       health gates and metric comparisons as test cases, for CI systems
+    graphs.json     the action graphs as built (``srr graph --format json``), and
+    graphs.mmd      as Mermaid (``srr graph``): the report draws them from here
     report.html     the reviewer's page (harness.report), written last
     incomplete.json only while the run has not finished (harness.runmarker): a killed run
                     keeps it, and ``recover`` turns such a directory back into a valid one
@@ -32,12 +34,12 @@ from typing import Any
 
 from harness import __version__, runlock, runmarker, yamlio
 from harness.atomic import write_json_atomic
-from harness.builders.camera_record import recorded_cameras, unrecorded_topics
 from harness.bus import Bus, TopicStats
 from harness.bus.bagfile import ChunkPolicy
 from harness.bus.bagread import ros1_recording
 from harness.bus.live import LiveConfig, LiveView
 from harness.bus.recover import RecoveredBag, recover_bag
+from harness.camera_topics import recorded_cameras, unrecorded_topics
 from harness.diff import DiffResult, Tolerance
 from harness.diff import diff_runs as _diff_runs
 from harness.diskspace import (
@@ -66,6 +68,7 @@ from harness.regression import (
 )
 from harness.regression.reference import reference_path
 from harness.replay import Playback, Replay
+from harness.report.graphs import RunGraphs, read_graphs, write_graphs
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.scenario import (
@@ -211,6 +214,7 @@ class _Loop:
     srr_gt: bool
     extra: dict[str, Any]
     output: OutputKind = ROS2_OUTPUT  # what the recorder writes (harness.output)
+    graphs: RunGraphs | None = None  # written into the run directory (graphs.json)
 
 
 def _prepare(run_dir: Path) -> None:
@@ -248,6 +252,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(with_ros2_bridge(scenario, run_dir), source=source)
     try:
+        graphs = _graphs_of(sim)  # as built, before any tick
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         if live is not None and output.ros == 1:
             raise SrrError(f"--foxglove: the live view serves ROS 2 messages, and this run "
@@ -275,7 +280,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     if sim.world.world_file is not None:  # the file's static geometry, for the report's map
         extra["world_map"] = map_json(sim.world.world_file)
     loop = _Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
-                 sim.srr_gt, extra, output)
+                 sim.srr_gt, extra, output, graphs)
     try:
         return _record(scenario, loop, source=source, run_dir=run_dir,
                        n_ticks=scenario.n_ticks, progress=progress, baselines=baselines,
@@ -376,6 +381,8 @@ def _write_run(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n
     runmarker.mark(run_dir, "recording", scenario_file=source, command=command)
     (run_dir / "scenario.yaml").write_text(
         yamlio.dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
+    if loop.graphs is not None:
+        write_graphs(run_dir, loop.graphs)
     rec = scenario.recording
     recorder = loop.output.recorder(run_dir / "bag", ChunkPolicy(
         max_bytes=round(rec.chunk_mb * MB), max_span_ns=round(rec.chunk_s * 1e9),
@@ -489,7 +496,8 @@ def _write_run(scenario: Scenario, loop: _Loop, *, source: str, run_dir: Path, n
     write_json_atomic(run_dir / "summary.json", summary)  # the run is complete from here on
     runmarker.clear(run_dir)
     try:  # last: a report that fails to render never costs the run its summary
-        write_report(run_dir, summary=summary, scenario=scenario, frames=frames)
+        write_report(run_dir, summary=summary, scenario=scenario, frames=frames,
+                     rebuild_graphs=_rebuild_graphs)
     except SrrError:
         raise
     except Exception as err:
@@ -551,8 +559,12 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         "overrides": list(overrides), "withheld": sorted(withheld)}}
     if "world_map" in summary:  # the recorded scene, as it was
         extra["world_map"] = summary["world_map"]
+    try:  # the recorded scene's graphs; without them the report rebuilds them
+        graphs = read_graphs(src)
+    except (OSError, ValueError):
+        graphs = None
     loop = _Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
-                 bool(summary.get("srr_gt")), extra, playback.output)
+                 bool(summary.get("srr_gt")), extra, playback.output, graphs)
     return _record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.get("ticks") or scenario.n_ticks), progress=progress,
                    baselines=baselines, started=started)
@@ -622,7 +634,28 @@ def report(run_dir: str | Path) -> Path:
     if not (run / "bag" / "metadata.yaml").is_file() and ros1_recording(run / "bag") is None:
         raise BagError(f"{run / 'bag'}: metadata.yaml: missing (not a rosbag2 directory)")
     frames = scenario_frames(scenario, run / "bag")
-    return write_report(run, summary=summary, scenario=scenario, frames=frames)
+    return write_report(run, summary=summary, scenario=scenario, frames=frames,
+                        rebuild_graphs=_rebuild_graphs)
+
+
+def _graphs_of(sim: Simulation) -> RunGraphs:
+    return RunGraphs(stage_to_json(sim.stage), stage_to_mermaid(sim.stage))
+
+
+def _rebuild_graphs(scenario: Scenario, summary: Mapping[str, Any], run_dir: Path) -> RunGraphs:
+    """The action graphs of a run directory from before runs wrote ``graphs.json``: the
+    scene built again from its scenario (the report itself never builds one)."""
+    srr_gt = summary.get("srr_gt")
+    # Model and world files are named relative to the scenario file the run was started
+    # from (the run's own scenario.yaml keeps those paths as written), as for a replay.
+    source = str(summary.get("scenario_file") or run_dir / "scenario.yaml")
+    sim = Simulation(scenario, srr_gt=srr_gt if isinstance(srr_gt, bool) else None,
+                     source=source)
+    try:
+        return _graphs_of(sim)
+    finally:
+        with contextlib.suppress(Exception):  # nothing ran: nothing worth reporting
+            sim.close()
 
 
 def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:

@@ -29,7 +29,6 @@ from pathlib import Path
 from typing import Any
 
 from harness import yamlio
-from harness.builders.camera_record import CompressedStream, compressed_streams, recorded_cameras
 from harness.bus import Bus, Qos
 from harness.bus.bagread import (
     DECODE_ERRORS,
@@ -40,6 +39,7 @@ from harness.bus.bagread import (
     ros1_recording,
 )
 from harness.bus.ros1 import ros1_type
+from harness.camera_topics import CompressedStream, compressed_streams, recorded_cameras
 from harness.errors import BagError, VideoError, reason
 from harness.graph.nodes.camera import depth_image_message, rgb_image_message
 from harness.output import ROS2_OUTPUT, OutputKind

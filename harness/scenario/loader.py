@@ -537,7 +537,7 @@ def _check_world(sc: Scenario, v: _Validator) -> None:
     """A world file: exactly one of ``mjcf``/``urdf``; with ``mode: replace`` no procedural
     field set to anything but its default (it would be silently unused); a valid prim that no
     robot or camera lies in (or holds)."""
-    from harness.sim.prims import check_prim_path
+    from harness.scenario.prims import check_prim_path
 
     model = sc.world.model
     if model is None:
@@ -578,7 +578,7 @@ def _check_robots(sc: Scenario, v: _Validator) -> None:
         validate_frame_id,
         validate_namespace,
     )
-    from harness.sim.prims import check_prim_path
+    from harness.scenario.prims import check_prim_path
 
     for i, robot in enumerate(sc.robots):
         if robot.articulation_prim:
@@ -641,7 +641,7 @@ def _check_builtin_joints(v: _Validator, where: str, robot: RobotSpec) -> None:
 
 def _check_cameras(sc: Scenario, v: _Validator) -> None:
     """Unique names and resolutions in range; no camera on another camera's or a robot's prim."""
-    from harness.sim.prims import check_prim_path
+    from harness.scenario.prims import check_prim_path
 
     cams: dict[str, int] = {}
     prims: dict[str, str] = {r.prim: f"robots[{i}] ({r.name})"

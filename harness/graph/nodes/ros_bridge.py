@@ -36,6 +36,7 @@ from harness.bus.messages import (
 from harness.errors import GraphError
 from harness.geometry import quat_wxyz_conj, quat_wxyz_mul, quat_wxyz_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
+from harness.scenario.prims import frame_of
 from harness.sim.cameras import optical_quat
 from harness.sim.prims import PrimKind
 
@@ -271,11 +272,6 @@ class PublishRawTransformTree(_TfPublisher):
     def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
         topic, static = self.edge_topic(value)
         return [TfEdge(str(value("parentFrameId")), str(value("childFrameId")), static, topic)]
-
-
-def frame_of(prim: str) -> str:
-    """Isaac's frame naming: the last component of the prim path."""
-    return prim.rstrip("/").rsplit("/", 1)[-1]
 
 
 def frame_pose(world: Any, prim: str) -> tuple[np.ndarray, np.ndarray]:
