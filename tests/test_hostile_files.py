@@ -22,6 +22,8 @@ from harness import api
 from harness.cli import main
 from tests.conftest import SCENARIOS
 
+pytestmark = pytest.mark.slow  # every test damages (or runs) a real run
+
 FW = SCENARIOS / "forklift_warehouse.yaml"
 Damage = Callable[[bytes], bytes]
 

@@ -131,6 +131,7 @@ def test_ground_truth_equals_world_to_odom_composed_with_odometry() -> None:
         assert abs(np.dot(q, gt[stamp][1])) == pytest.approx(1.0, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_cli_run_with_srr_gt_records_ground_truth(tmp_path: Path,
                                                   capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "run"

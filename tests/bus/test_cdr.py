@@ -135,6 +135,7 @@ def test_large_arrays_stay_the_messages_own_buffers() -> None:
         rosbags(small, "sensor_msgs/msg/Image"),)
 
 
+@pytest.mark.slow
 def test_every_message_of_a_real_run(tmp_path: Path) -> None:
     """Each recorded message, decoded and serialized again, gives the recorded bytes."""
     from rosbags.highlevel import AnyReader

@@ -41,6 +41,7 @@ def test_counts_and_digests_follow_publication_order(tmp_path: Path) -> None:
     assert again.close()["/clock"].sha256 == stats["/clock"].sha256
 
 
+@pytest.mark.slow
 def test_a_failing_disk_is_one_line_and_leaves_no_run(tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str],
                                                       monkeypatch: pytest.MonkeyPatch) -> None:

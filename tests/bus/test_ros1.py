@@ -276,6 +276,7 @@ def test_inferred_ros1_refuses_the_live_views(srr: Callable[..., Done], clocks: 
     (["output.ros=2"], 2, None),
     (["graphs.Ros1Clock.enabled=false", "graphs.Ros2Clock.enabled=true"], 2, None),
 ])
+@pytest.mark.slow
 def test_output_kind_and_inspect(srr: Callable[..., Done], clocks: Path, tmp_path: Path,
                                  sets: list[str], ros: int, file: str | None) -> None:
     """ROS 1 node names record ROS 1 unless output says otherwise; ``srr inspect`` lists

@@ -264,6 +264,7 @@ def test_scenarios_are_found() -> None:
 
 
 @pytest.mark.parametrize("path", SCENARIO_FILES, ids=lambda p: p.stem)
+@pytest.mark.slow
 def test_recorded_messages_round_trip_through_rclpy(
         path: Path, scenario_check: Callable[[Path], ScenarioCheck]) -> None:
     result = scenario_check(path)
@@ -271,6 +272,7 @@ def test_recorded_messages_round_trip_through_rclpy(
 
 
 @pytest.mark.parametrize("path", SCENARIO_FILES, ids=lambda p: p.stem)
+@pytest.mark.slow
 def test_every_recorded_type_is_checked_or_listed(
         path: Path, scenario_check: Callable[[Path], ScenarioCheck]) -> None:
     result = scenario_check(path)
@@ -284,6 +286,7 @@ def test_every_recorded_type_is_checked_or_listed(
 
 
 @pytest.mark.parametrize("path", SCENARIO_FILES, ids=lambda p: p.stem)
+@pytest.mark.slow
 def test_recorded_type_hashes_are_the_real_ones(
         path: Path, scenario_check: Callable[[Path], ScenarioCheck]) -> None:
     """The RIHS01 hash rosbags wrote into metadata.yaml is the one ROS 2 Jazzy generated."""
@@ -299,6 +302,7 @@ def test_recorded_type_hashes_are_the_real_ones(
     assert not wrong, wrong
 
 
+@pytest.mark.slow
 def test_forklift_checks_odometry_twist_clock_and_tf_elements(
         scenario_check: Callable[[Path], ScenarioCheck]) -> None:
     result = scenario_check(FORKLIFT)

@@ -13,6 +13,7 @@ from harness.cli import main
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
 
 
+@pytest.mark.slow
 def test_inspect_lists_topics(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     res = api.run_scenario(api.load(SCENARIO, duration=1.0), out=tmp_path / "r")
     assert main(["inspect", str(res.run_dir / "bag")]) == 0
@@ -22,6 +23,7 @@ def test_inspect_lists_topics(tmp_path: Path, capsys: pytest.CaptureFixture[str]
 
 
 @pytest.mark.parametrize("broken", ["missing", "no-metadata", "truncated"])
+@pytest.mark.slow
 def test_inspect_refuses_broken_bags(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                      broken: str) -> None:
     bag = tmp_path / "bag"
@@ -40,6 +42,7 @@ def test_inspect_refuses_broken_bags(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert str(bag) in err
 
 
+@pytest.mark.slow
 def test_interrupt_finalizes_bag_and_marks_summary(tmp_path: Path) -> None:
     sc = api.load(SCENARIO, duration=5.0)
 

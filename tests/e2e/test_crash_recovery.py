@@ -95,6 +95,7 @@ def finalizing(out: Path) -> bool:
 
 
 @pytest.mark.parametrize("moment", ["early", "mid-run", "finalizing"])
+@pytest.mark.slow
 def test_kill_then_recover(reference: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
                            moment: str) -> None:
     ref_file = mcap_file(reference)
@@ -168,6 +169,7 @@ def test_kill_then_recover(reference: Path, tmp_path: Path, capsys: pytest.Captu
         assert "INVALID" in (out / "report.html").read_text()
 
 
+@pytest.mark.slow
 def test_chunk_settings_of_the_scenario_reach_the_recorder(tmp_path: Path) -> None:
     sc = api.load(SCENARIO, duration=2.0,
                   overrides=["recording.chunk_mb=0.02", "recording.chunk_s=60"])

@@ -21,6 +21,7 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 @pytest.mark.parametrize(("name", "duration"), [("forklift_warehouse", 2.0),
                                                 ("camera_publishing", 1.0)])
+@pytest.mark.slow
 def test_estimate_is_within_its_stated_factor_of_a_real_bag(tmp_path: Path, name: str,
                                                             duration: float) -> None:
     sc = api.load(SCENARIOS / f"{name}.yaml", duration=duration)
@@ -73,6 +74,7 @@ def test_refusal_names_the_margin_from_the_command_line(tmp_path: Path,
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_low_disk_stops_the_run_at_a_tick_boundary_and_marks_it_invalid(tmp_path: Path) -> None:
     calls: list[Path] = []
 

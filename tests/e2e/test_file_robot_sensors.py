@@ -60,6 +60,7 @@ def static_tf(bag: dict[str, list[Any]]) -> dict[tuple[str, str], Any]:
             for msg in bag["/tf_static"] for t in msg.transforms}
 
 
+@pytest.mark.slow
 def test_offset_lidar_and_imu_on_a_urdf_robot(tmp_path: Path) -> None:
     path = scene(tmp_path, diffbot({
         "lidar": {"link": "lidar_link", "frame_id": "scan_offset", "beams": 360,
@@ -88,6 +89,7 @@ def test_offset_lidar_and_imu_on_a_urdf_robot(tmp_path: Path) -> None:
 
 
 @pytest.mark.skipif(not rendering_available(), reason="no OpenGL (MUJOCO_GL=egl or osmesa)")
+@pytest.mark.slow
 def test_depth_camera_on_an_mjcf_site(tmp_path: Path) -> None:
     spawn_x = -1.0
     path = scene(tmp_path, {

@@ -17,6 +17,8 @@ import pytest
 from tests.conftest import ROOT, SCENARIOS
 from tests.e2e.bagread import decoded
 
+pytestmark = pytest.mark.slow  # every test reads a run of the module's fixture
+
 # scenario → (robot, root link, link tree (parent, child), frames of other messages,
 #             least distance travelled in metres)
 CASES: dict[str, tuple[str, str, set[tuple[str, str]], set[str], float]] = {

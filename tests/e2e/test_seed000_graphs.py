@@ -145,6 +145,7 @@ def k_of(info: Any) -> Any:
     return info.k if hasattr(info, "k") else info.K
 
 
+@pytest.mark.slow
 def test_the_seed_topics_are_recorded(bag: Recorded) -> None:
     assert {t: len(m) for t, m in bag.msgs.items()} == {
         "/clock": TICKS, "/camera/color": TICKS, "/camera/camera_info": TICKS,
@@ -156,6 +157,7 @@ def test_the_seed_topics_are_recorded(bag: Recorded) -> None:
         k * 1_000_000_000 // 60 for k in range(TICKS)]
 
 
+@pytest.mark.slow
 def test_camera_image_has_the_render_product_size(bag: Recorded) -> None:
     """The seed sets no size: IsaacCreateRenderProduct's default, 1280 x 720."""
     image, info = bag.msgs["/camera/color"][-1], bag.msgs["/camera/camera_info"][-1]
@@ -166,6 +168,7 @@ def test_camera_image_has_the_render_product_size(bag: Recorded) -> None:
     assert (info.width, info.height, k_of(info)[2], k_of(info)[5]) == (1280, 720, 639.5, 359.5)
 
 
+@pytest.mark.slow
 def test_scan_ranges_to_the_wall(bag: Recorded) -> None:
     """Beam 0 (+x) ends on the wall ahead at 3 − (1 + odom x − 0.064) m, every scan; the side
     walls are 3 m away (beams 90, 270); the wall behind is beyond range_max (inf)."""
@@ -178,6 +181,7 @@ def test_scan_ranges_to_the_wall(bag: Recorded) -> None:
     assert bag.msgs["/scan"][0].ranges[0] == pytest.approx(2.064, abs=1e-4)
 
 
+@pytest.mark.slow
 def test_imu_feels_gravity(bag: Recorded) -> None:
     imu = bag.msgs["/imu"]
     assert imu[0].header.frame_id == "IMU"
@@ -185,6 +189,7 @@ def test_imu_feels_gravity(bag: Recorded) -> None:
     assert np.mean(z) == pytest.approx(9.81, abs=0.02)
 
 
+@pytest.mark.slow
 def test_odometry_moves_under_cmd_vel(bag: Recorded) -> None:
     first, last = bag.msgs["/odom"][0], bag.msgs["/odom"][-1]
     assert (last.header.frame_id, last.child_frame_id) == ("odom", "base_footprint")
@@ -194,6 +199,7 @@ def test_odometry_moves_under_cmd_vel(bag: Recorded) -> None:
     assert abs(last.pose.pose.position.y) < 1e-6
 
 
+@pytest.mark.slow
 def test_hand_built_tf_tree(bag: Recorded) -> None:
     static = {(t.header.frame_id, t.child_frame_id): t.transform.translation
               for m in bag.msgs["/tf_static"] for t in m.transforms}
@@ -204,6 +210,7 @@ def test_hand_built_tf_tree(bag: Recorded) -> None:
     assert (scan.x, scan.y, scan.z) == pytest.approx((SCAN_X, 0.0, 0.122))
 
 
+@pytest.mark.slow
 def test_ros1_types_definitions_and_header_seq(bag: Recorded) -> None:
     """ROS 1 spelling and definitions (the MD5 sums ROS 1 itself gives them), /tf as
     tf2_msgs/TFMessage as Isaac's ROS 1 bridge publishes it, latched /tf_static, and each
@@ -224,6 +231,7 @@ def test_ros1_types_definitions_and_header_seq(bag: Recorded) -> None:
         or bag.summary["output"]["because"] == "output.format: bag"
 
 
+@pytest.mark.slow
 def test_scores_and_health_do_not_depend_on_the_format(bag: Recorded) -> None:
     """The same drive, scored from the ROS 1 or the ROS 2 recording: the same metrics, every
     health gate passes (rates, recorded == published, /clock monotonic, ground truth)."""
@@ -238,6 +246,7 @@ def test_scores_and_health_do_not_depend_on_the_format(bag: Recorded) -> None:
 FIRST: dict[str, Any] = {}  # the metrics of the first format run in this session
 
 
+@pytest.mark.slow
 def test_report_keyframes_read_the_recording(bag: Recorded) -> None:
     """The report's camera keyframes decode the recorded image, whatever the format."""
     found = nearest_images(bag.run_dir / "bag", [500_000_000])[500_000_000]
@@ -249,6 +258,7 @@ def test_report_keyframes_read_the_recording(bag: Recorded) -> None:
 
 
 @pytest.mark.parametrize("bag", ["ros1-bag"], indirect=True)  # on the ROS 1 bag alone
+@pytest.mark.slow
 def test_replay_diff_and_bless_a_ros1_bag(bag: Recorded, tmp_path: Path) -> None:
     """``srr replay`` plays the ROS 1 recording into the scripted teleop again and records
     the same bytes, per topic; ``srr diff`` finds the two identical; blessing the run keeps a
@@ -270,6 +280,7 @@ def test_replay_diff_and_bless_a_ros1_bag(bag: Recorded, tmp_path: Path) -> None
     assert len(ref.odom) == 2 * TICKS and len(ref.gt_poses) == TICKS and len(ref.tf) == 6
 
 
+@pytest.mark.slow
 def test_ros1_runs_are_deterministic(tmp_path: Path) -> None:
     """Two runs of the seed's scene recorded as ROS 1 give identical per-topic digests."""
     if not rendering_available():

@@ -61,6 +61,7 @@ def test_bless_in_one_directory_and_run_in_another(tmp_path: Path,
     assert rep.summary["baseline"]["path"] == str(beside)
 
 
+@pytest.mark.slow
 def test_the_baselines_field_is_relative_to_the_scenario_file(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     src = scene_copy(tmp_path)
@@ -105,6 +106,7 @@ def test_relative_sources_resolve_the_same_from_any_directory(
     assert api.baselines_dir("<scenario>") == tmp_path / "baselines"  # not from a file
 
 
+@pytest.mark.slow
 def test_blessing_an_invalid_run_is_refused_as_bad_input(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     src = tmp_path / "hall.yaml"

@@ -46,6 +46,7 @@ def test_what_counts_as_the_configuration() -> None:
     assert len(diffs) == 5 and diffs[-1].startswith("… and ")
 
 
+@pytest.mark.slow
 def test_a_shortened_run_is_a_mismatch_not_a_regression(tmp_path: Path) -> None:
     res = api.run_scenario(api.load(FW, duration=2.0), source=str(FW), out=tmp_path / "r")
     assert (res.verdict, res.exit_code) == ("MISMATCH", 1)
@@ -58,6 +59,7 @@ def test_a_shortened_run_is_a_mismatch_not_a_regression(tmp_path: Path) -> None:
     assert "duration: 35.0 → 2.0" in html
 
 
+@pytest.mark.slow
 def test_a_baseline_without_a_recorded_configuration_is_still_compared(tmp_path: Path) -> None:
     """Baselines blessed before the configuration was recorded compare as before, and the
     summary says the configuration was not checked."""
@@ -72,6 +74,7 @@ def test_a_baseline_without_a_recorded_configuration_is_still_compared(tmp_path:
     assert res.summary["baseline"]["config_checked"] is False
 
 
+@pytest.mark.slow
 def test_blessing_records_the_configuration(tmp_path: Path) -> None:
     sc = api.load(FW, duration=1.0)
     res = api.run_scenario(sc, source=str(FW), out=tmp_path / "r")
@@ -102,6 +105,7 @@ def test_shipped_baselines_record_their_configuration(name: str) -> None:
         api.load(SCENARIOS / f"{name}.yaml")))
 
 
+@pytest.mark.slow
 def test_an_edited_model_file_is_another_configuration(tmp_path: Path) -> None:
     """The baseline records the digest of the robot's model file (and its meshes): a copy of
     the scene compares like for like, the same path with an edited file does not."""

@@ -13,6 +13,8 @@ import pytest
 from harness.cli import main
 from tests.conftest import SCENARIOS
 
+pytestmark = pytest.mark.slow  # runs a scenario
+
 FW = SCENARIOS / "forklift_warehouse.yaml"
 
 

@@ -23,6 +23,7 @@ def scene(tmp_path: Path) -> Path:
     return src
 
 
+@pytest.mark.slow
 def test_a_recording_only_scene_exits_0_with_its_own_verdict(
         scene: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["run", str(scene), "--out", str(tmp_path / "r"), "-q"]) == 0
@@ -40,6 +41,7 @@ def test_a_recording_only_scene_exits_0_with_its_own_verdict(
     assert 'data-verdict="RECORDED"' in html and "Recorded on purpose" in html
 
 
+@pytest.mark.slow
 def test_a_tripped_health_gate_still_fails_a_recording_only_scene(
         scene: Path, tmp_path: Path) -> None:
     code = main(["run", str(scene), "--out", str(tmp_path / "r"), "-q",
@@ -48,6 +50,7 @@ def test_a_tripped_health_gate_still_fails_a_recording_only_scene(
     assert json.loads((tmp_path / "r" / "summary.json").read_text())["verdict"] == "INVALID"
 
 
+@pytest.mark.slow
 def test_unscored_without_saying_so_stays_exit_1(tmp_path: Path) -> None:
     src = tmp_path / "hall.yaml"
     src.write_text(HALL, encoding="utf-8")
@@ -65,6 +68,7 @@ def test_record_only_with_a_scoring_block_is_refused(
            "scoring.perception is enabled" in err
 
 
+@pytest.mark.slow
 def test_a_suite_of_recording_only_scenes_exits_0(scene: Path, tmp_path: Path) -> None:
     code = main(["suite", str(scene), "--jobs", "1", "--out", str(tmp_path / "suite"), "-q"])
     assert code == 0

@@ -37,6 +37,7 @@ def test_shipped_baselines_carry_a_small_reference_recording(name: str) -> None:
     assert any(t.startswith("/gt/") for t in counts) and "/clock" in counts
 
 
+@pytest.mark.slow
 def test_blessing_writes_the_reference_and_frames_read_it_like_the_run(tmp_path: Path) -> None:
     fw = SCENARIOS / "forklift_warehouse.yaml"
     res = api.run_scenario(api.load(fw, duration=3.0), source=str(fw), out=tmp_path / "r")

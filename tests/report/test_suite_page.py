@@ -137,6 +137,7 @@ def _ticks(svg: ET.Element) -> dict[str, float]:
 # --------------------------------------------------------------------------- groups table
 
 
+@pytest.mark.slow
 def test_groups_are_worst_first_and_every_link_resolves(suite: tuple[Path, dict, str]) -> None:
     page, summary, html = suite
     table = _between(html, '<table class="groups-table"', "</tbody>")
@@ -162,6 +163,7 @@ def test_groups_are_worst_first_and_every_link_resolves(suite: tuple[Path, dict,
     assert 'id="interrupted"' not in banner
 
 
+@pytest.mark.slow
 def test_key_lines_show_regressions_with_delta_and_count_the_rest(
         suite: tuple[Path, dict, str]) -> None:
     html = suite[2]
@@ -176,6 +178,7 @@ def test_key_lines_show_regressions_with_delta_and_count_the_rest(
     assert "the worker crashed: killed by signal SIGSEGV" in invalid
 
 
+@pytest.mark.slow
 def test_runs_without_a_report_say_why_and_link_the_log(suite: tuple[Path, dict, str]) -> None:
     page, summary, html = suite
     row = _between(html, '<tr data-group="turtlebot_teleop"', "</tr>")
@@ -191,6 +194,7 @@ def test_runs_without_a_report_say_why_and_link_the_log(suite: tuple[Path, dict,
         assert (page.parent / log.group(1)).is_file()
 
 
+@pytest.mark.slow
 def test_flaky_group_names_topics_divergence_and_each_repeat(
         suite: tuple[Path, dict, str]) -> None:
     html = suite[2]
@@ -205,6 +209,7 @@ def test_flaky_group_names_topics_divergence_and_each_repeat(
                        ("#3", "PASS", "ab12" * 16)]
 
 
+@pytest.mark.slow
 def test_statistics_table_per_group(suite: tuple[Path, dict, str]) -> None:
     html = suite[2]
     details = re.findall(r'<details class="group-stats" id="g\d+" data-group="([^"]+)"', html)
@@ -225,6 +230,7 @@ def test_statistics_table_per_group(suite: tuple[Path, dict, str]) -> None:
 # --------------------------------------------------------------------------- sweeps
 
 
+@pytest.mark.slow
 def test_sweep_dots_bands_and_boundaries(suite: tuple[Path, dict, str]) -> None:
     html = suite[2]
     block = _between(html, '<div class="sweep" data-sweep="dock_worker_crossing"', "</div></div>")
@@ -263,6 +269,7 @@ def test_sweep_dots_bands_and_boundaries(suite: tuple[Path, dict, str]) -> None:
     assert len(line) == 1 and len(line[0].get("points", "").split()) == len(SPEEDS)
 
 
+@pytest.mark.slow
 def test_tolerance_band_follows_the_points_and_stops_without_baseline(
         suite: tuple[Path, dict, str]) -> None:
     html = suite[2]
@@ -282,6 +289,7 @@ def test_tolerance_band_follows_the_points_and_stops_without_baseline(
     assert [e.get("data-value") for e in _all(goal, "threshold")] == ["0.5"]
 
 
+@pytest.mark.slow
 def test_string_sweep_is_equally_spaced_with_one_line_per_second_parameter(
         suite: tuple[Path, dict, str]) -> None:
     html = suite[2]
@@ -322,6 +330,7 @@ def _night(root: Path, folder: str, started: str, summary: dict[str, Any],
     (root / folder / "summary.json").write_text(json.dumps(s), encoding="utf-8")
 
 
+@pytest.mark.slow
 def test_history_sparklines_one_point_per_night(suite: tuple[Path, dict, str],
                                                 tmp_path: Path) -> None:
     _, summary, _ = suite
@@ -357,6 +366,7 @@ def test_history_sparklines_one_point_per_night(suite: tuple[Path, dict, str],
     assert f'<details class="group-history" data-group="{gid}" open>' in sect
 
 
+@pytest.mark.slow
 def test_interrupted_suite_says_so(suite: tuple[Path, dict, str], tmp_path: Path) -> None:
     s = dict(suite[1], interrupted=True, verdict="INTERRUPTED", exit_code=130)
     html = write_suite_page(tmp_path, s).read_text(encoding="utf-8")
@@ -365,6 +375,7 @@ def test_interrupted_suite_says_so(suite: tuple[Path, dict, str], tmp_path: Path
     assert "exit code 130" in banner
 
 
+@pytest.mark.slow
 def test_page_is_deterministic_and_drops_links_to_missing_files(
         suite: tuple[Path, dict, str], tmp_path: Path) -> None:
     page, summary, html = suite

@@ -117,6 +117,7 @@ def test_the_frame_names_leave_no_cdr_padding() -> None:
 
 @pytest.mark.parametrize(("topic", "mode"), [("/tf", "typed"), ("/tf", "raw"),
                                              ("/tf_static", "typed")])
+@pytest.mark.slow
 def test_tfmessage_crosses_processes_raw_and_typed(
         tf2_prefix: Path, tmp_path: Path, topic: str, mode: str) -> None:
     offset = ["/tf typed", "/tf raw", "/tf_static typed"].index(f"{topic} {mode}")

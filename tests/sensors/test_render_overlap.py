@@ -78,6 +78,7 @@ def _digests(topics: dict[str, Any]) -> dict[str, str]:
     return {t: v["sha256"] for t, v in topics.items()}
 
 
+@pytest.mark.slow
 def test_overlapped_rendering_gives_the_same_bytes_as_the_plain_loop(tmp_path: Path) -> None:
     plain = _run(tmp_path, "plain", overlap=False)
     overlapped = _run(tmp_path, "overlap_1", overlap=True)
@@ -92,6 +93,7 @@ def test_overlapped_rendering_gives_the_same_bytes_as_the_plain_loop(tmp_path: P
         assert v["count"] == v["published"], t  # nothing lost on the way through the threads
 
 
+@pytest.mark.slow
 def test_overlapped_rendering_into_a_ros1_recording_gives_the_plain_loop_bytes(
         tmp_path: Path) -> None:
     # the ROS 1 recorder builds deferred images on the caller's thread and converts them
@@ -103,6 +105,7 @@ def test_overlapped_rendering_into_a_ros1_recording_gives_the_plain_loop_bytes(
     assert int(frames.topics.set_index("name").loc["/cam_b_depth", "count"]) == 20
 
 
+@pytest.mark.slow
 def test_shadows_change_colour_but_not_depth(tmp_path: Path) -> None:
     off = _digests(_run(tmp_path, "off", overlap=True))
     on = _digests(_run(tmp_path, "on", overlap=True, shadows=True))

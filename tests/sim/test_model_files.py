@@ -316,6 +316,7 @@ def odometry(run_dir: Path) -> np.ndarray:
     return np.asarray(rows)
 
 
+@pytest.mark.slow
 def test_turtlebot3_from_urdf_drives_like_the_built_in(tmp_path: Path) -> None:
     """The same teleop script on the built-in TurtleBot3 and on its URDF twin: the same
     odometry (the models are the same bodies, masses, contacts and drives)."""

@@ -9,7 +9,6 @@ angular.z must turn it counter-clockwise seen from above.
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -203,16 +202,3 @@ def test_two_builds_and_a_reset_give_bit_identical_states() -> None:
     assert _rollout(first) == a
     assert a != _rollout(forklift_world(), turn=0.4 + 1e-9)  # the comparison can fail
 
-
-def test_report_physics_only_real_time_factor() -> None:
-    world = forklift_world()
-    names, pos, vel = swivel_ik(1.0, 0.2, ForkliftControl())
-    world.apply_joint_commands(FORKLIFT, names, pos, vel)
-    ticks = 240  # 4 s of sim time at 60 Hz, 4 substeps each
-    start = time.perf_counter()
-    for _ in range(ticks):
-        world.step(4)
-    wall = time.perf_counter() - start
-    sim = ticks * 4 * world.timestep
-    print(f"\nforklift scene, physics only: {sim / wall:.0f} sim s per wall s "
-          f"({sim:.1f} s in {wall * 1000:.0f} ms)")

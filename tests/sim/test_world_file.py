@@ -124,6 +124,7 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> api.RunResult:
                             out=tmp_path_factory.mktemp("shelf") / "run")
 
 
+@pytest.mark.slow
 def test_lidar_ranges_to_the_files_walls_and_shelf_equal_the_geometry(
         run: api.RunResult, world: World) -> None:
     """The first scan (at the spawn, before the robot moves) against the file's faces."""
@@ -143,6 +144,7 @@ def test_lidar_ranges_to_the_files_walls_and_shelf_equal_the_geometry(
     assert beam(270.0) == pytest.approx(ly - SOUTH, abs=0.01)
 
 
+@pytest.mark.slow
 def test_the_run_keeps_the_files_map_and_the_report_draws_it(run: api.RunResult,
                                                             world: World) -> None:
     wm = run.summary["world_map"]
@@ -159,6 +161,7 @@ def test_the_run_keeps_the_files_map_and_the_report_draws_it(run: api.RunResult,
     assert "could not be rebuilt" not in html and "/World/turtlebot3_TfGraph" in html
 
 
+@pytest.mark.slow
 def test_two_runs_give_identical_digests(run: api.RunResult, tmp_path: Path) -> None:
     again = api.run_scenario(api.load(SCENARIO, duration=2.0), source=str(SCENARIO),
                              out=tmp_path / "again")
@@ -167,11 +170,13 @@ def test_two_runs_give_identical_digests(run: api.RunResult, tmp_path: Path) -> 
         {t: v["sha256"] for t, v in run.summary["topics"].items()}
 
 
+@pytest.mark.slow
 def test_a_replay_keeps_the_recorded_map(run: api.RunResult, tmp_path: Path) -> None:
     rep = api.replay(run.run_dir, out=tmp_path / "replay")
     assert rep.summary["world_map"] == run.summary["world_map"]
 
 
+@pytest.mark.slow
 def test_the_bundled_scenario_passes_against_its_baseline(tmp_path: Path) -> None:
     res = api.run_scenario(api.load(SCENARIO), source=str(SCENARIO), out=tmp_path / "r")
     assert res.verdict == "PASS", res.summary["reasons"]
@@ -180,6 +185,7 @@ def test_the_bundled_scenario_passes_against_its_baseline(tmp_path: Path) -> Non
     assert metrics["control.goal_reached"] == 1.0
 
 
+@pytest.mark.slow
 def test_camera_depth_to_the_files_wall(tmp_path: Path) -> None:
     """The robot turned to the west wall: depth at the image centre (odd resolution, so a
     pixel sits on the optical axis) is the distance along the axis to x = -4."""

@@ -22,6 +22,8 @@ from harness.video import psnr, read_sim_time
 from harness.video.sei import nal_units
 from tests.e2e.bagread import decoded, mcap_file
 
+pytestmark = pytest.mark.slow  # every test reads runs of the module's fixture
+
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = Path(__file__).with_name("rtsp_two_cameras.yaml")
 DOCK = ROOT / "scenarios" / "dock_nominal.yaml"

@@ -61,6 +61,7 @@ def _by_topic(run_dir: Path) -> dict[str, list[tuple[int, str, Any]]]:
     return out
 
 
+@pytest.mark.slow
 def test_h264_and_depth_png_decode_with_pyav_close_to_a_raw_run(
         runs: dict[str, api.RunResult]) -> None:
     raw_topics, topics = _by_topic(runs["raw"].run_dir), _by_topic(runs["a"].run_dir)
@@ -92,6 +93,7 @@ def test_h264_and_depth_png_decode_with_pyav_close_to_a_raw_run(
         assert not mm[~hit].any()
 
 
+@pytest.mark.slow
 def test_raw_topics_are_published_not_recorded(runs: dict[str, api.RunResult]) -> None:
     summary = runs["a"].summary
     assert "/camera/color" not in summary["topics"]
@@ -110,6 +112,7 @@ def test_raw_topics_are_published_not_recorded(runs: dict[str, api.RunResult]) -
             runs["raw"].summary["topics"][topic]["sha256"]
 
 
+@pytest.mark.slow
 def test_two_runs_give_identical_digests(runs: dict[str, api.RunResult]) -> None:
     a, b = runs["a"].summary, runs["b"].summary
     assert a["topics"].keys() == b["topics"].keys()
@@ -122,6 +125,7 @@ def test_two_runs_give_identical_digests(runs: dict[str, api.RunResult]) -> None
         assert a["topics"][topic]["sha256"] == raw[topic]["sha256"], topic
 
 
+@pytest.mark.slow
 def test_replay_decodes_the_compressed_topics_for_a_raw_reader(
         runs: dict[str, api.RunResult], tmp_path: Path) -> None:
     rep = api.replay(runs["a"].run_dir, out=tmp_path / "replay")

@@ -139,6 +139,7 @@ def _raw_frames(run_dir: Path) -> dict[str, dict[int, np.ndarray]]:
     return out
 
 
+@pytest.mark.slow
 def test_each_url_streams_h264_at_the_configured_rate(streamed: Any) -> None:
     got, _run_dir, summary = streamed
     n = round(DURATION_S * FPS)
@@ -157,6 +158,7 @@ def test_each_url_streams_h264_at_the_configured_rate(streamed: Any) -> None:
         assert set(np.diff(pts).tolist()) == {90_000 // FPS}, pts
 
 
+@pytest.mark.slow
 def test_frames_match_the_raw_frames_rendered_at_the_same_time(streamed: Any) -> None:
     got, run_dir, _summary = streamed
     raw = _raw_frames(run_dir)
