@@ -546,9 +546,7 @@ def _cmd_suite(args: argparse.Namespace) -> int:
         holder["progress"](ev)
 
     with sigterm_as_interrupt():
-        from harness.suite.runner import plan_suite
-
-        plan = plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout)
+        plan = api.plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout)
         for w in plan.warnings:
             err_console.print(f"srr suite: warning: {w}", markup=False)
         with SuiteProgress(out_console, len(plan.runs), live=live) as progress:

@@ -24,6 +24,12 @@ import yaml
 from harness import runmarker
 from harness.atomic import write_json_atomic
 from harness.errors import SrrError
+from harness.report.junit import junit_cases, write_junit
+from harness.run.facts import combined_digest, reproduce_command, versions
+from harness.run.loading import load
+from harness.run.recover import recover
+from harness.run.rerender import report
+from harness.scenario import scenario_to_mapping
 from harness.suite.plan import RunSpec
 from harness.summary import SUMMARY_NAME
 
@@ -48,11 +54,9 @@ def _salvage(run_path: Path) -> str | None:
     Raises :class:`SrrError` when there was something that could not be recovered."""
     if runmarker.read(run_path) is None or not (run_path / "bag").is_dir():
         return None  # not even the recorder was made: nothing to recover
-    from harness import api
-
-    res = api.recover(run_path)
+    res = recover(run_path)
     with contextlib.suppress(SrrError):
-        api.report(run_path)
+        report(run_path)
     kept = sum(t.count for t in res.bag.topics.values())
     return f"{kept} recorded messages were recovered from its complete chunks"
 
@@ -80,11 +84,7 @@ def _write(run_path: Path, spec: RunSpec, detail: str) -> None:
     """The resolved scenario, an INVALID ``summary.json`` (no topics, no scores) whose one
     failed health gate says ``detail``, and its ``junit.xml``; the in-progress marker, if any,
     removed."""
-    from harness import api
-    from harness.report.junit import junit_cases, write_junit
-    from harness.scenario import scenario_to_mapping
-
-    scenario = api.load(spec.scenario_file, overrides=list(spec.overrides))
+    scenario = load(spec.scenario_file, overrides=list(spec.overrides))
     run_path.mkdir(parents=True, exist_ok=True)
     (run_path / "scenario.yaml").write_text(
         yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
@@ -105,9 +105,9 @@ def _write(run_path: Path, spec: RunSpec, detail: str) -> None:
         "graphs": [],
         "systems_under_test": [s.name for s in scenario.systems_under_test if s.enabled],
         "topics": {},
-        "digest": api.combined_digest({}),
-        "versions": api.versions(),
-        "command": api.reproduce_command(spec.scenario_file, scenario, run_path),
+        "digest": combined_digest({}),
+        "versions": versions(),
+        "command": reproduce_command(spec.scenario_file, scenario, run_path),
         "verdict": "INVALID",
         "exit_code": 3,
         "reasons": [f"health {GATE}: {detail}"],
