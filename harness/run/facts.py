@@ -14,6 +14,7 @@ from typing import Any
 from harness import __version__
 from harness.bus import TopicStats
 from harness.scenario import Scenario
+from harness.summary import TopicRow
 from harness.sut.base import SutContext
 
 __all__ = ["combined_digest", "default_run_dir", "reproduce_command", "sut_endpoints",
@@ -42,28 +43,23 @@ def default_run_dir(scenario: Scenario, root: Path = Path("reports"), suffix: st
     return candidate
 
 
-def combined_digest(topics: Mapping[str, Any]) -> str:
+def combined_digest(topics: Mapping[str, TopicRow]) -> str:
+    """One SHA-256 over every topic's name and digest, in name order."""
     h = hashlib.sha256()
     for name in sorted(topics):
-        h.update(f"{name}\0{topics[name]['sha256']}\n".encode())
+        h.update(f"{name}\0{topics[name].sha256}\n".encode())
     return h.hexdigest()
 
 
 def topic_table(stats: Mapping[str, TopicStats], published: Mapping[str, int],
-                duration_s: float) -> dict[str, Any]:
-    table = {}
-    for name, st in stats.items():
-        rate = st.count / duration_s if duration_s > 0 else 0.0
-        table[name] = {
-            "type": st.msgtype,
-            "count": st.count,
-            "published": published.get(name, 0),
-            "rate_hz": round(rate, 3),
-            "bytes": st.bytes,
-            "sha256": st.sha256,
-            "durability": st.durability,
-        }
-    return table
+                duration_s: float) -> dict[str, TopicRow]:
+    """Each recorded topic's row: its type, messages recorded and published, rate over
+    ``duration_s`` of simulated time, bytes, SHA-256 and durability."""
+    return {name: TopicRow(type=st.msgtype, count=st.count, sha256=st.sha256,
+                           published=published.get(name, 0),
+                           rate_hz=round(st.count / duration_s if duration_s > 0 else 0.0, 3),
+                           bytes=st.bytes, durability=st.durability)
+            for name, st in stats.items()}
 
 
 def sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any]:

@@ -21,6 +21,7 @@ from harness.regression.reference import reference_path
 from harness.run.baselines import baseline_name, scene_config
 from harness.scenario import Scenario
 from harness.scoring import Scores
+from harness.summary import BaselineRef
 
 __all__ = ["Judgement", "judge"]
 
@@ -33,7 +34,7 @@ class Judgement:
     verdict: str
     exit_code: int
     reasons: tuple[str, ...]
-    baseline: dict[str, Any] | None
+    baseline: BaselineRef | None
     comparison: tuple[dict[str, Any], ...]
 
 
@@ -57,13 +58,12 @@ def judge(scenario: Scenario, scores: Scores, bdir: Path, *, digest: str,
         cmp = cmp.not_compared()
     verdict = decide(scores.health, scores.metrics, cmp, note, mismatch,
                      record_only=scenario.scoring.record_only)
-    baseline = None if base is None else {
-        "path": str(path), "blessed_by": base.blessed_by, "reason": base.reason,
-        "blessed_at": base.blessed_at, "seed": base.seed, "digest": base.digest,
-        "digest_matches": base.digest == digest,
-        "config_checked": base.config is not None, "config_differences": mismatch,
-        "reference": str(reference_path(path)) if base.reference
-        and reference_path(path).is_file() else None,
-    }
+    baseline = None if base is None else BaselineRef(
+        path=str(path), blessed_by=base.blessed_by, reason=base.reason,
+        blessed_at=base.blessed_at, seed=base.seed, digest=base.digest,
+        digest_matches=base.digest == digest, config_checked=base.config is not None,
+        config_differences=tuple(mismatch),
+        reference=str(reference_path(path)) if base.reference
+        and reference_path(path).is_file() else None)
     return Judgement(verdict.name, verdict.exit_code, tuple(verdict.reasons), baseline,
                      () if cmp is None else tuple(dataclasses.asdict(e) for e in cmp.entries))

@@ -23,7 +23,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import shutil
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,13 +31,13 @@ from typing import Any
 import yaml
 
 from harness import runlock, runmarker
-from harness.atomic import write_json_atomic
 from harness.builders.camera_record import unrecorded_topics
 from harness.bus import Bus
 from harness.bus.bagfile import ChunkPolicy
 from harness.bus.live import LiveView
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
 from harness.errors import InvalidRunError, RunStopped, SrrError
+from harness.frames import Frames
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.output import ROS2_OUTPUT, OutputKind
@@ -49,6 +49,7 @@ from harness.run.facts import combined_digest, sut_endpoints, topic_table, versi
 from harness.run.judge import judge
 from harness.scenario import Scenario, scenario_to_mapping
 from harness.scoring import Scores, scenario_frames, score_frames
+from harness.summary import RunSummary, TopicRow
 from harness.sut.base import SutContext
 
 __all__ = ["Loop", "Progress", "RunResult", "Started", "prepare", "record"]
@@ -59,16 +60,20 @@ Started = Callable[[Path], None]  # told the run directory once it is created an
 
 @dataclass(frozen=True)
 class RunResult:
+    """A recorded run: its directory, verdict and exit code, and its summary, as
+    ``summary.json`` holds it (``summary``) and typed (``run_summary``)."""
+
     run_dir: Path
     verdict: str
     exit_code: int
     summary: dict[str, Any]
+    run_summary: RunSummary
 
 
 @dataclass(frozen=True)
 class Loop:
     """What the shared recording path needs from a loop: its bus, systems under test, tick
-    counter and ``run``/``close``, plus what the summary says about it."""
+    counter and ``step``/``close``, plus what the summary says about it."""
 
     bus: Bus
     suts: Sequence[tuple[str, Any, SutContext]]
@@ -76,7 +81,12 @@ class Loop:
     close: Callable[[], None]
     ticks: Callable[[], int]
     srr_gt: bool
-    extra: dict[str, Any]
+    command: str  # what reproduces the run
+    warnings: tuple[str, ...] = ()  # found before the run (wiring, rates, output topics)
+    graphs: tuple[Any, ...] = ()  # the action graphs' files
+    scene_files: Mapping[str, str] | None = None  # model files' digests by field
+    world_map: Any = None  # a world file's static geometry, for the report's map
+    replay_of: Mapping[str, Any] | None = None  # what a replay plays back
     output: OutputKind = ROS2_OUTPUT  # what the recorder writes (harness.output)
 
 
@@ -122,7 +132,7 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     (:mod:`harness.runmarker`), so a killed run never looks done. ``view`` (a started live
     view) gets every message the recorder serializes and, after each tick, the simulation
     time; it may hold the first tick for a client and pace the loop."""
-    command = str(loop.extra.get("command", ""))
+    command = loop.command
     recorder = _open_recorder(scenario, loop, run_dir, source=source, command=command)
     ended = _tick_loop(scenario, loop, recorder, run_dir, n_ticks=n_ticks, progress=progress,
                        free_space=free_space, view=view)
@@ -135,23 +145,20 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     if ended.stopped is not None:
         scores = dataclasses.replace(
             scores, health=(*scores.health, HealthResult(ended.gate, False, ended.stopped)))
-    summary = _summarize(scenario, loop, recorder, source=source, scores=scores,
-                         topics=topics, sim_s=sim_s, ended=ended)
     bdir = baselines_dir(source, baselines, scenario)
-    summary["baselines_dir"] = str(bdir)  # where bless writes this run's baseline
+    summary = _summarize(scenario, loop, recorder, source=source, scores=scores,
+                         topics=topics, sim_s=sim_s, ended=ended, bdir=bdir)
     if update_baseline and not ended.interrupted:
-        _update_baseline(scenario, summary, scores, bdir, run_dir, update_reason)
-    j = judge(scenario, scores, bdir, digest=summary["digest"],
-              scene_files=summary.get("scene_files"))
-    summary["verdict"], summary["exit_code"] = j.verdict, j.exit_code
-    summary["reasons"] = list(j.reasons)
-    summary["baseline"] = j.baseline
-    summary["comparison"] = list(j.comparison)
+        _update_baseline(scenario, summary, bdir, run_dir, update_reason)
+    j = judge(scenario, scores, bdir, digest=summary.digest, scene_files=summary.scene_files)
+    summary = dataclasses.replace(summary, verdict=j.verdict, exit_code=j.exit_code,
+                                  reasons=j.reasons, baseline=j.baseline,
+                                  comparison=j.comparison)
     if ended.interrupted:
-        summary["verdict"], summary["exit_code"] = "INTERRUPTED", 130
-        summary["reasons"] = ["interrupted before the end of the scenario"]
-    _write_outputs(scenario, summary, run_dir, frames)
-    return RunResult(run_dir, summary["verdict"], summary["exit_code"], summary)
+        summary = dataclasses.replace(summary, verdict="INTERRUPTED", exit_code=130,
+                                      reasons=("interrupted before the end of the scenario",))
+    data = _write_outputs(scenario, summary, run_dir, frames)
+    return RunResult(run_dir, summary.verdict, summary.exit_code, data, summary)
 
 
 def _open_recorder(scenario: Scenario, loop: Loop, run_dir: Path, *, source: str,
@@ -217,7 +224,7 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
 
 
 def _score(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path,
-           source: str) -> tuple[Scores, Any, dict[str, Any], float]:
+           source: str) -> tuple[Scores, Frames, dict[str, TopicRow], float]:
     """Close the recorder and score what it recorded: the scores, the frames read from the
     bag (for the report), the topic table and the simulated seconds."""
     stats = recorder.close()
@@ -234,65 +241,56 @@ def _score(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path,
 
 
 def _summarize(scenario: Scenario, loop: Loop, recorder: Any, *, source: str, scores: Scores,
-               topics: dict[str, Any], sim_s: float, ended: _Ended) -> dict[str, Any]:
-    """The run's summary up to its baselines folder and verdict."""
-    summary: dict[str, Any] = {
-        "scenario": scenario.name,
-        "scenario_file": source,
-        "seed": scenario.seed,
-        "srr_gt": loop.srr_gt,
-        "duration_s": scenario.duration,
-        "simulated_s": sim_s,
-        "ticks": loop.ticks(),
-        "tick_hz": scenario.physics.tick_hz,
-        "interrupted": ended.interrupted,
-        "stopped": ended.stopped,
-        "warnings": [],
-        "health": [dataclasses.asdict(h) for h in scores.health],
-        "metrics": [dataclasses.asdict(m) for m in scores.metrics],
-        "graphs": [],
-        "systems_under_test": [name for name, _, _ in loop.suts],
-        "sut_endpoints": sut_endpoints(loop.suts),
-        "output": loop.output.summary(),
-        "topics": topics,
-        "digest": combined_digest(topics),
-        "versions": versions(),
-        **loop.extra,
-    }
-    if recorder.unrecorded:  # published in the run, recorded compressed (or not at all)
-        summary["unrecorded"] = {t: {"type": ty, "published": n}
-                                 for t, (ty, n) in recorder.skipped().items()}
+               topics: dict[str, TopicRow], sim_s: float, ended: _Ended,
+               bdir: Path) -> RunSummary:
+    """The run's summary, not yet judged (INVALID until :func:`harness.run.judge.judge`)."""
     # what plug-ins noticed while running (the ROS 2 bridge: topics it could not bridge)
-    summary["warnings"] = [*summary["warnings"], *(
-        w for _, sut, _ in loop.suts for w in getattr(sut, "warnings", list)())]
-    return summary
+    noticed = [w for _, sut, _ in loop.suts for w in getattr(sut, "warnings", list)()]
+    return RunSummary(
+        scenario=scenario.name, scenario_file=source, seed=scenario.seed, srr_gt=loop.srr_gt,
+        duration_s=scenario.duration, simulated_s=sim_s, ticks=loop.ticks(),
+        tick_hz=scenario.physics.tick_hz, interrupted=ended.interrupted,
+        stopped=ended.stopped, warnings=(*loop.warnings, *noticed), health=scores.health,
+        metrics=tuple(dataclasses.asdict(m) for m in scores.metrics), graphs=loop.graphs,
+        systems_under_test=tuple(name for name, _, _ in loop.suts),
+        sut_endpoints=sut_endpoints(loop.suts), output=loop.output.summary(),
+        topics=topics, digest=combined_digest(topics), versions=versions(),
+        scene_files=loop.scene_files, command=loop.command, replay_of=loop.replay_of,
+        world_map=loop.world_map,
+        # published in the run, recorded compressed (or not at all)
+        unrecorded={t: {"type": ty, "published": n} for t, (ty, n)
+                    in recorder.skipped().items()} if recorder.unrecorded else None,
+        baselines_dir=str(bdir),  # where bless writes this run's baseline
+        verdict="INVALID", exit_code=3)
 
 
-def _update_baseline(scenario: Scenario, summary: dict[str, Any], scores: Scores, bdir: Path,
-                     run_dir: Path, reason: str) -> None:
+def _update_baseline(scenario: Scenario, summary: RunSummary, bdir: Path, run_dir: Path,
+                     reason: str) -> None:
     """``--update-baseline``: this run becomes its scenario's baseline; an invalid run is
     refused (:class:`InvalidRunError`)."""
-    if not all(h.ok for h in scores.health):
+    if not summary.ok:
         raise InvalidRunError(f"{run_dir}: health gates tripped; an invalid run cannot "
                               "become the baseline")
-    save_baseline(baseline_path(baseline_name(scenario), bdir), summary,
+    save_baseline(baseline_path(baseline_name(scenario), bdir), summary.to_json(),
                   reason=reason, source_run=str(run_dir),
-                  config=scene_config(scenario, summary.get("scene_files")),
+                  config=scene_config(scenario, summary.scene_files),
                   bag=run_dir / "bag")
 
 
-def _write_outputs(scenario: Scenario, summary: dict[str, Any], run_dir: Path,
-                   frames: Any) -> None:
+def _write_outputs(scenario: Scenario, summary: RunSummary, run_dir: Path,
+                   frames: Frames) -> dict[str, Any]:
     """``junit.xml``, then ``summary.json`` (the run is complete from here on: the marker
     goes), then ``report.html``, last: a report that fails to render never costs the run its
-    summary."""
-    write_junit(run_dir / "junit.xml", scenario.name, junit_cases(summary))
-    write_json_atomic(run_dir / "summary.json", summary)
+    summary. Returns the summary as written."""
+    data = summary.to_json()
+    write_junit(run_dir / "junit.xml", scenario.name, junit_cases(data))
+    summary.write(run_dir)
     runmarker.clear(run_dir)
     try:
-        write_report(run_dir, summary=summary, scenario=scenario, frames=frames)
+        write_report(run_dir, summary=data, scenario=scenario, frames=frames)
     except SrrError:
         raise
     except Exception as err:
         raise SrrError(f"{run_dir / 'report.html'}: the report could not be rendered "
                        f"({type(err).__name__}: {err}); summary.json is complete") from err
+    return data

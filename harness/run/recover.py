@@ -15,6 +15,7 @@ from harness.metrics.types import HealthResult
 from harness.report.junit import junit_cases, write_junit
 from harness.run.facts import combined_digest, reproduce_command, topic_table, versions
 from harness.scenario import Scenario, load_scenario
+from harness.summary import SUMMARY_NAME, RunSummary
 
 __all__ = ["RecoverResult", "recover"]
 
@@ -79,23 +80,22 @@ def _recover(p: Path, run_dir: Path | None) -> RecoverResult:
     if bag.status == "valid" and has_summary:
         runmarker.clear(run_dir)  # killed after the summary was written: the run is complete
         return RecoverResult(bag, run_dir, None, phase)
-    summary = _recovered_summary(run_dir, scenario, bag, marker or {}, phase)
+    summary = _recovered_summary(run_dir, scenario, bag, marker or {}, phase).to_json()
     write_junit(run_dir / "junit.xml", scenario.name, junit_cases(summary))
-    write_json_atomic(run_dir / "summary.json", summary)
+    write_json_atomic(run_dir / SUMMARY_NAME, summary)
     runmarker.clear(run_dir)
     return RecoverResult(bag, run_dir, summary, phase)
 
 
 def _recovered_summary(run_dir: Path, scenario: Scenario, bag: RecoveredBag,
-                       marker: dict[str, Any], phase: str | None) -> dict[str, Any]:
+                       marker: dict[str, Any], phase: str | None) -> RunSummary:
     hz = scenario.physics.tick_hz
     last = max((t.last_ns for t in bag.topics.values() if t.last_ns is not None), default=None)
     # Stamps are tick * 1e9 // hz, so the last kept tick is ceil(last * hz / 1e9).
     ticks = 0 if last is None else -(-last * hz // 1_000_000_000) + 1
     sim_s = ticks / hz
-    topics = topic_table(bag.topics, {}, sim_s)
-    for t in topics.values():
-        t["published"] = None  # unknown: the run did not finish
+    topics = {n: dataclasses.replace(t, published=None)  # unknown: the run did not finish
+              for n, t in topic_table(bag.topics, {}, sim_s).items()}
     kept = sum(t.count for t in bag.topics.values())
     dropped = (f"; the {bag.dropped_bytes} bytes after them, an incomplete chunk, were "
                "dropped" if bag.dropped_bytes else "")
@@ -109,35 +109,18 @@ def _recovered_summary(run_dir: Path, scenario: Scenario, bag: RecoveredBag,
             "tick loop)"}.get(phase or "", "before it wrote its summary")
     detail = (f"the run was killed {when}; recovered with srr recover: {what}; scores were "
               "not computed")
-    health = [HealthResult("recording_complete", False, detail)]
-    return {
-        "scenario": scenario.name,
-        "scenario_file": marker.get("scenario_file", ""),
-        "seed": scenario.seed,
-        "srr_gt": scenario.srr_gt,
-        "duration_s": scenario.duration,
-        "simulated_s": sim_s,
-        "ticks": ticks,
-        "tick_hz": scenario.physics.tick_hz,
-        "interrupted": True,
-        "recovered": True,
-        "recovery": {"bag": bag.status, "phase": phase, "chunks_kept": bag.chunks,
-                     "messages_kept": kept, "dropped_bytes": bag.dropped_bytes,
-                     "damaged_file": None if bag.damaged is None else bag.damaged.name},
-        "stopped": None,
-        "warnings": [],
-        "health": [dataclasses.asdict(h) for h in health],
-        "metrics": [],
-        "graphs": [],
-        "systems_under_test": [s.name for s in scenario.systems_under_test if s.enabled],
-        "topics": topics,
-        "digest": combined_digest(topics),
-        "versions": versions(),
-        "command": marker.get("command") or reproduce_command(
+    return RunSummary(
+        scenario=scenario.name, scenario_file=marker.get("scenario_file", ""),
+        seed=scenario.seed, srr_gt=scenario.srr_gt, duration_s=scenario.duration,
+        simulated_s=sim_s, ticks=ticks, tick_hz=scenario.physics.tick_hz, interrupted=True,
+        recovered=True,
+        recovery={"bag": bag.status, "phase": phase, "chunks_kept": bag.chunks,
+                  "messages_kept": kept, "dropped_bytes": bag.dropped_bytes,
+                  "damaged_file": None if bag.damaged is None else bag.damaged.name},
+        health=(HealthResult("recording_complete", False, detail),), metrics=(),
+        systems_under_test=tuple(s.name for s in scenario.systems_under_test if s.enabled),
+        topics=topics, digest=combined_digest(topics), versions=versions(),
+        command=marker.get("command") or reproduce_command(
             marker.get("scenario_file", str(run_dir / "scenario.yaml")), scenario, run_dir),
-        "verdict": "INVALID",
-        "exit_code": 3,
-        "reasons": [f"health recording_complete: {detail}"],
-        "baseline": None,
-        "comparison": [],
-    }
+        verdict="INVALID", exit_code=3,
+        reasons=(f"health recording_complete: {detail}",))

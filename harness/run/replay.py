@@ -71,15 +71,15 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     check_free_space(scenario, out_dir, disk_free)
     command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
                         *(f"--set {o}" for o in overrides), f"--out {out_dir}"])
-    extra = {"warnings": warnings, "command": command,
-             "scene_files": dict(summary.get("scene_files") or {}), "replay_of": {
+    replay_of = {
         "run_dir": str(src.resolve()), "digest": summary.get("digest"), "mode": "open-loop",
         "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
-        "overrides": list(overrides), "withheld": sorted(withheld)}}
-    if "world_map" in summary:  # the recorded scene, as it was
-        extra["world_map"] = summary["world_map"]
+        "overrides": list(overrides), "withheld": sorted(withheld)}
     loop = Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
-                 bool(summary.get("srr_gt")), extra, playback.output)
+                bool(summary.get("srr_gt")), command=command, warnings=tuple(warnings),
+                scene_files=dict(summary.get("scene_files") or {}), replay_of=replay_of,
+                world_map=summary.get("world_map"),  # the recorded scene, as it was
+                output=playback.output)
     return record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.get("ticks") or scenario.n_ticks), progress=progress,
                    baselines=baselines, started=started)

@@ -90,13 +90,12 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         if view is not None:
             view.close()
         raise
-    extra: dict[str, Any] = {"graphs": sim.graph_paths, "warnings": list(warnings),
-                             "scene_files": dict(sim.world.scene_files),
-                             "command": reproduce_command(source, scenario, run_dir)}
-    if sim.world.world_file is not None:  # the file's static geometry, for the report's map
-        extra["world_map"] = map_json(sim.world.world_file)
+    world_map = (map_json(sim.world.world_file)  # the file's static geometry, for the map
+                 if sim.world.world_file is not None else None)
     loop = Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
-                 sim.srr_gt, extra, output)
+                sim.srr_gt, command=reproduce_command(source, scenario, run_dir),
+                warnings=tuple(warnings), graphs=tuple(sim.graph_paths),
+                scene_files=dict(sim.world.scene_files), world_map=world_map, output=output)
     try:
         return record(scenario, loop, source=source, run_dir=run_dir,
                        n_ticks=scenario.n_ticks, progress=progress, baselines=baselines,
