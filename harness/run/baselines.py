@@ -10,8 +10,8 @@ from typing import Any
 from harness import runlock
 from harness.errors import ScenarioError, SrrError
 from harness.regression import baseline_path, comparable_config, save_baseline
+from harness.run.summary import RunSummary
 from harness.scenario import Scenario, load_scenario, scenario_to_mapping
-from harness.summary import read_summary
 
 __all__ = ["PROJECT_MARKERS", "baseline_name", "baselines_dir", "bless", "scene_config"]
 
@@ -77,18 +77,18 @@ def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
     ``baselines_dir``; for runs from before it was recorded, :func:`baselines_dir` of its
     scenario file). An INVALID or interrupted run is refused (SrrError, exit 2)."""
     runlock.refuse_if_live(run_dir)
-    summary = read_summary(run_dir)
-    if summary.get("verdict") == "INVALID" or summary.get("interrupted"):
-        why = " ".join("; ".join(str(r) for r in summary.get("reasons") or []).split())
+    summary = RunSummary.read(run_dir)
+    if summary.verdict == "INVALID" or summary.interrupted:
+        why = " ".join("; ".join(summary.reasons).split())
         raise SrrError(f"{Path(run_dir).resolve()}: not blessed: the run is "
-                       f"{summary.get('verdict', 'invalid')} ({why or 'no reason recorded'}); "
+                       f"{summary.verdict} ({why or 'no reason recorded'}); "
                        "only a valid, complete run can become the baseline")
     scenario = load_scenario(Path(run_dir) / "scenario.yaml")
-    recorded = summary.get("baselines_dir")  # the folder the run was judged against
+    recorded = summary.baselines_dir  # the folder the run was judged against
     path = baseline_path(baseline_name(scenario), baselines_dir(
-        summary.get("scenario_file", ""), baselines if baselines is not None
+        summary.scenario_file, baselines if baselines is not None
         else Path(recorded) if recorded else None, scenario))
-    save_baseline(path, summary, reason=reason, source_run=str(run_dir),
-                  config=scene_config(scenario, summary.get("scene_files")),
+    save_baseline(path, summary.to_json(), reason=reason, source_run=str(run_dir),
+                  config=scene_config(scenario, summary.scene_files),
                   bag=Path(run_dir) / "bag")
     return path

@@ -13,8 +13,8 @@ from typing import Any
 
 from harness import __version__
 from harness.bus import TopicStats
+from harness.run.summary import TopicRow
 from harness.scenario import Scenario
-from harness.summary import TopicRow
 from harness.sut.base import SutContext
 
 __all__ = ["combined_digest", "default_run_dir", "reproduce_command", "sut_endpoints",

@@ -19,9 +19,9 @@ from harness.regression import (
 )
 from harness.regression.reference import reference_path
 from harness.run.baselines import baseline_name, scene_config
+from harness.run.summary import BaselineRef
 from harness.scenario import Scenario
 from harness.scoring import Scores
-from harness.summary import BaselineRef
 
 __all__ = ["Judgement", "judge"]
 

@@ -47,9 +47,9 @@ from harness.report.junit import junit_cases, write_junit
 from harness.run.baselines import baseline_name, baselines_dir, scene_config
 from harness.run.facts import combined_digest, sut_endpoints, topic_table, versions
 from harness.run.judge import judge
+from harness.run.summary import RunSummary, TopicRow
 from harness.scenario import Scenario, scenario_to_mapping
 from harness.scoring import Scores, scenario_frames, score_frames
-from harness.summary import RunSummary, TopicRow
 from harness.sut.base import SutContext
 
 __all__ = ["Loop", "Progress", "RunResult", "Started", "prepare", "record"]

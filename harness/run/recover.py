@@ -14,8 +14,9 @@ from harness.bus.recover import RecoveredBag, recover_bag
 from harness.metrics.types import HealthResult
 from harness.report.junit import junit_cases, write_junit
 from harness.run.facts import combined_digest, reproduce_command, topic_table, versions
+from harness.run.summary import RunSummary
 from harness.scenario import Scenario, load_scenario
-from harness.summary import SUMMARY_NAME, RunSummary
+from harness.summary import SUMMARY_NAME
 
 __all__ = ["RecoverResult", "recover"]
 

@@ -4,7 +4,7 @@ recorded scenario (:mod:`harness.replay` plays it; :mod:`harness.run.record` rec
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -17,9 +17,9 @@ from harness.replay import Playback, Replay
 from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
+from harness.run.summary import RunSummary
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
 from harness.scoring import check_scoring
-from harness.summary import read_summary
 from harness.sut.base import load_suts
 
 __all__ = ["replay"]
@@ -36,7 +36,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     like a run of the recorded scenario (:mod:`harness.replay`)."""
     src = Path(run_dir)
     runlock.refuse_if_live(src)
-    summary = read_summary(src)
+    summary = RunSummary.read(src)
     recorded = load_scenario(src / "scenario.yaml")
     pairs = [parse_override(o) for o in overrides]
     for text in suts:
@@ -50,13 +50,13 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         pairs.append((f"systems_under_test.{name.strip()}.plugin", plugin.strip()))
     scenario = load_scenario(src / "scenario.yaml", pairs)
     _check_replay_scene(recorded, scenario)
-    source = str(summary.get("scenario_file") or src / "scenario.yaml")
-    check_scoring(scenario, srr_gt=bool(summary.get("srr_gt")), source=source)
-    judged = summary.get("baselines_dir")  # judged against the recorded run's baselines
+    source = str(summary.scenario_file or src / "scenario.yaml")
+    check_scoring(scenario, srr_gt=summary.srr_gt, source=source)
+    judged = summary.baselines_dir  # judged against the recorded run's baselines
     baselines = baselines_dir(source, baselines if baselines is not None
                               else Path(judged) if judged else None, scenario)
     playback = Playback(src / "bag")
-    withheld = _recorded_outputs(summary, recorded, source)
+    withheld = _recorded_outputs(summary.sut_endpoints, recorded, source)
     rep = Replay(scenario, playback, withheld, source)
     try:
         rep.start()
@@ -72,16 +72,16 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
                         *(f"--set {o}" for o in overrides), f"--out {out_dir}"])
     replay_of = {
-        "run_dir": str(src.resolve()), "digest": summary.get("digest"), "mode": "open-loop",
+        "run_dir": str(src.resolve()), "digest": summary.digest, "mode": "open-loop",
         "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
         "overrides": list(overrides), "withheld": sorted(withheld)}
     loop = Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
-                bool(summary.get("srr_gt")), command=command, warnings=tuple(warnings),
-                scene_files=dict(summary.get("scene_files") or {}), replay_of=replay_of,
-                world_map=summary.get("world_map"),  # the recorded scene, as it was
+                summary.srr_gt, command=command, warnings=tuple(warnings),
+                scene_files=dict(summary.scene_files or {}), replay_of=replay_of,
+                world_map=summary.world_map,  # the recorded scene, as it was
                 output=playback.output)
     return record(scenario, loop, source=source, run_dir=out_dir,
-                   n_ticks=int(summary.get("ticks") or scenario.n_ticks), progress=progress,
+                   n_ticks=int(summary.ticks or scenario.n_ticks), progress=progress,
                    baselines=baselines, started=started)
 
 
@@ -103,11 +103,12 @@ def _check_replay_scene(recorded: Scenario, scenario: Scenario) -> None:
                             "under test and the scoring")
 
 
-def _recorded_outputs(summary: dict[str, Any], recorded: Scenario, source: str) -> set[str]:
-    """Topics the recorded run's systems under test published: from ``summary.json``, or, for
-    runs recorded before it kept them, by setting the recorded plug-ins up on a scratch bus."""
-    eps = summary.get("sut_endpoints")
-    if isinstance(eps, dict):
+def _recorded_outputs(eps: Mapping[str, Any] | None, recorded: Scenario,
+                      source: str) -> set[str]:
+    """Topics the recorded run's systems under test published: from its summary's
+    ``sut_endpoints`` (``eps``), or, for runs recorded before it kept them, by setting the
+    recorded plug-ins up on a scratch bus."""
+    if isinstance(eps, Mapping):
         return {t for v in eps.values() if isinstance(v, dict)
                 for t in v.get("publishes", []) if isinstance(t, str)}
     bus = Bus(lambda: 0)

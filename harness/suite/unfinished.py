@@ -28,9 +28,10 @@ from harness.run.facts import combined_digest, reproduce_command, versions
 from harness.run.loading import load
 from harness.run.recover import recover
 from harness.run.rerender import report
+from harness.run.summary import RunSummary
 from harness.scenario import scenario_to_mapping
 from harness.suite.plan import RunSpec
-from harness.summary import SUMMARY_NAME, RunSummary
+from harness.summary import SUMMARY_NAME
 
 __all__ = ["Settled", "settle"]
 

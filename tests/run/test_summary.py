@@ -13,7 +13,8 @@ import pytest
 
 from harness import api
 from harness.errors import SrrError
-from harness.summary import SUMMARY_NAME, RunSummary
+from harness.run.summary import RunSummary
+from harness.summary import SUMMARY_NAME
 
 DATA = Path(__file__).parent / "data"
 ROOT = Path(__file__).resolve().parents[2]
