@@ -97,8 +97,10 @@ def prepare(run_dir: Path) -> None:
         raise SrrError(f"--out {run_dir}: directory exists and is not empty")
 
 
-def record(scenario: Scenario, loop: Loop, *, run_dir: Path, started: Started | None = None,
-           **kw: Any) -> RunResult:
+def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_ticks: int,
+           progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
+           update_reason: str = "", free_space: FreeSpace = disk_free,
+           view: LiveView | None = None, started: Started | None = None) -> RunResult:
     """:func:`write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
     created and locked first (a live owner is refused), and released, its lock file
     removed, however the run ends (``kill -9`` releases the lock too)."""
@@ -110,7 +112,10 @@ def record(scenario: Scenario, loop: Loop, *, run_dir: Path, started: Started | 
         except BaseException:
             loop.close()  # which write_run does once it runs
             raise
-        return write_run(scenario, loop, run_dir=run_dir, **kw)
+        return write_run(scenario, loop, source=source, run_dir=run_dir, n_ticks=n_ticks,
+                         progress=progress, baselines=baselines,
+                         update_baseline=update_baseline, update_reason=update_reason,
+                         free_space=free_space, view=view)
 
 
 @dataclass(frozen=True)
