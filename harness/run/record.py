@@ -83,7 +83,7 @@ class Loop:
     srr_gt: bool
     command: str  # what reproduces the run
     warnings: tuple[str, ...] = ()  # found before the run (wiring, rates, output topics)
-    graphs: tuple[Any, ...] = ()  # the action graphs' files
+    graph_paths: tuple[Any, ...] = ()  # the action graphs' files (summary "graphs")
     scene_files: Mapping[str, str] | None = None  # model files' digests by field
     world_map: Any = None  # a world file's static geometry, for the report's map
     replay_of: Mapping[str, Any] | None = None  # what a replay plays back
@@ -256,7 +256,7 @@ def _summarize(scenario: Scenario, loop: Loop, recorder: Any, *, source: str, sc
         duration_s=scenario.duration, simulated_s=sim_s, ticks=loop.ticks(),
         tick_hz=scenario.physics.tick_hz, interrupted=ended.interrupted,
         stopped=ended.stopped, warnings=(*loop.warnings, *noticed), health=scores.health,
-        metrics=tuple(dataclasses.asdict(m) for m in scores.metrics), graphs=loop.graphs,
+        metrics=tuple(dataclasses.asdict(m) for m in scores.metrics), graphs=loop.graph_paths,
         systems_under_test=tuple(name for name, _, _ in loop.suts),
         sut_endpoints=sut_endpoints(loop.suts), output=loop.output.summary(),
         topics=topics, digest=combined_digest(topics), versions=versions(),

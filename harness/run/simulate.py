@@ -94,7 +94,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
                  if sim.world.world_file is not None else None)
     loop = Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
                 sim.srr_gt, command=reproduce_command(source, scenario, run_dir),
-                warnings=tuple(warnings), graphs=tuple(sim.graph_paths),
+                warnings=tuple(warnings), graph_paths=tuple(sim.graph_paths),
                 scene_files=dict(sim.world.scene_files), world_map=world_map, output=output)
     try:
         return record(scenario, loop, source=source, run_dir=run_dir,
