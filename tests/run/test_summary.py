@@ -71,6 +71,7 @@ def test_a_malformed_or_newer_summary_names_the_file_and_field(
         RunSummary.read(tmp_path)
 
 
+@pytest.mark.slow
 def test_a_fresh_run_writes_the_summary_its_result_holds(tmp_path: Path) -> None:
     path = ROOT / "scenarios" / "forklift_warehouse.yaml"
     res = api.run_scenario(api.load(path, duration=0.5), source=str(path), out=tmp_path / "r")
