@@ -10,6 +10,8 @@ that every published message was recorded, and writes the run directory:
     summary.json    verdict and reasons, health gates, metrics, baseline comparison,
                     per-topic count/rate/bytes/sha256, versions, seed, command to reproduce
     junit.xml       health gates and metric comparisons as test cases, for CI systems
+    graphs.json     the action graphs as built (``srr graph --format json``), and
+    graphs.mmd      as Mermaid (``srr graph``): the report draws them from here
     report.html     the reviewer's page (harness.report), written last
     incomplete.json only while the run has not finished (harness.runmarker): a killed run
                     keeps it, and ``recover`` turns such a directory back into a valid one

@@ -8,8 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
-
+from harness import yamlio
 from harness.bus.bagread import open_recording, reading, ros1_recording
 from harness.errors import BagError
 
@@ -59,7 +58,7 @@ def inspect_bag(path: str | Path) -> BagInfo:
                   for c in rec.connections]
         if rec.kind == "rosbag2":
             with reading(path):  # rosbags has read it: the key is there
-                meta = yaml.safe_load((p / "metadata.yaml").read_text(encoding="utf-8"))
+                meta = yamlio.load((p / "metadata.yaml").read_text(encoding="utf-8"))
             storage = str(meta["rosbag2_bagfile_information"]["storage_identifier"])
         else:
             storage = "rosbag1" if rec.kind == "bag" else f"mcap ({rec.profile})"

@@ -10,35 +10,48 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable, Sequence
+from functools import cache
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
-from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-from rich.table import Table
-
-from harness import __version__, api
-from harness.atomic import write_json_atomic
-from harness.bag import inspect_bag
-from harness.bus.live import DEFAULT_PORT, LiveConfig
-from harness.diff import DiffResult
-from harness.errors import SrrError
+# Only what the parser needs is imported here: ``srr --help`` and argument errors load no
+# simulation, bus or rendering code. Each command imports the API when it runs.
+from harness import __version__
+from harness.bus.liveconfig import DEFAULT_PORT
+from harness.errors import SrrError, shorten
 from harness.interrupt import sigterm_as_interrupt
 from harness.summary import replay_note
 
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from harness import api
+    from harness.bus.liveconfig import LiveConfig
+    from harness.diff import DiffResult
+
 __all__ = ["main"]
 
-err_console = Console(stderr=True, highlight=False, soft_wrap=True)
-# Piped output (CI logs) gets wide tables instead of rich's 80-column default.
-out_console = Console(highlight=False, soft_wrap=True,
-                      width=None if sys.stdout.isatty() else 160)
+
+@cache
+def _stderr() -> Console:
+    from rich.console import Console
+
+    return Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+@cache
+def _stdout() -> Console:
+    from rich.console import Console
+
+    # Piped output (CI logs) gets wide tables instead of rich's 80-column default.
+    return Console(highlight=False, soft_wrap=True, width=None if sys.stdout.isatty() else 160)
 
 
 class _Parser(argparse.ArgumentParser):
     """argparse that reports bad arguments as one line and exit code 2."""
 
     def error(self, message: str) -> NoReturn:
-        err_console.print(f"srr {self.prog.split()[-1]}: error: {message}", markup=False)
+        _stderr().print(f"srr {self.prog.split()[-1]}: error: {shorten(message)}", markup=False)
         raise SystemExit(2)
 
 
@@ -183,14 +196,18 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _progress(quiet: bool) -> Any:
-    if quiet or (not err_console.is_terminal and not sys.stderr.isatty()):
+    if quiet or (not _stderr().is_terminal and not sys.stderr.isatty()):
         return None
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
     return Progress(TextColumn("[bold]{task.description}"), BarColumn(),
                     TextColumn("{task.fields[sim]}"), TimeRemainingColumn(),
-                    console=err_console, transient=True)
+                    console=_stderr(), transient=True)
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
+    from harness import api
+
     bar = _progress(args.quiet)
     task: Any = None
 
@@ -219,13 +236,15 @@ def _started(bar: Any) -> Callable[[Path], None]:
     line; above the progress bar, on its console, while one is shown (a line printed on
     stdout would land inside the bar's line on the terminal)."""
     def say(run_dir: Path) -> None:
-        (out_console if bar is None else bar.console).print(f"run directory: {run_dir}",
-                                                             markup=False)
+        (_stdout() if bar is None else bar.console).print(f"run directory: {run_dir}",
+                                                          markup=False)
     return say
 
 
 def _live_config(args: argparse.Namespace) -> LiveConfig | None:
     """``--foxglove`` and its options as a :class:`LiveConfig` (None without ``--foxglove``)."""
+    from harness.bus.liveconfig import LiveConfig
+
     given = [flag for flag, value in (("--foxglove-port", args.foxglove_port),
                                       ("--foxglove-host", args.foxglove_host),
                                       ("--foxglove-wait", args.foxglove_wait),
@@ -244,6 +263,10 @@ def _live_config(args: argparse.Namespace) -> LiveConfig | None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from rich.table import Table
+
+    from harness import api
+
     live = _live_config(args)
     overrides = list(args.overrides)
     if args.min_free_mb is not None:
@@ -280,7 +303,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                                        progress=tick, baselines=args.baselines,
                                        update_baseline=args.update_baseline,
                                        update_reason=args.reason, live=live,
-                                       notice=lambda text: err_console.print(
+                                       notice=lambda text: _stderr().print(
                                            f"srr run: {text}", markup=False),
                                        started=_started(bar))
         finally:
@@ -293,12 +316,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         table.add_column("digest")
         for r in rep.runs:
             table.add_row(str(r.run_dir), r.verdict, r.summary["digest"][:16])
-        out_console.print(table)
+        _stdout().print(table)
         if rep.identical:
-            out_console.print(f"identical per-topic digests across {args.repeat} runs")
+            _stdout().print(f"identical per-topic digests across {args.repeat} runs")
         else:
-            out_console.print("digests DIFFER on: " + ", ".join(rep.differing_topics))
-        out_console.print(str(rep.out_dir))
+            _stdout().print("digests DIFFER on: " + ", ".join(rep.differing_topics))
+        _stdout().print(str(rep.out_dir))
         return rep.exit_code
     _print_run(res)
     return res.exit_code
@@ -309,6 +332,8 @@ def _fmt(v: Any) -> str:
 
 
 def _print_run(res: api.RunResult) -> None:
+    from rich.table import Table
+
     s = res.summary
     what = "open-loop replay, " if s.get("replay_of") else ""
     out = s.get("output") or {}
@@ -320,7 +345,7 @@ def _print_run(res: api.RunResult) -> None:
         table.add_column(col, justify="right" if col in ("count", "rate Hz") else "left")
     for name, t in s["topics"].items():
         table.add_row(name, t["type"], str(t["count"]), f"{t['rate_hz']:.1f}")
-    out_console.print(table)
+    _stdout().print(table)
     if s["comparison"]:
         unjudged = all(e["status"] == "not_compared" for e in s["comparison"])
         mt = Table(title="metrics beside a baseline of another configuration (not compared)"
@@ -333,31 +358,33 @@ def _print_run(res: api.RunResult) -> None:
             mt.add_row(e["name"], f"{_fmt(e['value'])} {e['unit']}", _fmt(e["baseline"]),
                        _fmt(e["delta"]), f"±{e['tolerance']:.3g}",
                        e["status"].replace("_", " "), style=style)
-        out_console.print(mt)
+        _stdout().print(mt)
     elif s["metrics"]:
         mt = Table(title="metrics (no baseline)")
         for col in ("metric", "value", "unit"):
             mt.add_column(col)
         for m in s["metrics"]:
             mt.add_row(m["name"], _fmt(m["value"]), m["unit"])
-        out_console.print(mt)
+        _stdout().print(mt)
     for w in s.get("warnings", []):
-        err_console.print(f"srr run: warning: {w}", markup=False)
+        _stderr().print(f"srr run: warning: {w}", markup=False)
     bad = [h for h in s["health"] if not h["ok"]]
-    out_console.print(f"health: {len(s['health']) - len(bad)}/{len(s['health'])} gates ok",
-                      markup=False)
+    _stdout().print(f"health: {len(s['health']) - len(bad)}/{len(s['health'])} gates ok",
+                    markup=False)
     replay = replay_note(s)
     if replay is not None:
-        out_console.print(f"this run is an {replay}", markup=False)
-    out_console.print(f"verdict: {res.verdict}", markup=False)
+        _stdout().print(f"this run is an {replay}", markup=False)
+    _stdout().print(f"verdict: {res.verdict}", markup=False)
     for reason in s.get("reasons", []):
-        out_console.print(f"  - {reason}", markup=False)
-    out_console.print(str(res.run_dir), markup=False)
+        _stdout().print(f"  - {reason}", markup=False)
+    _stdout().print(str(res.run_dir), markup=False)
 
 
 def _cmd_baseline(args: argparse.Namespace) -> int:
+    from harness import api
+
     path = api.bless(args.run_dir, args.reason, baselines=args.baselines)
-    out_console.print(f"blessed {args.run_dir} as {path}", markup=False)
+    _stdout().print(f"blessed {args.run_dir} as {path}", markup=False)
     return 0
 
 
@@ -366,32 +393,40 @@ def _cmd_ros2(args: argparse.Namespace) -> int:
 
     install = install_tf2_msgs(args.cache)
     how = "built" if install.built_now else "already built"
-    out_console.print(f"tf2_msgs: {how} ({install.build_seconds:.1f} s, "
-                      f"{install.size_bytes / 1e6:.1f} MB): {install.prefix}", markup=False)
+    _stdout().print(f"tf2_msgs: {how} ({install.build_seconds:.1f} s, "
+                    f"{install.size_bytes / 1e6:.1f} MB): {install.prefix}", markup=False)
     return 0
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
+    from harness import api
+
     sc = api.load(args.scenario, overrides=args.overrides)
     warnings = api.validate(sc, source=str(args.scenario))
     for w in warnings:
-        err_console.print(f"srr validate: warning: {w}", markup=False)
+        _stderr().print(f"srr validate: warning: {w}", markup=False)
     robots = ", ".join(
         f"{r.name} ({r.model_name}{', namespace /' + r.ns.strip('/') if r.ns else ''})"
         for r in sc.robots if r.enabled) or "none"
-    out_console.print(f"{args.scenario}: ok — {sc.name}, {sc.duration:g} s, seed {sc.seed}, "
-                      f"robots: {robots}" + (f", {len(warnings)} warning(s)" if warnings else ""),
-                      markup=False)
+    _stdout().print(f"{args.scenario}: ok — {sc.name}, {sc.duration:g} s, seed {sc.seed}, "
+                    f"robots: {robots}" + (f", {len(warnings)} warning(s)" if warnings else ""),
+                    markup=False)
     return 0
 
 
 def _cmd_graph(args: argparse.Namespace) -> int:
+    from harness import api
+
     sc = api.load(args.scenario, overrides=args.overrides)
     sys.stdout.write(api.graph_text(sc, args.format, source=str(args.scenario)) + "\n")
     return 0
 
 
 def _cmd_inspect(args: argparse.Namespace) -> int:
+    from rich.table import Table
+
+    from harness.bag import inspect_bag
+
     info = inspect_bag(args.bag)
     table = Table(title=f"{info.path} ({info.storage}, {info.message_count} messages, "
                   f"{(info.end_ns - info.start_ns) / 1e9:.2f} s)")
@@ -399,50 +434,56 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
         table.add_column(col)
     for t in info.topics:
         table.add_row(t.name, t.msgtype, str(t.count), t.durability)
-    out_console.print(table)
+    _stdout().print(table)
     return 0
 
 
 def _cmd_recover(args: argparse.Namespace) -> int:
+    from rich.table import Table
+
+    from harness import api
+
     res = api.recover(args.bag)
     bag = res.bag
     kept = sum(t.count for t in bag.topics.values())
     if bag.status == "valid" and not res.changed:
-        out_console.print(f"{bag.mcap}: valid ({kept} messages in {bag.chunks} chunks): "
-                          "nothing to recover", markup=False)
+        _stdout().print(f"{bag.mcap}: valid ({kept} messages in {bag.chunks} chunks): "
+                        "nothing to recover", markup=False)
         return 0
     table = Table(title=f"{bag.bag_dir}: kept per topic")
     for col in ("topic", "type", "kept", "durability"):
         table.add_column(col, justify="right" if col == "kept" else "left")
     for t in bag.topics.values():
         table.add_row(t.topic, t.msgtype, str(t.count), t.durability)
-    out_console.print(table)
+    _stdout().print(table)
     if bag.status == "rebuilt":
         last = max((t.last_ns or 0 for t in bag.topics.values()), default=0)
         dropped = (f"; dropped the {bag.dropped_bytes} bytes after them (an incomplete chunk)"
                    if bag.dropped_bytes else "")
-        out_console.print(f"rebuilt {bag.mcap.name} from {bag.chunks} complete chunks "
-                          f"({kept} messages, the last at {last / 1e9:.3f} s){dropped}; the "
-                          f"original is kept as {bag.damaged.name if bag.damaged else '?'}",
-                          markup=False)
+        _stdout().print(f"rebuilt {bag.mcap.name} from {bag.chunks} complete chunks "
+                        f"({kept} messages, the last at {last / 1e9:.3f} s){dropped}; the "
+                        f"original is kept as {bag.damaged.name if bag.damaged else '?'}",
+                        markup=False)
     elif bag.status == "metadata":
-        out_console.print(f"{bag.mcap.name} was complete ({kept} messages); rewrote "
-                          "metadata.yaml", markup=False)
+        _stdout().print(f"{bag.mcap.name} was complete ({kept} messages); rewrote "
+                        "metadata.yaml", markup=False)
     else:
-        out_console.print(f"{bag.mcap.name} was complete ({kept} messages)", markup=False)
+        _stdout().print(f"{bag.mcap.name} was complete ({kept} messages)", markup=False)
     if res.summary is not None and res.run_dir is not None:
-        out_console.print(f"{res.run_dir / 'summary.json'}: recovered, verdict "
-                          f"{res.summary['verdict']} (killed while "
-                          f"{res.phase or 'running'}; not scored)", markup=False)
+        _stdout().print(f"{res.run_dir / 'summary.json'}: recovered, verdict "
+                        f"{res.summary['verdict']} (killed while "
+                        f"{res.phase or 'running'}; not scored)", markup=False)
     elif res.run_dir is not None:
-        out_console.print(f"{res.run_dir}: the run had finished; its summary is kept",
-                          markup=False)
+        _stdout().print(f"{res.run_dir}: the run had finished; its summary is kept",
+                        markup=False)
     return 0
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
+    from harness import api
+
     path = api.report(args.run_dir)
-    out_console.print(str(path), markup=False)
+    _stdout().print(str(path), markup=False)
     return 0
 
 
@@ -459,12 +500,14 @@ _STATUS_STYLE = {"differs": "bold red", "only_in_a": "bold red", "only_in_b": "b
 
 
 def _print_diff(r: DiffResult) -> None:
+    from rich.table import Table
+
     for label, run in (("A", r.a), ("B", r.b)):
         sim = f"{run.simulated_s:.1f} s" if run.simulated_s is not None else "?"
-        out_console.print(f"{label}: {run.path}  ({run.scenario}, seed {run.seed}, {sim}, "
-                          f"{run.verdict})", markup=False)
+        _stdout().print(f"{label}: {run.path}  ({run.scenario}, seed {run.seed}, {sim}, "
+                        f"{run.verdict})", markup=False)
     for note in r.replay_notes:
-        out_console.print(note, markup=False)
+        _stdout().print(note, markup=False)
     table = Table(title="recorded topics (messages paired by index)")
     for col in ("topic", "type", "A", "B", "status", "differ", "first divergence"):
         table.add_column(col, justify="right" if col in ("A", "B", "differ") else "left")
@@ -474,7 +517,7 @@ def _print_diff(r: DiffResult) -> None:
         table.add_row(t.name, t.msgtype.replace("/msg/", "/"), str(t.count_a), str(t.count_b),
                       t.status, str(t.messages_differ), where,
                       style=_STATUS_STYLE.get(t.status, ""))
-    out_console.print(table)
+    _stdout().print(table)
     fields = [(t, f) for t in r.topics for f in t.fields]
     if fields:
         ft = Table(title="numeric differences |B − A| over the messages that differ")
@@ -489,10 +532,10 @@ def _print_diff(r: DiffResult) -> None:
                        f"{f.rms:.4g}", f"#{f.at_index} @{f.at_ns / 1e9:.3f} s",
                        f.tolerance.describe() if f.tolerance else "none",
                        style="" if f.within else "red")
-        out_console.print(ft)
+        _stdout().print(ft)
         if len(fields) > len(shown):
-            out_console.print(f"  … {len(fields) - len(shown)} more field(s) differ "
-                              "(--json or --html for all)", markup=False)
+            _stdout().print(f"  … {len(fields) - len(shown)} more field(s) differ "
+                            "(--json or --html for all)", markup=False)
     moved = [m for m in r.metrics if m.status != "ok"]
     if moved:
         mt = Table(title="metrics that moved (A = baseline; informative, not part of the exit "
@@ -503,43 +546,48 @@ def _print_diff(r: DiffResult) -> None:
             mt.add_row(m.name, f"{_fmt(m.value_a)} {m.unit}", f"{_fmt(m.value_b)} {m.unit}",
                        _fmt(m.delta), f"±{m.tolerance:.3g}", m.status, m.better or "—",
                        style=_STATUS_STYLE.get(m.status, ""))
-        out_console.print(mt)
+        _stdout().print(mt)
     if r.metrics:
-        out_console.print(f"metrics: {len(r.metrics) - len(moved)}/{len(r.metrics)} within "
-                          "tolerance", markup=False)
+        _stdout().print(f"metrics: {len(r.metrics) - len(moved)}/{len(r.metrics)} within "
+                        "tolerance", markup=False)
     for note in r.notes:
-        err_console.print(f"srr diff: note: {note}", markup=False)
+        _stderr().print(f"srr diff: note: {note}", markup=False)
     first = r.first_divergence
     if first is not None:
-        out_console.print(f"first divergence: {first.describe()}", markup=False)
+        _stdout().print(f"first divergence: {first.describe()}", markup=False)
     labels = {"identical": "identical", "within_tolerance": "within tolerance",
               "differs": "different", "only_in_a": "only in A", "only_in_b": "only in B"}
     counts = {label: sum(t.status == s for t in r.topics) for s, label in labels.items()}
     parts = [f"{n} {label}" for label, n in counts.items() if n]
-    out_console.print(f"verdict: {r.verdict.replace('_', ' ')} ({len(r.topics)} topics: "
-                      f"{', '.join(parts)})",
-                      markup=False)
+    _stdout().print(f"verdict: {r.verdict.replace('_', ' ')} ({len(r.topics)} topics: "
+                    f"{', '.join(parts)})",
+                    markup=False)
 
 
 def _cmd_diff(args: argparse.Namespace) -> int:
+    from harness import api
+    from harness.atomic import write_json_atomic
+
     _writable("--html", args.html)
     _writable("--json", args.json)
     result = api.diff_runs(args.run_a, args.run_b, tolerances=args.tolerances)
     _print_diff(result)
     if args.json is not None:
         write_json_atomic(args.json, result.to_dict())
-        out_console.print(f"json: {args.json}", markup=False)
+        _stdout().print(f"json: {args.json}", markup=False)
     if args.html is not None:
-        out_console.print(f"html: {api.write_diff(result, args.html)}", markup=False)
+        _stdout().print(f"html: {api.write_diff(result, args.html)}", markup=False)
     return result.exit_code
 
 
 def _cmd_suite(args: argparse.Namespace) -> int:
+
+    from harness import api
     from harness.suite.progress import SuiteProgress, groups_table
 
     if args.update_baselines and not args.reason:
         raise SrrError("--update-baselines: say why with --reason TEXT")
-    live = not args.quiet and out_console.is_terminal
+    live = not args.quiet and _stdout().is_terminal
     holder: dict[str, Any] = {}
 
     def listen(ev: Any) -> None:
@@ -548,8 +596,8 @@ def _cmd_suite(args: argparse.Namespace) -> int:
     with sigterm_as_interrupt():
         plan = api.plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout)
         for w in plan.warnings:
-            err_console.print(f"srr suite: warning: {w}", markup=False)
-        with SuiteProgress(out_console, len(plan.runs), live=live) as progress:
+            _stderr().print(f"srr suite: warning: {w}", markup=False)
+        with SuiteProgress(_stdout(), len(plan.runs), live=live) as progress:
             holder["progress"] = progress
             res = api.run_planned_suite(
                 plan, executor=args.executor, jobs=args.jobs, address=args.address,
@@ -558,14 +606,14 @@ def _cmd_suite(args: argparse.Namespace) -> int:
                 bless_reason=args.reason if args.update_baselines else None, listen=listen,
                 fork=True)  # this process only plans: workers fork from it when safe
     s = res.summary
-    out_console.print(groups_table(res.groups, f"suite {s['name']}: {len(s['runs'])} runs on "
+    _stdout().print(groups_table(res.groups, f"suite {s['name']}: {len(s['runs'])} runs on "
                                    f"{s['executor']} × {s['jobs']} in {s['wall_s']:.1f} s"))
     for w in (s.get("history") or {}).get("warnings", []):
-        err_console.print(f"srr suite: warning: {w}", markup=False)
+        _stderr().print(f"srr suite: warning: {w}", markup=False)
     for path in res.blessed:
-        out_console.print(f"blessed {path}", markup=False)
-    out_console.print(f"verdict: {res.verdict}", markup=False)
-    out_console.print(f"{res.out_dir / 'index.html'}", markup=False)
+        _stdout().print(f"blessed {path}", markup=False)
+    _stdout().print(f"verdict: {res.verdict}", markup=False)
+    _stdout().print(f"{res.out_dir / 'index.html'}", markup=False)
     return int(res.exit_code)
 
 
@@ -580,11 +628,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return COMMANDS[args.command](args)
     except SrrError as err:
-        one_line = " ".join(part.strip() for part in str(err).splitlines() if part.strip())
-        err_console.print(f"srr {args.command}: {one_line}", markup=False)
+        one_line = shorten(" ".join(part.strip() for part in str(err).splitlines()
+                                    if part.strip()))
+        _stderr().print(f"srr {args.command}: {one_line}", markup=False)
         return err.exit_code
     except KeyboardInterrupt:
-        err_console.print(f"srr {args.command}: interrupted", markup=False)
+        _stderr().print(f"srr {args.command}: interrupted", markup=False)
         return 130
 
 

@@ -23,10 +23,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from harness.builders.base import gate_step
 from harness.bus.bagfile import MESSAGE_OVERHEAD
 from harness.errors import DiskSpaceError
-from harness.scenario import Scenario
+from harness.scenario import Scenario, gate_step
 
 __all__ = [
     "LARGE_BAG",

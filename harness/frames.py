@@ -66,6 +66,11 @@ from harness.bus.endpoints import tf_tree_of
 from harness.bus.messages import TYPESTORE
 from harness.bus.ros1 import deserialize_ros1
 from harness.errors import BagError
+from harness.geometry import (
+    quat_xyzw_mul_columns,
+    quat_xyzw_rotate_columns,
+    yaw_from_quat_xyzw_columns,
+)
 
 __all__ = [
     "CLOCK",
@@ -78,7 +83,6 @@ __all__ = [
     "Frames",
     "decode_batch",
     "load_frames",
-    "quat_yaw",
 ]
 
 CLOCK = "rosgraph_msgs/msg/Clock"
@@ -128,11 +132,6 @@ class Frames:
     @property
     def duration_s(self) -> float:
         return (self.end_ns - self.start_ns) / 1e9
-
-
-def quat_yaw(qx: Any, qy: Any, qz: Any, qw: Any) -> Any:
-    """Yaw (rad) of (x, y, z, w) quaternions; works on scalars and numpy arrays."""
-    return np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
 # --------------------------------------------------------------------------- CDR layout walk
@@ -503,26 +502,6 @@ def decode_batch(raws: Sequence[bytes], msgtype: str, *, fast: bool = True,
 # --------------------------------------------------------------------------- transforms
 
 
-def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product of (x, y, z, w) quaternions, broadcasting over leading axes."""
-    ax, ay, az, aw = np.moveaxis(a, -1, 0)
-    bx, by, bz, bw = np.moveaxis(b, -1, 0)
-    return np.stack([
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    ], axis=-1)
-
-
-def _qrot(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Rotate vectors ``v`` (..., 3) by (x, y, z, w) quaternions ``q``."""
-    u = q[..., :3]
-    w = q[..., 3:4]
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
-
-
 _Transform = tuple[np.ndarray, np.ndarray]  # translation (3,), rotation xyzw (4,)
 
 
@@ -538,8 +517,8 @@ def _chain(static: dict[str, tuple[str, _Transform]], world: str, frame: str
             return None
         seen.add(cur)
         parent, (pt, pq) = static[cur]
-        t = pt + _qrot(pq, t)
-        q = _qmul(pq, q)
+        t = pt + quat_xyzw_rotate_columns(pq, t)
+        q = quat_xyzw_mul_columns(pq, q)
         cur = parent
     return t, q
 
@@ -590,7 +569,7 @@ def _gt_table(name: str, cols: dict[str, np.ndarray]) -> pd.DataFrame:
     return pd.DataFrame({
         "t_ns": _stamp(c), "name": np.full(c["msg"].size, name, dtype=object),
         "x": c["x"], "y": c["y"], "z": c["z"],
-        "yaw": quat_yaw(c["qx"], c["qy"], c["qz"], c["qw"]),
+        "yaw": yaw_from_quat_xyzw_columns(c["qx"], c["qy"], c["qz"], c["qw"]),
     })
 
 
@@ -605,13 +584,13 @@ def _odom_table(topic: str, cols: dict[str, np.ndarray],
         if tf is None:
             continue
         sel = cols["frame_id"] == fid
-        pos[sel] = tf[0] + _qrot(tf[1], pos[sel])
-        quat[sel] = _qmul(tf[1], quat[sel])
+        pos[sel] = tf[0] + quat_xyzw_rotate_columns(tf[1], pos[sel])
+        quat[sel] = quat_xyzw_mul_columns(tf[1], quat[sel])
         frame[sel] = world
     return pd.DataFrame({
         "t_ns": _stamp(cols), "topic": np.full(n, topic, dtype=object), "frame": frame,
         "x": pos[:, 0], "y": pos[:, 1],
-        "yaw": quat_yaw(quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]),
+        "yaw": yaw_from_quat_xyzw_columns(quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]),
         "vx": cols["vx"], "wz": cols["wz"],
     })
 

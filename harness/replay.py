@@ -28,9 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from harness.builders.camera_record import CompressedStream, compressed_streams, recorded_cameras
+from harness import yamlio
 from harness.bus import Bus, Qos
 from harness.bus.bagread import (
     DECODE_ERRORS,
@@ -41,6 +39,7 @@ from harness.bus.bagread import (
     ros1_recording,
 )
 from harness.bus.ros1 import ros1_type
+from harness.camera_topics import CompressedStream, compressed_streams, recorded_cameras
 from harness.errors import BagError, VideoError, reason
 from harness.graph.nodes.camera import depth_image_message, rgb_image_message
 from harness.output import ROS2_OUTPUT, OutputKind
@@ -51,8 +50,6 @@ from harness.video.codec import H264Decoder, decode_depth_png, decode_rgb
 __all__ = ["Playback", "RecordedTopic", "Replay"]
 
 IMAGE = "sensor_msgs/msg/Image"
-
-_YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 @dataclass(frozen=True)
@@ -84,7 +81,7 @@ def _qos(profiles: Any) -> Qos:
     metadata version 9, a YAML string in older ones); ``ValueError`` (or a YAML error) for
     one that is neither."""
     if isinstance(profiles, str):
-        profiles = yaml.safe_load(profiles)
+        profiles = yamlio.load(profiles)
     if not profiles:
         return Qos()
     if not isinstance(profiles, list):
@@ -123,7 +120,7 @@ class Playback:
             raise BagError(f"{self.bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
         meta_file = self.bag_dir / "metadata.yaml"
         with reading(meta_file, "not a rosbag2 metadata file"):
-            info = _key(yaml.load(meta_file.read_text(encoding="utf-8"), Loader=_YamlLoader),
+            info = _key(yamlio.load(meta_file.read_text(encoding="utf-8")),
                         "rosbag2_bagfile_information")
             self.topics = {}
             for entry in _items(info, "topics_with_message_count"):

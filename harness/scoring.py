@@ -13,13 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.builders.camera_record import (
+from harness.bus import resolve_topic
+from harness.camera_topics import (
     compressed_streams,
     fixed_camera,
     robot_camera,
     unrecorded_topics,
 )
-from harness.bus import resolve_topic
 from harness.errors import ScenarioError
 from harness.frames import Frames, load_frames
 from harness.metrics import (

@@ -6,6 +6,7 @@ import os
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from tests.report.browser import chromium_path
 
@@ -29,3 +30,12 @@ def chromium() -> str:
         pytest.skip("headless Chromium not installed (/usr/bin/chromium missing): "
                     "apt-get install -y chromium, or set SRR_CHROMIUM")
     return path
+
+
+# Hypothesis profiles: "ci" (the default) is derandomized, so a CI run is reproducible, and
+# small enough for the fast tier; "nightly" (HYPOTHESIS_PROFILE=nightly, the nightly workflow)
+# draws many more, new examples every night. Tests that set max_examples themselves keep it.
+settings.register_profile("ci", derandomize=True, database=None, deadline=None,
+                          max_examples=20, print_blob=True)
+settings.register_profile("nightly", max_examples=1000, deadline=None, print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))

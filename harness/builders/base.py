@@ -3,32 +3,20 @@
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from harness.geometry import wxyz_to_xyzw
 from harness.graph import GraphStage
-from harness.graph.nodes.ros_bridge import frame_of, relative_pose
+from harness.graph.nodes.ros_bridge import relative_pose
 from harness.scenario import RobotSpec, Scenario, gate_step
+from harness.scenario.prims import frame_of
+from harness.wiring.plan import NodeOrigin  # the wiring plan reads the annotations
 
 __all__ = ["BuildContext", "GraphEdits", "NodeOrigin", "fresh_graph", "gate_step",
            "gated_render_product", "sensor_frame_tf"]
 
 GraphEdits = tuple[list[tuple[str, str]], list[tuple[str, str]], list[tuple[str, Any]]]
-
-
-@dataclass(frozen=True)
-class NodeOrigin:
-    """Which scenario field a node was built from (``robots[1].odometry``) and, per input,
-    which sub-field set it (``topicName`` → ``odom_topic``), so wiring errors name fields."""
-
-    field: str
-    inputs: Mapping[str, str] = dataclasses.field(default_factory=dict)
-
-    def field_for(self, input_name: str) -> str:
-        sub = self.inputs.get(input_name)
-        return f"{self.field}.{sub}" if sub else self.field
 
 
 @dataclass(frozen=True)

@@ -1,124 +1,42 @@
-"""A camera's ``record`` block: its compressed topics and the helper nodes that publish them,
+"""A camera's ``record`` block in a graph: the helper nodes that publish its compressed topics,
 for fixed cameras (``cameras:``, :mod:`harness.builders.cameras`) and robot-mounted ones
 (``robots[].sensors.camera``, :mod:`harness.builders.robot_camera`) alike.
 
-A camera's raw image topics (rgb and, where it has one, depth) each get a
-``CompressedCameraHelper`` per compressed format (:data:`COMPRESSED`): ``<rgb topic>/h264``
-(foxglove_msgs/CompressedVideo), ``<rgb topic>/compressed`` (jpeg or png) and ``<depth
-topic>/compressed`` (16-bit PNG millimetres), in the namespace of the raw topics. A raw
-stream that ``record`` leaves out is still published (the systems under test read it in the
-run) but not recorded: :func:`unrecorded_topics`.
+Which topics those are is :mod:`harness.camera_topics` (pure, no graph): each gets one
+``CompressedCameraHelper`` (:data:`COMPRESSED`). The names of that module are re-exported
+here for the builders.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 from harness.builders.base import BuildContext, GraphEdits, gate_step, render_product_helper
-from harness.bus import resolve_topic
-from harness.graph.nodes.ros_bridge import frame_of
-from harness.graph.nodes.video import COMPRESSED_FORMATS
-from harness.scenario import CameraRecordSpec, CameraSpec, H264Spec, RobotSpec, Scenario
+from harness.camera_topics import (
+    TOPIC_SUFFIX,
+    CompressedStream,
+    RecordedCamera,
+    compressed_streams,
+    fixed_camera,
+    recorded_cameras,
+    robot_camera,
+    unrecorded_topics,
+)
+from harness.scenario import H264Spec
 
 __all__ = ["COMPRESSED", "CompressedStream", "RecordedCamera", "compressed_helpers",
            "compressed_streams", "fixed_camera", "h264_values", "recorded_cameras",
            "robot_camera", "unrecorded_topics"]
 
+_NODE: dict[tuple[str, str], str] = {
+    ("rgb", "h264"): "CameraHelperRgbH264",
+    ("rgb", "jpeg"): "CameraHelperRgbJpeg",
+    ("rgb", "png"): "CameraHelperRgbPng",
+    ("depth", "png"): "CameraHelperDepthPng",
+}
 #: (stream, format) → (node name, topic suffix after the raw topic).
 COMPRESSED: dict[tuple[str, str], tuple[str, str]] = {
-    ("rgb", "h264"): ("CameraHelperRgbH264", "/h264"),
-    ("rgb", "jpeg"): ("CameraHelperRgbJpeg", "/compressed"),
-    ("rgb", "png"): ("CameraHelperRgbPng", "/compressed"),
-    ("depth", "png"): ("CameraHelperDepthPng", "/compressed"),
-}
-
-
-@dataclass(frozen=True)
-class CompressedStream:
-    """One compressed topic of a camera: ``topic`` (fully qualified) carries ``raw_topic``'s
-    ``stream`` (rgb or depth) as ``format`` in ``msgtype``."""
-
-    camera: str
-    stream: str
-    format: str
-    topic: str
-    raw_topic: str
-    msgtype: str
-
-
-@dataclass(frozen=True)
-class RecordedCamera:
-    """A camera whose graph srr builds, as its ``record`` block sees it: ``raw`` maps each of
-    its image streams (``rgb``, ``depth``) to its raw topic, relative to ``namespace``;
-    ``field`` is the camera's block (``cameras[0]``, ``robots[1].sensors.camera``)."""
-
-    name: str
-    field: str
-    record: CameraRecordSpec
-    raw: Mapping[str, str]
-    namespace: str
-    frame_id: str
-    fps: float
-
-
-def fixed_camera(scenario: Scenario, camera: CameraSpec) -> RecordedCamera:
-    """A ``cameras:`` entry: raw topics ``<cam>_rgb`` / ``<cam>_depth`` (those it outputs)."""
-    return RecordedCamera(
-        camera.name, f"cameras[{scenario.cameras.index(camera)}]", camera.record,
-        {s: f"{camera.name}_{s}" for s in ("rgb", "depth") if s in camera.outputs}, "",
-        frame_of(camera.prim), camera.fps)
-
-
-def robot_camera(scenario: Scenario, robot: RobotSpec) -> RecordedCamera | None:
-    """A robot's ``sensors.camera`` (None: none, disabled or without srr's graph): raw
-    topics ``topic`` / ``depth_topic`` in the robot's namespace."""
-    spec = robot.sensors.camera
-    if spec is None or not spec.enabled or not spec.graph:
-        return None
-    raw = {"rgb": spec.topic}
-    if spec.depth_topic:
-        raw["depth"] = spec.depth_topic
-    return RecordedCamera(robot.name,
-                          f"robots[{scenario.robot_index(robot.name)}].sensors.camera",
-                          spec.record, raw, robot.ns, robot.frame(spec.frame_id), spec.fps)
-
-
-def recorded_cameras(scenario: Scenario) -> list[RecordedCamera]:
-    """Every enabled camera srr builds a graph for: the robots' cameras, then ``cameras:``."""
-    out = [c for r in scenario.robots if r.enabled
-           if (c := robot_camera(scenario, r)) is not None]
-    out += [fixed_camera(scenario, c) for c in scenario.cameras
-            if c.enabled and c.outputs]
-    return out
-
-
-def _formats(camera: RecordedCamera) -> list[tuple[str, tuple[str, ...]]]:
-    rec = camera.record
-    return [(s, f) for s, f in (("rgb", rec.rgb), ("depth", rec.depth)) if s in camera.raw]
-
-
-def compressed_streams(camera: RecordedCamera) -> list[CompressedStream]:
-    """The camera's compressed topics, from its ``record`` block."""
-    out = []
-    for stream, formats in _formats(camera):
-        raw = camera.raw[stream]
-        for fmt in formats:
-            if fmt == "raw":
-                continue
-            out.append(CompressedStream(
-                camera.name, stream, fmt,
-                resolve_topic(raw + COMPRESSED[(stream, fmt)][1], camera.namespace),
-                resolve_topic(raw, camera.namespace), COMPRESSED_FORMATS[(stream, fmt)]))
-    return out
-
-
-def unrecorded_topics(scenario: Scenario) -> set[str]:
-    """Raw camera topics published but, by their camera's ``record``, not recorded."""
-    return {resolve_topic(cam.raw[stream], cam.namespace)
-            for cam in recorded_cameras(scenario)
-            for stream, formats in _formats(cam) if "raw" not in formats}
+    key: (node, TOPIC_SUFFIX[key]) for key, node in _NODE.items()}
 
 
 def compressed_helpers(bc: BuildContext, path: str, camera: RecordedCamera) -> GraphEdits:

@@ -29,7 +29,7 @@ from typing import Any
 
 from harness.builders.base import BuildContext, fresh_graph
 from harness.graph import Controller
-from harness.graph.nodes.ros_bridge import frame_of
+from harness.scenario.prims import frame_of
 
 __all__ = ["GRAPH_PATH", "OPTICAL_TO_WORLD_IJKR", "build", "world_frame"]
 

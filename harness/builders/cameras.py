@@ -38,8 +38,8 @@ from harness.builders.camera_record import (
     unrecorded_topics,
 )
 from harness.graph import Controller
-from harness.graph.nodes.ros_bridge import frame_of
 from harness.scenario import CameraSpec
+from harness.scenario.prims import frame_of
 
 __all__ = ["COMPRESSED", "HELPERS", "CompressedStream", "build", "gate_step", "graph_path",
            "h264_values", "topic_names", "unrecorded_topics"]

@@ -23,7 +23,7 @@ from typing import Any
 
 from harness.builders.base import BuildContext, fresh_graph
 from harness.builders.odometry import robot_front
-from harness.geometry import quat_from_yaw, quat_mul, wxyz_to_xyzw, yaw_between
+from harness.geometry import quat_wxyz_from_yaw, quat_wxyz_mul, wxyz_to_xyzw, yaw_between
 from harness.graph import Controller
 from harness.scenario import RobotSpec
 
@@ -48,7 +48,7 @@ def graph_path(robot: RobotSpec) -> str:
 def odom_origin(bc: BuildContext, robot: RobotSpec) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Translation and (x, y, z, w) rotation of the odom frame in the world frame."""
     pos, quat = bc.world.prim_pose(bc.world.base_prim(robot.name))
-    q = quat_mul(quat, quat_from_yaw(yaw_between(robot_front(bc, robot))))
+    q = quat_wxyz_mul(quat, quat_wxyz_from_yaw(yaw_between(robot_front(bc, robot))))
     return tuple(float(v) for v in pos), tuple(float(v) for v in wxyz_to_xyzw(q))
 
 

@@ -27,7 +27,7 @@ from typing import IO, Any
 import yaml
 from mcap.writer import CompressionType
 
-from harness import __version__
+from harness import __version__, yamlio
 from harness.atomic import write_text_atomic
 from harness.bus.mcap_writer import McapWriter, Payload, payload_size
 
@@ -81,7 +81,7 @@ class TopicMeta:
 
     @property
     def qos_profiles(self) -> list[Any]:
-        loaded = yaml.safe_load(self.qos) if self.qos else []
+        loaded = yamlio.load(self.qos) if self.qos else []
         return loaded if isinstance(loaded, list) else []
 
 

@@ -50,6 +50,7 @@ from rosbags.rosbag2.errors import ReaderError as Rosbag2ReaderError
 from rosbags.serde import SerdeError
 from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 
+from harness import yamlio
 from harness.bus.mcapread import McapIndex, guarded, lz4_failure
 from harness.bus.messages import TYPESTORE
 from harness.bus.ros1 import Ros1TypeError, deserialize_ros1, ros2_type, to_ros2
@@ -369,9 +370,6 @@ def open_recording(path: str | Path, *, shown: object = None, what: str = "canno
     return _Mcap(p, shown, what)
 
 
-_YamlLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-
-
 def open_indexed(path: str | Path, *, shown: object = None, what: str = "cannot read bag"
                  ) -> Recording:
     """:func:`open_recording`, but a rosbag2 directory whose ``metadata.yaml`` names one MCAP
@@ -394,8 +392,7 @@ def _one_mcap(bag_dir: Path) -> Path | None:
     """The one ``.mcap`` file a rosbag2 directory's ``metadata.yaml`` names, if it names one
     that exists (None for anything else, unreadable metadata included)."""
     try:
-        meta = yaml.load((bag_dir / "metadata.yaml").read_text(encoding="utf-8"),
-                         Loader=_YamlLoader)
+        meta = yamlio.load((bag_dir / "metadata.yaml").read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, yaml.YAMLError):
         return None
     info = meta.get("rosbag2_bagfile_information") if isinstance(meta, dict) else None

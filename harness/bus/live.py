@@ -17,22 +17,20 @@ name, ``foxglove.websocket.v1`` (Lichtblick), connect as well as Foxglove's.
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from typing import Any
 
 from harness.bus.bus import Envelope, Qos
+from harness.bus.liveconfig import DEFAULT_PORT, LiveConfig
 from harness.bus.recorder import cdr_bytes, topic_meta
 from harness.bus.wsfront import SubprotocolFront
 from harness.errors import LiveViewError
 
 __all__ = ["DEFAULT_PORT", "LATCHED_KEEP", "LiveConfig", "LiveView", "Pacer"]
 
-DEFAULT_PORT = 8765
 # After a client's first subscription, --foxglove-wait starts the run once no new subscription
 # came for this long.
 SETTLE_S = 0.5
@@ -42,35 +40,6 @@ SETTLE_S = 0.5
 LATCHED_KEEP = 64
 
 Notice = Callable[[str], None]
-
-
-@dataclass(frozen=True)
-class LiveConfig:
-    """What ``--foxglove`` asks for.
-
-    ``host``/``port``: where the WebSocket server listens (port 0: any free port).
-    ``wait_s``: hold the first tick until a client subscribes to a topic (and its other
-    subscriptions settled: SETTLE_S without a new one), at most this long
-    (None: do not wait). ``rate``: pace the run so simulated time goes at most ``rate`` times
-    as fast as the wall clock (None: as fast as it computes)."""
-
-    host: str = "127.0.0.1"
-    port: int = DEFAULT_PORT
-    wait_s: float | None = None
-    rate: float | None = None
-
-    def __post_init__(self) -> None:
-        if not self.host.strip():
-            raise LiveViewError("--foxglove-host: must not be empty")
-        if isinstance(self.port, bool) or not isinstance(self.port, int) \
-                or not 0 <= self.port <= 65535:
-            raise LiveViewError(f"--foxglove-port: must be a port number 0..65535, "
-                                f"got {self.port!r}")
-        if self.wait_s is not None and not (math.isfinite(self.wait_s) and self.wait_s >= 0):
-            raise LiveViewError(f"--foxglove-wait: must be >= 0 seconds, got {self.wait_s!r}")
-        if self.rate is not None and not (math.isfinite(self.rate) and self.rate > 0):
-            raise LiveViewError(f"--rate: must be > 0 (simulated seconds per wall-clock "
-                                f"second), got {self.rate!r}")
 
 
 class Pacer:

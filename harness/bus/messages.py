@@ -34,6 +34,7 @@ __all__ = [
     "msg_type",
     "odometry",
     "odometry_packer",
+    "quaternion_xyzw",
     "serialize",
     "split_ns",
     "tf_message",
@@ -180,7 +181,9 @@ def _vec3(v: _FloatVec) -> Any:
     return _Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
 
 
-def _quat_xyzw(q: _FloatVec) -> Any:
+def quaternion_xyzw(q: _FloatVec) -> Any:
+    """A ``geometry_msgs/Quaternion`` of the (x, y, z, w) quaternion ``q`` (harness.geometry
+    converts from MuJoCo's (w, x, y, z))."""
     return _Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
 
 
@@ -190,7 +193,7 @@ def twist(linear: Sequence[float], angular: Sequence[float]) -> Any:
 
 def transform_stamped(ns: int, parent: str, child: str, translation: _FloatVec,
                       rotation_xyzw: _FloatVec) -> Any:
-    tf = _Transform(translation=_vec3(translation), rotation=_quat_xyzw(rotation_xyzw))
+    tf = _Transform(translation=_vec3(translation), rotation=quaternion_xyzw(rotation_xyzw))
     return _TransformStamped(header=header(ns, parent), child_frame_id=child, transform=tf)
 
 
@@ -217,7 +220,7 @@ def odometry(ns: int, odom_frame: str, child_frame: str, position: Sequence[floa
              orientation_xyzw: Sequence[float], linear: Sequence[float],
              angular: Sequence[float]) -> Any:
     point = _Point(x=float(position[0]), y=float(position[1]), z=float(position[2]))
-    pose = _Pose(position=point, orientation=_quat_xyzw(orientation_xyzw))
+    pose = _Pose(position=point, orientation=quaternion_xyzw(orientation_xyzw))
     cov = np.zeros(36, dtype=np.float64)
     return _Odometry(
         header=header(ns, odom_frame),

@@ -35,6 +35,7 @@ from mcap.reader import make_reader
 from mcap.records import Channel, Chunk, Footer, Header, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 
+from harness import yamlio
 from harness.bus.bagfile import (
     ChunkPolicy,
     McapBagWriter,
@@ -305,7 +306,7 @@ def _collect(on_message: Callable[[int, _Topic, Message], None] | None = None
 
 def _metadata_agrees(bag_dir: Path, mcap: Path, scan: _Scan) -> bool:
     try:
-        meta = yaml.safe_load((bag_dir / "metadata.yaml").read_text(encoding="utf-8"))
+        meta = yamlio.load((bag_dir / "metadata.yaml").read_text(encoding="utf-8"))
         info = meta["rosbag2_bagfile_information"]
         counts = {t["topic_metadata"]["name"]: int(t["message_count"])
                   for t in info["topics_with_message_count"]}

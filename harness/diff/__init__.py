@@ -7,23 +7,28 @@
 * :mod:`harness.diff.tolerance`: ``--tolerance TOPIC_GLOB[:FIELD_GLOB]=ABS[,REL]``;
 * :mod:`harness.diff.metrics`: both runs' metrics through the baseline comparison engine;
 * :func:`render_diff` / :func:`write_diff` (:mod:`harness.diff.html`): the page.
-"""
+
+Names are imported from their submodules on first use (:mod:`harness._lazy`)."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
-from harness.diff.core import diff_runs
-from harness.diff.result import (
-    DiffResult,
-    Divergence,
-    FieldDiff,
-    MetricDelta,
-    RunInfo,
-    TopicDiff,
-    Worst,
-)
-from harness.diff.tolerance import Tolerance, parse_tolerance
+from harness._lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from harness.diff.core import diff_runs
+    from harness.diff.html import render_diff, write_diff
+    from harness.diff.result import (
+        DiffResult,
+        Divergence,
+        FieldDiff,
+        MetricDelta,
+        RunInfo,
+        TopicDiff,
+        Worst,
+    )
+    from harness.diff.tolerance import Tolerance, parse_tolerance
 
 __all__ = [
     "DiffResult",
@@ -40,10 +45,18 @@ __all__ = [
     "write_diff",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    if name in ("render_diff", "write_diff"):
-        from harness.diff import html
-
-        return getattr(html, name)
-    raise AttributeError(f"module 'harness.diff' has no attribute {name!r}")
+_WHERE = {
+    "diff_runs": "core",
+    "DiffResult": "result",
+    "Divergence": "result",
+    "FieldDiff": "result",
+    "MetricDelta": "result",
+    "RunInfo": "result",
+    "TopicDiff": "result",
+    "Worst": "result",
+    "Tolerance": "tolerance",
+    "parse_tolerance": "tolerance",
+    "render_diff": "html",
+    "write_diff": "html",
+}
+__getattr__, __dir__ = lazy_exports(__name__, _WHERE, globals())

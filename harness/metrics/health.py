@@ -17,7 +17,7 @@ plain inputs to :class:`HealthResult` rows; :func:`health_gates` wires them to
   messages or between the last one and the end of the run.
 * TF tree (``tf_tree``, or ``tf_tree:<ns>`` for a namespaced ``<ns>/tf``): the recorded
   transforms form one valid tree as tf2 needs it — every frame one parent, no frame both
-  static and dynamic, no cycle, frame ids tf2 accepts (:mod:`harness.wiring.tree`), no frame
+  static and dynamic, no cycle, frame ids tf2 accepts (:mod:`harness.tf_tree`), no frame
   published twice with the same stamp (two sources; tf2 drops the second as repeated data)
   and no static frame given two different transforms.
 """
@@ -33,7 +33,7 @@ import pandas as pd
 
 from harness.frames import Frames
 from harness.metrics.types import HealthResult
-from harness.wiring.tree import Edge, roots, tree_problems
+from harness.tf_tree import Edge, roots, tree_problems
 
 __all__ = [
     "OutputSpec",

@@ -1,5 +1,15 @@
-"""Baselines and regression comparison (named so it does not clash with ``baselines/``)."""
+"""Baselines and regression comparison (named so it does not clash with ``baselines/``).
 
+Names are imported from their submodules on first use (:mod:`harness._lazy`)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from harness._lazy import lazy_exports
+
+# Imported now, not on first use: the function ``compare`` has the name of its submodule,
+# which a lazy lookup would find first once anything imported ``harness.regression.compare``.
 from harness.regression.compare import (
     DEFAULT_TOLERANCES,
     Comparison,
@@ -7,16 +17,18 @@ from harness.regression.compare import (
     compare,
     tolerance_for,
 )
-from harness.regression.config import comparable_config, config_differences, with_defaults
-from harness.regression.store import (
-    Baseline,
-    BaselineError,
-    BaselineMetric,
-    baseline_path,
-    load_baseline,
-    save_baseline,
-)
-from harness.regression.verdict import Verdict, absolute_failures, decide
+
+if TYPE_CHECKING:
+    from harness.regression.config import comparable_config, config_differences, with_defaults
+    from harness.regression.store import (
+        Baseline,
+        BaselineError,
+        BaselineMetric,
+        baseline_path,
+        load_baseline,
+        save_baseline,
+    )
+    from harness.regression.verdict import Verdict, absolute_failures, decide
 
 __all__ = [
     "DEFAULT_TOLERANCES",
@@ -37,3 +49,19 @@ __all__ = [
     "tolerance_for",
     "with_defaults",
 ]
+
+_WHERE = {
+    "comparable_config": "config",
+    "config_differences": "config",
+    "with_defaults": "config",
+    "Baseline": "store",
+    "BaselineError": "store",
+    "BaselineMetric": "store",
+    "baseline_path": "store",
+    "load_baseline": "store",
+    "save_baseline": "store",
+    "Verdict": "verdict",
+    "absolute_failures": "verdict",
+    "decide": "verdict",
+}
+__getattr__, __dir__ = lazy_exports(__name__, _WHERE, globals())

@@ -1,5 +1,9 @@
 """The run's action graphs drawn as SVG, one diagram per graph, without any script.
 
+A run writes its graphs into the run directory as it starts (:data:`GRAPHS_JSON`, the JSON of
+``srr graph --format json``, and :data:`GRAPHS_MERMAID`, the Mermaid text of ``srr graph``):
+the report reads them there (:func:`read_graphs`) and never builds a simulation.
+
 Layout: a node's column is its depth, the longest chain of connections (execution and data)
 leading to it; nodes keep their creation order inside a column. Execution edges are solid,
 data edges dashed; hovering an edge or a node shows its attributes.
@@ -7,13 +11,22 @@ data edges dashed; hovering an edge or a node shows its attributes.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
+from harness.atomic import write_text_atomic
 from harness.report.svg import Svg
 
-__all__ = ["GraphDiagram", "graph_diagrams", "layout_depths"]
+__all__ = ["GRAPHS_JSON", "GRAPHS_MERMAID", "GraphDiagram", "RunGraphs", "graph_diagrams",
+           "layout_depths", "read_graphs", "write_graphs"]
+
+#: The run's action graphs as JSON (``srr graph --format json``), in the run directory.
+GRAPHS_JSON = "graphs.json"
+#: The same graphs as a Mermaid flowchart (``srr graph``).
+GRAPHS_MERMAID = "graphs.mmd"
 
 NODE_W = 150.0  # narrowest node; wider when a name needs it
 NODE_H = 40.0
@@ -22,6 +35,41 @@ ROW_GAP = 14.0
 PAD = 12.0
 _MAX_CHARS = 34
 _CHAR_W = 7.2  # bold 12 px
+
+
+@dataclass(frozen=True)
+class RunGraphs:
+    """A run's action graphs as ``srr graph`` prints them: ``json_text`` (the stage dump)
+    and ``mermaid`` (the flowchart)."""
+
+    json_text: str
+    mermaid: str
+
+    def stage(self) -> dict[str, Any]:
+        """The stage dump as a dict (:func:`graph_diagrams` draws it); raises ValueError
+        when the JSON text is not an object."""
+        data = json.loads(self.json_text)
+        if not isinstance(data, dict):
+            raise ValueError("expected a JSON object")
+        return data
+
+
+def write_graphs(run_dir: Path, graphs: RunGraphs) -> None:
+    """Write :data:`GRAPHS_JSON` and :data:`GRAPHS_MERMAID` into ``run_dir`` (atomically)."""
+    write_text_atomic(run_dir / GRAPHS_JSON, graphs.json_text)
+    write_text_atomic(run_dir / GRAPHS_MERMAID, graphs.mermaid)
+
+
+def read_graphs(run_dir: Path) -> RunGraphs | None:
+    """The graphs a run wrote into ``run_dir``; None for a run directory without
+    :data:`GRAPHS_JSON` (one written before srr recorded its graphs). Raises OSError or
+    UnicodeDecodeError when a file is there but cannot be read."""
+    path = run_dir / GRAPHS_JSON
+    if not path.is_file():
+        return None
+    mermaid = run_dir / GRAPHS_MERMAID
+    return RunGraphs(path.read_text(encoding="utf-8"),
+                     mermaid.read_text(encoding="utf-8") if mermaid.is_file() else "")
 
 
 @dataclass(frozen=True)

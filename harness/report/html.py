@@ -14,9 +14,8 @@ inline.
 
 from __future__ import annotations
 
-import contextlib
 import shlex
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,7 +28,7 @@ from harness.frames import Frames
 from harness.metrics.safety import NEAR_AT
 from harness.regression.verdict import GOAL_REACHED, GOAL_REACHED_AT
 from harness.report.data import RunData, load_run, metric_windows
-from harness.report.graphs import graph_diagrams
+from harness.report.graphs import GRAPHS_JSON, RunGraphs, graph_diagrams, read_graphs
 from harness.report.images import IMAGE_TYPES, Keyframe, keyframes
 from harness.report.plots import (
     Highlight,
@@ -43,7 +42,11 @@ from harness.report.templates import template
 from harness.scenario import Scenario
 from harness.summary import replay_note
 
-__all__ = ["fmt_value", "fmt_windows", "render_report", "write_report"]
+__all__ = ["GraphRebuild", "fmt_value", "fmt_windows", "render_report", "write_report"]
+
+#: The action graphs of a run directory without ``graphs.json``, from its scenario, summary
+#: and directory (``harness.api`` builds the scene again; the report itself never does).
+GraphRebuild = Callable[[Scenario, Mapping[str, Any], Path], RunGraphs]
 
 REPORT_NAME = "report.html"
 MAX_REASONS = 3
@@ -192,30 +195,26 @@ def _highlights(data: RunData, names: Sequence[str]) -> dict[str, Highlight]:
     return out
 
 
-def _graphs(data: RunData) -> tuple[list[Any], str, str | None]:
-    """(diagrams, mermaid text, problem) for the run's scenario."""
-    if data.scenario is None:
-        return [], "", None
-    from harness.engine import Simulation
-    from harness.graph import stage_to_dict, stage_to_mermaid
-
-    srr_gt = data.summary.get("srr_gt")
-    # Model and world files are named relative to the scenario file the run was started
-    # from (the run's own scenario.yaml keeps those paths as written), as for a replay.
-    source = str(data.summary.get("scenario_file") or data.run_dir / "scenario.yaml")
-    sim = None
+def _graphs(data: RunData, rebuild: GraphRebuild | None) -> tuple[list[Any], str, str | None]:
+    """(diagrams, mermaid text, problem): the graphs the run wrote into its directory; for a
+    run directory from before srr wrote them, ``rebuild``'s (the caller's, which may build
+    the scene again), or none and a note saying so."""
     try:
-        sim = Simulation(data.scenario, srr_gt=srr_gt if isinstance(srr_gt, bool) else None,
-                         source=source)
-        stage = stage_to_dict(sim.stage)
-        mermaid = stage_to_mermaid(sim.stage)
-    except Exception as err:  # a plug-in that no longer imports must not hide the report
-        return [], "", f"action graphs could not be rebuilt: {err}"
-    finally:
-        if sim is not None:
-            with contextlib.suppress(Exception):  # nothing ran: nothing worth reporting
-                sim.close()
-    return graph_diagrams(stage), mermaid, None
+        found = read_graphs(data.run_dir)
+        if found is None:
+            if data.scenario is None:
+                return [], "", None
+            if rebuild is None:
+                return [], "", (f"action graphs: this run directory has no {GRAPHS_JSON} "
+                                "(written by runs since srr recorded its graphs)")
+            try:
+                found = rebuild(data.scenario, data.summary, data.run_dir)
+            except Exception as err:  # a plug-in that no longer imports must not hide the report
+                return [], "", f"action graphs could not be rebuilt: {err}"
+        stage = found.stage()
+    except (OSError, ValueError) as err:  # a damaged graphs file costs the graphs, not the report
+        return [], "", f"{data.run_dir / GRAPHS_JSON}: could not be read: {err}"
+    return graph_diagrams(stage), found.mermaid, None
 
 
 @dataclass
@@ -280,12 +279,15 @@ def _exact_command(data: RunData) -> str:
 
 
 def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
-                  scenario: Scenario | None = None, frames: Frames | None = None) -> str:
+                  scenario: Scenario | None = None, frames: Frames | None = None,
+                  rebuild_graphs: GraphRebuild | None = None) -> str:
     """The HTML text of a run directory's report.
 
     ``summary``, ``scenario`` and ``frames`` may be passed when the caller already has them
-    (``run_scenario`` does); otherwise they are read from ``run_dir``. Raises
-    :class:`SrrError` when ``run_dir`` is not a run directory."""
+    (``run_scenario`` does); otherwise they are read from ``run_dir``. The action graphs are
+    the run's ``graphs.json``; for a run directory without one, ``rebuild_graphs`` (given by
+    :mod:`harness.api`, which can build the scene) supplies them, or the page says they are
+    missing. Raises :class:`SrrError` when ``run_dir`` is not a run directory."""
     data = load_run(Path(run_dir), summary=summary, scenario=scenario, frames=frames)
     s = data.summary
     verdict = str(s.get("verdict", "INVALID"))
@@ -301,7 +303,7 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
     panels = time_panels(data, hl)
     focus = [p for g in focus_groups for p in panels if p.group == g]
     others = [p for p in panels if p not in focus]
-    graphs, mermaid, graph_problem = _graphs(data)
+    graphs, mermaid, graph_problem = _graphs(data, rebuild_graphs)
     kf_rows, kf_problem = _keyframes(data)
     problems = list(data.problems) + [p for p in (graph_problem, kf_problem) if p]
 
@@ -403,10 +405,12 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
 
 
 def write_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
-                 scenario: Scenario | None = None, frames: Frames | None = None) -> Path:
+                 scenario: Scenario | None = None, frames: Frames | None = None,
+                 rebuild_graphs: GraphRebuild | None = None) -> Path:
     """Render and write ``<run_dir>/report.html`` (atomically); returns its path."""
     run_dir = Path(run_dir)
-    text = render_report(run_dir, summary=summary, scenario=scenario, frames=frames)
+    text = render_report(run_dir, summary=summary, scenario=scenario, frames=frames,
+                         rebuild_graphs=rebuild_graphs)
     path = run_dir / REPORT_NAME
     write_text_atomic(path, text)
     return path

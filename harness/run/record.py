@@ -28,13 +28,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from harness import runlock, runmarker
-from harness.builders.camera_record import unrecorded_topics
+from harness import runlock, runmarker, yamlio
 from harness.bus import Bus
 from harness.bus.bagfile import ChunkPolicy
 from harness.bus.live import LiveView
+from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
 from harness.errors import InvalidRunError, RunStopped, SrrError
 from harness.frames import Frames
@@ -42,10 +40,12 @@ from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.output import ROS2_OUTPUT, OutputKind
 from harness.regression import baseline_path, save_baseline
+from harness.report.graphs import RunGraphs, write_graphs
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.run.baselines import baseline_name, baselines_dir, scene_config
 from harness.run.facts import combined_digest, sut_endpoints, topic_table, versions
+from harness.run.graphs import rebuild_graphs
 from harness.run.judge import judge
 from harness.run.summary import RunSummary, TopicRow
 from harness.scenario import Scenario, scenario_to_mapping
@@ -87,6 +87,7 @@ class Loop:
     scene_files: Mapping[str, str] | None = None  # model files' digests by field
     world_map: Any = None  # a world file's static geometry, for the report's map
     replay_of: Mapping[str, Any] | None = None  # what a replay plays back
+    graphs: RunGraphs | None = None  # written into the run directory (graphs.json)
     output: OutputKind = ROS2_OUTPUT  # what the recorder writes (harness.output)
 
 
@@ -168,11 +169,13 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
 
 def _open_recorder(scenario: Scenario, loop: Loop, run_dir: Path, *, source: str,
                    command: str) -> Any:
-    """The in-progress marker and the resolved ``scenario.yaml``, then the recorder (not yet
-    opened) of the loop's output."""
+    """The in-progress marker, the resolved ``scenario.yaml`` and the action graphs, then the
+    recorder (not yet opened) of the loop's output."""
     runmarker.mark(run_dir, "recording", scenario_file=source, command=command)
     (run_dir / "scenario.yaml").write_text(
-        yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
+        yamlio.dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
+    if loop.graphs is not None:
+        write_graphs(run_dir, loop.graphs)
     rec = scenario.recording
     return loop.output.recorder(run_dir / "bag", ChunkPolicy(
         max_bytes=round(rec.chunk_mb * MB), max_span_ns=round(rec.chunk_s * 1e9),
@@ -292,7 +295,8 @@ def _write_outputs(scenario: Scenario, summary: RunSummary, run_dir: Path,
     summary.write(run_dir)
     runmarker.clear(run_dir)
     try:
-        write_report(run_dir, summary=data, scenario=scenario, frames=frames)
+        write_report(run_dir, summary=data, scenario=scenario, frames=frames,
+                     rebuild_graphs=rebuild_graphs)
     except SrrError:
         raise
     except Exception as err:

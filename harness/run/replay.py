@@ -14,6 +14,7 @@ from harness.diskspace import check_free_space, disk_free
 from harness.errors import ScenarioError
 from harness.regression import comparable_config, config_differences
 from harness.replay import Playback, Replay
+from harness.report.graphs import read_graphs
 from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
@@ -75,11 +76,15 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         "run_dir": str(src.resolve()), "digest": summary.digest, "mode": "open-loop",
         "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
         "overrides": list(overrides), "withheld": sorted(withheld)}
+    try:  # the recorded scene's graphs; without them the report rebuilds them
+        graphs = read_graphs(src)
+    except (OSError, ValueError):
+        graphs = None
     loop = Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
                 summary.srr_gt, command=command, warnings=tuple(warnings),
                 scene_files=dict(summary.scene_files or {}), replay_of=replay_of,
                 world_map=summary.world_map,  # the recorded scene, as it was
-                output=playback.output)
+                output=playback.output, graphs=graphs)
     return record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.ticks or scenario.n_ticks), progress=progress,
                    baselines=baselines, started=started)

@@ -8,6 +8,7 @@ from harness import runlock
 from harness.bus.bagread import ros1_recording
 from harness.errors import BagError
 from harness.report.html import write_report
+from harness.run.graphs import rebuild_graphs
 from harness.scenario import load_scenario
 from harness.scoring import scenario_frames
 from harness.summary import read_summary
@@ -26,4 +27,5 @@ def report(run_dir: str | Path) -> Path:
     if not (run / "bag" / "metadata.yaml").is_file() and ros1_recording(run / "bag") is None:
         raise BagError(f"{run / 'bag'}: metadata.yaml: missing (not a rosbag2 directory)")
     frames = scenario_frames(scenario, run / "bag")
-    return write_report(run, summary=summary, scenario=scenario, frames=frames)
+    return write_report(run, summary=summary, scenario=scenario, frames=frames,
+                        rebuild_graphs=rebuild_graphs)

@@ -11,14 +11,15 @@ from pathlib import Path
 from typing import Any
 
 from harness.atomic import write_json_atomic
-from harness.builders.camera_record import recorded_cameras
 from harness.bus.live import LiveConfig, LiveView
+from harness.camera_topics import recorded_cameras
 from harness.diskspace import FreeSpace, check_free_space, disk_free, large_bag_notice
 from harness.engine import Simulation
 from harness.errors import ScenarioError, SrrError
 from harness.output import check_output_topics, decide_output
 from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir, reproduce_command
+from harness.run.graphs import graphs_of
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
 from harness.scenario import Scenario, SutSpec, rate_warnings
 from harness.scoring import check_scoring
@@ -69,6 +70,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     sim = Simulation(with_ros2_bridge(scenario, run_dir), source=source)
     try:
+        graphs = graphs_of(sim)  # as built, before any tick
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         if live is not None and output.ros == 1:
             raise SrrError(f"--foxglove: the live view serves ROS 2 messages, and this run "
@@ -95,7 +97,8 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     loop = Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
                 sim.srr_gt, command=reproduce_command(source, scenario, run_dir),
                 warnings=tuple(warnings), graph_paths=tuple(sim.graph_paths),
-                scene_files=dict(sim.world.scene_files), world_map=world_map, output=output)
+                scene_files=dict(sim.world.scene_files), world_map=world_map, output=output,
+                graphs=graphs)
     try:
         return record(scenario, loop, source=source, run_dir=run_dir,
                        n_ticks=scenario.n_ticks, progress=progress, baselines=baselines,

@@ -18,7 +18,8 @@ from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
 import yaml
 
-from harness.errors import ScenarioError, SrrError
+from harness import yamlio
+from harness.errors import ScenarioError, SrrError, reason
 from harness.scenario.schema import (
     BUILTIN_JOINTS,
     FORMAT_VERSION,
@@ -68,21 +69,22 @@ class _Origins:
 
 
 def _read_yaml(path: Path, shown: str, field: str = "") -> dict[str, Any]:
-    if not path.exists():
-        raise ScenarioError(shown, field, "file not found")
-    if path.is_dir():
-        raise ScenarioError(shown, field, "is a directory, not a scenario file")
     try:
+        if not path.exists():
+            raise ScenarioError(shown, field, "file not found")
+        if path.is_dir():
+            raise ScenarioError(shown, field, "is a directory, not a scenario file")
         text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise ScenarioError(shown, field, f"cannot read: {err}") from err
+    except (OSError, ValueError) as err:  # a name too long, a NUL byte, no permission
+        why = err.strerror if isinstance(err, OSError) and err.strerror else reason(err)
+        raise ScenarioError(shown, field, f"cannot read: {why}") from err
     try:
-        data = yaml.safe_load(text)
+        data = yamlio.load(text)
+    except yamlio.DuplicateKeyError as err:
+        raise ScenarioError(shown, err.field, f"set twice (lines {err.first_line} and "
+                            f"{err.line}): remove one") from err
     except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
-        problem = getattr(err, "problem", None) or str(err).splitlines()[0]
-        raise ScenarioError(shown, "", f"YAML syntax error at {where}{problem}") from err
+        raise ScenarioError(shown, "", f"YAML syntax error at {yamlio.describe(err)}") from err
     if data is None:
         raise ScenarioError(shown, "", "file is empty")
     if not isinstance(data, dict):
@@ -108,9 +110,11 @@ def _expand_includes(path: Path, data: dict[str, Any], origins: _Origins) -> dic
             raise ScenarioError(shown, "include", "expected a file name or a list of file names")
     merged: dict[str, Any] = {}
     for i, rel in enumerate(includes):
+        field = "include" if isinstance(raw, str) else f"include[{i}]"
+        if not rel or "\0" in rel:
+            raise ScenarioError(shown, field, f"not a file name: {rel!r}")
         inc_path = (path.parent / rel).resolve()
         inc_shown = str(path.parent / rel)
-        field = "include" if isinstance(raw, str) else f"include[{i}]"
         inc = _read_yaml(inc_path, inc_shown, field)
         if "include" in inc:
             raise ScenarioError(inc_shown, "include", "nested includes are not supported")
@@ -192,9 +196,10 @@ def parse_override(text: str) -> tuple[str, Any]:
     if not sep or not key:
         raise ScenarioError("--set", text, "expected KEY=VALUE")
     try:
-        parsed = yaml.safe_load(value) if value.strip() else ""
+        parsed = yamlio.load(value) if value.strip() else ""
     except yaml.YAMLError as err:
-        raise ScenarioError("--set", key, f"value is not valid YAML: {value!r}") from err
+        raise ScenarioError("--set", key, f"value is not valid YAML ({yamlio.describe(err)}): "
+                            f"{value!r}") from err
     return key, parsed
 
 
@@ -261,6 +266,11 @@ def _typename(tp: Any) -> str:
     return str(tp)
 
 
+#: The least value a field that must be > 0 takes: lengths, rates and times below it are
+#: zero in practice (MuJoCo refuses geom sizes under 1e-15).
+_TINY = 1e-9
+
+
 class _Validator:
     def __init__(self, origins: _Origins) -> None:
         self.origins = origins
@@ -295,7 +305,9 @@ class _Validator:
             return raw
         if tp is bool:
             if not isinstance(raw, bool):
-                self.fail(path, f"expected true or false, got {raw!r}")
+                hint = " (YAML 1.2 booleans are true and false only)" if isinstance(
+                    raw, str) and raw.lower() in ("yes", "no", "on", "off", "y", "n") else ""
+                self.fail(path, f"expected true or false, got {raw!r}{hint}")
             return raw
         if tp is int:
             if isinstance(raw, bool) or not isinstance(raw, int):
@@ -312,6 +324,8 @@ class _Validator:
         if tp is str:
             if not isinstance(raw, str):
                 self.fail(path, f"expected a string, got {raw!r}")
+            if "\0" in raw:  # C libraries (MuJoCo) and file systems end a name there
+                self.fail(path, f"contains a NUL character: {raw!r}")
             return raw
         raise TypeError(f"schema type {tp!r} at {path} is not supported by the loader")
 
@@ -322,6 +336,8 @@ class _Validator:
         lo, hi, lo_open = rng
         if lo is not None and (raw <= lo if lo_open else raw < lo):
             self.fail(path, f"must be {'>' if lo_open else '>='} {lo:g}, got {raw!r}")
+        if lo == 0 and lo_open and raw < _TINY:  # a size of 5e-324 m is 0 to MuJoCo
+            self.fail(path, f"must be > 0 (at least {_TINY:g}), got {raw!r}")
         if hi is not None and raw > hi:
             self.fail(path, f"must be <= {hi:g}, got {raw!r}")
 
@@ -521,7 +537,7 @@ def _check_world(sc: Scenario, v: _Validator) -> None:
     """A world file: exactly one of ``mjcf``/``urdf``; with ``mode: replace`` no procedural
     field set to anything but its default (it would be silently unused); a valid prim that no
     robot or camera lies in (or holds)."""
-    from harness.sim.prims import check_prim_path
+    from harness.scenario.prims import check_prim_path
 
     model = sc.world.model
     if model is None:
@@ -562,8 +578,14 @@ def _check_robots(sc: Scenario, v: _Validator) -> None:
         validate_frame_id,
         validate_namespace,
     )
+    from harness.scenario.prims import check_prim_path
 
     for i, robot in enumerate(sc.robots):
+        if robot.articulation_prim:
+            try:
+                check_prim_path(robot.prim)
+            except SrrError as err:
+                v.fail(f"robots[{i}].articulation_prim", str(err))
         model = robot.model_file
         if model is not None:
             if (model.urdf is None) == (model.mjcf is None):
@@ -619,6 +641,8 @@ def _check_builtin_joints(v: _Validator, where: str, robot: RobotSpec) -> None:
 
 def _check_cameras(sc: Scenario, v: _Validator) -> None:
     """Unique names and resolutions in range; no camera on another camera's or a robot's prim."""
+    from harness.scenario.prims import check_prim_path
+
     cams: dict[str, int] = {}
     prims: dict[str, str] = {r.prim: f"robots[{i}] ({r.name})"
                              for i, r in enumerate(sc.robots) if r.enabled}
@@ -629,9 +653,12 @@ def _check_cameras(sc: Scenario, v: _Validator) -> None:
                    f"cameras[{j}], from {v.origins.file_for(f'cameras[{j}]')})")
         cams[cam.name] = i
         _check_name(v, f"cameras[{i}].name", cam.name)
-        w, h = cam.resolution
-        if not (1 <= w <= 8192 and 1 <= h <= 8192):
-            v.fail(f"cameras[{i}].resolution", f"must be within 1..8192, got {w}x{h}")
+        if cam.camera_prim:
+            try:
+                check_prim_path(cam.prim)
+            except SrrError as err:
+                v.fail(f"cameras[{i}].camera_prim", str(err))
+        _check_resolution(v, f"cameras[{i}].resolution", cam.resolution)
         _check_record(v, f"cameras[{i}]", cam.record,
                       {s: f"{cam.name}_{s}" for s in ("rgb", "depth") if s in cam.outputs},
                       f"cameras[{i}].outputs has no '{{stream}}'", cam.resolution)
@@ -642,6 +669,12 @@ def _check_cameras(sc: Scenario, v: _Validator) -> None:
                    f"{prims[cam.prim]}")
         prims[cam.prim] = f"cameras[{i}] ({cam.name})"
     _check_rtsp(sc, v)
+
+
+def _check_resolution(v: _Validator, path: str, resolution: tuple[int, int]) -> None:
+    w, h = resolution
+    if not (1 <= w <= 8192 and 1 <= h <= 8192):
+        v.fail(path, f"must be within 1..8192, got {w}x{h}")
 
 
 _MOUNT_PATH = re.compile(r"^(/[A-Za-z0-9._~-]+)+$")
@@ -677,6 +710,7 @@ def _check_robot_cameras(sc: Scenario, v: _Validator) -> None:
         if cam is None:
             continue
         where = f"robots[{i}].sensors.camera"
+        _check_resolution(v, f"{where}.resolution", cam.resolution)
         if not cam.graph and cam.record != CameraRecordSpec():
             v.fail(f"{where}.record", "has no effect with graph: false (the graphs: builder "
                    "that publishes the camera decides what it records)")
@@ -923,7 +957,7 @@ def _name_rule(field: str) -> Callable[[str], None] | None:
 def _check_names(v: _Validator, obj: Any, path: str) -> None:
     """Every topic field must be a valid ROS 2 topic name and every frame field a frame id
     tf2 accepts (see :func:`_name_rule`)."""
-    from harness.bus.names import FrameIdError, TopicNameError
+    from harness.bus.names import FrameIdError, TopicNameError, validate_topic
 
     if isinstance(obj, tuple):
         for i, item in enumerate(obj):
@@ -940,12 +974,27 @@ def _check_names(v: _Validator, obj: Any, path: str) -> None:
                 rule(value)
             except (TopicNameError, FrameIdError) as err:
                 v.fail(sub, str(err))
+        elif f.name in _TOPIC_LISTS or f.name in _TOPIC_KEYED:
+            names = value if f.name in _TOPIC_LISTS else tuple(value)
+            for i, name in enumerate(names):
+                try:
+                    validate_topic(name)
+                except TopicNameError as err:
+                    v.fail(f"{sub}[{i}]" if f.name in _TOPIC_LISTS else f"{sub}.{name}",
+                           str(err))
         else:
             _check_names(v, value, sub)
 
+
+#: Fields that hold a list of topic names, and mappings keyed by topic names.
+_TOPIC_LISTS = frozenset({"marker_topics"})
+_TOPIC_KEYED = frozenset({"expected_rates", "sut_outputs"})
+
 def _check_name(v: _Validator, path: str, name: str) -> None:
-    if not name or not all(c.isalnum() or c == "_" for c in name) or name[0].isdigit():
-        v.fail(path, f"must be letters, digits and '_' and not start with a digit, got {name!r}")
+    if not name or not all(c.isascii() and (c.isalnum() or c == "_") for c in name) \
+            or name[0].isdigit():  # names become prim paths and ROS names: ASCII only
+        v.fail(path, f"must be letters, digits and '_' and not start with a digit (ASCII "
+               f"only), got {name!r}")
 
 
 def validate_dataclass(cls: type[T], raw: Any, file: str, field: str) -> T:

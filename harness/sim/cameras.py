@@ -19,8 +19,9 @@ from collections.abc import Sequence
 import mujoco
 import numpy as np
 
+from harness.geometry import FloatArray, quat_wxyz_conj
 from harness.scenario.schema import CameraSpec
-from harness.sim.geometry import FloatArray, quat_conj, quat_from_mat, quat_from_rpy_deg, quat_mul
+from harness.sim.mjquat import quat_wxyz_from_mat_mj, quat_wxyz_from_rpy_deg_mj, quat_wxyz_mul_mj
 from harness.sim.prims import PrimKind, PrimTable
 
 __all__ = [
@@ -35,7 +36,7 @@ __all__ = [
 
 # Columns: the MuJoCo camera's x (right), y (up), z (backwards) axes written in the world-
 # convention camera frame (+X forward, +Y left, +Z up).
-Q_MJ_IN_WORLD_CONVENTION: FloatArray = quat_from_mat(
+Q_MJ_IN_WORLD_CONVENTION: FloatArray = quat_wxyz_from_mat_mj(
     np.array([[0.0, 0.0, -1.0],
               [-1.0, 0.0, 0.0],
               [0.0, 1.0, 0.0]])
@@ -44,7 +45,7 @@ Q_MJ_IN_WORLD_CONVENTION: FloatArray = quat_from_mat(
 # Columns: the ROS optical frame's x (right), y (down), z (forward) axes written in the world-
 # convention camera frame. Its inverse, (w, x, y, z) = (0.5, 0.5, -0.5, 0.5), is seed 001's
 # static <camera> → <camera>_world rotation (quatd [0.5, -0.5, 0.5, 0.5] in IJKR order).
-Q_OPTICAL_IN_WORLD_CONVENTION: FloatArray = quat_from_mat(
+Q_OPTICAL_IN_WORLD_CONVENTION: FloatArray = quat_wxyz_from_mat_mj(
     np.array([[0.0, 0.0, 1.0],
               [-1.0, 0.0, 0.0],
               [0.0, -1.0, 0.0]])
@@ -53,17 +54,17 @@ Q_OPTICAL_IN_WORLD_CONVENTION: FloatArray = quat_from_mat(
 
 def optical_quat(q_world_convention: Sequence[float] | FloatArray) -> FloatArray:
     """ROS optical-frame orientation (+Z forward, +X right, +Y down) of a camera prim."""
-    return quat_mul(q_world_convention, Q_OPTICAL_IN_WORLD_CONVENTION)
+    return quat_wxyz_mul_mj(q_world_convention, Q_OPTICAL_IN_WORLD_CONVENTION)
 
 
 def mj_camera_quat(q_world_convention: Sequence[float] | FloatArray) -> FloatArray:
     """MuJoCo camera orientation for a world-convention camera orientation."""
-    return quat_mul(q_world_convention, Q_MJ_IN_WORLD_CONVENTION)
+    return quat_wxyz_mul_mj(q_world_convention, Q_MJ_IN_WORLD_CONVENTION)
 
 
 def world_convention_quat(q_mj_camera: Sequence[float] | FloatArray) -> FloatArray:
     """World-convention orientation (+X forward, +Z up) of a MuJoCo camera orientation."""
-    return quat_mul(q_mj_camera, quat_conj(Q_MJ_IN_WORLD_CONVENTION))
+    return quat_wxyz_mul_mj(q_mj_camera, quat_wxyz_conj(Q_MJ_IN_WORLD_CONVENTION))
 
 
 def add_fixed_camera(spec: mujoco.MjSpec, camera: CameraSpec, prims: PrimTable) -> str:
@@ -72,7 +73,7 @@ def add_fixed_camera(spec: mujoco.MjSpec, camera: CameraSpec, prims: PrimTable) 
     spec.worldbody.add_camera(
         name=name,
         pos=[float(v) for v in camera.spawn.position],
-        quat=list(mj_camera_quat(quat_from_rpy_deg(camera.spawn.rpy_deg))),
+        quat=list(mj_camera_quat(quat_wxyz_from_rpy_deg_mj(camera.spawn.rpy_deg))),
         fovy=float(camera.fovy_deg),
         resolution=[float(camera.resolution[0]), float(camera.resolution[1])],
     )
@@ -89,7 +90,7 @@ def add_mounted_camera(body: mujoco.MjsBody, mj_name: str, fovy_deg: float,
     body.add_camera(
         name=mj_name,
         pos=[float(v) for v in pos],
-        quat=[float(v) for v in quat_mul(quat, Q_MJ_IN_WORLD_CONVENTION)],
+        quat=[float(v) for v in quat_wxyz_mul_mj(quat, Q_MJ_IN_WORLD_CONVENTION)],
         fovy=float(fovy_deg),
         resolution=[float(resolution[0]), float(resolution[1])],
     )

@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from harness.sim.geometry import FloatArray
+from harness.geometry import FloatArray
 
 __all__ = ["MIN_WIDTH", "SEGMENTS", "Footprint", "geom_footprint", "geom_points"]
 

@@ -3,9 +3,10 @@ shelves and dock inside it, checked before the world is built.
 
 The warehouse's floor is the walled room (``world.size``, centred on the origin) and, with
 ``world.dock.enabled``, the trailer backed up to it (:func:`~harness.sim.warehouse.
-trailer_footprint`). A robot's spawn position, every waypoint of a worker's route and a fixed
-camera's position must lie on it; a shelf's footprint must lie in the room; the trailer's open
-end must be in the room or on its wall (so that the trailer meets a wall and gets a door).
+trailer_footprint`). A robot's spawn position, every waypoint of a robot's or a worker's
+route and a fixed camera's position must lie on it; a shelf's footprint must lie in the room;
+the trailer's open end must be in the room or on its wall (so that the trailer meets a wall
+and gets a door).
 The defaults of ``world.shelves`` and ``world.dock`` are laid out for the default 30 x 20 m
 room, so a smaller ``world.size`` that keeps them is refused here, naming them.
 
@@ -102,6 +103,10 @@ def check_layout(scenario: Scenario, source: str = "<scenario>") -> None:
         for j, (x, y) in enumerate(worker.route):
             if worker.enabled and not _on_floor(world, (x, y)):
                 fail(f"workers[{i}].route[{j}]", f"({x:g}, {y:g}) is {_where(world)}")
+    for name, route in scenario.routes.items():
+        for j, (x, y) in enumerate(route.waypoints):
+            if not _on_floor(world, (x, y)):
+                fail(f"routes.{name}.waypoints[{j}]", f"({x:g}, {y:g}) is {_where(world)}")
     for i, cam in enumerate(scenario.cameras):
         p = cam.spawn.position
         if cam.enabled and not _on_floor(world, p):

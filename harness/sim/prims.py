@@ -9,7 +9,6 @@ the same object (an alias such as the robot root prim for its chassis body).
 from __future__ import annotations
 
 import enum
-import re
 import types
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -17,11 +16,9 @@ from dataclasses import dataclass
 import mujoco
 
 from harness.errors import SimulationError
+from harness.scenario.prims import check_prim_path
 
 __all__ = ["PrimKind", "PrimRef", "PrimTable", "check_prim_path"]
-
-_PRIM_RE = re.compile(r"^(/[A-Za-z0-9_][A-Za-z0-9_.\-]*)+$")
-
 
 class PrimKind(enum.Enum):
     """What a prim is in MuJoCo terms."""
@@ -48,13 +45,6 @@ class PrimRef:
     kind: PrimKind
     id: int
     name: str
-
-
-def check_prim_path(path: str) -> str:
-    """Return ``path`` if it is an absolute prim path (``/World/forklift/body``), else raise."""
-    if not isinstance(path, str) or not _PRIM_RE.match(path):
-        raise SimulationError(f"not a valid prim path: {path!r}")
-    return path
 
 
 class PrimTable:

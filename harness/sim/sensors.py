@@ -26,7 +26,7 @@ import numpy as np
 
 from harness.scenario.schema import ImuSpec, LidarSpec, RobotCameraSpec, RobotSpec
 from harness.sim.cameras import add_mounted_camera
-from harness.sim.geometry import quat_from_rpy_deg, quat_mul, rotate
+from harness.sim.mjquat import quat_wxyz_from_rpy_deg_mj, quat_wxyz_mul_mj, quat_wxyz_rotate_mj
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import RobotBuild
 from harness.sim.robots.paths import ModelSource
@@ -76,8 +76,8 @@ def _mount(spec: mujoco.MjSpec, robot: RobotSpec, build: RobotBuild, kind: str,
     else:
         link = block.link
     off = block.offset
-    pos = pos + rotate(quat, off.position)
-    quat = quat_mul(quat, quat_from_rpy_deg(off.rpy_deg))
+    pos = pos + quat_wxyz_rotate_mj(quat, off.position)
+    quat = quat_wxyz_mul_mj(quat, quat_wxyz_from_rpy_deg_mj(off.rpy_deg))
     off_origin = bool(np.any(np.abs(pos) > 1e-12) or abs(abs(float(quat[0])) - 1.0) > 1e-12)
     if off_origin and block.frame_id == link:
         raise src.error(f"{field}.frame_id", f"the {kind} sits off the origin of link {link!r} "

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from harness.geometry import quat_wxyz_from_yaw
 from harness.scenario.schema import DockSpec, ShelfSpec, WorldSpec
-from harness.sim.geometry import quat_from_yaw
 from harness.sim.prims import PrimKind, PrimTable
 
 __all__ = [
@@ -147,7 +147,7 @@ def _box(body: mujoco.MjsBody, name: str, pos: Sequence[float], half: Sequence[f
          rgba: Sequence[float], *, collide: bool = True, yaw: float = 0.0) -> mujoco.MjsGeom:
     return body.add_geom(
         name=name, type=_BOX, pos=[float(v) for v in pos], size=[float(v) for v in half],
-        quat=list(quat_from_yaw(yaw)), rgba=list(rgba), group=_STATIC_GROUP,
+        quat=list(quat_wxyz_from_yaw(yaw)), rgba=list(rgba), group=_STATIC_GROUP,
         contype=1 if collide else 0, conaffinity=1 if collide else 0,
     )
 
@@ -204,7 +204,7 @@ def _add_shelf(parent: mujoco.MjsBody, index: int, shelf: ShelfSpec, prims: Prim
     """A rack: uprights at most ~2.7 m apart front and back, plus boards every ~0.8 m."""
     name = f"warehouse/shelf_{index}"
     body = parent.add_body(name=name, pos=[shelf.position[0], shelf.position[1], 0.0],
-                           quat=list(quat_from_yaw(math.radians(shelf.yaw_deg))))
+                           quat=list(quat_wxyz_from_yaw(math.radians(shelf.yaw_deg))))
     prims.declare(f"/World/Warehouse/Shelf_{index}", PrimKind.BODY, name)
     length, depth, height = shelf.size
     post = min(0.08, length / 4, depth / 4)
@@ -224,7 +224,7 @@ def _add_shelf(parent: mujoco.MjsBody, index: int, shelf: ShelfSpec, prims: Prim
 def _add_trailer(parent: mujoco.MjsBody, dock: DockSpec, prims: PrimTable) -> None:
     """Trailer with its open end at ``dock.position``; local +X runs into it."""
     dock_body = parent.add_body(name="warehouse/dock", pos=[dock.position[0], dock.position[1], 0],
-                                quat=list(quat_from_yaw(math.radians(dock.yaw_deg))))
+                                quat=list(quat_wxyz_from_yaw(math.radians(dock.yaw_deg))))
     prims.declare("/World/Warehouse/Dock", PrimKind.BODY, "warehouse/dock")
     body = dock_body.add_body(name="warehouse/trailer")
     prims.declare("/World/Warehouse/Dock/Trailer", PrimKind.BODY, "warehouse/trailer")

@@ -33,6 +33,7 @@ import mujoco
 import numpy as np
 
 from harness.errors import SimulationError
+from harness.geometry import quat_wxyz_from_yaw
 from harness.scenario.schema import Scenario, WorkerSpec
 from harness.sim.prims import PrimKind, PrimTable
 
@@ -181,16 +182,12 @@ def plan_workers(scenario: Scenario) -> tuple[Worker, ...]:
     return tuple(out)
 
 
-def _yaw_quat(yaw: float) -> list[float]:
-    return [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
-
-
 def add_workers(spec: mujoco.MjSpec, workers: Sequence[Worker], prims: PrimTable) -> None:
     """Add one mocap body per worker, posed for time 0, and declare its prims."""
     for w in workers:
         x, y, yaw = w.path.pose_at(0)
-        body = spec.worldbody.add_body(name=w.body, pos=[x, y, 0.0], quat=_yaw_quat(yaw),
-                                       mocap=True)
+        body = spec.worldbody.add_body(name=w.body, pos=[x, y, 0.0],
+                                       quat=quat_wxyz_from_yaw(yaw).tolist(), mocap=True)
         head_r = _HEAD_FRACTION * w.height
         torso_top = w.height - 2.0 * head_r
         half = torso_top / 2.0 - w.radius
@@ -233,5 +230,5 @@ class WorkerDriver:
         for w, slot in zip(self._workers, self._slots, strict=True):
             x, y, yaw = w.path.pose_at(time_ns)
             data.mocap_pos[slot] = (x, y, 0.0)
-            data.mocap_quat[slot] = _yaw_quat(yaw)
+            data.mocap_quat[slot] = quat_wxyz_from_yaw(yaw)
         return bool(self._workers)

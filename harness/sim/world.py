@@ -38,11 +38,12 @@ import mujoco
 import numpy as np
 
 from harness.errors import ScenarioError, SimulationError
+from harness.geometry import FloatArray
 from harness.scenario.schema import Scenario, WorldSpec
 from harness.sim.cameras import add_fixed_camera, world_convention_quat
 from harness.sim.footprints import Footprint
-from harness.sim.geometry import FloatArray, quat_from_mat, quat_from_rpy_deg
 from harness.sim.layout import check_layout
+from harness.sim.mjquat import quat_wxyz_from_mat_mj, quat_wxyz_from_rpy_deg_mj
 from harness.sim.prims import PrimKind, PrimRef, PrimTable
 from harness.sim.render import apply_render_settings
 from harness.sim.robots import ActuatorMode, ModelSource, RobotBuild, add_robot
@@ -237,7 +238,7 @@ def _assemble(scenario: Scenario, prims: PrimTable, source: str, environ: Mappin
             raise SimulationError(f"robots.{robot.name}: two robots share this name")
         seen.add(robot.name)
         x, y, z = robot.spawn.position
-        quat = quat_from_rpy_deg(robot.spawn.rpy_deg)
+        quat = quat_wxyz_from_rpy_deg_mj(robot.spawn.rpy_deg)
         field = f"robots[{i}]"
         file = scenario.file_for(field, source)
         where = ModelSource(file, field, Path(file).parent, environ)
@@ -434,10 +435,11 @@ class World:
         if ref.kind is PrimKind.BODY:
             return d.xpos[ref.id].copy(), d.xquat[ref.id].copy()
         if ref.kind is PrimKind.SITE:
-            return d.site_xpos[ref.id].copy(), quat_from_mat(d.site_xmat[ref.id])
+            return d.site_xpos[ref.id].copy(), quat_wxyz_from_mat_mj(d.site_xmat[ref.id])
         if ref.kind is PrimKind.GEOM:
-            return d.geom_xpos[ref.id].copy(), quat_from_mat(d.geom_xmat[ref.id])
-        return d.cam_xpos[ref.id].copy(), world_convention_quat(quat_from_mat(d.cam_xmat[ref.id]))
+            return d.geom_xpos[ref.id].copy(), quat_wxyz_from_mat_mj(d.geom_xmat[ref.id])
+        q_mj = quat_wxyz_from_mat_mj(d.cam_xmat[ref.id])
+        return d.cam_xpos[ref.id].copy(), world_convention_quat(q_mj)
 
     def prim_velocity(self, path: str) -> tuple[FloatArray, FloatArray]:
         """Linear (m/s) and angular (rad/s) velocity of ``path``'s origin, world frame."""

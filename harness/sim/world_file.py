@@ -51,7 +51,7 @@ import numpy as np
 
 from harness.scenario.schema import WorldModel
 from harness.sim.footprints import Footprint, geom_footprint, geom_points
-from harness.sim.geometry import quat_from_rpy_deg
+from harness.sim.mjquat import quat_wxyz_from_rpy_deg_mj
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import COLLISION_GROUP
 from harness.sim.robots.model_file import ModelFileError, one_line, read_model_file
@@ -127,7 +127,7 @@ def _name_geoms(spec: mujoco.MjSpec) -> dict[str, str]:
 
 def _pose(model: WorldModel) -> tuple[list[float], list[float]]:
     return ([float(v) for v in model.pose.position],
-            [float(q) for q in quat_from_rpy_deg(model.pose.rpy_deg)])
+            [float(q) for q in quat_wxyz_from_rpy_deg_mj(model.pose.rpy_deg)])
 
 
 def _measure(spec: mujoco.MjSpec, assets: Mapping[str, bytes], model: WorldModel,

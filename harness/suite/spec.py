@@ -29,6 +29,7 @@ from typing import Any
 
 import yaml
 
+from harness import yamlio
 from harness.errors import ScenarioError, SrrError
 from harness.scenario import load_scenario, parse_override
 from harness.suite.sweep import SweepParam, parse_sweep
@@ -66,11 +67,12 @@ def _read(path: Path) -> Any:
     except (OSError, UnicodeDecodeError) as err:
         raise SrrError(f"{path}: cannot be read ({err})") from err
     try:
-        return yaml.safe_load(text)
+        return yamlio.load(text)
+    except yamlio.DuplicateKeyError as err:
+        raise ScenarioError(str(path), err.field, f"set twice (lines {err.first_line} and "
+                            f"{err.line}): remove one") from err
     except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise ScenarioError(str(path), "", f"not valid YAML{where}") from err
+        raise ScenarioError(str(path), "", f"not valid YAML: {yamlio.describe(err)}") from err
 
 
 def is_suite_file(data: Any) -> bool:
@@ -81,12 +83,18 @@ def _is_scenario(data: Any) -> bool:
     return isinstance(data, Mapping) and "name" in data and not is_suite_file(data)
 
 
+#: More repeats of one scenario than this is a typo (and would not fit in memory as runs).
+MAX_REPEAT = 1000
+
+
 def _count(value: Any, file: str, field: str, *, integer: bool) -> Any:
     ok = (isinstance(value, int) if integer else isinstance(value, (int, float))) \
-        and not isinstance(value, bool) and math.isfinite(value) and value > 0
+        and not isinstance(value, bool) and math.isfinite(min(value, math.inf)) and value > 0
     if not ok:
         kind = "a whole number" if integer else "a number of seconds"
         raise ScenarioError(file, field, f"expected {kind} > 0, got {value!r}")
+    if integer and value > MAX_REPEAT:
+        raise ScenarioError(file, field, f"at most {MAX_REPEAT} repeats, got {value!r}")
     return value
 
 
@@ -94,7 +102,7 @@ def _overrides(raw: Any, file: str, field: str) -> tuple[str, ...]:
     if raw is None:
         return ()
     if isinstance(raw, Mapping):
-        items = [f"{k}={yaml.safe_dump(v, default_flow_style=True).strip().removesuffix('...')}"
+        items = [f"{k}={yamlio.dump(v, default_flow_style=True).strip().removesuffix('...')}"
                  .strip() for k, v in raw.items()]
     elif isinstance(raw, list) and all(isinstance(x, str) for x in raw):
         items = list(raw)
@@ -132,7 +140,12 @@ def _entry(raw: Any, base: Path, file: str, field: str, cli: _Defaults,
     if not isinstance(path, str) or not path:
         raise ScenarioError(file, f"{field}.path", "expected the path of a scenario file")
     scenario_file = base / path
-    if not scenario_file.is_file():
+    try:
+        is_file = scenario_file.is_file()
+    except OSError as err:  # a name too long for the file system
+        raise ScenarioError(file, f"{field}.path", f"cannot read {path!r}: "
+                            f"{err.strerror or err}") from None
+    if not is_file:
         raise ScenarioError(file, f"{field}.path", f"no such file: {scenario_file}")
     repeat = raw.get("repeat")
     repeat = (_count(repeat, file, f"{field}.repeat", integer=True) if repeat is not None

@@ -97,7 +97,14 @@ def _range(raw: Mapping[str, Any], file: str, field: str) -> tuple[Scalar, ...]:
         raise ScenarioError(file, f"{field}.step", f"must be > 0, got {step!r}")
     if hi < lo:
         raise ScenarioError(file, f"{field}.to", f"must be >= from ({lo!r}), got {hi!r}")
-    n = math.floor((hi - lo) / step + 1e-9) + 1
+    try:
+        span = (hi - lo) / step
+    except OverflowError:  # integers too large for a float
+        span = math.inf
+    if not span < MAX_POINTS:  # also inf: from -1e308 to 1e308
+        raise ScenarioError(file, f"{field}.step", f"gives too many values (at most "
+                            f"{MAX_POINTS}): {lo!r} to {hi!r} in steps of {step!r}")
+    n = math.floor(span + 1e-9) + 1
     if n > MAX_POINTS:
         raise ScenarioError(file, f"{field}.step", f"gives {n} values (at most {MAX_POINTS})")
     if all(isinstance(v, int) for v in (lo, hi, step)):

@@ -27,7 +27,7 @@ from scipy.optimize import linear_sum_assignment
 
 from harness.bus.messages import header, make
 from harness.errors import PluginError
-from harness.geometry import xyzw_to_wxyz
+from harness.geometry import mat_from_quat_wxyz, xyzw_to_wxyz
 from harness.scenario.schema import num
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
 from harness.sut.zones import points_in_polygon
@@ -216,12 +216,7 @@ class DepthPeopleTracker(SystemUnderTest):
 
 def _rotate_many(q: np.ndarray, v: np.ndarray) -> npt.NDArray[np.float64]:
     """Rotate rows of ``v`` by the (w, x, y, z) quaternion ``q``."""
-    w, x, y, z = q
-    r = np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+    r = mat_from_quat_wxyz(q)
     return cast("npt.NDArray[np.float64]", v @ r.T)  # numpy types ``@`` of unshaped arrays as Any
 
 

@@ -8,7 +8,14 @@ from typing import Any
 
 import numpy as np
 
-from harness.geometry import qmul, qrotate, quat_mul, quat_rotate, quat_to_yaw, xyzw_to_wxyz
+from harness.geometry import (
+    quat_wxyz_mul,
+    quat_wxyz_mul_floats,
+    quat_wxyz_rotate,
+    quat_wxyz_rotate_floats,
+    xyzw_to_wxyz,
+    yaw_from_quat_wxyz,
+)
 from harness.sut.base import SutContext
 
 __all__ = ["OdomPose"]
@@ -56,7 +63,7 @@ class OdomPose:
                 break
             seen.add(cur)
             parent, (pt, pq) = self._static[cur]
-            t, q = pt + quat_rotate(pq, t), quat_mul(pq, q)
+            t, q = pt + quat_wxyz_rotate(pq, t), quat_wxyz_mul(pq, q)
             cur = parent
         result = (t, q) if found else None
         self._chain = (frame, result)
@@ -70,11 +77,12 @@ class OdomPose:
         if chain is None:
             return None
         p, q = self.odom.pose.pose.position, self.odom.pose.pose.orientation
-        # Python floats: the arithmetic of quat_rotate / quat_mul on arrays, term for term
-        # (see harness.geometry), without building arrays.
+        # Python floats: the arithmetic of quat_wxyz_rotate / quat_wxyz_mul on arrays, term for
+        # term (see harness.geometry), without building arrays.
         t0, q0 = chain
         tx, ty, _ = t0.tolist()
         q0f = q0.tolist()
-        rx, ry, _ = qrotate(q0f, (p.x, p.y, p.z))
-        yaw = quat_to_yaw(qmul(q0f, (float(q.w), float(q.x), float(q.y), float(q.z))))
+        rx, ry, _ = quat_wxyz_rotate_floats(q0f, (p.x, p.y, p.z))
+        q_odom = (float(q.w), float(q.x), float(q.y), float(q.z))
+        yaw = yaw_from_quat_wxyz(quat_wxyz_mul_floats(q0f, q_odom))
         return tx + rx, ty + ry, yaw

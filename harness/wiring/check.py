@@ -10,7 +10,7 @@ Errors (a :class:`~harness.errors.ScenarioError`, exit 2, naming the file and th
 * a topic the scoring block names (health outputs and rates, perception markers, the safety
   state) that nothing publishes, or that carries another type than the scoring reads;
 * TF: a frame id tf2 refuses, a frame with two parents, a frame published static and
-  dynamic or by two sources, a cycle (see :mod:`harness.wiring.tree`).
+  dynamic or by two sources, a cycle (see :mod:`harness.tf_tree`).
 
 Warnings (returned, printed, kept in the summary): any other subscription nothing publishes (a
 parked robot's ``cmd_vel``, a system under test's input), and a topic published by a graph
@@ -26,8 +26,8 @@ from harness.bus import FrameIdError, resolve_topic, validate_frame_id
 from harness.bus.endpoints import tf_tree_of
 from harness.errors import ScenarioError
 from harness.scenario import Scenario
+from harness.tf_tree import Edge, tree_problems
 from harness.wiring.plan import Plan, PlannedEdge, PlannedTopic
-from harness.wiring.tree import Edge, tree_problems
 
 __all__ = ["check_wiring"]
 

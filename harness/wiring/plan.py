@@ -4,18 +4,19 @@ that set it.
 
 Graph nodes declare their endpoints from their input values (:meth:`NodeType.endpoints`), so
 the plan covers any graph on the stage, built-in or not; the builders' annotations
-(:class:`~harness.builders.base.NodeOrigin`) turn a node input into a scenario field path
-(``robots[1].odometry.odom_topic``); a node without one is named by its attribute path.
+(:class:`NodeOrigin`, made by :meth:`harness.builders.base.BuildContext.annotate`) turn a
+node input into a scenario field path (``robots[1].odometry.odom_topic``); a node without
+one is named by its attribute path.
 Systems under test are planned from what they advertised and subscribed in ``setup``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from harness.builders.base import NodeOrigin
 from harness.bus import TopicNameError
 from harness.bus.endpoints import TfEdge
 from harness.errors import GraphError, ScenarioError
@@ -23,7 +24,20 @@ from harness.graph import GraphStage, Node
 from harness.scenario import Scenario
 from harness.sut.base import SutContext
 
-__all__ = ["Plan", "PlannedEdge", "PlannedTopic", "plan_wiring"]
+__all__ = ["NodeOrigin", "Plan", "PlannedEdge", "PlannedTopic", "plan_wiring"]
+
+
+@dataclass(frozen=True)
+class NodeOrigin:
+    """Which scenario field a node was built from (``robots[1].odometry``) and, per input,
+    which sub-field set it (``topicName`` → ``odom_topic``), so wiring errors name fields."""
+
+    field: str
+    inputs: Mapping[str, str] = dataclasses.field(default_factory=dict)
+
+    def field_for(self, input_name: str) -> str:
+        sub = self.inputs.get(input_name)
+        return f"{self.field}.{sub}" if sub else self.field
 
 
 @dataclass(frozen=True)

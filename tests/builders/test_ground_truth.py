@@ -14,7 +14,13 @@ from harness.builders.ground_truth import GRAPH_PATH
 from harness.bus import Envelope
 from harness.cli import main
 from harness.engine import Simulation
-from harness.geometry import quat_from_yaw, quat_mul, quat_rotate, quat_to_yaw, xyzw_to_wxyz
+from harness.geometry import (
+    quat_wxyz_from_yaw,
+    quat_wxyz_mul,
+    quat_wxyz_rotate,
+    xyzw_to_wxyz,
+    yaw_from_quat_wxyz,
+)
 from tests.conftest import SCENARIOS
 from tests.e2e.bagread import decoded
 
@@ -81,12 +87,12 @@ def test_ground_truth_publishes_true_poses_every_tick() -> None:
         pos, q = tf_of(env.msg)
         cpos, cq = chassis[stamp]
         np.testing.assert_allclose(pos, cpos, atol=1e-12)
-        np.testing.assert_allclose(q, quat_mul(cq, quat_from_yaw(math.pi)), atol=1e-12)
+        np.testing.assert_allclose(q, quat_wxyz_mul(cq, quat_wxyz_from_yaw(math.pi)), atol=1e-12)
     first, last = (tf_of(by_topic["/gt/forklift/tf"][i].msg) for i in (0, -1))
-    assert abs(quat_to_yaw(first[1])) < 1e-6  # spawned at yaw 180°: ground truth faces +X
+    assert abs(yaw_from_quat_wxyz(first[1])) < 1e-6  # spawned at yaw 180°: ground truth faces +X
     travel = last[0] - first[0]
     assert travel[0] > 0.3  # the route follower drives it along +X ...
-    assert abs(math.remainder(math.atan2(travel[1], travel[0]) - quat_to_yaw(last[1]),
+    assert abs(math.remainder(math.atan2(travel[1], travel[0]) - yaw_from_quat_wxyz(last[1]),
                               2 * math.pi)) < 0.15  # ... and ground truth faces that way
 
     # workers: their live pose, a pure function of time; frame character_<index>
@@ -99,7 +105,7 @@ def test_ground_truth_publishes_true_poses_every_tick() -> None:
             x, y, yaw = paths[frame].pose_at(env.stamp_ns)
             np.testing.assert_allclose(pos, [x, y, 0.0], atol=1e-12)
             np.testing.assert_allclose(pos, people[(frame, env.stamp_ns)], atol=1e-12)
-            assert quat_to_yaw(q) == pytest.approx(yaw, abs=1e-12)
+            assert yaw_from_quat_wxyz(q) == pytest.approx(yaw, abs=1e-12)
     end = tf_of(by_topic["/gt/character_2/tf"][-1].msg)[0]
     assert end[0] == pytest.approx(-10.0 + 2.0 * (89 * S // 60) / S, abs=1e-12)
 
@@ -119,8 +125,8 @@ def test_ground_truth_equals_world_to_odom_composed_with_odometry() -> None:
     assert set(odom) == set(gt) and len(gt) == 60
     for stamp, pose in odom.items():
         o = pose.orientation
-        pos = p0 + quat_rotate(q0, [pose.position.x, pose.position.y, pose.position.z])
-        q = quat_mul(q0, xyzw_to_wxyz([o.x, o.y, o.z, o.w]))
+        pos = p0 + quat_wxyz_rotate(q0, [pose.position.x, pose.position.y, pose.position.z])
+        q = quat_wxyz_mul(q0, xyzw_to_wxyz([o.x, o.y, o.z, o.w]))
         np.testing.assert_allclose(pos, gt[stamp][0], atol=1e-9)
         assert abs(np.dot(q, gt[stamp][1])) == pytest.approx(1.0, abs=1e-9)
 

@@ -21,6 +21,7 @@ import pytest
 from harness.bus import Bus
 from harness.cli import main
 from harness.errors import PluginError
+from harness.geometry import yaw_from_quat_wxyz
 from harness.scenario import load_scenario
 from harness.sut.base import SutContext
 from harness.sut.teleop import ScriptedTeleop, Segment, command_at
@@ -98,7 +99,7 @@ def stamp(msg: Any) -> int:
 
 
 def yaw_of(q: Any) -> float:
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+    return yaw_from_quat_wxyz((q.w, q.x, q.y, q.z))
 
 
 slow = pytest.mark.slow  # the tests that need the CLI run (two 10 s runs, about 20 s)

@@ -29,6 +29,7 @@ from harness.bus.messages import (
     transform_stamped,
     twist,
 )
+from harness.geometry import quat_wxyz_from_yaw, wxyz_to_xyzw
 
 __all__ = ["ROI", "TRIPWIRE", "SynthSpec", "character_xy", "forklift_xy", "write_synthetic_bag"]
 
@@ -83,10 +84,6 @@ def expected_muted(t: float, n_characters: int) -> bool:
                                        for i in range(n_characters))
 
 
-def _quat_yaw(yaw: float) -> tuple[float, float, float, float]:
-    return 0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)
-
-
 def _marker(ns_: int, name: str, track_id: int, x: float, y: float, action: int = 0) -> Any:
     m = msg_type("visualization_msgs/msg/Marker")
     pose = msg_type("geometry_msgs/msg/Pose")(
@@ -135,7 +132,7 @@ def write_synthetic_bag(path: Path, spec: SynthSpec = SynthSpec()) -> int:
         t = t_ns / 1e9
         write("/clock", "rosgraph_msgs/msg/Clock", t_ns, clock(t_ns))
         fx, fy, fyaw = forklift_xy(t)
-        q = _quat_yaw(fyaw)
+        q = wxyz_to_xyzw(quat_wxyz_from_yaw(fyaw))
         speed = 1.5 if fyaw == 0.0 else -1.5
         write("/odom", "nav_msgs/msg/Odometry", t_ns, odometry(
             t_ns, odom_frame, base_frame, (fx - ODOM_ORIGIN[0], fy - ODOM_ORIGIN[1], 0.0), q,

@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import json
 import re
+import shutil
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -203,3 +204,50 @@ def test_the_report_overlays_the_baseline_from_its_reference_recording(
     finally:
         moved.rename(ref)
     assert 'id="against"' not in again and "reference recording" in again and "is gone" in again
+
+
+def test_the_run_writes_its_graphs_and_the_report_draws_them_from_there(
+        failing_run: api.RunResult, summary: dict, tmp_path: Path) -> None:
+    run = failing_run.run_dir
+    sc = api.load(run / "scenario.yaml")
+    source = summary["scenario_file"]
+    # the files are what `srr graph` prints for the scene as run
+    assert (run / "graphs.json").read_text(encoding="utf-8") == \
+        api.graph_text(sc, "json", source=source)
+    assert (run / "graphs.mmd").read_text(encoding="utf-8") == \
+        api.graph_text(sc, "mermaid", source=source)
+    # the page draws the file, not a scene built again: an edited file shows up
+    copy = tmp_path / "run"
+    shutil.copytree(run, copy)
+    dump = json.loads((copy / "graphs.json").read_text(encoding="utf-8"))
+    dump["graphs"][0]["path"] = "/World/DrawnFromTheFileGraph"
+    (copy / "graphs.json").write_text(json.dumps(dump), encoding="utf-8")
+    html = render_report(copy)
+    assert "/World/DrawnFromTheFileGraph" in html
+    assert html.count('<div class="graph-card">') == len(summary["graphs"])
+
+
+def test_a_run_directory_without_graphs_still_gets_them_from_srr_report(
+        failing_run: api.RunResult, summary: dict, tmp_path: Path) -> None:
+    copy = tmp_path / "old"
+    shutil.copytree(failing_run.run_dir, copy)
+    (copy / "graphs.json").unlink()
+    (copy / "graphs.mmd").unlink()
+    lenient = render_report(copy)  # the renderer alone builds no scene: it says so
+    assert '<div class="graph-card">' not in lenient
+    assert "this run directory has no graphs.json" in lenient
+    api.report(copy)  # the API builds the scene again, as for runs from before graphs.json
+    html = (copy / "report.html").read_text(encoding="utf-8")
+    assert html.count('<div class="graph-card">') == len(summary["graphs"])
+    assert "graphs.json" not in html
+    assert not (copy / "graphs.json").exists()  # nothing written but the page
+
+
+def test_a_damaged_graphs_file_costs_the_graphs_not_the_report(
+        failing_run: api.RunResult, tmp_path: Path) -> None:
+    copy = tmp_path / "damaged"
+    shutil.copytree(failing_run.run_dir, copy)
+    (copy / "graphs.json").write_text("[1, 2", encoding="utf-8")
+    html = render_report(copy)
+    assert '<div class="graph-card">' not in html
+    assert "graphs.json: could not be read" in html

@@ -133,6 +133,8 @@ robots:
      "(0, 30) is outside"),
     ("cameras:\n  - {name: cam, spawn: {position: [-20, 0, 3]}, outputs: [rgb]}\n",
      "cameras[0].spawn.position", "(-20, 0) is outside"),
+    ("routes:\n  go: {waypoints: [[0, 0], [1e308, 0]]}\n", "routes.go.waypoints[1]",
+     "(1e+308, 0) is outside"),
 ])
 def test_things_placed_outside_the_world_are_refused(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], change: str, field: str,

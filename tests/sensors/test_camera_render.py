@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from harness.errors import SimulationError
+from harness.geometry import quat_wxyz_conj, quat_wxyz_rotate
 from harness.scenario.schema import (
     CameraSpec,
     DockSpec,
@@ -19,7 +20,6 @@ from harness.scenario.schema import (
 )
 from harness.sim import World
 from harness.sim.cameras import optical_quat
-from harness.sim.geometry import quat_conj, rotate
 from harness.sim.render import Intrinsics, Renderer, depth_from_buffer, points_from_depth
 
 # An empty 30 x 20 m hall: walls' inner faces at x = ±15, y = ±10; floor at z = 0.
@@ -99,7 +99,7 @@ def test_floor_and_wall_pixels_back_project_onto_the_geometry(hall: World,
     assert len(pts) == W * H
     pos, q_world_conv = hall.prim_pose("/World/tilted")
     q_opt = optical_quat(q_world_conv)
-    world_pts = np.array([rotate(q_opt, p) for p in pts]) + pos
+    world_pts = np.array([quat_wxyz_rotate(q_opt, p) for p in pts]) + pos
     on_floor = np.abs(world_pts[:, 2]) < 0.02
     on_wall = np.abs(world_pts[:, 0] - 15.0) < 0.02
     assert (on_floor | on_wall).all()
@@ -161,7 +161,7 @@ def test_safety_indicator_is_orange_where_the_intrinsics_project_it() -> None:
     indicator = "/World/forklift/body/body/safety_indicator"
     disk, _ = world.prim_pose(indicator)
     pos, q = world.prim_pose("/World/overhead")
-    p_opt = rotate(quat_conj(optical_quat(q)), disk - pos)
+    p_opt = quat_wxyz_rotate(quat_wxyz_conj(optical_quat(q)), disk - pos)
     (u, v), = frame.intrinsics.project(p_opt)
     assert 5 < u < 90 and 5 < v < 66 and abs(u - 47.5) > 5  # off-centre, inside the image
     r_, g, b = (int(c) for c in frame.rgb[round(v), round(u)])

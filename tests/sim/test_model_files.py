@@ -16,9 +16,9 @@ import yaml
 from harness import api
 from harness.cli import main
 from harness.errors import ScenarioError
+from harness.geometry import rpy_from_quat_wxyz, yaw_from_quat_wxyz
 from harness.scenario import load_scenario
 from harness.sim import World
-from harness.sim.geometry import rpy_from_quat
 from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
 from tests.conftest import SCENARIOS
 from tests.e2e.bagread import decoded
@@ -230,7 +230,7 @@ def test_instances_of_one_file_coexist_at_their_spawn_poses(tmp_path: Path) -> N
                           ("truck", (-4.0, 2.0), 180.0)):
         pos, quat = world.prim_pose(world.base_prim(name))
         assert pos == pytest.approx((*xy, 0.0), abs=1e-9)
-        assert math.degrees(rpy_from_quat(quat)[2]) % 360 == pytest.approx(yaw % 360)
+        assert math.degrees(rpy_from_quat_wxyz(quat)[2]) % 360 == pytest.approx(yaw % 360)
     a, b = world.robot("bot_a"), world.robot("bot_b")
     assert set(a.links) == set(b.links) == DIFFBOT_LINKS
     assert set(a.body_ids).isdisjoint(b.body_ids)
@@ -311,8 +311,7 @@ def odometry(run_dir: Path) -> np.ndarray:
     for topic, _, _, msg in decoded(run_dir):
         if topic == "/odom":
             p, q = msg.pose.pose.position, msg.pose.pose.orientation
-            rows.append((p.x, p.y, math.atan2(2 * (q.w * q.z + q.x * q.y),
-                                              1 - 2 * (q.y * q.y + q.z * q.z)),
+            rows.append((p.x, p.y, yaw_from_quat_wxyz((q.w, q.x, q.y, q.z)),
                          msg.twist.twist.linear.x, msg.twist.twist.angular.z))
     return np.asarray(rows)
 

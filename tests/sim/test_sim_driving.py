@@ -14,6 +14,7 @@ import time
 import numpy as np
 import pytest
 
+from harness.geometry import quat_wxyz_rotate, rpy_from_quat_wxyz
 from harness.scenario.schema import (
     DiffDriveControl,
     ForkliftControl,
@@ -23,7 +24,6 @@ from harness.scenario.schema import (
     Scenario,
 )
 from harness.sim import World
-from harness.sim.geometry import rotate, rpy_from_quat
 
 FORKLIFT = "/World/forklift"
 TB3 = "/World/tb3"
@@ -85,7 +85,7 @@ def planar_motion(world: World, base: str, front: tuple[float, float, float],
                   p0: np.ndarray, q0: np.ndarray) -> tuple[float, float]:
     """(along forward, lateral) displacement of ``base`` since (p0, q0)."""
     p1, _ = world.prim_pose(base)
-    fwd = rotate(q0, front)[:2]
+    fwd = quat_wxyz_rotate(q0, front)[:2]
     fwd /= np.linalg.norm(fwd)
     d = (p1 - p0)[:2]
     return float(d @ fwd), float(abs(d[0] * fwd[1] - d[1] * fwd[0]))
@@ -93,11 +93,11 @@ def planar_motion(world: World, base: str, front: tuple[float, float, float],
 
 def yaw_rate(world: World, base: str, seconds: float) -> float:
     """Mean yaw rate over ``seconds`` from the unwrapped yaw at 10 Hz samples."""
-    yaws = [float(rpy_from_quat(world.prim_pose(base)[1])[2])]
+    yaws = [float(rpy_from_quat_wxyz(world.prim_pose(base)[1])[2])]
     n = round(seconds * 10)
     for _ in range(n):
         world.step(round(0.1 / world.timestep))
-        yaws.append(float(rpy_from_quat(world.prim_pose(base)[1])[2]))
+        yaws.append(float(rpy_from_quat_wxyz(world.prim_pose(base)[1])[2]))
     return float(np.unwrap(yaws)[-1] - yaws[0]) / seconds
 
 
@@ -105,7 +105,8 @@ def test_forklift_forward_is_minus_x_and_points_along_world_x_when_yawed_180() -
     world = forklift_world()
     _, q = world.prim_pose(f"{FORKLIFT}/body")
     assert world.robot_front("forklift") == (-1.0, 0.0, 0.0)
-    np.testing.assert_allclose(rotate(q, world.robot_front("forklift")), [1, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(quat_wxyz_rotate(q, world.robot_front("forklift")), [1, 0, 0],
+                               atol=1e-9)
 
 
 def test_forklift_drives_straight_forward() -> None:
@@ -118,7 +119,7 @@ def test_forklift_drives_straight_forward() -> None:
     assert lateral < 0.2
     p1, q1 = world.prim_pose(base)
     assert abs(p1[2] - p0[2]) < 0.1
-    roll, pitch, _ = np.degrees(rpy_from_quat(q1))
+    roll, pitch, _ = np.degrees(rpy_from_quat_wxyz(q1))
     assert abs(roll) < 5 and abs(pitch) < 5
     assert p1[0] > p0[0]  # yaw 180°: forward is world +X
 
@@ -130,7 +131,7 @@ def test_forklift_turns_counter_clockwise_for_positive_angular_z() -> None:
     rate = yaw_rate(world, base, 2.0)
     assert rate == pytest.approx(0.3, rel=0.2)
     _, q = world.prim_pose(base)
-    roll, pitch, _ = np.degrees(rpy_from_quat(q))
+    roll, pitch, _ = np.degrees(rpy_from_quat_wxyz(q))
     assert abs(roll) < 5 and abs(pitch) < 5
 
 
@@ -170,7 +171,7 @@ def test_turtlebot_drives_straight_forward() -> None:
     p1, q1 = world.prim_pose(base)
     assert p1[1] > p0[1]  # yaw 90°: forward is world +Y
     assert abs(p1[2] - p0[2]) < 0.01
-    roll, pitch, _ = np.degrees(rpy_from_quat(q1))
+    roll, pitch, _ = np.degrees(rpy_from_quat_wxyz(q1))
     assert abs(roll) < 2 and abs(pitch) < 2
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from harness.errors import ScenarioError, SimulationError
+from harness.geometry import quat_wxyz_from_rpy_deg, quat_wxyz_rotate
 from harness.scenario.schema import (
     CameraSpec,
     DiffDriveControl,
@@ -26,7 +27,6 @@ from harness.scenario.schema import (
     WorldSpec,
 )
 from harness.sim import PrimKind, World
-from harness.sim.geometry import quat_from_rpy_deg, rotate
 
 STATIC = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)  # geom group 0 only
 
@@ -106,7 +106,7 @@ def test_spawn_places_wheels_on_the_floor_whatever_the_spawn_z() -> None:
         tb3(spawn=Pose(position=(1.0, 2.0, 0.7)))))
     p, q = world.prim_pose("/World/forklift/body")
     np.testing.assert_allclose(p, [-10.0, 2.0, 0.0], atol=1e-12)
-    np.testing.assert_allclose(q, quat_from_rpy_deg((0, 0, 30)), atol=1e-12)
+    np.testing.assert_allclose(q, quat_wxyz_from_rpy_deg((0, 0, 30)), atol=1e-12)
     world.step(60)
     for base in ("/World/forklift/body", "/World/tb3/base_footprint"):
         assert abs(world.prim_pose(base)[0][2]) < 0.005, base
@@ -118,7 +118,7 @@ def test_base_scan_is_0132_above_base_footprint() -> None:
     world.step(30)
     foot, q = world.prim_pose("/World/tb3/base_footprint")
     scan, _ = world.prim_pose("/World/tb3/base_scan")
-    np.testing.assert_allclose(scan - foot, rotate(q, (-0.064, 0.0, 0.132)), atol=1e-6)
+    np.testing.assert_allclose(scan - foot, quat_wxyz_rotate(q, (-0.064, 0.0, 0.132)), atol=1e-6)
     assert scan[2] - foot[2] == pytest.approx(0.132, abs=1e-3)
 
 
@@ -277,7 +277,7 @@ def test_yawed_dock_cuts_its_door_in_the_north_wall() -> None:
     dist, name = ray(world, (3.0, 0.0, 3.5), (0, 1, 0))
     assert dist == pytest.approx(10.0, abs=1e-6) and name == "warehouse/wall_north_lintel"
     _pos, quat = world.prim_pose("/World/Warehouse/Dock/Trailer")
-    np.testing.assert_allclose(rotate(quat, (1, 0, 0)), [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(quat_wxyz_rotate(quat, (1, 0, 0)), [0, 1, 0], atol=1e-12)
 
 
 def test_shelves_walls_and_floor_are_static_group_0_with_distinct_colours() -> None:
@@ -303,15 +303,15 @@ def test_fixed_camera_pose_uses_world_axes_convention() -> None:
                      fovy_deg=50.0, resolution=(800, 600))
     world = World.build(scenario(cameras=(cam,)))
     pos, quat = world.prim_pose("/World/cam")
-    q_expected = quat_from_rpy_deg((0.0, 30.0, 45.0))
+    q_expected = quat_wxyz_from_rpy_deg((0.0, 30.0, 45.0))
     np.testing.assert_allclose(pos, [1, 2, 4], atol=1e-12)
     assert abs(float(np.dot(quat, q_expected))) == pytest.approx(1.0, abs=1e-9)
     ref = world.prim_ref("/World/cam")
     xmat = world.data.cam_xmat[ref.id].reshape(3, 3)
     look = -xmat[:, 2]  # a MuJoCo camera looks along its -Z
-    np.testing.assert_allclose(look, rotate(q_expected, (1, 0, 0)), atol=1e-9)
+    np.testing.assert_allclose(look, quat_wxyz_rotate(q_expected, (1, 0, 0)), atol=1e-9)
     assert look[2] < 0  # positive pitch looks down
-    np.testing.assert_allclose(xmat[:, 1], rotate(q_expected, (0, 0, 1)), atol=1e-9)  # up
+    np.testing.assert_allclose(xmat[:, 1], quat_wxyz_rotate(q_expected, (0, 0, 1)), atol=1e-9)  # up
     assert world.model.cam_fovy[ref.id] == pytest.approx(50.0)
     assert world.model.vis.global_.offwidth >= 800
 
@@ -326,9 +326,10 @@ def test_mounted_sensors_get_prims_and_the_imu_reads_gravity() -> None:
     reading = world.imu("tb3")
     np.testing.assert_allclose(reading.linear_acceleration, [0, 0, 9.81], atol=0.05)
     np.testing.assert_allclose(reading.angular_velocity, [0, 0, 0], atol=1e-3)
-    assert abs(float(np.dot(reading.orientation, quat_from_rpy_deg((0, 0, 90))))) > 0.9999
+    assert abs(float(np.dot(reading.orientation, quat_wxyz_from_rpy_deg((0, 0, 90))))) > 0.9999
     _cam_pos, cam_q = world.prim_pose("/World/tb3/camera_link/camera")
-    np.testing.assert_allclose(rotate(cam_q, (1, 0, 0)), [0, 1, 0], atol=1e-3)  # looks forward
+    # looks forward
+    np.testing.assert_allclose(quat_wxyz_rotate(cam_q, (1, 0, 0)), [0, 1, 0], atol=1e-3)
     assert world.prim_body_id("/World/tb3/base_scan/lidar") in world.robot_body_ids("tb3")
     with pytest.raises(SimulationError):
         world.imu("nobody")

@@ -15,7 +15,13 @@ import pytest
 from harness import api
 from harness.bus import Bus
 from harness.bus.messages import Pose, odometry, tf_message_of
-from harness.geometry import quat_from_yaw, quat_mul, quat_rotate, quat_to_yaw, xyzw_to_wxyz
+from harness.geometry import (
+    quat_wxyz_from_yaw,
+    quat_wxyz_mul,
+    quat_wxyz_rotate,
+    xyzw_to_wxyz,
+    yaw_from_quat_wxyz,
+)
 from harness.sut.base import SutContext
 from harness.sut.route_follower import (
     RouteFollower,
@@ -78,8 +84,8 @@ def ref_command(f: RouteFollower, pose: tuple[float, float, float],
 
 def ref_pose(t0: np.ndarray, q0: np.ndarray, odom: Any) -> tuple[float, float, float]:
     p, q = odom.pose.pose.position, odom.pose.pose.orientation
-    pos = t0 + quat_rotate(q0, [p.x, p.y, p.z])
-    yaw = quat_to_yaw(quat_mul(q0, xyzw_to_wxyz([q.x, q.y, q.z, q.w])))
+    pos = t0 + quat_wxyz_rotate(q0, [p.x, p.y, p.z])
+    yaw = yaw_from_quat_wxyz(quat_wxyz_mul(q0, xyzw_to_wxyz([q.x, q.y, q.z, q.w])))
     return float(pos[0]), float(pos[1]), yaw
 
 
@@ -99,7 +105,7 @@ def test_follower_commands_are_the_numpy_ones_bit_for_bit(seed: int) -> None:
     rng = random.Random(seed)
     # world -> odom: a turned and shifted odometry frame, so the chain's arithmetic shows
     t0 = np.array([rng.uniform(-13, -11), rng.uniform(-4, -2), 0.0])
-    q0 = quat_from_yaw(rng.uniform(-0.3, 0.3))
+    q0 = quat_wxyz_from_yaw(rng.uniform(-0.3, 0.3))
     bus.publish("/tf_static", "tf2_msgs/msg/TFMessage", tf_message_of(
         0, [Pose("world", "odom", t0, (q0[1], q0[2], q0[3], q0[0]))]))
     route = follower.path
@@ -114,8 +120,8 @@ def test_follower_commands_are_the_numpy_ones_bit_for_bit(seed: int) -> None:
         yaw = rng.uniform(-math.pi, math.pi)
         # the odometry that puts the robot there: inverse of world -> odom
         inv = np.array([q0[0], -q0[1], -q0[2], -q0[3]])
-        local = quat_rotate(inv, np.array([wx, wy, 0.0]) - t0)
-        qo = quat_mul(inv, quat_from_yaw(yaw))
+        local = quat_wxyz_rotate(inv, np.array([wx, wy, 0.0]) - t0)
+        qo = quat_wxyz_mul(inv, quat_wxyz_from_yaw(yaw))
         msg = odometry(0, "odom", "base_link", local, (qo[1], qo[2], qo[3], qo[0]),
                        (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         bus.publish("/odom", "nav_msgs/msg/Odometry", msg)

@@ -11,7 +11,14 @@ import math
 from typing import Any
 
 from harness.errors import GraphError
-from harness.geometry import Quat, qconj, qmul, qrotate, quat_from_yaw, yaw_between
+from harness.geometry import (
+    QuatTuple,
+    quat_wxyz_conj_floats,
+    quat_wxyz_from_yaw,
+    quat_wxyz_mul_floats,
+    quat_wxyz_rotate_floats,
+    yaw_between,
+)
 from harness.graph import Attr, NodeType, register
 
 __all__ = ["ArticulationController", "ComputeOdometry", "DifferentialController", "robot_root"]
@@ -64,13 +71,14 @@ class ComputeOdometry(NodeType):
         self._prim = _first(db.inputs.chassisPrim)
         if not self._prim or not ctx.world.has_prim(self._prim):
             raise GraphError(f"{db.node_path}.inputs:chassisPrim: no prim {self._prim!r}")
-        self._front: Quat = tuple(quat_from_yaw(yaw_between(db.inputs.robotFront)).tolist())
-        self._origin: tuple[list[float], Quat] | None = None
+        front = quat_wxyz_from_yaw(yaw_between(db.inputs.robotFront))
+        self._front: QuatTuple = tuple(front.tolist())
+        self._origin: tuple[list[float], QuatTuple] | None = None
 
-    def base_pose(self, world: Any) -> tuple[list[float], Quat]:
+    def base_pose(self, world: Any) -> tuple[list[float], QuatTuple]:
         """World position and (w, x, y, z) orientation of the base frame, as Python floats."""
         pos, quat = world.prim_pose(self._prim)
-        return pos.tolist(), qmul(quat.tolist(), self._front)
+        return pos.tolist(), quat_wxyz_mul_floats(quat.tolist(), self._front)
 
     def compute(self, db: Any, ctx: Any) -> bool:
         # Python floats throughout (see harness.geometry): the same values as numpy's.
@@ -78,14 +86,15 @@ class ComputeOdometry(NodeType):
         if self._origin is None:
             self._origin = (pos, quat)
         p0, q0 = self._origin
-        inv0 = qconj(q0)
+        inv0 = quat_wxyz_conj_floats(q0)
         lin_w, ang_w = (v.tolist() for v in ctx.world.prim_velocity(self._prim))
-        inv = qconj(quat)
-        db.outputs.position = qrotate(inv0, (pos[0] - p0[0], pos[1] - p0[1], pos[2] - p0[2]))
-        w, x, y, z = qmul(inv0, quat)
+        inv = quat_wxyz_conj_floats(quat)
+        db.outputs.position = quat_wxyz_rotate_floats(
+            inv0, (pos[0] - p0[0], pos[1] - p0[1], pos[2] - p0[2]))
+        w, x, y, z = quat_wxyz_mul_floats(inv0, quat)
         db.outputs.orientation = (x, y, z, w)
-        db.outputs.linearVelocity = qrotate(inv, lin_w)
-        db.outputs.angularVelocity = qrotate(inv, ang_w)
+        db.outputs.linearVelocity = quat_wxyz_rotate_floats(inv, lin_w)
+        db.outputs.angularVelocity = quat_wxyz_rotate_floats(inv, ang_w)
         db.outputs.globalLinearVelocity = tuple(lin_w)
         return True
 

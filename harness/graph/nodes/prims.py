@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import Any
 
 from harness.errors import GraphError, SimulationError
-from harness.geometry import qmul, quat_from_yaw, yaw_between
+from harness.geometry import quat_wxyz_from_yaw, quat_wxyz_mul_floats, yaw_between
 from harness.graph import Attr, NodeType, register
 from harness.sim.prims import PrimKind
 
@@ -45,11 +45,11 @@ class ReadPrimPose(NodeType):
 
     def initialize(self, db: Any, ctx: Any) -> None:
         self._prim = _prim(db, ctx.world)
-        self._front = quat_from_yaw(yaw_between(db.inputs.robotFront)).tolist()
+        self._front = quat_wxyz_from_yaw(yaw_between(db.inputs.robotFront)).tolist()
 
     def compute(self, db: Any, ctx: Any) -> bool:
         pos, quat = ctx.world.prim_pose(self._prim)
-        w, x, y, z = qmul(quat.tolist(), self._front)  # as quat_mul does, on Python floats
+        w, x, y, z = quat_wxyz_mul_floats(quat.tolist(), self._front)
         db.outputs.translation = tuple(pos.tolist())
         db.outputs.rotation = (x, y, z, w)
         return True

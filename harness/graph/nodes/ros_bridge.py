@@ -34,8 +34,9 @@ from harness.bus.messages import (
     tf_packer,
 )
 from harness.errors import GraphError
-from harness.geometry import quat_conj, quat_mul, quat_rotate, wxyz_to_xyzw
+from harness.geometry import quat_wxyz_conj, quat_wxyz_mul, quat_wxyz_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
+from harness.scenario.prims import frame_of
 from harness.sim.cameras import optical_quat
 from harness.sim.prims import PrimKind
 
@@ -273,11 +274,6 @@ class PublishRawTransformTree(_TfPublisher):
         return [TfEdge(str(value("parentFrameId")), str(value("childFrameId")), static, topic)]
 
 
-def frame_of(prim: str) -> str:
-    """Isaac's frame naming: the last component of the prim path."""
-    return prim.rstrip("/").rsplit("/", 1)[-1]
-
-
 def frame_pose(world: Any, prim: str) -> tuple[np.ndarray, np.ndarray]:
     """World pose (position, wxyz) of ``prim``'s TF frame. Like Isaac's transform-tree
     publishers, a camera prim's frame is its ROS optical frame (+Z forward, +X right, +Y down)."""
@@ -293,8 +289,8 @@ def relative_pose(world: Any, parent: str | None, child: str) -> tuple[np.ndarra
     if not parent:
         return pos, quat
     ppos, pquat = frame_pose(world, parent)
-    inv = quat_conj(pquat)
-    return quat_rotate(inv, np.asarray(pos) - np.asarray(ppos)), quat_mul(inv, quat)
+    inv = quat_wxyz_conj(pquat)
+    return quat_wxyz_rotate(inv, np.asarray(pos) - np.asarray(ppos)), quat_wxyz_mul(inv, quat)
 
 
 @register("srr.PublishTransformTree", aliases=aliases("PublishTransformTree"))

@@ -27,9 +27,9 @@ from typing import Any
 import numpy as np
 
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.bus.messages import header, msg_type
+from harness.bus.messages import header, msg_type, quaternion_xyzw
 from harness.errors import GraphError
-from harness.geometry import quat_conj, quat_rotate, wxyz_to_xyzw
+from harness.geometry import quat_wxyz_conj, quat_wxyz_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
 from harness.graph.nodes.camera import point_cloud_message, render_products
 from harness.graph.nodes.ros_bridge import (
@@ -152,7 +152,6 @@ def imu_message(ns: int, frame_id: str, orientation_xyzw: Sequence[float] | None
                 linear_acceleration: Sequence[float] | None) -> Any:
     """A ``sensor_msgs/Imu``; a part given as None is zeroed with covariance[0] = -1."""
     vec3 = msg_type("geometry_msgs/msg/Vector3")
-    quat = msg_type("geometry_msgs/msg/Quaternion")
 
     def cov(present: bool) -> np.ndarray:
         c = np.zeros(9, dtype=np.float64)
@@ -165,7 +164,7 @@ def imu_message(ns: int, frame_id: str, orientation_xyzw: Sequence[float] | None
     a = linear_acceleration if linear_acceleration is not None else (0.0, 0.0, 0.0)
     return msg_type("sensor_msgs/msg/Imu")(
         header=header(ns, frame_id),
-        orientation=quat(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3])),
+        orientation=quaternion_xyzw(q),
         orientation_covariance=cov(orientation_xyzw is not None),
         angular_velocity=vec3(x=float(w[0]), y=float(w[1]), z=float(w[2])),
         angular_velocity_covariance=cov(angular_velocity is not None),
@@ -379,8 +378,8 @@ class ReadIMU(NodeType):
         acc = np.asarray(reading.linear_acceleration, dtype=np.float64)
         if not db.inputs.readGravity:
             gravity = [float(v) for v in ctx.world.model.opt.gravity]
-            to_imu = quat_conj([float(v) for v in reading.orientation])
-            acc = acc + quat_rotate(list(to_imu), gravity)
+            to_imu = quat_wxyz_conj([float(v) for v in reading.orientation])
+            acc = acc + quat_wxyz_rotate(list(to_imu), gravity)
         db.outputs.linAcc = tuple(float(v) for v in acc)
         db.outputs.angVel = tuple(float(v) for v in reading.angular_velocity)
         db.outputs.orientation = tuple(float(v) for v in wxyz_to_xyzw(reading.orientation))

@@ -38,10 +38,12 @@ import numpy as np
 
 from harness.bus.endpoints import Endpoint, TfEdge
 from harness.bus.messages import header, make, msg_type, time_msg
+from harness.camera_topics import COMPRESSED_FORMATS
 from harness.errors import GraphError, VideoError
 from harness.graph import Attr, NodeType, register
 from harness.graph.nodes.camera import render_products
-from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, frame_of, topic_of
+from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, topic_of
+from harness.scenario.prims import frame_of
 from harness.video.codec import (
     DEPTH_PNG_FORMAT,
     H264Encoder,
@@ -58,13 +60,6 @@ __all__ = ["COMPRESSED_FORMATS", "RTSP_HUB", "CompressedCameraHelper", "RTSPCame
 #: Key of the run's RTSP servers in ``ctx.extras``.
 RTSP_HUB = "rtsp"
 
-#: (``type``, ``format``) → message type.
-COMPRESSED_FORMATS: dict[tuple[str, str], str] = {
-    ("rgb", "h264"): "foxglove_msgs/msg/CompressedVideo",
-    ("rgb", "jpeg"): "sensor_msgs/msg/CompressedImage",
-    ("rgb", "png"): "sensor_msgs/msg/CompressedImage",
-    ("depth", "png"): "sensor_msgs/msg/CompressedImage",
-}
 
 _ENCODER_INPUTS = (
     Attr("encoder", "token", "x264"),

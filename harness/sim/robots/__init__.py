@@ -6,8 +6,8 @@ from __future__ import annotations
 import mujoco
 
 from harness.errors import SimulationError
+from harness.geometry import FloatArray
 from harness.scenario.schema import DiffDriveControl, ForkliftControl, RobotSpec
-from harness.sim.geometry import FloatArray
 from harness.sim.prims import PrimTable
 from harness.sim.robots.common import ActuatorMode, RobotBuild
 from harness.sim.robots.forklift import add_forklift

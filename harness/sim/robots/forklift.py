@@ -27,8 +27,8 @@ import types
 import mujoco
 
 from harness.errors import SimulationError
+from harness.geometry import FloatArray
 from harness.scenario.schema import BUILTIN_JOINTS, ForkliftControl, RobotSpec
-from harness.sim.geometry import FloatArray
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import (
     BOX,

@@ -51,6 +51,7 @@ from dataclasses import dataclass
 
 import mujoco
 
+from harness.geometry import FloatArray
 from harness.scenario.schema import (
     DiffDriveControl,
     DriveSpec,
@@ -58,7 +59,6 @@ from harness.scenario.schema import (
     ModelFile,
     RobotSpec,
 )
-from harness.sim.geometry import FloatArray
 from harness.sim.prims import PrimKind, PrimTable
 from harness.sim.robots.common import COLLISION_GROUP, VISUAL_GROUP, ActuatorMode, RobotBuild
 from harness.sim.robots.model_file import (
