@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from harness import runlock
-from harness.bus.live import LiveConfig
+from harness.bus.liveconfig import LiveConfig
 from harness.diff import DiffResult, Tolerance
 from harness.diff import diff_runs as _diff_runs
 from harness.engine import Simulation
