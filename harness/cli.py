@@ -594,9 +594,7 @@ def _cmd_suite(args: argparse.Namespace) -> int:
         holder["progress"](ev)
 
     with sigterm_as_interrupt():
-        from harness.suite.runner import plan_suite
-
-        plan = plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout)
+        plan = api.plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout)
         for w in plan.warnings:
             _stderr().print(f"srr suite: warning: {w}", markup=False)
         with SuiteProgress(_stdout(), len(plan.runs), live=live) as progress:

@@ -1,4 +1,6 @@
-"""Reading a run directory's ``summary.json`` back, checked field by field.
+"""Reading a run directory's ``summary.json`` back, checked field by field (the typed summary
+that every writer builds, and that reads these checked fields, is
+:class:`harness.run.summary.RunSummary`).
 
 Every command that reads a run directory (``report``, ``replay``, ``baseline bless``, ``diff``)
 goes through :func:`read_summary`: a missing, unparsable or mis-typed summary is one
@@ -15,19 +17,20 @@ from typing import Any
 
 from harness.errors import SrrError
 
-__all__ = ["SUMMARY_NAME", "read_summary", "replay_note"]
+__all__ = ["SUMMARY_NAME", "Check", "check_summary", "fail", "is_int", "read_summary",
+           "replay_note"]
 
 SUMMARY_NAME = "summary.json"
 
 Check = Callable[[Any], bool]
 
 
-def _is_int(v: Any) -> bool:
+def is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
 def _is_num(v: Any) -> bool:
-    return _is_int(v) or isinstance(v, float)
+    return is_int(v) or isinstance(v, float)
 
 
 def _opt_num(v: Any) -> bool:
@@ -49,21 +52,21 @@ _METRIC = {"name": (_str, "a string"), "value": (_opt_num, "a number or null"),
            "unit": (_str, "a string"), "direction": (_str, "a string")}
 _HEALTH = {"name": (_str, "a string"), "ok": (lambda v: isinstance(v, bool), "true or false"),
            "detail": (_str, "a string")}
-_TOPIC = {"count": (_is_int, "an integer"), "sha256": (_str, "a string"),
+_TOPIC = {"count": (is_int, "an integer"), "sha256": (_str, "a string"),
           "type": (_str, "a string")}
 
 #: field → (check, what it should be); fields a summary must have.
 REQUIRED: dict[str, tuple[Check, str]] = {
     "scenario": (_str, "a string"),
     "verdict": (_str, "a string"),
-    "seed": (_is_int, "an integer"),
+    "seed": (is_int, "an integer"),
     "digest": (_str, "a string"),
     "metrics": (lambda v: isinstance(v, list), "a list"),
     "health": (lambda v: isinstance(v, list), "a list"),
     "topics": (lambda v: isinstance(v, dict), "a mapping"),
 }
 OPTIONAL: dict[str, tuple[Check, str]] = {
-    "ticks": (_is_int, "an integer"),
+    "ticks": (is_int, "an integer"),
     "simulated_s": (_is_num, "a number"),
     "srr_gt": (lambda v: isinstance(v, bool), "true or false"),
     "scenario_file": (_str, "a string"),
@@ -91,7 +94,7 @@ def replay_note(summary: Mapping[str, Any]) -> str | None:
     return f"open-loop replay of {r.get('run_dir', '?')} ({what})"
 
 
-def _fail(path: Path, field: str, message: str) -> SrrError:
+def fail(path: Path, field: str, message: str) -> SrrError:
     return SrrError(f"{path}: {field}: {message}")
 
 
@@ -108,23 +111,29 @@ def read_summary(run_dir: str | Path) -> dict[str, Any]:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (ValueError, UnicodeDecodeError, OSError) as err:
         raise SrrError(f"{path}: not valid JSON: {err}") from err
+    check_summary(data, path)
+    checked: dict[str, Any] = data
+    return checked
+
+
+def check_summary(data: Any, path: Path) -> None:
+    """:class:`SrrError` naming ``path`` and the field when ``data`` is not a run summary."""
     if not isinstance(data, dict):
         raise SrrError(f"{path}: expected a JSON object, got {type(data).__name__}")
-    for field, (check, what) in REQUIRED.items():
-        if field not in data:
-            raise _fail(path, field, "missing (not an srr run summary)")
-        if not check(data[field]):
-            raise _fail(path, field, f"expected {what}, got {data[field]!r:.60}")
-    for field, (check, what) in OPTIONAL.items():
-        if field in data and not check(data[field]):
-            raise _fail(path, field, f"expected {what}, got {data[field]!r:.60}")
+    for key, (check, what) in REQUIRED.items():
+        if key not in data:
+            raise fail(path, key, "missing (not an srr run summary)")
+        if not check(data[key]):
+            raise fail(path, key, f"expected {what}, got {data[key]!r:.60}")
+    for key, (check, what) in OPTIONAL.items():
+        if key in data and not check(data[key]):
+            raise fail(path, key, f"expected {what}, got {data[key]!r:.60}")
     for i, m in enumerate(data["metrics"]):
         if not _rows(_METRIC)(m):
-            raise _fail(path, f"metrics[{i}]", "expected name, value, unit and direction")
+            raise fail(path, f"metrics[{i}]", "expected name, value, unit and direction")
     for i, h in enumerate(data["health"]):
         if not _rows(_HEALTH)(h):
-            raise _fail(path, f"health[{i}]", "expected name, ok and detail")
+            raise fail(path, f"health[{i}]", "expected name, ok and detail")
     for name, t in data["topics"].items():
         if not _rows(_TOPIC)(t):
-            raise _fail(path, f"topics.{name}", "expected count, sha256 and type")
-    return data
+            raise fail(path, f"topics.{name}", "expected count, sha256 and type")

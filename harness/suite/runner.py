@@ -11,6 +11,9 @@ from pathlib import Path
 from typing import Any
 
 from harness.errors import SrrError
+from harness.run.baselines import baselines_dir, bless
+from harness.run.loading import load
+from harness.run.simulate import validate
 from harness.scenario import load_scenario, parse_override
 from harness.suite.events import Executor, Listener
 from harness.suite.outputs import FORMAT, write_outputs
@@ -54,8 +57,6 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
     """Everything ``srr validate`` checks, for every entry (its first sweep point: the world,
     graphs, systems under test and wiring are built once), and every point's scenario loaded,
     before anything runs."""
-    from harness import api
-
     spec = load_suite(paths, repeat=repeat, timeout_s=timeout_s)
     runs = plan_runs(spec)  # every point loads: a bad sweep path names where it was declared
     warnings: list[str] = []
@@ -63,7 +64,7 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
         first = expand(entry.sweep)[0]
         pairs = [parse_override(o) for o in entry.overrides + first.overrides()]
         sc = load_scenario(entry.scenario_file, pairs)
-        warnings += [f"{entry.name}: {w}" for w in api.validate(sc, entry.scenario_file)]
+        warnings += [f"{entry.name}: {w}" for w in validate(sc, entry.scenario_file)]
     return SuitePlan(spec, runs, tuple(warnings))
 
 
@@ -86,7 +87,6 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
     ``history``: a folder of earlier suite outputs whose metrics the page shows as trends.
     ``bless_reason``: make the first repeat of every group that is neither INVALID, FLAKY nor
     interrupted its baseline (``--update-baselines``), e.g. to bless each sweep point."""
-    from harness import api
     from harness.suite.history import load_history
 
     if history is not None and not Path(history).is_dir():
@@ -127,10 +127,10 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
                 # the folder as this process finds it: a run on a Ray cluster judged against
                 # the copy of the project shipped to its node, whose path it recorded
                 spec = g.runs[0].spec
-                here = baselines if baselines is not None else api.baselines_dir(
-                    spec.scenario_file, None, api.load(spec.scenario_file,
+                here = baselines if baselines is not None else baselines_dir(
+                    spec.scenario_file, None, load(spec.scenario_file,
                                                        overrides=spec.overrides))
-                blessed.append(api.bless(out_dir / g.runs[0].run_dir, bless_reason,
+                blessed.append(bless(out_dir / g.runs[0].run_dir, bless_reason,
                                          baselines=here))
     write_outputs(out_dir, summary, ranked)
     return SuiteResult(out_dir, verdict, code, summary, tuple(ranked), tuple(blessed))

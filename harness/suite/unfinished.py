@@ -17,13 +17,19 @@ from __future__ import annotations
 import contextlib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import yaml
 
 from harness import runmarker
-from harness.atomic import write_json_atomic
 from harness.errors import SrrError
+from harness.metrics.types import HealthResult
+from harness.report.junit import junit_cases, write_junit
+from harness.run.facts import combined_digest, reproduce_command, versions
+from harness.run.loading import load
+from harness.run.recover import recover
+from harness.run.rerender import report
+from harness.run.summary import RunSummary
+from harness.scenario import scenario_to_mapping
 from harness.suite.plan import RunSpec
 from harness.summary import SUMMARY_NAME
 
@@ -48,11 +54,9 @@ def _salvage(run_path: Path) -> str | None:
     Raises :class:`SrrError` when there was something that could not be recovered."""
     if runmarker.read(run_path) is None or not (run_path / "bag").is_dir():
         return None  # not even the recorder was made: nothing to recover
-    from harness import api
-
-    res = api.recover(run_path)
+    res = recover(run_path)
     with contextlib.suppress(SrrError):
-        api.report(run_path)
+        report(run_path)
     kept = sum(t.count for t in res.bag.topics.values())
     return f"{kept} recorded messages were recovered from its complete chunks"
 
@@ -80,40 +84,19 @@ def _write(run_path: Path, spec: RunSpec, detail: str) -> None:
     """The resolved scenario, an INVALID ``summary.json`` (no topics, no scores) whose one
     failed health gate says ``detail``, and its ``junit.xml``; the in-progress marker, if any,
     removed."""
-    from harness import api
-    from harness.report.junit import junit_cases, write_junit
-    from harness.scenario import scenario_to_mapping
-
-    scenario = api.load(spec.scenario_file, overrides=list(spec.overrides))
+    scenario = load(spec.scenario_file, overrides=list(spec.overrides))
     run_path.mkdir(parents=True, exist_ok=True)
     (run_path / "scenario.yaml").write_text(
         yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
-    summary: dict[str, Any] = {
-        "scenario": scenario.name,
-        "scenario_file": spec.scenario_file,
-        "seed": scenario.seed,
-        "srr_gt": scenario.srr_gt,
-        "duration_s": scenario.duration,
-        "simulated_s": 0.0,
-        "ticks": 0,
-        "tick_hz": scenario.physics.tick_hz,
-        "interrupted": True,
-        "stopped": None,
-        "warnings": [],
-        "health": [{"name": GATE, "ok": False, "detail": detail}],
-        "metrics": [],
-        "graphs": [],
-        "systems_under_test": [s.name for s in scenario.systems_under_test if s.enabled],
-        "topics": {},
-        "digest": api.combined_digest({}),
-        "versions": api.versions(),
-        "command": api.reproduce_command(spec.scenario_file, scenario, run_path),
-        "verdict": "INVALID",
-        "exit_code": 3,
-        "reasons": [f"health {GATE}: {detail}"],
-        "baseline": None,
-        "comparison": [],
-    }
-    write_junit(run_path / "junit.xml", scenario.name, junit_cases(summary))
-    write_json_atomic(run_path / SUMMARY_NAME, summary)
+    summary = RunSummary(
+        scenario=scenario.name, scenario_file=spec.scenario_file, seed=scenario.seed,
+        srr_gt=scenario.srr_gt, duration_s=scenario.duration, simulated_s=0.0, ticks=0,
+        tick_hz=scenario.physics.tick_hz, interrupted=True,
+        health=(HealthResult(GATE, False, detail),), metrics=(),
+        systems_under_test=tuple(s.name for s in scenario.systems_under_test if s.enabled),
+        topics={}, digest=combined_digest({}), versions=versions(),
+        command=reproduce_command(spec.scenario_file, scenario, run_path),
+        verdict="INVALID", exit_code=3, reasons=(f"health {GATE}: {detail}",))
+    write_junit(run_path / "junit.xml", scenario.name, junit_cases(summary.to_json()))
+    summary.write(run_path)
     runmarker.clear(run_path)

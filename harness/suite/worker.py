@@ -20,6 +20,11 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from harness.errors import SrrError
+from harness.interrupt import sigterm_as_interrupt
+from harness.run.loading import load
+from harness.run.simulate import run_scenario
+
 __all__ = ["peak_rss_mb", "run_job"]
 
 
@@ -30,15 +35,11 @@ def run_job(job: Mapping[str, Any], out_root: str | Path,
     Returns ``{"exit_code": int, "error": str | None, "peak_rss_mb": float}``; ``error`` is
     the one-line reason when the run could not be started or finished (an
     :class:`~harness.errors.SrrError`); ``peak_rss_mb`` this process's peak resident memory."""
-    from harness import api
-    from harness.errors import SrrError
-    from harness.interrupt import sigterm_as_interrupt
-
     run_dir = Path(out_root) / str(job["run_dir"])
     try:
         with sigterm_as_interrupt():
-            scenario = api.load(job["scenario_file"], overrides=list(job["overrides"]))
-            res = api.run_scenario(scenario, source=str(job["scenario_file"]), out=run_dir,
+            scenario = load(job["scenario_file"], overrides=list(job["overrides"]))
+            res = run_scenario(scenario, source=str(job["scenario_file"]), out=run_dir,
                                    baselines=Path(baselines) if baselines else None)
     except SrrError as err:
         return {"exit_code": err.exit_code, "error": str(err), "peak_rss_mb": peak_rss_mb()}

@@ -19,6 +19,7 @@ from harness.errors import SrrError
 from harness.report import render_report
 from harness.report.data import load_run, metric_windows
 from harness.report.images import keyframes
+from harness.run import record
 
 pytestmark = pytest.mark.slow
 
@@ -175,7 +176,7 @@ def test_summary_is_kept_when_the_report_fails(tmp_path: Path,
     def broken(*args: object, **kwargs: object) -> None:
         raise RuntimeError("boom")
 
-    monkeypatch.setattr(api, "write_report", broken)
+    monkeypatch.setattr(record, "write_report", broken)
     sc = api.load(Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml",
                   duration=0.5)
     with pytest.raises(SrrError, match=r"report\.html.*boom"):

@@ -1,0 +1,79 @@
+"""The small facts every run summary carries: the versions it ran with, its per-topic table
+and combined digest, the command that reproduces it, and the default run directory name."""
+
+from __future__ import annotations
+
+import hashlib
+import platform
+import time
+from collections.abc import Mapping, Sequence
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+from harness import __version__
+from harness.bus import TopicStats
+from harness.run.summary import TopicRow
+from harness.scenario import Scenario
+from harness.sut.base import SutContext
+
+__all__ = ["combined_digest", "default_run_dir", "reproduce_command", "sut_endpoints",
+           "topic_table", "versions"]
+
+
+def versions() -> dict[str, str]:
+    out = {"srr": __version__, "python": platform.python_version()}
+    for dist in ("mujoco", "numpy", "rosbags", "mcap", "pandas"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = "not installed"
+    return out
+
+
+def default_run_dir(scenario: Scenario, root: Path = Path("reports"), suffix: str = "") -> Path:
+    """``reports/<scenario>/<run id>``; the run id is the local start time plus the seed
+    (a name only: no wall-clock value goes into the recorded data), then ``suffix``."""
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    base = root / scenario.name / f"{stamp}-s{scenario.seed}{suffix}"
+    candidate, n = base, 1
+    while candidate.exists():
+        n += 1
+        candidate = base.with_name(f"{base.name}-{n}")
+    return candidate
+
+
+def combined_digest(topics: Mapping[str, TopicRow]) -> str:
+    """One SHA-256 over every topic's name and digest, in name order."""
+    h = hashlib.sha256()
+    for name in sorted(topics):
+        h.update(f"{name}\0{topics[name].sha256}\n".encode())
+    return h.hexdigest()
+
+
+def topic_table(stats: Mapping[str, TopicStats], published: Mapping[str, int],
+                duration_s: float) -> dict[str, TopicRow]:
+    """Each recorded topic's row: its type, messages recorded and published, rate over
+    ``duration_s`` of simulated time, bytes, SHA-256 and durability."""
+    return {name: TopicRow(type=st.msgtype, count=st.count, sha256=st.sha256,
+                           published=published.get(name, 0),
+                           rate_hz=round(st.count / duration_s if duration_s > 0 else 0.0, 3),
+                           bytes=st.bytes, durability=st.durability)
+            for name, st in stats.items()}
+
+
+def sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any]:
+    """Name → plug-in and the topics it publishes and subscribes (what a replay withholds)."""
+    out: dict[str, Any] = {}
+    for name, sut, ctx in suts:
+        out[name] = {
+            "plugin": f"{type(sut).__module__}:{type(sut).__qualname__}",
+            "publishes": sorted({e.topic for e in ctx.endpoints if e.kind == "pub"}),
+            "subscribes": sorted({e.topic for e in ctx.endpoints if e.kind == "sub"}),
+        }
+    return out
+
+
+def reproduce_command(source: str, scenario: Scenario, run_dir: Path) -> str:
+    return (f"srr run {source} --seed {scenario.seed} --duration {scenario.duration:g} "
+            f"--out {run_dir}")

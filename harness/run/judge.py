@@ -1,0 +1,69 @@
+"""Judging a scored run: compare its metrics with its scenario's baseline, under the same
+configuration only, and decide the verdict (:func:`harness.regression.decide`)."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from harness.regression import (
+    baseline_path,
+    compare,
+    config_differences,
+    decide,
+    load_baseline,
+    with_defaults,
+)
+from harness.regression.reference import reference_path
+from harness.run.baselines import baseline_name, scene_config
+from harness.run.summary import BaselineRef
+from harness.scenario import Scenario
+from harness.scoring import Scores
+
+__all__ = ["Judgement", "judge"]
+
+
+@dataclass(frozen=True)
+class Judgement:
+    """What judging gave: the summary's ``verdict``, ``exit_code``, ``reasons``, ``baseline``
+    (None when there was none to compare with) and ``comparison`` fields."""
+
+    verdict: str
+    exit_code: int
+    reasons: tuple[str, ...]
+    baseline: BaselineRef | None
+    comparison: tuple[dict[str, Any], ...]
+
+
+def judge(scenario: Scenario, scores: Scores, bdir: Path, *, digest: str,
+          scene_files: Mapping[str, str] | None) -> Judgement:
+    """Compare ``scores`` with the baseline of ``scenario`` in ``bdir``; ``digest`` is the
+    run's combined digest and ``scene_files`` its model files' digests (its configuration)."""
+    path = baseline_path(baseline_name(scenario), bdir)
+    base = load_baseline(path) if scores.metrics else None
+    cmp = compare(scores.metrics, base, scenario.scoring.tolerances) if base else None
+    note = (f"no baseline at {path}: bless one with `srr baseline bless RUN_DIR --reason "
+            "TEXT` or `srr run ... --update-baseline`")
+    if "@" in baseline_name(scenario):  # a sweep point's own baseline
+        note = (f"no baseline at {path}: bless every sweep point with `srr suite SUITE "
+                "--update-baselines --reason TEXT`")
+    files = scene_files if base is not None and base.config is not None \
+        and "scene_files" in base.config else None  # a baseline from before srr hashed them
+    mismatch = [] if base is None or base.config is None else config_differences(
+        with_defaults(base.config), scene_config(scenario, files))
+    if cmp is not None and mismatch:  # a baseline of another configuration judges nothing
+        cmp = cmp.not_compared()
+    verdict = decide(scores.health, scores.metrics, cmp, note, mismatch,
+                     record_only=scenario.scoring.record_only)
+    baseline = None if base is None else BaselineRef(
+        path=str(path), blessed_by=base.blessed_by, reason=base.reason,
+        blessed_at=base.blessed_at, seed=base.seed, digest=base.digest,
+        digest_matches=base.digest == digest, config_checked=base.config is not None,
+        config_differences=tuple(mismatch),
+        reference=str(reference_path(path)) if base.reference
+        and reference_path(path).is_file() else None)
+    return Judgement(verdict.name, verdict.exit_code, tuple(verdict.reasons), baseline,
+                     () if cmp is None else tuple(dataclasses.asdict(e) for e in cmp.entries))

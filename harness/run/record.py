@@ -1,0 +1,305 @@
+"""Recording a run: own the run directory, record the tick loop into the bag, score, judge
+and write the outputs. Shared by a run of a scenario (:mod:`harness.run.simulate`) and an
+open-loop replay (:mod:`harness.run.replay`), which differ only in the :class:`Loop` they
+record.
+
+The steps of :func:`record`, each a function here:
+
+1. :func:`prepare` — refuse a live or non-empty run directory (before anything is built);
+2. :func:`record` — own the directory (:mod:`harness.runlock`) for the steps below;
+3. :func:`_open_recorder` — the in-progress marker, ``scenario.yaml``, the recorder (and the
+   live view's tap);
+4. :func:`_tick_loop` — the ticks, under the disk-space guard; a stop at a tick boundary or
+   Ctrl-C keeps what was recorded;
+5. :func:`_score` — close the recorder, tabulate the topics and score the recording;
+6. :func:`_summarize` — the run's summary (without its verdict);
+7. :func:`_update_baseline` (``--update-baseline``) and :func:`harness.run.judge.judge`;
+8. :func:`_write_outputs` — ``junit.xml``, ``summary.json`` (the run is complete from here),
+   then ``report.html``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import shutil
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from harness import runlock, runmarker, yamlio
+from harness.bus import Bus
+from harness.bus.bagfile import ChunkPolicy
+from harness.bus.live import LiveView
+from harness.camera_topics import unrecorded_topics
+from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
+from harness.errors import InvalidRunError, RunStopped, SrrError
+from harness.frames import Frames
+from harness.memory import release_free_memory
+from harness.metrics.types import HealthResult
+from harness.output import ROS2_OUTPUT, OutputKind
+from harness.regression import baseline_path, save_baseline
+from harness.report.graphs import RunGraphs, write_graphs
+from harness.report.html import write_report
+from harness.report.junit import junit_cases, write_junit
+from harness.run.baselines import baseline_name, baselines_dir, scene_config
+from harness.run.facts import combined_digest, sut_endpoints, topic_table, versions
+from harness.run.graphs import rebuild_graphs
+from harness.run.judge import judge
+from harness.run.summary import RunSummary, TopicRow
+from harness.scenario import Scenario, scenario_to_mapping
+from harness.scoring import Scores, scenario_frames, score_frames
+from harness.sut.base import SutContext
+
+__all__ = ["Loop", "Progress", "RunResult", "Started", "prepare", "record"]
+
+Progress = Callable[[int, int], None]
+Started = Callable[[Path], None]  # told the run directory once it is created and owned
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """A recorded run: its directory, verdict and exit code, and its summary, as
+    ``summary.json`` holds it (``summary``) and typed (``run_summary``)."""
+
+    run_dir: Path
+    verdict: str
+    exit_code: int
+    summary: dict[str, Any]
+    run_summary: RunSummary
+
+
+@dataclass(frozen=True)
+class Loop:
+    """What the shared recording path needs from a loop: its bus, systems under test, tick
+    counter and ``step``/``close``, plus what the summary says about it."""
+
+    bus: Bus
+    suts: Sequence[tuple[str, Any, SutContext]]
+    step: Callable[[], None]  # one tick
+    close: Callable[[], None]
+    ticks: Callable[[], int]
+    srr_gt: bool
+    command: str  # what reproduces the run
+    warnings: tuple[str, ...] = ()  # found before the run (wiring, rates, output topics)
+    graph_paths: tuple[Any, ...] = ()  # the action graphs' files (summary "graphs")
+    scene_files: Mapping[str, str] | None = None  # model files' digests by field
+    world_map: Any = None  # a world file's static geometry, for the report's map
+    replay_of: Mapping[str, Any] | None = None  # what a replay plays back
+    graphs: RunGraphs | None = None  # written into the run directory (graphs.json)
+    output: OutputKind = ROS2_OUTPUT  # what the recorder writes (harness.output)
+
+
+def prepare(run_dir: Path) -> None:
+    """Refuse a run directory another process is writing, or one that is not empty."""
+    runlock.refuse_if_live(run_dir)
+    if run_dir.exists() and any(run_dir.iterdir()):
+        raise SrrError(f"--out {run_dir}: directory exists and is not empty")
+
+
+def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_ticks: int,
+           progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
+           update_reason: str = "", free_space: FreeSpace = disk_free,
+           view: LiveView | None = None, started: Started | None = None) -> RunResult:
+    """:func:`write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
+    created and locked first (a live owner is refused), and released, its lock file
+    removed, however the run ends (``kill -9`` releases the lock too)."""
+    with contextlib.ExitStack() as owned:
+        try:
+            owned.enter_context(runlock.owning(run_dir, "written", fresh=True))
+            if started is not None:
+                started(run_dir)
+        except BaseException:
+            loop.close()  # which write_run does once it runs
+            raise
+        return write_run(scenario, loop, source=source, run_dir=run_dir, n_ticks=n_ticks,
+                         progress=progress, baselines=baselines,
+                         update_baseline=update_baseline, update_reason=update_reason,
+                         free_space=free_space, view=view)
+
+
+@dataclass(frozen=True)
+class _Ended:
+    """How the tick loop ended: ``interrupted`` (Ctrl-C), or ``stopped`` at a tick boundary
+    by the health gate ``gate`` (the disk-space guard, or a :class:`RunStopped`)."""
+
+    interrupted: bool = False
+    stopped: str | None = None
+    gate: str = "disk_space"
+
+
+def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_ticks: int,
+              progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
+              update_reason: str = "", free_space: FreeSpace = disk_free,
+              view: LiveView | None = None) -> RunResult:
+    """Record ``loop`` into ``run_dir``, score it and write the run directory. Until
+    ``summary.json`` is written the directory holds ``incomplete.json``
+    (:mod:`harness.runmarker`), so a killed run never looks done. ``view`` (a started live
+    view) gets every message the recorder serializes and, after each tick, the simulation
+    time; it may hold the first tick for a client and pace the loop."""
+    command = loop.command
+    recorder = _open_recorder(scenario, loop, run_dir, source=source, command=command)
+    ended = _tick_loop(scenario, loop, recorder, run_dir, n_ticks=n_ticks, progress=progress,
+                       free_space=free_space, view=view)
+    runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
+    try:  # until summary.json exists the directory is half-written: an error removes it
+        scores, frames, topics, sim_s = _score(scenario, loop, recorder, run_dir, source)
+    except BaseException:
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise
+    if ended.stopped is not None:
+        scores = dataclasses.replace(
+            scores, health=(*scores.health, HealthResult(ended.gate, False, ended.stopped)))
+    bdir = baselines_dir(source, baselines, scenario)
+    summary = _summarize(scenario, loop, recorder, source=source, scores=scores,
+                         topics=topics, sim_s=sim_s, ended=ended, bdir=bdir)
+    if update_baseline and not ended.interrupted:
+        _update_baseline(scenario, summary, bdir, run_dir, update_reason)
+    j = judge(scenario, scores, bdir, digest=summary.digest, scene_files=summary.scene_files)
+    summary = dataclasses.replace(summary, verdict=j.verdict, exit_code=j.exit_code,
+                                  reasons=j.reasons, baseline=j.baseline,
+                                  comparison=j.comparison)
+    if ended.interrupted:
+        summary = dataclasses.replace(summary, verdict="INTERRUPTED", exit_code=130,
+                                      reasons=("interrupted before the end of the scenario",))
+    data = _write_outputs(scenario, summary, run_dir, frames)
+    return RunResult(run_dir, summary.verdict, summary.exit_code, data, summary)
+
+
+def _open_recorder(scenario: Scenario, loop: Loop, run_dir: Path, *, source: str,
+                   command: str) -> Any:
+    """The in-progress marker, the resolved ``scenario.yaml`` and the action graphs, then the
+    recorder (not yet opened) of the loop's output."""
+    runmarker.mark(run_dir, "recording", scenario_file=source, command=command)
+    (run_dir / "scenario.yaml").write_text(
+        yamlio.dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
+    if loop.graphs is not None:
+        write_graphs(run_dir, loop.graphs)
+    rec = scenario.recording
+    return loop.output.recorder(run_dir / "bag", ChunkPolicy(
+        max_bytes=round(rec.chunk_mb * MB), max_span_ns=round(rec.chunk_s * 1e9),
+        fsync=rec.fsync, compression=rec.compression),
+        unrecorded=unrecorded_topics(scenario))
+
+
+def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, n_ticks: int,
+               progress: Progress | None, free_space: FreeSpace,
+               view: LiveView | None) -> _Ended:
+    """Open the recorder on the bus (and the live view on the recorder), then run the ticks.
+    A low disk or a :class:`RunStopped` stops the loop at a tick boundary and Ctrl-C ends it,
+    what was recorded kept; any other error removes the run directory. The loop is closed
+    however it ends."""
+    guard = DiskGuard(run_dir, round(scenario.recording.min_free_mb * MB), free_space,
+                      every_ticks=scenario.physics.tick_hz)
+    hz = scenario.physics.tick_hz
+    try:
+        recorder.open(loop.bus.qos)
+        loop.bus.add_tap(recorder)
+        for _, sut, _ in loop.suts:  # the ROS 2 bridge publishes the recorder's bytes
+            attach = getattr(sut, "attach_recorder", None)
+            if callable(attach):
+                attach(recorder)
+        if view is not None:
+            recorder.add_serialized_tap(view.log)
+            view.advertise({t: i.msgtype for t, i in loop.bus.topics().items()}, loop.bus.qos)
+            view.wait_for_client()
+        for _ in range(n_ticks):
+            loop.step()
+            if view is not None:
+                view.tick()
+            if progress is not None:
+                progress(loop.ticks(), n_ticks)
+            if loop.ticks() % hz == 0:  # flat resident memory however long the run
+                release_free_memory()
+            low = guard.poll(loop.ticks(), recorder.bytes_serialized)
+            if low is not None:
+                return _Ended(stopped=f"{low}: the run was stopped after "
+                                      f"{loop.ticks() / hz:g} s of simulated time")
+    except KeyboardInterrupt:
+        return _Ended(interrupted=True)
+    except RunStopped as err:  # at a tick boundary: what was recorded stays, INVALID
+        return _Ended(gate=err.gate, stopped=f"{err}; the run was stopped after "
+                                             f"{loop.ticks() / hz:g} s of simulated time")
+    except BaseException:
+        with contextlib.suppress(Exception):  # the original error is the one to report
+            recorder.close()
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise
+    finally:
+        loop.close()
+    return _Ended()
+
+
+def _score(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path,
+           source: str) -> tuple[Scores, Frames, dict[str, TopicRow], float]:
+    """Close the recorder and score what it recorded: the scores, the frames read from the
+    bag (for the report), the topic table and the simulated seconds."""
+    stats = recorder.close()
+    release_free_memory()  # the loop's buffers, before scoring reads the bag
+    published = {t: n for t, n in loop.bus.published_counts().items()
+                 if t not in recorder.unrecorded}
+    sim_s = loop.ticks() / scenario.physics.tick_hz
+    topics = topic_table(stats, published, sim_s)
+    frames = scenario_frames(scenario, run_dir / "bag")
+    scores = score_frames(scenario, frames, srr_gt=loop.srr_gt, published=published,
+                          recorded={t: st.count for t, st in stats.items()},
+                          duration_s=sim_s, source=source)
+    return scores, frames, topics, sim_s
+
+
+def _summarize(scenario: Scenario, loop: Loop, recorder: Any, *, source: str, scores: Scores,
+               topics: dict[str, TopicRow], sim_s: float, ended: _Ended,
+               bdir: Path) -> RunSummary:
+    """The run's summary, not yet judged (INVALID until :func:`harness.run.judge.judge`)."""
+    # what plug-ins noticed while running (the ROS 2 bridge: topics it could not bridge)
+    noticed = [w for _, sut, _ in loop.suts for w in getattr(sut, "warnings", list)()]
+    return RunSummary(
+        scenario=scenario.name, scenario_file=source, seed=scenario.seed, srr_gt=loop.srr_gt,
+        duration_s=scenario.duration, simulated_s=sim_s, ticks=loop.ticks(),
+        tick_hz=scenario.physics.tick_hz, interrupted=ended.interrupted,
+        stopped=ended.stopped, warnings=(*loop.warnings, *noticed), health=scores.health,
+        metrics=tuple(dataclasses.asdict(m) for m in scores.metrics), graphs=loop.graph_paths,
+        systems_under_test=tuple(name for name, _, _ in loop.suts),
+        sut_endpoints=sut_endpoints(loop.suts), output=loop.output.summary(),
+        topics=topics, digest=combined_digest(topics), versions=versions(),
+        scene_files=loop.scene_files, command=loop.command, replay_of=loop.replay_of,
+        world_map=loop.world_map,
+        # published in the run, recorded compressed (or not at all)
+        unrecorded={t: {"type": ty, "published": n} for t, (ty, n)
+                    in recorder.skipped().items()} if recorder.unrecorded else None,
+        baselines_dir=str(bdir),  # where bless writes this run's baseline
+        verdict="INVALID", exit_code=3)
+
+
+def _update_baseline(scenario: Scenario, summary: RunSummary, bdir: Path, run_dir: Path,
+                     reason: str) -> None:
+    """``--update-baseline``: this run becomes its scenario's baseline; an invalid run is
+    refused (:class:`InvalidRunError`)."""
+    if not summary.ok:
+        raise InvalidRunError(f"{run_dir}: health gates tripped; an invalid run cannot "
+                              "become the baseline")
+    save_baseline(baseline_path(baseline_name(scenario), bdir), summary.to_json(),
+                  reason=reason, source_run=str(run_dir),
+                  config=scene_config(scenario, summary.scene_files),
+                  bag=run_dir / "bag")
+
+
+def _write_outputs(scenario: Scenario, summary: RunSummary, run_dir: Path,
+                   frames: Frames) -> dict[str, Any]:
+    """``junit.xml``, then ``summary.json`` (the run is complete from here on: the marker
+    goes), then ``report.html``, last: a report that fails to render never costs the run its
+    summary. Returns the summary as written."""
+    data = summary.to_json()
+    write_junit(run_dir / "junit.xml", scenario.name, junit_cases(data))
+    summary.write(run_dir)
+    runmarker.clear(run_dir)
+    try:
+        write_report(run_dir, summary=data, scenario=scenario, frames=frames,
+                     rebuild_graphs=rebuild_graphs)
+    except SrrError:
+        raise
+    except Exception as err:
+        raise SrrError(f"{run_dir / 'report.html'}: the report could not be rendered "
+                       f"({type(err).__name__}: {err}); summary.json is complete") from err
+    return data

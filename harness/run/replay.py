@@ -1,0 +1,144 @@
+"""Open-loop replay of a recorded run (``srr replay``): its bag played back into its systems
+under test, or replacements, and the new run recorded, scored and judged like a run of the
+recorded scenario (:mod:`harness.replay` plays it; :mod:`harness.run.record` records it)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from harness import runlock
+from harness.bus import Bus
+from harness.diskspace import check_free_space, disk_free
+from harness.errors import ScenarioError
+from harness.regression import comparable_config, config_differences
+from harness.replay import Playback, Replay
+from harness.report.graphs import read_graphs
+from harness.run.baselines import baselines_dir
+from harness.run.facts import default_run_dir
+from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
+from harness.run.summary import RunSummary
+from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
+from harness.scoring import check_scoring
+from harness.sut.base import load_suts
+
+__all__ = ["replay"]
+
+
+def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence[str] = (),
+           out: Path | None = None, progress: Progress | None = None,
+           baselines: Path | None = None, started: Started | None = None) -> RunResult:
+    """Open-loop replay of a recorded run (``srr replay``): its bag played back, in
+    publication order, into its systems under test — or into replacements (``suts``:
+    ``NAME=module:Class``) and changed parameters (``overrides``: ``--set`` on the systems
+    under test and the scoring). What the systems under test published is produced again;
+    everything else is the recording's bytes. The new run directory is scored and judged
+    like a run of the recorded scenario (:mod:`harness.replay`)."""
+    src = Path(run_dir)
+    runlock.refuse_if_live(src)
+    summary = RunSummary.read(src)
+    recorded = load_scenario(src / "scenario.yaml")
+    pairs = [parse_override(o) for o in overrides]
+    for text in suts:
+        name, sep, plugin = text.partition("=")
+        if not sep or not name.strip() or not plugin.strip():
+            raise ScenarioError("--sut", text, "expected NAME=module:Class")
+        if not any(s.name == name.strip() for s in recorded.systems_under_test):
+            names = ", ".join(s.name for s in recorded.systems_under_test) or "none"
+            raise ScenarioError("--sut", name, f"no system under test named {name.strip()!r} "
+                                f"in {src / 'scenario.yaml'} (names: {names})")
+        pairs.append((f"systems_under_test.{name.strip()}.plugin", plugin.strip()))
+    scenario = load_scenario(src / "scenario.yaml", pairs)
+    _check_replay_scene(recorded, scenario)
+    source = str(summary.scenario_file or src / "scenario.yaml")
+    check_scoring(scenario, srr_gt=summary.srr_gt, source=source)
+    judged = summary.baselines_dir  # judged against the recorded run's baselines
+    baselines = baselines_dir(source, baselines if baselines is not None
+                              else Path(judged) if judged else None, scenario)
+    playback = Playback(src / "bag")
+    withheld = _recorded_outputs(summary.sut_endpoints, recorded, source)
+    rep = Replay(scenario, playback, withheld, source)
+    try:
+        rep.start()
+        withheld |= {e.topic for _, _, ctx in rep.suts for e in ctx.endpoints
+                     if e.kind == "pub"}
+        warnings = _replay_wiring(rep, playback, withheld)
+    except BaseException:
+        rep.close()
+        raise
+    out_dir = Path(out) if out is not None else default_run_dir(scenario, suffix="-replay")
+    prepare(out_dir)
+    check_free_space(scenario, out_dir, disk_free)
+    command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
+                        *(f"--set {o}" for o in overrides), f"--out {out_dir}"])
+    replay_of = {
+        "run_dir": str(src.resolve()), "digest": summary.digest, "mode": "open-loop",
+        "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
+        "overrides": list(overrides), "withheld": sorted(withheld)}
+    try:  # the recorded scene's graphs; without them the report rebuilds them
+        graphs = read_graphs(src)
+    except (OSError, ValueError):
+        graphs = None
+    loop = Loop(rep.bus, rep.suts, rep.step_tick, rep.close, lambda: rep.tick_index,
+                summary.srr_gt, command=command, warnings=tuple(warnings),
+                scene_files=dict(summary.scene_files or {}), replay_of=replay_of,
+                world_map=summary.world_map,  # the recorded scene, as it was
+                output=playback.output, graphs=graphs)
+    return record(scenario, loop, source=source, run_dir=out_dir,
+                   n_ticks=int(summary.ticks or scenario.n_ticks), progress=progress,
+                   baselines=baselines, started=started)
+
+
+def _check_replay_scene(recorded: Scenario, scenario: Scenario) -> None:
+    """A replay may change the systems under test and the scoring, not the recorded scene."""
+    def scene(sc: Scenario) -> dict[str, Any]:
+        cfg = comparable_config(scenario_to_mapping(sc))
+        cfg.pop("scoring", None)
+        return cfg
+
+    if recorded.output != scenario.output:
+        raise ScenarioError("--set", "output", "a replay records what the recording is "
+                            "(ROS 1 or ROS 2, bag or MCAP); it cannot change the output")
+    diffs = config_differences(scene(recorded), scene(scenario))
+    if diffs:
+        field = diffs[0].split(":", 1)[0]
+        raise ScenarioError("--set", field, "changes the recorded scene, which an open-loop "
+                            "replay plays back as it was; a replay can change the systems "
+                            "under test and the scoring")
+
+
+def _recorded_outputs(eps: Mapping[str, Any] | None, recorded: Scenario,
+                      source: str) -> set[str]:
+    """Topics the recorded run's systems under test published: from its summary's
+    ``sut_endpoints`` (``eps``), or, for runs recorded before it kept them, by setting the
+    recorded plug-ins up on a scratch bus."""
+    if isinstance(eps, Mapping):
+        return {t for v in eps.values() if isinstance(v, dict)
+                for t in v.get("publishes", []) if isinstance(t, str)}
+    bus = Bus(lambda: 0)
+    suts = load_suts(recorded, bus, source)
+    for _, sut, ctx in suts:
+        sut.setup(ctx)
+    return {e.topic for _, _, ctx in suts for e in ctx.endpoints if e.kind == "pub"}
+
+
+def _replay_wiring(rep: Replay, playback: Playback, withheld: set[str]) -> list[str]:
+    """Types of what the systems under test read must match the recording; inputs that are
+    neither recorded nor published by another system under test are warnings."""
+    produced = {e.topic: e.msgtype for _, _, ctx in rep.suts for e in ctx.endpoints
+                if e.kind == "pub"}
+    warnings = []
+    for name, _, ctx in rep.suts:
+        for e in ctx.endpoints:
+            rec = playback.topics.get(e.topic)
+            if rec is not None and rec.msgtype != e.msgtype:
+                raise ScenarioError(ctx.field.split(": ", 1)[0], ctx.field.split(": ", 1)[-1],
+                                    f"{name} uses {e.topic} as {e.msgtype}, but the recording "
+                                    f"carries {rec.msgtype}")
+            fed = ((rec is not None and e.topic not in withheld) or e.topic in produced
+                   or e.topic in rep.decoded)
+            if e.kind == "sub" and not fed:
+                warnings.append(f"{ctx.field}: {name} subscribes to {e.topic}, which neither "
+                                "the recording nor another system under test provides")
+    return warnings

@@ -1,0 +1,31 @@
+"""``srr report``: re-render a finished run directory's ``report.html``, strictly."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from harness import runlock
+from harness.bus.bagread import ros1_recording
+from harness.errors import BagError
+from harness.report.html import write_report
+from harness.run.graphs import rebuild_graphs
+from harness.scenario import load_scenario
+from harness.scoring import scenario_frames
+from harness.summary import read_summary
+
+__all__ = ["report"]
+
+
+def report(run_dir: str | Path) -> Path:
+    """Re-render a run directory's ``report.html`` (``srr report``). Unlike the lenient
+    renderer, which notes what it could not read, this refuses a run directory whose
+    summary, scenario or bag does not read back (SrrError, exit 2) and writes nothing then."""
+    run = Path(run_dir)
+    runlock.refuse_if_live(run)
+    summary = read_summary(run)
+    scenario = load_scenario(run / "scenario.yaml")
+    if not (run / "bag" / "metadata.yaml").is_file() and ros1_recording(run / "bag") is None:
+        raise BagError(f"{run / 'bag'}: metadata.yaml: missing (not a rosbag2 directory)")
+    frames = scenario_frames(scenario, run / "bag")
+    return write_report(run, summary=summary, scenario=scenario, frames=frames,
+                        rebuild_graphs=rebuild_graphs)

@@ -1,0 +1,248 @@
+"""Running a scenario: check everything that can be checked before a run, build the
+simulation, serve its live view and streams, then record it (:mod:`harness.run.record`);
+``srr validate`` is the same checks without the run, and ``--repeat`` runs it ``n`` times."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from harness.atomic import write_json_atomic
+from harness.bus.live import LiveConfig, LiveView
+from harness.camera_topics import recorded_cameras
+from harness.diskspace import FreeSpace, check_free_space, disk_free, large_bag_notice
+from harness.engine import Simulation
+from harness.errors import ScenarioError, SrrError
+from harness.output import check_output_topics, decide_output
+from harness.run.baselines import baselines_dir
+from harness.run.facts import default_run_dir, reproduce_command
+from harness.run.graphs import graphs_of
+from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
+from harness.scenario import Scenario, SutSpec, rate_warnings
+from harness.scoring import check_scoring
+from harness.sim.world_file import map_json
+from harness.wiring import check_wiring
+
+__all__ = ["ROS2_BRIDGE", "Notice", "RepeatResult", "check_video", "run_repeat", "run_scenario",
+           "start_streams", "validate", "with_ros2_bridge"]
+
+Notice = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class RepeatResult:
+    runs: tuple[RunResult, ...]
+    identical: bool
+    differing_topics: tuple[str, ...]
+    exit_code: int
+    out_dir: Path
+
+
+def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
+                 progress: Progress | None = None, baselines: Path | None = None,
+                 update_baseline: bool = False, update_reason: str = "updated with "
+                 "--update-baseline", free_space: FreeSpace = disk_free,
+                 live: LiveConfig | None = None, notice: Notice | None = None,
+                 started: Started | None = None) -> RunResult:
+    """Build, run and record ``scenario``; write the run directory and return its verdict.
+
+    ``free_space`` measures the free bytes on a path's filesystem (``shutil.disk_usage`` by
+    default): the run refuses to start (:class:`~harness.errors.DiskSpaceError`) when it is
+    below the estimated bag size plus ``recording.min_free_mb``, and stops at a tick boundary,
+    INVALID, when it falls below ``recording.min_free_mb`` during the run.
+
+    ``live`` serves the run over the Foxglove WebSocket protocol while it goes
+    (:mod:`harness.bus.live`): the server starts once the scene is built and wired (a port
+    in use is refused then, before anything is written) and stops when the run ends, however
+    it ends. It changes nothing that is recorded. ``notice`` receives its one-line messages
+    for the user; ``started`` the run directory, once it is created and owned."""
+    run_dir = Path(out) if out is not None else default_run_dir(scenario)
+    baselines = baselines_dir(source, baselines, scenario)  # a bad folder stops it here
+    if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
+        scenario = dataclasses.replace(scenario, baselines=str(baselines))
+    prepare(run_dir)
+    size_note = large_bag_notice(scenario, check_free_space(scenario, run_dir, free_space))
+    if size_note is not None and notice is not None:
+        notice(size_note)
+    check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
+    sim = Simulation(with_ros2_bridge(scenario, run_dir), source=source)
+    try:
+        graphs = graphs_of(sim)  # as built, before any tick
+        output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
+        if live is not None and output.ros == 1:
+            raise SrrError(f"--foxglove: the live view serves ROS 2 messages, and this run "
+                           f"records ROS 1 ({output.because})")
+        plan = sim.plan()
+        warnings = [*rate_warnings(scenario, source), *check_wiring(plan, scenario, source),
+                    *check_output_topics(output, plan.topics, scenario, source)]
+        # After the plan, so the server advertises every topic the run will publish at once.
+        view = (LiveView.start(live, topics={t.topic: t.msgtype for t in plan.topics
+                                             if t.kind == "pub"}, notice=notice)
+                if live is not None else None)
+    except BaseException:
+        sim.close()
+        raise
+    try:
+        start_streams(sim, scenario, source, notice)
+    except BaseException:
+        sim.close()
+        if view is not None:
+            view.close()
+        raise
+    world_map = (map_json(sim.world.world_file)  # the file's static geometry, for the map
+                 if sim.world.world_file is not None else None)
+    loop = Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
+                sim.srr_gt, command=reproduce_command(source, scenario, run_dir),
+                warnings=tuple(warnings), graph_paths=tuple(sim.graph_paths),
+                scene_files=dict(sim.world.scene_files), world_map=world_map, output=output,
+                graphs=graphs)
+    try:
+        return record(scenario, loop, source=source, run_dir=run_dir,
+                       n_ticks=scenario.n_ticks, progress=progress, baselines=baselines,
+                       update_baseline=update_baseline, update_reason=update_reason,
+                       free_space=free_space, view=view, started=started)
+    finally:
+        if view is not None:
+            view.close()
+
+
+def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>",
+                  notice: Notice | None = None) -> list[str]:
+    """Serve the scenario's RTSP streams (``rtsp.enabled``): bind every camera's port now, so
+    a port in use stops the run before anything is written, then wait for clients
+    (``rtsp.wait_s``). Returns the stream URLs. The servers stop with the simulation."""
+    from harness.builders.rtsp_cameras import stream_cameras
+    from harness.errors import StreamError
+    from harness.graph.nodes.video import rtsp_hub
+    from harness.video.rtsp import StreamConfig
+
+    cams = stream_cameras(scenario)
+    if not cams:
+        return []
+    spec = scenario.rtsp
+    try:
+        hub = rtsp_hub(sim.ctx, rate=spec.rate)
+    except StreamError as err:
+        raise StreamError(f"{scenario.file_for('rtsp', source)}: rtsp.enabled: {err}") from err
+    urls = []
+    for i, cam in cams:
+        assert cam.port is not None
+        where = f"{scenario.file_for(f'cameras[{i}]', source)}: cameras[{i}].port"
+        urls.append(hub.stream(StreamConfig(cam.port, cam.mount, spec.host, where)).url)
+    say = notice or (lambda _text: None)
+    say(f"rtsp: serving {', '.join(urls)}")
+    if spec.wait_s is not None:
+        say(f"rtsp: waiting up to {spec.wait_s:g} s for a client on every stream")
+        missing = hub.wait_for_clients(spec.wait_s)
+        if missing:
+            say(f"rtsp: no client on {', '.join(missing)}; starting anyway")
+    return urls
+
+
+ROS2_BRIDGE = "ros2_bridge"
+
+
+def with_ros2_bridge(scenario: Scenario, run_dir: Path | None) -> Scenario:
+    """``scenario`` with the ROS 2 bridge as its last system under test when
+    ``ros2.enabled`` (:mod:`harness.ros2.bridge`); as it is otherwise. Without ``run_dir``
+    the bridge only checks (``srr validate``)."""
+    if not scenario.ros2.enabled:
+        return scenario
+    params: dict[str, Any] = ({"run_dir": str(run_dir)} if run_dir is not None
+                              else {"check_only": True})
+    bridge = SutSpec(name=ROS2_BRIDGE, plugin="harness.ros2.bridge:Ros2Bridge", params=params)
+    return dataclasses.replace(
+        scenario, systems_under_test=(*scenario.systems_under_test, bridge))
+
+
+def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
+               out: Path | None = None, progress: Progress | None = None,
+               baselines: Path | None = None, started: Started | None = None) -> RepeatResult:
+    """Run ``n`` times (``run_1`` … ``run_n`` under one directory) and compare digests."""
+    if n < 1:
+        raise SrrError(f"--repeat: must be >= 1, got {n}")
+    out_dir = Path(out) if out is not None else default_run_dir(scenario)
+    runs = tuple(run_scenario(scenario, source=source, out=out_dir / f"run_{i + 1}",
+                              progress=progress, baselines=baselines, started=started)
+                 for i in range(n))
+    first = runs[0].summary["topics"]
+    differing = sorted({t for r in runs[1:] for t in set(first) | set(r.summary["topics"])
+                        if first.get(t, {}).get("sha256")
+                        != r.summary["topics"].get(t, {}).get("sha256")})
+    identical = not differing
+    report = {
+        "runs": [str(r.run_dir) for r in runs],
+        "identical": identical,
+        "differing_topics": differing,
+        "digests": [r.summary["digest"] for r in runs],
+    }
+    write_json_atomic(out_dir / "determinism.json", report)
+    worst = max(r.exit_code for r in runs)
+    return RepeatResult(runs, identical, tuple(differing),
+                        worst if identical else max(worst, 1), out_dir)
+
+
+def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """Every check that can be made without running (``srr validate``): the scenario itself
+    (done by loading it), the scoring block, building the world and the graphs, loading and
+    setting up the systems under test, and the wiring (topics and TF). Raises the first error;
+    returns the warnings."""
+    check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
+    baselines_dir(source, None, scenario)  # a baselines: path that is not a folder
+    busy = check_video(scenario, source)
+    sim = Simulation(with_ros2_bridge(scenario, None), source=source)
+    try:
+        output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
+        plan = sim.plan()
+        size_note = large_bag_notice(scenario)
+        return (*rate_warnings(scenario, source), *check_wiring(plan, scenario, source),
+                *check_output_topics(output, plan.topics, scenario, source), *busy,
+                *([f"{source}: {size_note}"] if size_note else []))
+    finally:
+        sim.close()
+
+
+def check_video(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """What ``srr validate`` can know of the video settings before a run: every h264 encoder
+    the scenario asks for opens here (NVENC needs an NVIDIA GPU with an encoder), and, with
+    ``rtsp.enabled``, GStreamer's RTSP server loads. Raises the first error; returns warnings
+    for stream ports another program holds now (a run would stop on them)."""
+    import socket
+
+    from harness.builders.rtsp_cameras import stream_cameras
+    from harness.errors import StreamError, VideoError
+    from harness.video import gst
+    from harness.video.codec import check_encoder, settings_of
+
+    wanted = [(f"{c.field}.record.h264", c.record.h264)
+              for c in recorded_cameras(scenario) if "h264" in c.record.rgb]
+    cams = stream_cameras(scenario)
+    if cams:
+        wanted.append(("rtsp.h264", scenario.rtsp.h264))
+    for field, spec in wanted:
+        try:
+            check_encoder(settings_of(spec))
+        except VideoError as err:
+            raise ScenarioError(scenario.file_for(field.split(".")[0], source), field,
+                                str(err)) from err
+    if not cams:
+        return ()
+    try:
+        gst.load()
+    except StreamError as err:
+        raise ScenarioError(scenario.file_for("rtsp", source), "rtsp.enabled",
+                            str(err)) from err
+    warnings = []
+    for i, cam in cams:
+        with socket.socket(socket.AF_INET6 if ":" in scenario.rtsp.host
+                           else socket.AF_INET) as probe:
+            try:
+                probe.bind((scenario.rtsp.host, cam.port or 0))
+            except OSError as err:
+                warnings.append(f"{scenario.file_for(f'cameras[{i}]', source)}: "
+                                f"cameras[{i}].port: {scenario.rtsp.host}:{cam.port} cannot "
+                                f"be bound now ({err.strerror or err}); a run would stop there")
+    return tuple(warnings)

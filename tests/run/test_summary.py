@@ -1,0 +1,85 @@
+"""The typed run summary: summaries written by srr before :class:`RunSummary` existed (a run
+judged against a baseline, an open-loop replay, a run recovered by ``srr recover``; kept in
+``data/``) read back typed and write back byte for byte; a fresh run's summary is the one
+its result holds; a malformed or newer summary is one line naming the file and the field."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from harness import api
+from harness.errors import SrrError
+from harness.run.summary import RunSummary
+from harness.summary import SUMMARY_NAME
+
+DATA = Path(__file__).parent / "data"
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.parametrize("kind", ["run", "replay", "recovered"])
+def test_a_summary_of_earlier_srr_reads_and_writes_back_unchanged(kind: str,
+                                                                  tmp_path: Path) -> None:
+    s = RunSummary.read(DATA / kind)
+    s.write(tmp_path)
+    assert (tmp_path / SUMMARY_NAME).read_bytes() == (DATA / kind / SUMMARY_NAME).read_bytes()
+
+
+def test_typed_parts_of_a_judged_run() -> None:
+    s = RunSummary.read(DATA / "run")
+    raw = json.loads((DATA / "run" / SUMMARY_NAME).read_text())
+    assert (s.scenario, s.seed, s.verdict, s.exit_code) == ("forklift_warehouse", 7,
+                                                            "MISMATCH", 1)
+    assert s.ok and [h.name for h in s.health] == [h["name"] for h in raw["health"]]
+    assert s.baseline is not None and s.baseline.path == raw["baseline"]["path"]
+    assert s.baseline.config_differences == tuple(raw["baseline"]["config_differences"])
+    assert {n: t.sha256 for n, t in s.topics.items()} == {
+        n: t["sha256"] for n, t in raw["topics"].items()}
+    assert s.replay_of is None and not s.recovered and s.more == {}
+
+
+def test_typed_parts_of_a_replay_and_a_recovered_run() -> None:
+    rep = RunSummary.read(DATA / "replay")
+    assert rep.replay_of is not None and rep.replay_of["mode"] == "open-loop"
+    rec = RunSummary.read(DATA / "recovered")
+    assert rec.recovered and rec.recovery is not None and rec.verdict == "INVALID"
+    assert not rec.ok and all(t.published is None for t in rec.topics.values())
+
+
+def test_keys_it_does_not_know_are_kept(tmp_path: Path) -> None:
+    data = json.loads((DATA / "replay" / SUMMARY_NAME).read_text())
+    data["from_a_later_srr"] = {"x": 1}
+    s = RunSummary.from_json(data)
+    assert s.more == {"from_a_later_srr": {"x": 1}} and s.to_json() == data
+
+
+@pytest.mark.parametrize(("field", "value", "message"), [
+    ("schema_version", 2, r"schema_version: 2 is newer than this srr reads"),
+    ("reasons", "one reason", r"reasons: expected a list"),
+    ("exit_code", "1", r"exit_code: expected an integer"),
+    ("seed", "7", r"seed: expected an integer"),
+])
+def test_a_malformed_or_newer_summary_names_the_file_and_field(
+        tmp_path: Path, field: str, value: object, message: str) -> None:
+    data = json.loads((DATA / "replay" / SUMMARY_NAME).read_text())
+    data[field] = value
+    (tmp_path / SUMMARY_NAME).write_text(json.dumps(data))
+    with pytest.raises(SrrError, match=rf"^{tmp_path / SUMMARY_NAME}: {message}"):
+        RunSummary.read(tmp_path)
+
+
+@pytest.mark.slow
+def test_a_fresh_run_writes_the_summary_its_result_holds(tmp_path: Path) -> None:
+    path = ROOT / "scenarios" / "forklift_warehouse.yaml"
+    res = api.run_scenario(api.load(path, duration=0.5), source=str(path), out=tmp_path / "r")
+    on_disk = RunSummary.read(res.run_dir)
+    assert on_disk.to_json() == json.loads(json.dumps(res.summary))
+    assert (on_disk.topics, on_disk.health, on_disk.verdict) == (
+        res.run_summary.topics, res.run_summary.health, res.verdict)
+    copy = tmp_path / "copy"
+    shutil.copytree(res.run_dir, copy)
+    on_disk.write(copy)
+    assert (copy / SUMMARY_NAME).read_bytes() == (res.run_dir / SUMMARY_NAME).read_bytes()
