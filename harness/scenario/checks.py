@@ -1,0 +1,538 @@
+"""The scenario's cross-field rules, which the type hints cannot express (unique names, valid
+ROS names and prims, sensor rates the tick can give, output settings that work together, ...),
+checked on the typed :class:`~harness.scenario.schema.Scenario`; each failure is one line naming
+the file and the field (:meth:`harness.validation.Validator.fail`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from harness.errors import SrrError
+from harness.scenario.resolve import graph_name
+from harness.scenario.schema import (
+    BUILTIN_JOINTS,
+    FORMAT_VERSION,
+    CameraRecordSpec,
+    ControlScoring,
+    DiffDriveControl,
+    ForkliftControl,
+    H264Spec,
+    RobotSpec,
+    SafetyScoring,
+    Scenario,
+    WorldSpec,
+    gated_rate,
+)
+from harness.validation import Validator, close_match, join
+
+__all__ = ["H264_PRESETS", "RATE_TOLERANCE", "check_semantics", "rate_warnings", "sensor_rates"]
+
+
+def check_semantics(sc: Scenario, v: Validator) -> None:
+    """Cross-field rules the type hints cannot express."""
+    if sc.format_version != FORMAT_VERSION:
+        v.fail("format_version", f"unsupported version {sc.format_version} (this srr reads "
+               f"{FORMAT_VERSION})")
+    _check_name(v, "name", sc.name)
+    names: dict[str, int] = {}
+    for i, robot in enumerate(sc.robots):
+        if robot.name in names:
+            j = names[robot.name]
+            v.fail(f"robots[{i}].name", f"duplicate robot name {robot.name!r} (also robots[{j}], "
+                   f"from {v.file_for(f'robots[{j}]')})")
+        names[robot.name] = i
+        _check_name(v, f"robots[{i}].name", robot.name)
+    for name, route in sc.routes.items():
+        if len(route.waypoints) < 2:
+            v.fail(f"routes.{name}.waypoints", "a route needs at least two waypoints")
+    _check_workers_and_zones(sc, v)
+    _check_names(v, sc, "")
+    _check_world(sc, v)
+    _check_robots(sc, v)
+    _check_robot_cameras(sc, v)
+    _check_cameras(sc, v)
+    _check_suts(sc, v)
+    _check_graphs(sc, v)
+    _check_control_scoring(sc, v)
+    _check_output(sc, v)
+    _check_rates(sc, v)
+
+
+#: How far (relative) the rate a sensor really gets may be from the rate it asks for before
+#: the scenario is refused; closer, ``srr validate`` warns (:func:`rate_warnings`).
+RATE_TOLERANCE = 0.10
+
+
+def sensor_rates(sc: Scenario) -> list[tuple[str, float, float]]:
+    """(field, rate asked for, rate it really gets) of every sensor a built-in graph
+    publishes behind a simulation gate: a sensor publishes every ``gate_step``-th tick, so
+    only ``tick_hz / n`` is possible (:func:`~harness.scenario.schema.gated_rate`)."""
+    hz = sc.physics.tick_hz
+    out: list[tuple[str, float, float]] = []
+    for i, robot in enumerate(sc.robots):
+        if not robot.enabled:
+            continue
+        s = robot.sensors
+        for kind, spec in (("camera", s.camera), ("lidar", s.lidar), ("imu", s.imu)):
+            if spec is not None and spec.enabled and spec.graph:
+                out.append((f"robots[{i}].sensors.{kind}.fps", spec.fps,
+                            gated_rate(hz, spec.fps)))
+    for i, cam in enumerate(sc.cameras):
+        if cam.enabled and cam.outputs:
+            out.append((f"cameras[{i}].fps", cam.fps, gated_rate(hz, cam.fps)))
+    if sc.rtsp.enabled and any(c.enabled and c.port is not None for c in sc.cameras):
+        out.append(("rtsp.fps", sc.rtsp.fps, gated_rate(hz, sc.rtsp.fps)))
+    return out
+
+
+def _possible_rates(tick_hz: int) -> str:
+    return ", ".join(f"{tick_hz / n:.4g}" for n in range(1, 6))
+
+
+def _rate_message(sc: Scenario, asked: float, real: float) -> str:
+    hz = sc.physics.tick_hz
+    return (f"{asked:g} Hz cannot be given on the {hz} Hz tick (physics.tick_hz): a sensor "
+            f"publishes every n-th tick, so it would publish at {real:.4g} Hz")
+
+
+def _check_rates(sc: Scenario, v: Validator) -> None:
+    """Refuse a sensor rate the tick cannot give within :data:`RATE_TOLERANCE`."""
+    for field, asked, real in sensor_rates(sc):
+        if abs(real - asked) > RATE_TOLERANCE * asked:
+            v.fail(field, f"{_rate_message(sc, asked, real)}; ask for tick_hz / n "
+                   f"({_possible_rates(sc.physics.tick_hz)}, ... Hz) or change "
+                   "physics.tick_hz")
+
+
+def rate_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """One warning per sensor whose real rate differs (by less than
+    :data:`RATE_TOLERANCE`; more is refused) from the rate it asks for."""
+    return tuple(f"{sc.file_for(field, source)}: {field}: {_rate_message(sc, asked, real)}"
+                 for field, asked, real in sensor_rates(sc) if abs(real - asked) > 1e-9)
+
+
+def _check_output(sc: Scenario, v: Validator) -> None:
+    """``output:`` values that cannot work together (what the graphs imply is checked once
+    they are built: :mod:`harness.output`)."""
+    out = sc.output
+    if isinstance(out.ros, bool):  # YAML true == 1 to Literal[1, 2]
+        v.fail("output.ros", f"expected one of 1, 2, got {out.ros!r}")
+    if out.format == "bag" and out.ros == 2:
+        v.fail("output.format", "bag is a ROS 1 bag; ROS 2 output is a rosbag2 directory "
+               "(format: mcap)")
+    ros1 = out.ros == 1 or out.format == "bag"
+    if out.format == "bag" and sc.recording.compression == "zstd":
+        v.fail("recording.compression", "a ROS 1 bag compresses its chunks with lz4 (or "
+               "bz2), not zstd: use lz4 or none, or output.format: mcap")
+    if ros1 and sc.ros2.enabled:
+        v.fail("ros2.enabled", "the live ROS 2 bridge needs ROS 2 output, and this scenario "
+               "records ROS 1 (output)")
+
+
+_PROCEDURAL_FIELDS = ("size", "wall_height", "shelves", "dock")
+
+
+def _check_world(sc: Scenario, v: Validator) -> None:
+    """A world file: exactly one of ``mjcf``/``urdf``; with ``mode: replace`` no procedural
+    field set to anything but its default (it would be silently unused); a valid prim that no
+    robot or camera lies in (or holds)."""
+    from harness.scenario.prims import check_prim_path
+
+    model = sc.world.model
+    if model is None:
+        return
+    if (model.urdf is None) == (model.mjcf is None):
+        v.fail("world.model", "set exactly one of 'urdf' and 'mjcf' (the path of the world's "
+               "model file)")
+    if not model.path.strip():
+        v.fail(f"world.model.{model.kind}", "must not be empty")
+    if model.mode == "replace":
+        default = WorldSpec()
+        for name in _PROCEDURAL_FIELDS:
+            if getattr(sc.world, name) != getattr(default, name):
+                v.fail(f"world.{name}", "is not used: world.model.mode is 'replace' (the model "
+                       "file is the whole world); use mode: extend to build the procedural "
+                       "warehouse around the file, or leave this field out")
+    try:
+        check_prim_path(model.prim)
+    except SrrError as err:
+        v.fail("world.model.prim", str(err))
+    root = model.prim.rstrip("/")
+    taken = [(f"robots[{i}].articulation_prim", r.prim) for i, r in enumerate(sc.robots)
+             if r.enabled]
+    taken += [(f"cameras[{i}].camera_prim", c.prim) for i, c in enumerate(sc.cameras)
+              if c.enabled]
+    for field, prim in taken:
+        if prim == root or prim.startswith(root + "/") or root.startswith(prim + "/"):
+            v.fail(field, f"{prim} overlaps {root}, where the world file's bodies are "
+                   "(world.model.prim): move one of them")
+
+
+def _check_robots(sc: Scenario, v: Validator) -> None:
+    """Namespaces and frame prefixes that ROS accepts; no two enabled robots on one prim (or
+    one robot's prim inside another's)."""
+    from harness.bus.names import (
+        FrameIdError,
+        TopicNameError,
+        validate_frame_id,
+        validate_namespace,
+    )
+    from harness.scenario.prims import check_prim_path
+
+    for i, robot in enumerate(sc.robots):
+        if robot.articulation_prim:
+            try:
+                check_prim_path(robot.prim)
+            except SrrError as err:
+                v.fail(f"robots[{i}].articulation_prim", str(err))
+        model = robot.model_file
+        if model is not None:
+            if (model.urdf is None) == (model.mjcf is None):
+                v.fail(f"robots[{i}].model", "set exactly one of 'urdf' and 'mjcf' (the "
+                       "path of the robot's model file)")
+            if not model.path.strip():
+                v.fail(f"robots[{i}].model.{model.kind}", "must not be empty")
+        else:
+            _check_builtin_joints(v, f"robots[{i}].control", robot)
+        if robot.namespace is not None:
+            try:
+                validate_namespace(robot.namespace)
+            except TopicNameError as err:
+                v.fail(f"robots[{i}].namespace", str(err))
+        if robot.frame_prefix:
+            try:
+                validate_frame_id(robot.frame_prefix)
+            except FrameIdError as err:
+                v.fail(f"robots[{i}].frame_prefix", str(err).replace("frame id", "prefix"))
+    enabled = [(i, r) for i, r in enumerate(sc.robots) if r.enabled]
+    for n, (i, robot) in enumerate(enabled):
+        for j, other in enabled[:n]:
+            if robot.prim == other.prim:
+                v.fail(f"robots[{i}].articulation_prim", f"{robot.prim} is also the prim of "
+                       f"robots[{j}] ({other.name}): two robots cannot share one prim")
+            for inner, outer, k in ((robot, other, j), (other, robot, i)):
+                if inner.prim.startswith(outer.prim.rstrip("/") + "/"):
+                    v.fail(f"robots[{i}].articulation_prim",
+                           f"{inner.prim} lies inside {outer.prim}, the prim of robots[{k}] "
+                           f"({outer.name})")
+
+
+def _check_builtin_joints(v: Validator, where: str, robot: RobotSpec) -> None:
+    """A built-in model's ``control:`` names joints it has: the TurtleBot3's two wheel
+    joints; the forklift's swivel and drive joints, distinct from each other and from its
+    front wheels' joints."""
+    control, fixed = robot.control, BUILTIN_JOINTS.get(str(robot.model), ())
+    if isinstance(control, DiffDriveControl):
+        unknown = [j for j in control.joint_names if j not in fixed]
+        if unknown:
+            v.fail(f"{where}.joint_names", f"{unknown} are not joints of {robot.model} "
+                   f"(it has {list(fixed)})")
+    elif isinstance(control, ForkliftControl):
+        for sub, name in (("swivel_joint", control.swivel_joint),
+                          ("drive_joint", control.drive_joint)):
+            if name in fixed:
+                v.fail(f"{where}.{sub}", f"{name!r} is a front wheel joint of the forklift; "
+                       "name the swivel and drive joints otherwise")
+        if control.swivel_joint == control.drive_joint:
+            v.fail(f"{where}.drive_joint", f"{control.drive_joint!r} is also the swivel "
+                   "joint: the two joints need distinct names")
+
+
+def _check_cameras(sc: Scenario, v: Validator) -> None:
+    """Unique names and resolutions in range; no camera on another camera's or a robot's prim."""
+    from harness.scenario.prims import check_prim_path
+
+    cams: dict[str, int] = {}
+    prims: dict[str, str] = {r.prim: f"robots[{i}] ({r.name})"
+                             for i, r in enumerate(sc.robots) if r.enabled}
+    for i, cam in enumerate(sc.cameras):
+        if cam.name in cams:
+            j = cams[cam.name]
+            v.fail(f"cameras[{i}].name", f"duplicate camera name {cam.name!r} (also "
+                   f"cameras[{j}], from {v.file_for(f'cameras[{j}]')})")
+        cams[cam.name] = i
+        _check_name(v, f"cameras[{i}].name", cam.name)
+        if cam.camera_prim:
+            try:
+                check_prim_path(cam.prim)
+            except SrrError as err:
+                v.fail(f"cameras[{i}].camera_prim", str(err))
+        _check_resolution(v, f"cameras[{i}].resolution", cam.resolution)
+        _check_record(v, f"cameras[{i}]", cam.record,
+                      {s: f"{cam.name}_{s}" for s in ("rgb", "depth") if s in cam.outputs},
+                      f"cameras[{i}].outputs has no '{{stream}}'", cam.resolution)
+        if not cam.enabled:
+            continue
+        if cam.prim in prims:
+            v.fail(f"cameras[{i}].camera_prim", f"{cam.prim} is already the prim of "
+                   f"{prims[cam.prim]}")
+        prims[cam.prim] = f"cameras[{i}] ({cam.name})"
+    _check_rtsp(sc, v)
+
+
+def _check_resolution(v: Validator, path: str, resolution: tuple[int, int]) -> None:
+    w, h = resolution
+    if not (1 <= w <= 8192 and 1 <= h <= 8192):
+        v.fail(path, f"must be within 1..8192, got {w}x{h}")
+
+
+_MOUNT_PATH = re.compile(r"^(/[A-Za-z0-9._~-]+)+$")
+
+
+def _check_record(v: Validator, where: str, rec: CameraRecordSpec, raw: Mapping[str, str],
+                  lacking: str, resolution: tuple[int, int]) -> None:
+    """The ``record`` block of the camera at ``where`` (``raw``: the raw topic of each image
+    stream it publishes; ``lacking``: why it does not publish a ``{stream}``): formats of
+    streams the camera has, each once, one still format per topic, even sizes for h264."""
+    _check_h264(v, f"{where}.record.h264", rec.h264)
+    for stream, formats in (("rgb", rec.rgb), ("depth", rec.depth)):
+        path = f"{where}.record.{stream}"
+        for k, fmt in enumerate(formats):
+            if fmt in formats[:k]:
+                v.fail(f"{path}[{k}]", f"{fmt!r} is listed twice")
+        if formats and formats != ("raw",) and stream not in raw:
+            v.fail(path, f"records {', '.join(formats)} of the {stream} stream, but "
+                   + lacking.format(stream=stream))
+    if "jpeg" in rec.rgb and "png" in rec.rgb:
+        v.fail(f"{where}.record.rgb", "jpeg and png both go to "
+               f"{raw['rgb']}/compressed: choose one")
+    w, h = resolution
+    if "h264" in rec.rgb and (w % 2 or h % 2):
+        v.fail(f"{where}.resolution", f"h264 ({where}.record.rgb) needs an even "
+               f"width and height, got {w}x{h}")
+
+
+def _check_robot_cameras(sc: Scenario, v: Validator) -> None:
+    """A robot camera's ``record`` block, as a fixed camera's; none without srr's graph."""
+    for i, robot in enumerate(sc.robots):
+        cam = robot.sensors.camera
+        if cam is None:
+            continue
+        where = f"robots[{i}].sensors.camera"
+        _check_resolution(v, f"{where}.resolution", cam.resolution)
+        if not cam.graph and cam.record != CameraRecordSpec():
+            v.fail(f"{where}.record", "has no effect with graph: false (the graphs: builder "
+                   "that publishes the camera decides what it records)")
+        raw = {"rgb": cam.topic} | ({"depth": cam.depth_topic} if cam.depth_topic else {})
+        _check_record(v, where, cam.record, raw, f"{where}.depth_topic is not set",
+                      cam.resolution)
+
+
+#: Speed presets each h264 encoder knows.
+H264_PRESETS = {
+    "x264": ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow",
+             "slower", "veryslow", "placebo"),
+    "nvenc": ("p1", "p2", "p3", "p4", "p5", "p6", "p7"),
+}
+
+
+def _check_h264(v: Validator, path: str, spec: H264Spec) -> None:
+    if spec.preset is not None and spec.preset not in H264_PRESETS[spec.encoder]:
+        v.fail(f"{path}.preset", f"{spec.encoder} has no preset {spec.preset!r} (presets: "
+               f"{', '.join(H264_PRESETS[spec.encoder])})")
+
+
+def _check_rtsp(sc: Scenario, v: Validator) -> None:
+    """``rtsp:`` and the cameras' ``port`` / ``mount_path``: valid mount paths, no two
+    streams at one URL, h264-able sizes, at least one stream when enabled."""
+    urls: dict[tuple[int, str], int] = {}
+    streams = 0
+    for i, cam in enumerate(sc.cameras):
+        if cam.mount_path is not None and not _MOUNT_PATH.match(cam.mount_path):
+            v.fail(f"cameras[{i}].mount_path", "must be '/' followed by letters, digits and "
+                   f"'._~-' (segments separated by '/'), got {cam.mount_path!r}")
+        if cam.port is None or not cam.enabled:
+            continue
+        streams += 1
+        key = (cam.port, cam.mount)
+        if key in urls:
+            j = urls[key]
+            v.fail(f"cameras[{i}].port", f"rtsp://{sc.rtsp.host}:{cam.port}{cam.mount} is "
+                   f"also the stream of cameras[{j}] ({sc.cameras[j].name}): give each "
+                   "camera its own port (or mount_path)")
+        urls[key] = i
+        w, h = cam.resolution
+        if sc.rtsp.enabled and (w % 2 or h % 2):
+            v.fail(f"cameras[{i}].resolution", f"an RTSP stream (h264, 4:2:0) needs an even "
+                   f"width and height, got {w}x{h}")
+    _check_h264(v, "rtsp.h264", sc.rtsp.h264)
+    if not sc.rtsp.enabled:
+        return
+    if not sc.rtsp.host.strip():
+        v.fail("rtsp.host", "must not be empty")
+    if streams == 0:
+        v.fail("rtsp.enabled", "no enabled camera has a port: give each camera to stream a "
+               "port (and optionally a mount_path) in cameras")
+
+
+def _check_suts(sc: Scenario, v: Validator) -> None:
+    """Unique names, ``module:Class`` plug-ins, a bound robot that exists, valid namespaces
+    and remapping rules."""
+    from harness.bus.names import TopicNameError, validate_namespace, validate_topic
+
+    robots = [r.name for r in sc.robots if r.enabled]
+    suts: set[str] = set()
+    for i, sut in enumerate(sc.systems_under_test):
+        where = f"systems_under_test[{i}]"
+        if sut.name in suts:
+            v.fail(f"{where}.name", f"duplicate name {sut.name!r}")
+        suts.add(sut.name)
+        module, sep, attr = sut.plugin.partition(":")
+        if not sep or not module or not attr:
+            v.fail(f"{where}.plugin", f"expected 'module:Class', got {sut.plugin!r}")
+        if sut.robot and sut.robot not in robots and sut.enabled:
+            if any(r.name == sut.robot for r in sc.robots):
+                v.fail(f"{where}.robot", f"robot {sut.robot!r} is disabled; disable this "
+                       "system under test too (enabled: false) or bind it to another robot")
+            close = close_match(sut.robot, dict.fromkeys(robots))
+            hint = f"did you mean {close!r}? " if close else ""
+            v.fail(f"{where}.robot", f"no enabled robot named {sut.robot!r} ({hint}robots: "
+                   f"{', '.join(robots) or 'none'})")
+        if sut.namespace is not None:
+            try:
+                validate_namespace(sut.namespace)
+            except TopicNameError as err:
+                v.fail(f"{where}.namespace", str(err))
+        for src, dst in sut.remap.items():
+            for name, sub in ((src, f"{where}.remap"), (dst, f"{where}.remap.{src}")):
+                try:
+                    validate_topic(name)
+                except TopicNameError as err:
+                    v.fail(sub, str(err))
+
+def _check_graphs(sc: Scenario, v: Validator) -> None:
+    """``module:function`` builders, unique names that make valid graph paths, and a robot
+    that exists and is enabled (or, left out, a scene with exactly one enabled robot)."""
+    robots = [r.name for r in sc.robots if r.enabled]
+    names: dict[str, int] = {}
+    for i, spec in enumerate(sc.graphs):
+        where = f"graphs[{i}]"
+        module, sep, func = spec.builder.partition(":")
+        if not sep or not module or not func:
+            v.fail(f"{where}.builder", f"expected 'module:function', got {spec.builder!r}")
+        name = graph_name(spec)
+        _check_name(v, f"{where}.name", name)
+        if name in names:
+            v.fail(f"{where}.name", f"duplicate graph name {name!r} (also graphs[{names[name]}]"
+                   "); give one of them another name")
+        names[name] = i
+        if spec.robot and spec.enabled and spec.robot not in robots:
+            close = close_match(spec.robot, dict.fromkeys(robots))
+            hint = f"did you mean {close!r}? " if close else ""
+            v.fail(f"{where}.robot", f"no enabled robot named {spec.robot!r} ({hint}robots: "
+                   f"{', '.join(robots) or 'none'})")
+
+
+def _check_control_scoring(sc: Scenario, v: Validator) -> None:
+    """One control block per robot when ``scoring.control`` is a list; a block (or the
+    safety block) that leaves ``robot`` out needs exactly one enabled robot to default to."""
+    robots = [r.name for r in sc.robots if r.enabled]
+    c = sc.scoring.control
+    blocks: list[tuple[str, ControlScoring | SafetyScoring]] = \
+        [] if c is None else [("scoring.control", c)] if not isinstance(c, tuple) else \
+        [(f"scoring.control[{i}]", b) for i, b in enumerate(c)]
+    if sc.scoring.safety is not None:
+        blocks.append(("scoring.safety", sc.scoring.safety))
+    for where, block in blocks:
+        if block.enabled and not block.robot and len(robots) != 1:
+            v.fail(f"{where}.robot", "required: the scene has "
+                   f"{len(robots) or 'no'} enabled robots ({', '.join(robots) or 'none'}), "
+                   "so there is no single robot to default to")
+    if not isinstance(sc.scoring.control, tuple):
+        return
+    seen: dict[str, int] = {}
+    for i, block in enumerate(sc.scoring.control):
+        if block.robot in seen:
+            v.fail(f"scoring.control[{i}].robot", f"robot {block.robot!r} is already scored by "
+                   f"scoring.control[{seen[block.robot]}]")
+        seen[block.robot] = i
+
+def _check_workers_and_zones(sc: Scenario, v: Validator) -> None:
+    """Workers: unique names, walkable routes, bodies taller than wide. Zones: a real polygon
+    (three or more points, non-zero area) and a tripwire with two distinct ends."""
+    seen: set[str] = set()
+    for i, worker in enumerate(sc.workers):
+        where = f"workers[{i}]"
+        if worker.name:
+            _check_name(v, f"{where}.name", worker.name)
+        name = sc.worker_name(i)
+        if name in seen:
+            v.fail(f"{where}.name", f"duplicate worker name {name!r}")
+        seen.add(name)
+        if len(worker.route) < 2:
+            v.fail(f"{where}.route", "a route needs at least two waypoints")
+        for j in range(1, len(worker.route)):
+            if worker.route[j] == worker.route[j - 1]:
+                v.fail(f"{where}.route[{j}]", "repeats the previous waypoint")
+        if worker.radius > worker.height / 3:
+            v.fail(f"{where}.radius", f"must be at most height / 3 ({worker.height / 3:g}), "
+                   f"got {worker.radius!r}")
+    roi = sc.zones.loading_roi
+    if roi:
+        if len(roi) < 3:
+            v.fail("zones.loading_roi", f"a polygon needs at least three points, got {len(roi)}")
+        area2 = sum(x0 * y1 - x1 * y0
+                    for (x0, y0), (x1, y1) in zip(roi, roi[1:] + roi[:1], strict=True))
+        if abs(area2) < 1e-9:
+            v.fail("zones.loading_roi", "the polygon has zero area")
+    wire = sc.zones.trailer_tripwire
+    if wire is not None and wire.a == wire.b:
+        v.fail("zones.trailer_tripwire.b", f"must differ from a {list(wire.a)}")
+
+
+def _name_rule(field: str) -> Callable[[str], None] | None:
+    """The naming rule of a string field, by its name: ROS topic names for ``*topic``
+    fields, tf2 frame ids for ``*_frame`` and ``frame_id`` fields."""
+    from harness.bus.names import validate_frame_id, validate_topic
+
+    if field.endswith("topic"):
+        return validate_topic
+    if field.endswith("_frame") or field == "frame_id":
+        return validate_frame_id
+    return None
+
+
+def _check_names(v: Validator, obj: Any, path: str) -> None:
+    """Every topic field must be a valid ROS 2 topic name and every frame field a frame id
+    tf2 accepts (see :func:`_name_rule`)."""
+    from harness.bus.names import FrameIdError, TopicNameError, validate_topic
+
+    if isinstance(obj, tuple):
+        for i, item in enumerate(obj):
+            _check_names(v, item, f"{path}[{i}]")
+        return
+    if not dataclasses.is_dataclass(obj):
+        return
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        sub = join(path, f.name)
+        rule = _name_rule(f.name)
+        if rule is not None and isinstance(value, str):
+            try:
+                rule(value)
+            except (TopicNameError, FrameIdError) as err:
+                v.fail(sub, str(err))
+        elif f.name in _TOPIC_LISTS or f.name in _TOPIC_KEYED:
+            names = value if f.name in _TOPIC_LISTS else tuple(value)
+            for i, name in enumerate(names):
+                try:
+                    validate_topic(name)
+                except TopicNameError as err:
+                    v.fail(f"{sub}[{i}]" if f.name in _TOPIC_LISTS else f"{sub}.{name}",
+                           str(err))
+        else:
+            _check_names(v, value, sub)
+
+
+#: Fields that hold a list of topic names, and mappings keyed by topic names.
+_TOPIC_LISTS = frozenset({"marker_topics"})
+_TOPIC_KEYED = frozenset({"expected_rates", "sut_outputs"})
+
+def _check_name(v: Validator, path: str, name: str) -> None:
+    if not name or not all(c.isascii() and (c.isalnum() or c == "_") for c in name) \
+            or name[0].isdigit():  # names become prim paths and ROS names: ASCII only
+        v.fail(path, f"must be letters, digits and '_' and not start with a digit (ASCII "
+               f"only), got {name!r}")

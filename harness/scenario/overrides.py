@@ -1,0 +1,66 @@
+"""``--set KEY=VALUE`` overrides: parsing one, and applying them to a scenario's raw mapping."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import yaml
+
+from harness import yamlio
+from harness.errors import ScenarioError
+
+__all__ = ["apply_overrides", "parse_override"]
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """``"robots.forklift.spawn.position=[1, 2, 0]"`` → (path, parsed YAML value)."""
+    key, sep, value = text.partition("=")
+    key = key.strip()
+    if not sep or not key:
+        raise ScenarioError("--set", text, "expected KEY=VALUE")
+    try:
+        parsed = yamlio.load(value) if value.strip() else ""
+    except yaml.YAMLError as err:
+        raise ScenarioError("--set", key, f"value is not valid YAML ({yamlio.describe(err)}): "
+                            f"{value!r}") from err
+    return key, parsed
+
+
+def apply_overrides(data: dict[str, Any], overrides: Sequence[tuple[str, Any]]) -> None:
+    """Apply dotted-path overrides in place. List items can be addressed by index or ``name``."""
+    for key, value in overrides:
+        parts = key.split(".")
+        node: Any = data
+        for depth, part in enumerate(parts):
+            last = depth == len(parts) - 1
+            where = ".".join(parts[: depth + 1])
+            if isinstance(node, list):
+                idx = _list_index(node, part)
+                if idx is None:
+                    raise ScenarioError("--set", where, "no list item with that index or name")
+                if last:
+                    node[idx] = value
+                else:
+                    node = node[idx]
+            elif isinstance(node, dict):
+                if last:
+                    node[part] = value
+                else:
+                    if part not in node or node[part] is None:
+                        node[part] = {}
+                    node = node[part]
+            else:
+                raise ScenarioError("--set", where, "cannot set a field inside a "
+                                    f"{type(node).__name__}")
+
+
+def _list_index(items: list[Any], part: str) -> int | None:
+    if part.lstrip("-").isdigit():
+        idx = int(part)
+        return idx if -len(items) <= idx < len(items) else None
+    for i, item in enumerate(items):
+        if isinstance(item, dict) and item.get("name") == part:
+            return i
+    return None
+
