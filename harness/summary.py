@@ -11,72 +11,74 @@ traceback deeper in.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from harness.errors import SrrError
+from harness.validation import validate
 
-__all__ = ["SUMMARY_NAME", "Check", "check_summary", "fail", "is_int", "read_summary",
-           "replay_note"]
+__all__ = ["SUMMARY_NAME", "HealthRow", "MetricRow", "SummaryFile", "TopicDigest",
+           "check_summary", "fail", "read_summary", "replay_note"]
 
 SUMMARY_NAME = "summary.json"
 
-Check = Callable[[Any], bool]
+#: What a missing required key says: the file is not an srr run summary at all.
+_MISSING = "missing (not an srr run summary)"
 
 
-def is_int(v: Any) -> bool:
-    return isinstance(v, int) and not isinstance(v, bool)
+@dataclass(frozen=True)
+class MetricRow:
+    """One of ``metrics``: the metric's name, value (None: not measured), unit and direction
+    (further keys are not checked)."""
+
+    name: str
+    value: float | None
+    unit: str
+    direction: str
 
 
-def _is_num(v: Any) -> bool:
-    return is_int(v) or isinstance(v, float)
+@dataclass(frozen=True)
+class HealthRow:
+    """One of ``health``: a health gate, whether it held, and why."""
+
+    name: str
+    ok: bool
+    detail: str
 
 
-def _opt_num(v: Any) -> bool:
-    return v is None or _is_num(v)
+@dataclass(frozen=True)
+class TopicDigest:
+    """One of ``topics``: a recorded topic's message count, combined SHA-256 and type."""
+
+    count: int
+    sha256: str
+    type: str
 
 
-def _str(v: Any) -> bool:
-    return isinstance(v, str)
+@dataclass(frozen=True)
+class SummaryFile:
+    """What every reader of ``summary.json`` relies on; keys not named here are not checked
+    (:class:`harness.run.summary.RunSummary` reads the whole summary)."""
 
-
-def _rows(fields: Mapping[str, tuple[Check, str]]) -> Check:
-    def ok(v: Any) -> bool:
-        return isinstance(v, dict) and all(k in v and check(v[k]) for k, (check, _) in
-                                           fields.items())
-    return ok
-
-
-_METRIC = {"name": (_str, "a string"), "value": (_opt_num, "a number or null"),
-           "unit": (_str, "a string"), "direction": (_str, "a string")}
-_HEALTH = {"name": (_str, "a string"), "ok": (lambda v: isinstance(v, bool), "true or false"),
-           "detail": (_str, "a string")}
-_TOPIC = {"count": (is_int, "an integer"), "sha256": (_str, "a string"),
-          "type": (_str, "a string")}
-
-#: field → (check, what it should be); fields a summary must have.
-REQUIRED: dict[str, tuple[Check, str]] = {
-    "scenario": (_str, "a string"),
-    "verdict": (_str, "a string"),
-    "seed": (is_int, "an integer"),
-    "digest": (_str, "a string"),
-    "metrics": (lambda v: isinstance(v, list), "a list"),
-    "health": (lambda v: isinstance(v, list), "a list"),
-    "topics": (lambda v: isinstance(v, dict), "a mapping"),
-}
-OPTIONAL: dict[str, tuple[Check, str]] = {
-    "ticks": (is_int, "an integer"),
-    "simulated_s": (_is_num, "a number"),
-    "srr_gt": (lambda v: isinstance(v, bool), "true or false"),
-    "scenario_file": (_str, "a string"),
-    "baselines_dir": (_str, "a string"),
-    "sut_endpoints": (lambda v: isinstance(v, dict), "a mapping"),
-    "replay_of": (lambda v: isinstance(v, dict), "a mapping"),
-    "comparison": (lambda v: isinstance(v, list), "a list"),
-    "baseline": (lambda v: v is None or isinstance(v, dict), "a mapping or null"),
-    "interrupted": (lambda v: isinstance(v, bool), "true or false"),
-}
+    scenario: str
+    verdict: str
+    seed: int
+    digest: str
+    metrics: tuple[MetricRow, ...]
+    health: tuple[HealthRow, ...]
+    topics: dict[str, TopicDigest]
+    ticks: int = 0
+    simulated_s: float = 0.0
+    srr_gt: bool = False
+    scenario_file: str = ""
+    baselines_dir: str = ""
+    sut_endpoints: dict[str, Any] = field(default_factory=dict)
+    replay_of: dict[str, Any] = field(default_factory=dict)
+    comparison: tuple[Any, ...] = ()
+    baseline: dict[str, Any] | None = None
+    interrupted: bool = False
 
 
 def replay_note(summary: Mapping[str, Any]) -> str | None:
@@ -116,24 +118,9 @@ def read_summary(run_dir: str | Path) -> dict[str, Any]:
     return checked
 
 
-def check_summary(data: Any, path: Path) -> None:
-    """:class:`SrrError` naming ``path`` and the field when ``data`` is not a run summary."""
+def check_summary(data: Any, path: Path, model: type[SummaryFile] = SummaryFile) -> None:
+    """:class:`SrrError` naming ``path`` and the field when ``data`` is not a run summary
+    (read as ``model``: :class:`SummaryFile` or a dataclass that extends it)."""
     if not isinstance(data, dict):
         raise SrrError(f"{path}: expected a JSON object, got {type(data).__name__}")
-    for key, (check, what) in REQUIRED.items():
-        if key not in data:
-            raise fail(path, key, "missing (not an srr run summary)")
-        if not check(data[key]):
-            raise fail(path, key, f"expected {what}, got {data[key]!r:.60}")
-    for key, (check, what) in OPTIONAL.items():
-        if key in data and not check(data[key]):
-            raise fail(path, key, f"expected {what}, got {data[key]!r:.60}")
-    for i, m in enumerate(data["metrics"]):
-        if not _rows(_METRIC)(m):
-            raise fail(path, f"metrics[{i}]", "expected name, value, unit and direction")
-    for i, h in enumerate(data["health"]):
-        if not _rows(_HEALTH)(h):
-            raise fail(path, f"health[{i}]", "expected name, ok and detail")
-    for name, t in data["topics"].items():
-        if not _rows(_TOPIC)(t):
-            raise fail(path, f"topics.{name}", "expected count, sha256 and type")
+    validate(model, data, str(path), unknown="ignore", missing=_MISSING, yaml=False)

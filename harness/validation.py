@@ -3,11 +3,12 @@ hints: the one validator of every file srr reads (scenario files and their plug-
 suite files, sweep declarations, a run's ``summary.json``, baseline files).
 
 A dataclass says what a file may hold: its fields' type hints (``int``, ``float``, ``bool``,
-``str``, ``Literal``, ``tuple[...]``, ``dict[str, ...]``, ``X | None``, nested dataclasses,
-``Any``), their defaults (a field without one is required) and their metadata (``range``:
-``(lo, hi, lo_open)``; ``internal``: not read from the file). Every error is one
-:class:`~harness.errors.ScenarioError` line naming the file and the field path inside it
-(``robots[0].control.wheelbase``), long values cut (:func:`harness.errors.shorten`).
+``str``, ``Literal``, ``tuple[...]``, ``dict[str, ...]`` or ``Mapping[str, ...]``,
+``X | None``, nested dataclasses, ``Any``), their defaults (a field without one is required)
+and their metadata (``range``: ``(lo, hi, lo_open)``; ``internal``: not read from the file).
+Every error is one :class:`~harness.errors.ScenarioError` line naming the file and the field
+path inside it (``robots[0].control.wheelbase``), long values cut
+(:func:`harness.errors.shorten`).
 
 This module knows no file format; callers parse the text and give the data.
 """
@@ -33,6 +34,11 @@ T = typing.TypeVar("T")
 #: value); return ``hinted`` to keep the type hint.
 Refine = Callable[[type, str, Mapping[Any, Any], Any], Any]
 
+_MISSING = "required field is missing"
+
+#: Type hints read as a mapping (into a dict).
+_MAPPINGS = (dict, Mapping)
+
 def typename(tp: Any) -> str:
     origin = get_origin(tp)
     if tp is float:
@@ -47,7 +53,7 @@ def typename(tp: Any) -> str:
         return "one of " + ", ".join(repr(a) for a in get_args(tp))
     if origin is tuple:
         return "a list"
-    if origin is dict:
+    if origin in _MAPPINGS:
         return "a mapping"
     if dataclasses.is_dataclass(tp):
         return "a mapping"
@@ -65,16 +71,19 @@ class Validator:
     ``file``: the file named in errors, or a function giving it for a field path (a scenario's
     keys come from several files); ``refine``: see :data:`Refine`; ``unknown``: ``"refuse"``
     a key no field has, or ``"ignore"`` it (files that later versions may extend);
-    ``missing``: the message for a required field that is not there."""
+    ``missing``: the message for a required top-level field that is not there (a nested one
+    says "required field is missing"); ``yaml``: the data was read from YAML (a ``yes`` for a
+    boolean is then explained)."""
 
     def __init__(self, file: str | Callable[[str], str], *, refine: Refine | None = None,
                  unknown: Literal["refuse", "ignore"] = "refuse",
-                 missing: str = "required field is missing") -> None:
+                 missing: str = _MISSING, yaml: bool = True) -> None:
         self.file_for: Callable[[str], str] = (
             (lambda _path: file) if isinstance(file, str) else file)
         self.refine = refine
         self.unknown = unknown
         self.missing = missing
+        self.yaml = yaml
 
     def fail(self, path: str, message: str) -> typing.NoReturn:
         raise ScenarioError(self.file_for(path), path, message)
@@ -100,13 +109,13 @@ class Validator:
             return raw
         if origin is tuple:
             return self.tuple(tp, raw, path, meta)
-        if origin is dict:
+        if origin in _MAPPINGS:
             return self.mapping(tp, raw, path)
         if tp is Any:
             return raw
         if tp is bool:
             if not isinstance(raw, bool):
-                hint = " (YAML 1.2 booleans are true and false only)" if isinstance(
+                hint = " (YAML 1.2 booleans are true and false only)" if self.yaml and isinstance(
                     raw, str) and raw.lower() in ("yes", "no", "on", "off", "y", "n") else ""
                 self.fail(path, f"expected true or false, got {raw!r}{hint}")
             return raw
@@ -149,7 +158,7 @@ class Validator:
             if isinstance(raw, list | tuple):
                 return get_origin(option) is tuple
             if isinstance(raw, dict):
-                return dataclasses.is_dataclass(option) or get_origin(option) is dict
+                return dataclasses.is_dataclass(option) or get_origin(option) in _MAPPINGS
             return True
 
         options = sorted(options, key=lambda o: not fits(o))
@@ -202,7 +211,7 @@ class Validator:
             sub = join(path, name)
             if name not in raw:
                 if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
-                    self.fail(sub, self.missing)
+                    self.fail(sub, self.missing if not path else _MISSING)
                 continue
             tp = hints[name]
             if self.refine is not None:
@@ -224,8 +233,8 @@ def close_match(key: str, names: Mapping[str, Any]) -> str | None:
 
 def validate(cls: type[T], raw: Any, file: str | Callable[[str], str], field: str = "", *,
              refine: Refine | None = None, unknown: Literal["refuse", "ignore"] = "refuse",
-             missing: str = "required field is missing") -> T:
+             missing: str = _MISSING, yaml: bool = True) -> T:
     """``raw`` read into the dataclass ``cls`` (see :class:`Validator`); errors name ``file``
     and ``field`` (the path of ``raw`` inside the file, empty at the top level)."""
-    v = Validator(file, refine=refine, unknown=unknown, missing=missing)
+    v = Validator(file, refine=refine, unknown=unknown, missing=missing, yaml=yaml)
     return typing.cast(T, v.dataclass(cls, raw, field))

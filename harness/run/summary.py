@@ -13,7 +13,7 @@ from typing import Any, ClassVar
 
 from harness.atomic import write_json_atomic
 from harness.metrics.types import HealthResult
-from harness.summary import SUMMARY_NAME, Check, check_summary, fail, is_int, read_summary
+from harness.summary import SUMMARY_NAME, SummaryFile, check_summary, fail, read_summary
 
 __all__ = ["SCHEMA_VERSION", "BaselineRef", "RunSummary", "TopicRow"]
 
@@ -84,16 +84,18 @@ class BaselineRef:
                    reference=data.get("reference"))
 
 
-#: Fields :meth:`RunSummary.from_json` converts beyond those :func:`read_summary` checks.
-_TYPED: dict[str, tuple[Check, str]] = {
-    "warnings": (lambda v: isinstance(v, list), "a list"),
-    "graphs": (lambda v: isinstance(v, list), "a list"),
-    "systems_under_test": (lambda v: isinstance(v, list), "a list"),
-    "reasons": (lambda v: isinstance(v, list), "a list"),
-    "exit_code": (is_int, "an integer"),
-    "versions": (lambda v: isinstance(v, dict), "a mapping"),
-    "schema_version": (is_int, "an integer"),
-}
+@dataclass(frozen=True)
+class _RunSummaryFile(SummaryFile):
+    """The keys :meth:`RunSummary.from_json` converts beyond those :func:`read_summary`
+    checks."""
+
+    warnings: tuple[Any, ...] = ()
+    graphs: tuple[Any, ...] = ()
+    systems_under_test: tuple[Any, ...] = ()
+    reasons: tuple[Any, ...] = ()
+    exit_code: int = 3
+    versions: dict[str, Any] = field(default_factory=dict)
+    schema_version: int = SCHEMA_VERSION
 
 
 @dataclass(frozen=True)
@@ -183,10 +185,7 @@ class RunSummary:
         """A summary from its mapping, checked as :func:`read_summary` checks it (``path``
         names it in errors): :class:`SrrError` when malformed or of a newer version."""
         where = Path(path)
-        check_summary(data, where)
-        for key, (check, what) in _TYPED.items():
-            if key in data and not check(data[key]):
-                raise fail(where, key, f"expected {what}, got {data[key]!r:.60}")
+        check_summary(data, where, _RunSummaryFile)
         version = data.get("schema_version", 1)
         if version > SCHEMA_VERSION:
             raise fail(where, "schema_version", f"{version} is newer than this srr reads "

@@ -177,7 +177,7 @@ def _corrupt(run: Path, dst: Path, how: str, other: Path | None = None) -> Path:
     ("overwritten", "cannot read bag: Chunk checksum mismatch"),
     ("swapped", "does not match summary.json"),
     ("bad-json", "summary.json: not valid JSON"),
-    ("bad-metric", "summary.json: metrics[0]: expected name, value, unit and direction"),
+    ("bad-metric", "summary.json: metrics[0].value: expected a number, got 'fast'"),
 ])
 def test_bad_runs_exit_2_with_one_line_and_no_page(
         runs: Runs, tmp_path: Path, capsys: pytest.CaptureFixture[str], how: str,

@@ -6,15 +6,18 @@ its result holds; a malformed or newer summary is one line naming the file and t
 from __future__ import annotations
 
 import json
+import re
 import shutil
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from harness import api
 from harness.errors import SrrError
 from harness.run.summary import RunSummary
-from harness.summary import SUMMARY_NAME
+from harness.summary import SUMMARY_NAME, read_summary
 
 DATA = Path(__file__).parent / "data"
 ROOT = Path(__file__).resolve().parents[2]
@@ -69,6 +72,40 @@ def test_a_malformed_or_newer_summary_names_the_file_and_field(
     (tmp_path / SUMMARY_NAME).write_text(json.dumps(data))
     with pytest.raises(SrrError, match=rf"^{tmp_path / SUMMARY_NAME}: {message}"):
         RunSummary.read(tmp_path)
+
+
+def _drop_sha(d: dict[str, Any]) -> str:
+    name = sorted(d["topics"])[0]
+    del d["topics"][name]["sha256"]
+    return rf"topics\.{re.escape(name)}\.sha256: required field is missing"
+
+
+def _health_ok_word(d: dict[str, Any]) -> str:
+    d["health"][1]["ok"] = "yes"
+    return r"health\[1\]\.ok: expected true or false, got 'yes'"
+
+
+def _no_digest(d: dict[str, Any]) -> str:
+    del d["digest"]
+    return r"digest: missing \(not an srr run summary\)"
+
+
+def _null_ticks(d: dict[str, Any]) -> str:
+    d["ticks"] = None
+    return r"ticks: expected an integer, got null"
+
+
+@pytest.mark.parametrize("spoil", [_drop_sha, _health_ok_word, _no_digest, _null_ticks])
+def test_a_malformed_summary_names_the_field_inside_a_row(
+        tmp_path: Path, spoil: Callable[[dict[str, Any]], str]) -> None:
+    """The row and the key in it, not just the row: what is missing or of the wrong type."""
+    data = json.loads((DATA / "replay" / SUMMARY_NAME).read_text())
+    message = spoil(data)
+    (tmp_path / SUMMARY_NAME).write_text(json.dumps(data))
+    for read in (read_summary, RunSummary.read):
+        with pytest.raises(SrrError, match=rf"^{re.escape(str(tmp_path / SUMMARY_NAME))}: "
+                           rf"{message}$"):
+            read(tmp_path)
 
 
 @pytest.mark.slow
