@@ -18,8 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from harness.atomic import write_json_atomic
-from harness.errors import SrrError
+from harness.errors import ScenarioError, SrrError
 from harness.regression.reference import reference_path, write_reference
+from harness.validation import validate
 
 __all__ = ["BASELINE_VERSION", "Baseline", "BaselineError", "BaselineMetric", "baseline_path",
            "load_baseline", "save_baseline"]
@@ -38,18 +39,21 @@ class BaselineMetric:
     direction: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Baseline:
+    """A baseline, as its file holds it (read through :mod:`harness.validation`; keys it does
+    not know are ignored, fields with a default may be left out)."""
+
     scenario: str
     metrics: Mapping[str, BaselineMetric]
-    topics: Mapping[str, Mapping[str, Any]]
-    digest: str
+    topics: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    digest: str = ""
     seed: int
-    versions: Mapping[str, str]
-    blessed_by: str
-    reason: str
-    blessed_at: str
-    source_run: str
+    versions: Mapping[str, str] = field(default_factory=dict)
+    blessed_by: str = ""
+    reason: str = ""
+    blessed_at: str = ""
+    source_run: str = ""
     format_version: int = BASELINE_VERSION
     extra: Mapping[str, Any] = field(default_factory=dict)
     config: Mapping[str, Any] | None = None
@@ -72,46 +76,16 @@ def load_baseline(path: Path) -> Baseline | None:
         return None
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-        if not isinstance(data, dict):
-            raise TypeError(f"expected a JSON object, got {type(data).__name__}")
-        if not isinstance(data.get("metrics"), dict):
-            raise TypeError("metrics: expected a mapping of metric name → value, unit, "
-                            "direction")
-        metrics = {k: _metric(k, v) for k, v in data["metrics"].items()}
-        if not isinstance(data.get("topics", {}), dict):
-            raise TypeError("topics: expected a mapping")
-        if not isinstance(data.get("scenario"), str):
-            raise TypeError("scenario: expected a string")
-        if isinstance(data.get("seed"), bool) or not isinstance(data.get("seed"), int):
-            raise TypeError(f"seed: expected an integer, got {data.get('seed')!r}")
-        return Baseline(
-            scenario=data["scenario"], metrics=metrics, topics=data.get("topics", {}),
-            digest=data.get("digest", ""), seed=int(data["seed"]),
-            versions=data.get("versions", {}), blessed_by=data.get("blessed_by", ""),
-            reason=data.get("reason", ""), blessed_at=data.get("blessed_at", ""),
-            source_run=data.get("source_run", ""),
-            format_version=int(data.get("format_version", BASELINE_VERSION)),
-            extra=data.get("extra", {}), config=_mapping(data.get("config"), "config"),
-            reference=_mapping(data.get("reference"), "reference"),
-        )
-    except (OSError, ValueError, KeyError, TypeError) as err:
+    except (OSError, ValueError) as err:
         raise BaselineError(f"{path}: not a valid baseline: {err}") from err
-
-
-def _metric(name: str, v: Any) -> BaselineMetric:
-    value = v.get("value") if isinstance(v, dict) else None
-    if (not isinstance(v, dict) or isinstance(value, bool)
-            or not (value is None or isinstance(value, int | float))
-            or not isinstance(v.get("unit"), str) or not isinstance(v.get("direction"), str)):
-        raise TypeError(f"metrics.{name}: expected value (a number or null), unit and "
-                        f"direction, got {v!r:.60}")
-    return BaselineMetric(None if value is None else float(value), v["unit"], v["direction"])
-
-
-def _mapping(value: Any, field: str) -> Mapping[str, Any] | None:
-    if value is not None and not isinstance(value, dict):
-        raise TypeError(f"{field}: expected a mapping, got {type(value).__name__}")
-    return value
+    if not isinstance(data, dict):
+        raise BaselineError(f"{path}: not a valid baseline: expected a JSON object, got "
+                            f"{type(data).__name__}")
+    try:
+        return validate(Baseline, data, str(path), unknown="ignore", yaml=False)
+    except ScenarioError as err:
+        raise BaselineError(f"{path}: not a valid baseline: {err.field}: {err.message}") \
+            from err
 
 
 def who() -> str:
