@@ -5,7 +5,8 @@ suite files, sweep declarations, a run's ``summary.json``, baseline files).
 A dataclass says what a file may hold: its fields' type hints (``int``, ``float``, ``bool``,
 ``str``, ``Literal``, ``tuple[...]``, ``dict[str, ...]`` or ``Mapping[str, ...]``,
 ``X | None``, nested dataclasses, ``Any``), their defaults (a field without one is required)
-and their metadata (``range``: ``(lo, hi, lo_open)``; ``internal``: not read from the file).
+and their metadata (``range``: ``(lo, hi, lo_open)``; ``internal``: not read from the file;
+``key``: the key the file spells it with, where that is no Python name, such as ``from``).
 Every error is one :class:`~harness.errors.ScenarioError` line naming the file and the field
 path inside it (``robots[0].control.wheelbase``), long values cut
 (:func:`harness.errors.shorten`).
@@ -95,7 +96,7 @@ class Validator:
             if raw is None:
                 if type(None) in get_args(tp):
                     return None
-                self.fail(path, f"expected {typename(options[0])}, got null")
+                self.fail(path, f"expected {_alternatives(options)}, got null")
             if len(options) == 1:
                 return self.value(options[0], raw, path, meta)
             return self.union(options, raw, path, meta)
@@ -152,18 +153,16 @@ class Validator:
             self.fail(path, f"must be <= {hi:g}, got {raw!r}")
 
     def union(self, options: list[Any], raw: Any, path: str, meta: Mapping[str, Any]) -> Any:
+        if set(options) == {int, float}:  # a number; an integer stays one
+            whole = isinstance(raw, int) and not isinstance(raw, bool)
+            return self.value(int if whole else float, raw, path, meta)
+        if not any(_rank(o, raw) < 2 for o in options):
+            self.fail(path, f"expected {_alternatives(options)}, got {raw!r}")
         # Try the options shaped like the value first (a list for a list, a mapping for a
-        # mapping), so the error reported is the one of the form the user meant.
-        def fits(option: Any) -> bool:
-            if isinstance(raw, list | tuple):
-                return get_origin(option) is tuple
-            if isinstance(raw, dict):
-                return dataclasses.is_dataclass(option) or get_origin(option) in _MAPPINGS
-            return True
-
-        options = sorted(options, key=lambda o: not fits(o))
+        # mapping, a number for a number), so the error reported is the one of the form the
+        # user meant.
         errors: list[ScenarioError] = []
-        for option in options:
+        for option in sorted(options, key=lambda o: _rank(o, raw)):
             try:
                 return self.value(option, raw, path, meta)
             except ScenarioError as err:
@@ -197,27 +196,62 @@ class Validator:
         if not isinstance(raw, dict):
             self.fail(path or "(top level)", f"expected a mapping, got {raw!r}")
         hints = get_type_hints(cls)
-        fields = {f.name: f for f in dataclasses.fields(cls) if not f.metadata.get("internal")}
+        # by the key the file spells them with (metadata "key": a name Python cannot take)
+        fields = {f.metadata.get("key", f.name): f for f in dataclasses.fields(cls)
+                  if not f.metadata.get("internal")}
         if self.unknown == "refuse":
             for key in raw:
                 if key not in fields:
                     close = close_match(str(key), fields)
-                    hint = f" (did you mean '{close}'?)" if close else ""
+                    hint = f" (did you mean '{close}'?)" if close else \
+                        f" (expected {', '.join(fields)})" if len(fields) <= _LISTED else ""
                     if str(key).endswith("+") and str(key)[:-1] in fields:
                         hint = " (extending with '+' works for top-level keys only)"
                     self.fail(join(path, str(key)), f"unknown field{hint}")
         kwargs: dict[str, Any] = {}
-        for name, f in fields.items():
-            sub = join(path, name)
-            if name not in raw:
+        for key, f in fields.items():
+            sub = join(path, key)
+            if key not in raw:
                 if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
                     self.fail(sub, self.missing if not path else _MISSING)
                 continue
-            tp = hints[name]
+            tp = hints[f.name]
             if self.refine is not None:
-                tp = self.refine(cls, name, raw, tp)
-            kwargs[name] = self.value(tp, raw[name], sub, f.metadata)
+                tp = self.refine(cls, f.name, raw, tp)
+            kwargs[f.name] = self.value(tp, raw[key], sub, f.metadata)
         return cls(**kwargs)
+
+
+#: An unknown key in a dataclass of at most this many fields is answered with all of them.
+_LISTED = 6
+
+
+def _rank(option: Any, raw: Any) -> int:
+    """How well ``raw``'s form fits the type ``option``: 0 its very type (a number for a
+    number), 1 its form (a list for a list, a mapping for a mapping, a scalar for a scalar),
+    2 another form."""
+    container = get_origin(option) is tuple or get_origin(option) in _MAPPINGS \
+        or dataclasses.is_dataclass(option)
+    if option is Any:
+        return 1
+    if isinstance(raw, list | tuple):
+        return 1 if get_origin(option) is tuple else 2
+    if isinstance(raw, dict):
+        return 1 if container and get_origin(option) is not tuple else 2
+    if container:
+        return 2
+    if isinstance(raw, bool):
+        return 0 if option is bool else 1
+    if isinstance(raw, int | float):
+        return 0 if option is float or (option is int and isinstance(raw, int)) else 1
+    return 0 if option is str and isinstance(raw, str) else 1
+
+
+def _alternatives(options: list[Any]) -> str:
+    """``options`` in words: ``a string, a number or a mapping`` (an integer is a number)."""
+    names = [typename(o) for o in options if not (o is int and float in options)]
+    names = list(dict.fromkeys(names))
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} or {names[-1]}"
 
 
 def join(path: str, name: str) -> str:

@@ -13,6 +13,7 @@ varying fastest). Each point is one configuration: it is compared with its own b
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -20,8 +21,10 @@ from itertools import product
 from typing import Any
 
 from harness.errors import ScenarioError
+from harness.validation import Validator, validate
 
-__all__ = ["MAX_POINTS", "Point", "SweepParam", "expand", "parse_sweep", "point_label"]
+__all__ = ["MAX_POINTS", "Point", "SweepParam", "SweepRange", "expand", "parse_sweep",
+           "point_label"]
 
 #: More points than this in one sweep is almost certainly a typo in a step.
 MAX_POINTS = 1000
@@ -84,15 +87,18 @@ def _short(path: str, paths: Sequence[str]) -> str:
     return path
 
 
+@dataclass(frozen=True)
+class SweepRange:
+    """``{from: A, to: B, step: C}``: the values A, A + C, ... up to B (inclusive)."""
+
+    start: int | float = dataclasses.field(metadata={"key": "from"})
+    to: int | float
+    step: int | float
+
+
 def _range(raw: Mapping[str, Any], file: str, field: str) -> tuple[Scalar, ...]:
-    unknown = sorted(set(raw) - {"from", "to", "step"})
-    if unknown:
-        raise ScenarioError(file, f"{field}.{unknown[0]}", "unknown key (expected from, to, step)")
-    for key in ("from", "to", "step"):
-        v = raw.get(key)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ScenarioError(file, f"{field}.{key}", f"expected a finite number, got {v!r}")
-    lo, hi, step = raw["from"], raw["to"], raw["step"]
+    spec = validate(SweepRange, raw, file, field)
+    lo, hi, step = spec.start, spec.to, spec.step
     if step <= 0:
         raise ScenarioError(file, f"{field}.step", f"must be > 0, got {step!r}")
     if hi < lo:
@@ -129,12 +135,7 @@ def parse_sweep(raw: Any, file: str, field: str = "sweep") -> tuple[SweepParam, 
         elif isinstance(spec, list):
             if not spec:
                 raise ScenarioError(file, where, "no values to sweep")
-            for i, v in enumerate(spec):
-                if not isinstance(v, (bool, int, float, str)) or (
-                        isinstance(v, float) and not math.isfinite(v)):
-                    raise ScenarioError(file, f"{where}[{i}]",
-                                        f"expected a number, string or boolean, got {v!r}")
-            values = tuple(spec)
+            values = Validator(file).value(tuple[Scalar, ...], spec, where, {})
             dup = next((v for i, v in enumerate(values) if v in values[:i]), None)
             if dup is not None:
                 raise ScenarioError(file, where, f"value {dup!r} is listed twice")
