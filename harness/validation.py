@@ -156,9 +156,9 @@ class Validator:
         if set(options) == {int, float}:  # a number; an integer stays one
             whole = isinstance(raw, int) and not isinstance(raw, bool)
             return self.value(int if whole else float, raw, path, meta)
-        if not any(_rank(o, raw) < 2 for o in options):
+        if not any(_rank(o, raw) == 0 for o in options):  # none of the value's type
             self.fail(path, f"expected {_alternatives(options)}, got {raw!r}")
-        # Try the options shaped like the value first (a list for a list, a mapping for a
+        # Try the options of the value's type first (a list for a list, a mapping for a
         # mapping, a number for a number), so the error reported is the one of the form the
         # user meant.
         errors: list[ScenarioError] = []
@@ -227,19 +227,21 @@ _LISTED = 6
 
 
 def _rank(option: Any, raw: Any) -> int:
-    """How well ``raw``'s form fits the type ``option``: 0 its very type (a number for a
-    number), 1 its form (a list for a list, a mapping for a mapping, a scalar for a scalar),
-    2 another form."""
+    """How well ``raw`` fits the type ``option``: 0 of its type (a list for a list, a mapping
+    for a mapping, a number for a number, a string for one of string literals), 1 another
+    scalar for a scalar, 2 another form."""
     container = get_origin(option) is tuple or get_origin(option) in _MAPPINGS \
         or dataclasses.is_dataclass(option)
     if option is Any:
-        return 1
+        return 0
     if isinstance(raw, list | tuple):
-        return 1 if get_origin(option) is tuple else 2
+        return 0 if get_origin(option) is tuple else 2
     if isinstance(raw, dict):
-        return 1 if container and get_origin(option) is not tuple else 2
+        return 0 if container and get_origin(option) is not tuple else 2
     if container:
         return 2
+    if get_origin(option) is Literal:
+        return 0 if any(type(a) is type(raw) for a in get_args(option)) else 1
     if isinstance(raw, bool):
         return 0 if option is bool else 1
     if isinstance(raw, int | float):

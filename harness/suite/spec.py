@@ -33,8 +33,10 @@ from harness import yamlio
 from harness.errors import ScenarioError, SrrError
 from harness.scenario import load_scenario, parse_override
 from harness.suite.sweep import SweepParam, parse_sweep
+from harness.validation import validate
 
-__all__ = ["Entry", "SuiteSpec", "is_suite_file", "load_suite"]
+__all__ = ["DefaultsFile", "Entry", "EntryFile", "SuiteFile", "SuiteSpec", "is_suite_file",
+           "load_suite"]
 
 
 @dataclass(frozen=True)
@@ -98,17 +100,15 @@ def _count(value: Any, file: str, field: str, *, integer: bool) -> Any:
     return value
 
 
-def _overrides(raw: Any, file: str, field: str) -> tuple[str, ...]:
+def _overrides(raw: Mapping[str, Any] | tuple[str, ...] | None, file: str,
+               field: str) -> tuple[str, ...]:
     if raw is None:
         return ()
     if isinstance(raw, Mapping):
         items = [f"{k}={yamlio.dump(v, default_flow_style=True).strip().removesuffix('...')}"
                  .strip() for k, v in raw.items()]
-    elif isinstance(raw, list) and all(isinstance(x, str) for x in raw):
-        items = list(raw)
     else:
-        raise ScenarioError(file, field, "expected a mapping of paths to values or a list of "
-                            "KEY=VALUE strings")
+        items = list(raw)
     for i, text in enumerate(items):
         try:
             parse_override(text)
@@ -123,22 +123,43 @@ class _Defaults:
     timeout_s: float | None
 
 
-_ENTRY_KEYS = frozenset({"path", "name", "repeat", "timeout", "set", "sweep"})
+@dataclass(frozen=True)
+class EntryFile:
+    """One item of a suite file's ``scenarios:`` (a bare string is its ``path``): the
+    scenario file, relative to the suite file, and what the suite changes about it."""
+
+    path: str
+    name: str | None = None
+    repeat: int | None = None
+    timeout: int | float | None = None
+    set: dict[str, Any] | tuple[str, ...] | None = None
+    sweep: Any = None  # checked by parse_sweep
 
 
-def _entry(raw: Any, base: Path, file: str, field: str, cli: _Defaults,
-           suite: _Defaults) -> Entry:
-    if isinstance(raw, str):
-        raw = {"path": raw}
-    if not isinstance(raw, Mapping):
-        raise ScenarioError(file, field, "expected a scenario path or a mapping with `path:`")
-    unknown = sorted(set(raw) - _ENTRY_KEYS)
-    if unknown:
-        raise ScenarioError(file, f"{field}.{unknown[0]}",
-                            f"unknown key (expected one of {', '.join(sorted(_ENTRY_KEYS))})")
-    path = raw.get("path")
-    if not isinstance(path, str) or not path:
+@dataclass(frozen=True)
+class DefaultsFile:
+    """A suite file's ``defaults:``."""
+
+    repeat: int | None = None
+    timeout: int | float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class SuiteFile:
+    """A suite file: its name, defaults and scenarios."""
+
+    suite: str = "srr suite"
+    defaults: DefaultsFile | None = None
+    scenarios: tuple[str | EntryFile, ...]
+
+
+def _entry(item: str | EntryFile, raw: Any, base: Path, file: str, field: str,
+           cli: _Defaults, suite: _Defaults) -> Entry:
+    """``item``: the entry as read; ``raw``: as written (whether it declares a sweep)."""
+    e = EntryFile(path=item) if isinstance(item, str) else item
+    if not e.path:
         raise ScenarioError(file, f"{field}.path", "expected the path of a scenario file")
+    path = e.path
     scenario_file = base / path
     try:
         is_file = scenario_file.is_file()
@@ -147,20 +168,19 @@ def _entry(raw: Any, base: Path, file: str, field: str, cli: _Defaults,
                             f"{err.strerror or err}") from None
     if not is_file:
         raise ScenarioError(file, f"{field}.path", f"no such file: {scenario_file}")
-    repeat = raw.get("repeat")
-    repeat = (_count(repeat, file, f"{field}.repeat", integer=True) if repeat is not None
+    repeat = (_count(e.repeat, file, f"{field}.repeat", integer=True) if e.repeat is not None
               else cli.repeat or suite.repeat or 1)
-    timeout = raw.get("timeout")
-    timeout_s = (float(_count(timeout, file, f"{field}.timeout", integer=False))
-                 if timeout is not None else cli.timeout_s or suite.timeout_s)
-    overrides = _overrides(raw.get("set"), file, f"{field}.set")
-    name = raw.get("name")
-    if name is not None and (not isinstance(name, str) or not _safe_name(name)):
+    timeout_s = (float(_count(e.timeout, file, f"{field}.timeout", integer=False))
+                 if e.timeout is not None else cli.timeout_s or suite.timeout_s)
+    overrides = _overrides(e.set, file, f"{field}.set")
+    name = e.name
+    if name is not None and not _safe_name(name):
         raise ScenarioError(file, f"{field}.name", "expected a name of letters, digits, '_', "
                             f"'-' and '.', got {name!r}")
+    has_sweep = isinstance(raw, Mapping) and "sweep" in raw
     try:
         return _checked(str(scenario_file), overrides, repeat=repeat, timeout_s=timeout_s,
-                        name=name, sweep_raw=raw.get("sweep"), has_sweep="sweep" in raw,
+                        name=name, sweep_raw=e.sweep, has_sweep=has_sweep,
                         sweep_file=file, sweep_field=f"{field}.sweep",
                         declared_in=f"{file}: {field}")
     except ScenarioError as err:
@@ -193,28 +213,21 @@ def _checked(scenario_file: str, overrides: tuple[str, ...], *, repeat: int,
 
 def _suite_file(path: Path, data: Mapping[str, Any], cli: _Defaults) -> tuple[str, list[Entry]]:
     file = str(path)
-    unknown = sorted(set(data) - {"suite", "defaults", "scenarios"})
-    if unknown:
-        raise ScenarioError(file, unknown[0], "unknown key (expected suite, defaults, scenarios)")
-    name = data.get("suite", "srr suite")
-    if not isinstance(name, str) or not name.strip():
-        raise ScenarioError(file, "suite", f"expected the suite's name, got {name!r}")
-    raw_def = data.get("defaults") or {}
-    if not isinstance(raw_def, Mapping):
-        raise ScenarioError(file, "defaults", "expected a mapping (repeat, timeout)")
-    bad = sorted(set(raw_def) - {"repeat", "timeout"})
-    if bad:
-        raise ScenarioError(file, f"defaults.{bad[0]}", "unknown key (expected repeat, timeout)")
+    spec = validate(SuiteFile, data, file)
+    if not spec.suite.strip():
+        raise ScenarioError(file, "suite", f"expected the suite's name, got {spec.suite!r}")
+    d = spec.defaults or DefaultsFile()
     suite = _Defaults(
-        _count(raw_def["repeat"], file, "defaults.repeat", integer=True)
-        if "repeat" in raw_def else None,
-        float(_count(raw_def["timeout"], file, "defaults.timeout", integer=False))
-        if "timeout" in raw_def else None)
-    if not data["scenarios"]:
+        _count(d.repeat, file, "defaults.repeat", integer=True) if d.repeat is not None
+        else None,
+        float(_count(d.timeout, file, "defaults.timeout", integer=False))
+        if d.timeout is not None else None)
+    if not spec.scenarios:
         raise ScenarioError(file, "scenarios", "the suite lists no scenarios")
-    entries = [_entry(raw, path.parent, file, f"scenarios[{i}]", cli, suite)
-               for i, raw in enumerate(data["scenarios"])]
-    return name, entries
+    entries = [_entry(item, raw, path.parent, file, f"scenarios[{i}]", cli, suite)
+               for i, (item, raw) in enumerate(zip(spec.scenarios, data["scenarios"],
+                                                   strict=True))]
+    return spec.suite, entries
 
 
 def load_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
