@@ -1,7 +1,8 @@
 """Typed, frozen model of a scenario file.
 
-The loader (:mod:`harness.scenario.loader`) validates raw YAML against these dataclasses using
-their type hints and the ``meta`` of each field (range checks, choices). Blocks follow the
+The loader (:mod:`harness.scenario.loader`) reads raw YAML into these dataclasses through
+:mod:`harness.validation`, by their type hints and the ``meta`` of each field (range checks,
+choices). Blocks follow the
 shape of the forklift seed's ``robots.yaml`` / ``cameras.yaml``: every block has an ``enabled``
 flag and the per-robot graphs read their settings from ``control``, ``odometry`` and
 ``safety_indicator``.
@@ -74,7 +75,8 @@ Vec3 = tuple[float, float, float]
 
 
 def _range(lo: float | None = None, hi: float | None = None, *, lo_open: bool = False) -> Any:
-    """Field metadata read by the loader: an inclusive (or open at ``lo``) numeric range."""
+    """Field metadata read by :mod:`harness.validation`: an inclusive (or open at ``lo``)
+    numeric range."""
     return {"range": (lo, hi, lo_open)}
 
 
