@@ -13,9 +13,9 @@ from mcap_ros2.decoder import DecoderFactory
 from websockets.exceptions import InvalidStatus
 
 from harness.bus import TRANSIENT_LOCAL, Bus
-from harness.bus.live import LiveConfig, LiveView, Pacer
-from harness.bus.messages import clock, serialize, tf_message, transform_stamped
 from harness.errors import LiveViewError
+from harness.live.view import LiveConfig, LiveView, Pacer
+from harness.serde.messages import clock, serialize, tf_message, transform_stamped
 from tests.bus.foxglove_client import LEGACY_SUBPROTOCOL, SUBPROTOCOL, LiveClient, open_client
 
 TF = "tf2_msgs/msg/TFMessage"

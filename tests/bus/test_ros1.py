@@ -22,18 +22,6 @@ from rosbags.rosbag1 import Reader as Rosbag1Reader
 from rosbags.rosbag2 import Reader as Rosbag2Reader
 
 from harness.bus import TRANSIENT_LOCAL, Envelope, Qos
-from harness.bus import messages as m
-from harness.bus.messages import TYPESTORE
-from harness.bus.ros1 import (
-    Ros1Encoder,
-    Ros1TypeError,
-    deserialize_ros1,
-    dropped_fields,
-    msgdef,
-    ros1_name,
-    to_ros2,
-)
-from harness.bus.ros1bag import Ros1Recorder
 from harness.cli import main
 from harness.frames import (
     CLOCK,
@@ -43,6 +31,18 @@ from harness.frames import (
     TWIST,
     decode_batch,
     load_frames,
+)
+from harness.recording.ros1bag import Ros1Recorder
+from harness.serde import messages as m
+from harness.serde.messages import TYPESTORE
+from harness.serde.ros1 import (
+    Ros1Encoder,
+    Ros1TypeError,
+    deserialize_ros1,
+    dropped_fields,
+    msgdef,
+    ros1_name,
+    to_ros2,
 )
 from tests.metrics.synthbag import SynthSpec, write_synthetic_bag
 from tests.metrics.test_frames import BOOL, random_messages
@@ -148,7 +148,7 @@ def test_frames_decode_ros1_as_cdr(msgtype: str) -> None:
 
 def _as_ros1(ros2_bag: Path, bag_dir: Path, fmt: str, max_span_ns: int) -> dict[str, Any]:
     """Record a rosbag2 bag's messages again through the ROS 1 recorder."""
-    from harness.bus.bagfile import ChunkPolicy
+    from harness.recording.bagfile import ChunkPolicy
 
     rec = Ros1Recorder(bag_dir, "bag" if fmt == "bag" else "mcap",
                        chunks=ChunkPolicy(max_span_ns=max_span_ns))
@@ -302,7 +302,7 @@ def test_a_foreign_bag_with_tf_tfmessage(tmp_path: Path) -> None:
     same TF table (the type is read as tf2_msgs/msg/TFMessage)."""
     from rosbags.rosbag1 import Writer
 
-    from harness.bus.ros1 import ROS1_TYPESTORE
+    from harness.serde.ros1 import ROS1_TYPESTORE
 
     tf = m.tf_message([m.transform_stamped(2_000_000_000, "odom", "base_link", [1, 2, 0],
                                            [0, 0, 0, 1])])
