@@ -195,8 +195,8 @@ name: ros1_clock
 duration: 0.1
 clock: {enabled: false}
 graphs:
-  - {name: Ros1Clock, builder: "tests.bus.ros1_plugins:ros1_clock"}
-  - {name: Ros2Clock, builder: "tests.bus.ros1_plugins:ros2_clock", enabled: false}
+  - {name: Ros1Clock, builder: "tests.recording.ros1_plugins:ros1_clock"}
+  - {name: Ros2Clock, builder: "tests.recording.ros1_plugins:ros2_clock", enabled: false}
 """
 
 
@@ -229,7 +229,7 @@ def clocks(tmp_path: Path) -> Path:
      "graphs[1]: mixes ROS 1 and ROS 2 bridge nodes (/World/Ros1ClockGraph/PublishClock is "
      "omni.isaac.ros_bridge.ROS1PublishClock, /World/Ros2ClockGraph/PublishClock is "
      "isaacsim.ros2.bridge.ROS2PublishClock)"),
-    (["systems_under_test=[{name: v, plugin: 'tests.bus.ros1_plugins:Velocity'}]"],
+    (["systems_under_test=[{name: v, plugin: 'tests.recording.ros1_plugins:Velocity'}]"],
      "systems_under_test[0]: systems_under_test[0] (v) publishes /velocity as "
      "geometry_msgs/msg/VelocityStamped, which has no ROS 1 counterpart"),
     (["output.ros=true"], "output.ros: expected one of 1, 2, got True"),
