@@ -56,13 +56,6 @@ from rosbags.rosbag2 import StoragePlugin, Writer  # noqa: E402
 from harness import api  # noqa: E402
 from harness.builders.camera_tf import OPTICAL_TO_WORLD_IJKR, world_frame  # noqa: E402
 from harness.builders.cameras import gate_step  # noqa: E402
-from harness.bus.messages import (  # noqa: E402
-    TYPESTORE,
-    clock,
-    serialize,
-    tf_message,
-    transform_stamped,
-)
 from harness.geometry import wxyz_to_xyzw  # noqa: E402
 from harness.graph.nodes.camera import (  # noqa: E402
     CAMERA_TYPES,
@@ -73,6 +66,13 @@ from harness.graph.nodes.camera import (  # noqa: E402
 )
 from harness.graph.nodes.ros_bridge import frame_of, frame_pose  # noqa: E402
 from harness.scenario import Scenario  # noqa: E402
+from harness.serde.messages import (  # noqa: E402
+    TYPESTORE,
+    clock,
+    serialize,
+    tf_message,
+    transform_stamped,
+)
 from harness.sim import World  # noqa: E402
 from harness.sim.render import Renderer, points_from_depth  # noqa: E402
 
@@ -283,7 +283,7 @@ def _timed(cls: Any, name: str, acc: list[float]) -> Any:
 
 
 def harness_run(sc: Scenario, out: Path) -> SrrRun:
-    from harness.bus.recorder import Recorder
+    from harness.recording.recorder import Recorder
     from harness.sim.render_pipeline import RenderThread
 
     marks: dict[int, float] = {}

@@ -43,9 +43,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from harness import api  # noqa: E402
-from harness.bus import Envelope, Recorder  # noqa: E402
-from harness.bus.bagfile import ChunkPolicy  # noqa: E402
-from harness.bus.messages import TYPESTORE, serialize  # noqa: E402
+from harness.bus import Envelope  # noqa: E402
+from harness.recording import Recorder  # noqa: E402
+from harness.recording.bagfile import ChunkPolicy  # noqa: E402
+from harness.serde.messages import TYPESTORE, serialize  # noqa: E402
 
 Msg = tuple[str, str, int, Any]  # topic, type, log time, message object
 

@@ -33,8 +33,8 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 from mcap.reader import make_reader  # noqa: E402
 
 from harness import api  # noqa: E402
-from harness.bus.messages import TYPESTORE  # noqa: E402
 from harness.replay import Playback  # noqa: E402
+from harness.serde.messages import TYPESTORE  # noqa: E402
 
 
 def bare_read_decode(bag: Path) -> int:

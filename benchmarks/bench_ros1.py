@@ -1,7 +1,7 @@
 """ROS 1 output against ROS 2, side by side in one process (best of ``--repeats``):
 
 * serialize: microseconds per message to turn a bus message into recorded bytes: ROS 2 CDR
-  (``harness.bus.messages.serialize``) and ROS 1 (``Ros1Encoder.encode``: conversion to the
+  (``harness.serde.messages.serialize``) and ROS 1 (``Ros1Encoder.encode``: conversion to the
   Noetic message, header seq, rosbags' ``serialize_ros1``);
 * score: messages per second read, decoded and scored (``load_frames`` + every metric family
   + health gates, as ``bench_scoring.py``) from the synthetic bag as recorded (ROS 2) and the
@@ -34,10 +34,10 @@ sys.path.insert(0, str(ROOT))
 from benchmarks.bench_scoring import score  # noqa: E402
 from harness import api  # noqa: E402
 from harness.bus import TRANSIENT_LOCAL, Envelope, Qos  # noqa: E402
-from harness.bus import messages as m  # noqa: E402
-from harness.bus.messages import TYPESTORE, serialize  # noqa: E402
-from harness.bus.ros1 import Ros1Encoder  # noqa: E402
-from harness.bus.ros1bag import Ros1Recorder  # noqa: E402
+from harness.recording.ros1bag import Ros1Recorder  # noqa: E402
+from harness.serde import messages as m  # noqa: E402
+from harness.serde.messages import TYPESTORE, serialize  # noqa: E402
+from harness.serde.ros1 import Ros1Encoder  # noqa: E402
 from tests.metrics.synthbag import SynthSpec, write_synthetic_bag  # noqa: E402
 
 SEED000 = ROOT / "tests" / "e2e" / "seed000_graphs.yaml"

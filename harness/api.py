@@ -26,12 +26,12 @@ from pathlib import Path
 from typing import Any
 
 from harness import runlock
-from harness.bus.liveconfig import LiveConfig
 from harness.diff import DiffResult, Tolerance
 from harness.diff import diff_runs as _diff_runs
 from harness.engine import Simulation
 from harness.errors import SrrError
 from harness.graph import stage_to_json, stage_to_mermaid
+from harness.live.config import LiveConfig
 from harness.run.baselines import (
     PROJECT_MARKERS,
     baseline_name,

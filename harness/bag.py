@@ -1,7 +1,7 @@
 """Reading recorded bags back: topic table for ``srr inspect``, with clear errors (a ROS 2
 rosbag2 directory, or a ROS 1 recording: a ``.bag``, or an MCAP file with the ``ros1``
 profile, alone or in a run's ``bag/`` directory). The recording is opened, and its read errors
-translated, by :func:`harness.bus.bagread.open_recording`."""
+translated, by :func:`harness.recording.bagread.open_recording`."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from harness import yamlio
-from harness.bus.bagread import open_recording, reading, ros1_recording
 from harness.errors import BagError
+from harness.recording.bagread import open_recording, reading, ros1_recording
 
 __all__ = ["BagInfo", "BagTopic", "inspect_bag"]
 

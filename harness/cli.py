@@ -17,17 +17,17 @@ from typing import TYPE_CHECKING, Any, NoReturn
 # Only what the parser needs is imported here: ``srr --help`` and argument errors load no
 # simulation, bus or rendering code. Each command imports the API when it runs.
 from harness import __version__
-from harness.bus.liveconfig import DEFAULT_PORT
 from harness.errors import SrrError, shorten
 from harness.interrupt import sigterm_as_interrupt
+from harness.live.config import DEFAULT_PORT
 from harness.summary import replay_note
 
 if TYPE_CHECKING:
     from rich.console import Console
 
     from harness import api
-    from harness.bus.liveconfig import LiveConfig
     from harness.diff import DiffResult
+    from harness.live.config import LiveConfig
 
 __all__ = ["main"]
 
@@ -243,7 +243,7 @@ def _started(bar: Any) -> Callable[[Path], None]:
 
 def _live_config(args: argparse.Namespace) -> LiveConfig | None:
     """``--foxglove`` and its options as a :class:`LiveConfig` (None without ``--foxglove``)."""
-    from harness.bus.liveconfig import LiveConfig
+    from harness.live.config import LiveConfig
 
     given = [flag for flag, value in (("--foxglove-port", args.foxglove_port),
                                       ("--foxglove-host", args.foxglove_host),

@@ -23,8 +23,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from harness.bus.bagfile import MESSAGE_OVERHEAD
 from harness.errors import DiskSpaceError
+from harness.recording.bagfile import MESSAGE_OVERHEAD
 from harness.scenario import Scenario, gate_step
 
 __all__ = [

@@ -147,7 +147,7 @@ class BagError(SrrError):
 class BagReadError(BagError):
     """A recording's bytes do not read: what a reader (rosbags, mcap, a decompressor, the
     file system) raised on a damaged, truncated or foreign file, translated where the
-    recording is opened (:mod:`harness.bus.bagread`). ``file``: the recording as the user
+    recording is opened (:mod:`harness.recording.bagread`). ``file``: the recording as the user
     named it; the message is ``<file>: <what>: <reason>``."""
 
     def __init__(self, file: object, what: str, why: str) -> None:

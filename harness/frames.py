@@ -9,7 +9,7 @@ and contents, sequence lengths, the encapsulation). Every message of the same le
 layout bytes equal the template's has its fields at the same offsets, so they are read for all
 of those messages at once with numpy. Messages that fit no template are decoded one by one
 with ``rosbags``' ``deserialize_cdr``; both paths give the same values (a test checks it).
-A ROS 1 recording (:mod:`harness.bus.bagread`) is read the same way: the cursor walks ROS 1
+A ROS 1 recording (:mod:`harness.recording.bagread`) is read the same way: the cursor walks ROS 1
 serialization instead (no encapsulation or alignment, a ``seq`` in every header, ROS 1's
 shorter ``Marker``) and the slow path decodes with rosbags' Noetic types, so every table
 below is the same whichever ROS the run recorded.
@@ -61,16 +61,16 @@ import pandas as pd
 from pandas.api.types import union_categoricals
 from rosbags.serde import SerdeError
 
-from harness.bus.bagread import Encoding, open_indexed, ros1_recording
 from harness.bus.endpoints import tf_tree_of
-from harness.bus.messages import TYPESTORE
-from harness.bus.ros1 import deserialize_ros1
 from harness.errors import BagError
 from harness.geometry import (
     quat_xyzw_mul_columns,
     quat_xyzw_rotate_columns,
     yaw_from_quat_xyzw_columns,
 )
+from harness.recording.bagread import Encoding, open_indexed, ros1_recording
+from harness.serde.messages import TYPESTORE
+from harness.serde.ros1 import deserialize_ros1
 
 __all__ = [
     "CLOCK",

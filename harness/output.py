@@ -11,7 +11,7 @@ the ``ros1`` profile), decided once per run, before its first tick.
 ROS 1 and ROS 2 bridge nodes in one scenario's builders is a
 :class:`~harness.errors.ScenarioError` (exit 2, ``srr validate`` too). The built-in graphs are
 srr's own and record whichever the run records. With ROS 1, every
-published topic's type must have a Noetic counterpart (:mod:`harness.bus.ros1`), and the live
+published topic's type must have a Noetic counterpart (:mod:`harness.serde.ros1`), and the live
 ROS 2 bridge and the Foxglove live view (both speak ROS 2) are refused.
 """
 
@@ -22,13 +22,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from harness.bus.bagfile import ChunkPolicy
-from harness.bus.recorder import Recorder
-from harness.bus.ros1 import Ros1TypeError, dropped_fields, ros1_type
-from harness.bus.ros1bag import Ros1Recorder
 from harness.errors import ScenarioError
 from harness.graph import GraphStage
+from harness.recording.bagfile import ChunkPolicy
+from harness.recording.recorder import Recorder
+from harness.recording.ros1bag import Ros1Recorder
 from harness.scenario import Scenario
+from harness.serde.ros1 import Ros1TypeError, dropped_fields, ros1_type
 
 __all__ = ["ROS2_OUTPUT", "OutputKind", "bridge_ros_version", "check_output_topics",
            "decide_output"]

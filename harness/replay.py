@@ -30,7 +30,11 @@ from typing import Any
 
 from harness import yamlio
 from harness.bus import Bus, Qos
-from harness.bus.bagread import (
+from harness.camera_topics import CompressedStream, compressed_streams, recorded_cameras
+from harness.errors import BagError, VideoError, reason
+from harness.graph.nodes.camera import depth_image_message, rgb_image_message
+from harness.output import ROS2_OUTPUT, OutputKind
+from harness.recording.bagread import (
     DECODE_ERRORS,
     deserialize,
     mcap_records,
@@ -38,12 +42,8 @@ from harness.bus.bagread import (
     reading,
     ros1_recording,
 )
-from harness.bus.ros1 import ros1_type
-from harness.camera_topics import CompressedStream, compressed_streams, recorded_cameras
-from harness.errors import BagError, VideoError, reason
-from harness.graph.nodes.camera import depth_image_message, rgb_image_message
-from harness.output import ROS2_OUTPUT, OutputKind
 from harness.scenario import Scenario
+from harness.serde.ros1 import ros1_type
 from harness.sut.base import SutContext, SystemUnderTest, load_suts
 from harness.video.codec import H264Decoder, decode_depth_png, decode_rgb
 

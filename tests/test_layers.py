@@ -20,8 +20,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 #: Packages whose ``__init__`` exports its names lazily (harness._lazy).
-LAZY_PACKAGES = ("harness.bus", "harness.diff", "harness.metrics", "harness.regression",
-                 "harness.sim", "harness.sut", "harness.video", "harness.wiring")
+LAZY_PACKAGES = ("harness.bus", "harness.diff", "harness.live", "harness.metrics",
+                 "harness.recording", "harness.regression", "harness.serde", "harness.sim",
+                 "harness.sut", "harness.video", "harness.wiring")
 #: The pure layers and the run-level modules they stand on.
 PURE = ("harness.scenario", "harness.metrics", "harness.regression", "harness.frames",
         "harness.report", "harness.report.html", "harness.report.data", "harness.scoring",

@@ -1,8 +1,10 @@
-"""The in-process bus, ROS 2 message helpers and the MCAP recorder.
+"""The in-process transport: the bus (publish/subscribe with QoS), its endpoints, and the
+topic- and frame-name rules.
 
 Names are imported from their submodules on first use (:mod:`harness._lazy`): reading
-topic-name rules (:mod:`~harness.bus.names`) or a bag loads neither the recorder nor the
-live view."""
+topic-name rules (:mod:`~harness.bus.names`) loads no bus. Messages and their
+serialization live in :mod:`harness.serde`, recording and reading bags in
+:mod:`harness.recording`, the Foxglove live view in :mod:`harness.live`."""
 
 from __future__ import annotations
 
@@ -22,8 +24,6 @@ if TYPE_CHECKING:
         TopicInfo,
         resolved,
     )
-    from harness.bus.live import LiveView
-    from harness.bus.liveconfig import LiveConfig
     from harness.bus.names import (
         FrameIdError,
         TopicNameError,
@@ -33,7 +33,6 @@ if TYPE_CHECKING:
         validate_namespace,
         validate_topic,
     )
-    from harness.bus.recorder import Recorder, TopicStats
 
 __all__ = [
     "TRANSIENT_LOCAL",
@@ -42,14 +41,10 @@ __all__ = [
     "Deferred",
     "Envelope",
     "FrameIdError",
-    "LiveConfig",
-    "LiveView",
     "Publisher",
     "Qos",
-    "Recorder",
     "TopicInfo",
     "TopicNameError",
-    "TopicStats",
     "remap_topic",
     "resolve_topic",
     "resolved",
@@ -68,8 +63,6 @@ _WHERE = {
     "Qos": "bus",
     "TopicInfo": "bus",
     "resolved": "bus",
-    "LiveConfig": "liveconfig",
-    "LiveView": "live",
     "FrameIdError": "names",
     "TopicNameError": "names",
     "remap_topic": "names",
@@ -77,7 +70,5 @@ _WHERE = {
     "validate_frame_id": "names",
     "validate_namespace": "names",
     "validate_topic": "names",
-    "Recorder": "recorder",
-    "TopicStats": "recorder",
 }
 __getattr__, __dir__ = lazy_exports(__name__, _WHERE, globals())

@@ -11,7 +11,7 @@ memory (runs of one scenario stay within a tick of each other); nothing else is 
 camera images are never all loaded at once. Each topic's SHA-256 over (log time, payload)
 is recomputed as the recorder computes it.
 
-ROS 1 recordings (:mod:`harness.bus.bagread`) are compared the same way; their topics carry
+ROS 1 recordings (:mod:`harness.recording.bagread`) are compared the same way; their topics carry
 their ROS 1 type names (``sensor_msgs/Image``), so a ROS 1 run and a ROS 2 run differ in type
 on every topic, and a differing ROS 1 payload is decoded into the ROS 2 message to walk it.
 """
@@ -29,11 +29,11 @@ from typing import Any
 
 import numpy as np
 
-from harness.bus.bagread import DECODE_ERRORS, deserialize, open_recording
 from harness.diff.fields import as_float, walk
 from harness.diff.result import Divergence, FieldDiff, TopicDiff, TopicStatus, Worst
 from harness.diff.tolerance import Tolerance, glob_match, tolerance_for
 from harness.errors import BagError, reason
+from harness.recording.bagread import DECODE_ERRORS, deserialize, open_recording
 
 __all__ = ["diff_bags", "message_stream"]
 

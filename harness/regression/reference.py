@@ -19,9 +19,9 @@ from pathlib import Path
 
 from mcap.writer import CompressionType, Writer
 
-from harness.bus.bagread import mcap_records, open_recording, ros1_recording
-from harness.bus.ros1 import ros2_type
 from harness.errors import BagError, reason
+from harness.recording.bagread import mcap_records, open_recording, ros1_recording
+from harness.serde.ros1 import ros2_type
 
 __all__ = ["KEPT_TYPES", "ReferenceInfo", "kept", "reference_path", "write_reference"]
 

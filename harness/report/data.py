@@ -21,12 +21,12 @@ import numpy as np
 import pandas as pd
 
 from harness.bus import resolve_topic
-from harness.bus.bagread import ros1_recording
 from harness.errors import SrrError
 from harness.frames import Frames
 from harness.metrics.control import robot_poses, route_distance
 from harness.metrics.perception import align_frames, assign
 from harness.metrics.safety import Tripwire, expected_muted
+from harness.recording.bagread import ros1_recording
 from harness.scenario import Scenario, load_scenario
 from harness.scoring import scenario_frames, within_area
 from harness.summary import read_summary

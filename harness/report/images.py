@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from harness.bus.bagread import Recording, open_indexed
 from harness.errors import VideoError
+from harness.recording.bagread import Recording, open_indexed
 from harness.video.codec import H264Decoder, decode_rgb
 from harness.video.sei import nal_units
 
@@ -157,7 +157,7 @@ def nearest_images(bag_dir: Path, targets_ns: Sequence[int], *,
 
     ``max_gap_ns``: topic → largest gap between its messages (the search window around a
     target is that gap); ``topics`` restricts the image topics. ``bag_dir`` holds a ROS 2 or
-    a ROS 1 recording (:func:`harness.bus.bagread.open_indexed`). Depth and other non-colour
+    a ROS 1 recording (:func:`harness.recording.bagread.open_indexed`). Depth and other non-colour
     images are skipped. Only the windows around the targets are read. Returns target → list
     sorted by topic."""
     out: dict[int, list[tuple[str, int, np.ndarray]]] = {t: [] for t in targets_ns}

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from harness import __version__
-from harness.bus import TopicStats
+from harness.recording import TopicStats
 from harness.run.summary import TopicRow
 from harness.scenario import Scenario
 from harness.sut.base import SutContext

@@ -30,15 +30,15 @@ from typing import Any
 
 from harness import runlock, runmarker, yamlio
 from harness.bus import Bus
-from harness.bus.bagfile import ChunkPolicy
-from harness.bus.live import LiveView
 from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
 from harness.errors import InvalidRunError, RunStopped, SrrError
 from harness.frames import Frames
+from harness.live.view import LiveView
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.output import ROS2_OUTPUT, OutputKind
+from harness.recording.bagfile import ChunkPolicy
 from harness.regression import baseline_path, save_baseline
 from harness.report.graphs import RunGraphs, write_graphs
 from harness.report.html import write_report

@@ -10,8 +10,8 @@ from typing import Any
 
 from harness import runlock, runmarker
 from harness.atomic import write_json_atomic
-from harness.bus.recover import RecoveredBag, recover_bag
 from harness.metrics.types import HealthResult
+from harness.recording.recover import RecoveredBag, recover_bag
 from harness.report.junit import junit_cases, write_junit
 from harness.run.facts import combined_digest, reproduce_command, topic_table, versions
 from harness.run.summary import RunSummary
@@ -50,7 +50,7 @@ def recover(path: str | Path) -> RecoverResult:
     """``srr recover``: make a run directory (or a bag directory) left by a killed run valid.
 
     The bag's MCAP file is rebuilt from its complete chunks when it was cut short
-    (:func:`harness.bus.recover.recover_bag`; the original is kept as ``*.mcap.damaged``). A
+    (:func:`harness.recording.recover.recover_bag`; the original is kept as ``*.mcap.damaged``). A
     run directory that has no summary, or still holds ``incomplete.json``, or whose bag had to
     be rebuilt, gets a ``summary.json`` (and ``junit.xml``) marked ``recovered: true`` with
     verdict INVALID: per-topic counts and digests of what was kept, no scores (the run did not

@@ -11,11 +11,11 @@ from pathlib import Path
 from typing import Any
 
 from harness.atomic import write_json_atomic
-from harness.bus.live import LiveConfig, LiveView
 from harness.camera_topics import recorded_cameras
 from harness.diskspace import FreeSpace, check_free_space, disk_free, large_bag_notice
 from harness.engine import Simulation
 from harness.errors import ScenarioError, SrrError
+from harness.live.view import LiveConfig, LiveView
 from harness.output import check_output_topics, decide_output
 from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir, reproduce_command
@@ -55,7 +55,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     INVALID, when it falls below ``recording.min_free_mb`` during the run.
 
     ``live`` serves the run over the Foxglove WebSocket protocol while it goes
-    (:mod:`harness.bus.live`): the server starts once the scene is built and wired (a port
+    (:mod:`harness.live.view`): the server starts once the scene is built and wired (a port
     in use is refused then, before anything is written) and stops when the run ends, however
     it ends. It changes nothing that is recorded. ``notice`` receives its one-line messages
     for the user; ``started`` the run directory, once it is created and owned."""

@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from harness.bus.messages import twist
 from harness.errors import PluginError
 from harness.scenario.schema import num
+from harness.serde.messages import twist
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
 from harness.sut.pose import OdomPose
 

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from harness.builders.safety_indicator import ALARM_COLOR, MUTED_COLOR, graph_path
-from harness.bus.messages import msg_type
 from harness.engine import Simulation
 from harness.errors import GraphError
 from harness.graph import stage_to_dict
 from harness.scenario.schema import Pose, RobotSpec, SafetyIndicatorSpec, Scenario
+from harness.serde.messages import msg_type
 
 DISK = "/World/forklift/body/body/safety_indicator"
 TOPIC = "/safety/is_muted"

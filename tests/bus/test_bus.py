@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from harness.bus import TRANSIENT_LOCAL, Bus, Envelope
-from harness.bus.messages import clock, clock_packer, serialize, split_ns
+from harness.serde.messages import clock, clock_packer, serialize, split_ns
 
 CLOCK = "rosgraph_msgs/msg/Clock"
 

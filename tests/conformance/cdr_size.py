@@ -23,7 +23,7 @@ from typing import Any
 
 from rosbags.interfaces import Nodetype
 
-from harness.bus.messages import TYPESTORE
+from harness.serde.messages import TYPESTORE
 
 __all__ = ["exact_size", "fastrtps_size", "is_plain"]
 

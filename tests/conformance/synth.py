@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from rosbags.interfaces import Nodetype
 
-from harness.bus.messages import TYPESTORE
+from harness.serde.messages import TYPESTORE
 
 __all__ = ["random_message"]
 

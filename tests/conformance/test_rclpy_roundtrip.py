@@ -46,7 +46,7 @@ import yaml
 from mcap.reader import make_reader
 
 from harness import api
-from harness.bus.messages import TYPESTORE
+from harness.serde.messages import TYPESTORE
 from tests.conformance.cdr_size import exact_size, fastrtps_size
 from tests.conformance.summary import LINES
 from tests.conformance.synth import random_message
@@ -355,7 +355,7 @@ _MARK_X = 1234.5678
 
 
 def _odometry_bytes() -> bytes:
-    from harness.bus.messages import odometry
+    from harness.serde.messages import odometry
 
     msg = odometry(1_500_000_000, "odom", "base_link", [_MARK_X, -2.0, 0.0],
                    [0.0, 0.0, 0.38268343236, 0.92387953251], [1.5, 0.0, 0.0], [0.0, 0.0, 0.2])

@@ -7,7 +7,7 @@ import struct
 
 import numpy as np
 
-from harness.bus.messages import TYPESTORE, msg_type, odometry
+from harness.serde.messages import TYPESTORE, msg_type, odometry
 from tests.conformance.values import message_fields, value_diff
 
 ODOM = "nav_msgs/msg/Odometry"

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from harness.bus.messages import TYPESTORE
+from harness.serde.messages import TYPESTORE
 
 __all__ = ["message_fields", "value_diff"]
 

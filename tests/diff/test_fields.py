@@ -6,7 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from harness.bus.messages import (
+from harness.diff.fields import walk
+from harness.serde.messages import (
     deserialize,
     header,
     make,
@@ -14,7 +15,6 @@ from harness.bus.messages import (
     tf_message,
     transform_stamped,
 )
-from harness.diff.fields import walk
 
 
 class Record:

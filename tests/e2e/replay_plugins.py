@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from harness.bus.messages import make
+from harness.serde.messages import make
 from harness.sut import SutContext, SystemUnderTest
 
 

@@ -24,8 +24,8 @@ from mcap.reader import make_reader
 
 from harness import api, runmarker
 from harness.bag import inspect_bag
-from harness.bus.recorder import digest_update
 from harness.cli import main
+from harness.recording.recorder import digest_update
 
 from .bagread import decoded, mcap_file
 

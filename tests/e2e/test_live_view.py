@@ -20,8 +20,8 @@ from mcap.records import Schema
 from mcap_ros2.decoder import DecoderFactory
 
 from harness.cli import main
-from tests.bus.foxglove_client import LiveClient, Received
 from tests.e2e.bagread import mcap_file
+from tests.live.foxglove_client import LiveClient, Received
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIO = ROOT / "scenarios" / "dock_worker_crossing.yaml"

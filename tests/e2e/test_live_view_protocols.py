@@ -14,8 +14,8 @@ from mcap.records import Schema
 from mcap_ros2.decoder import DecoderFactory
 
 from harness import api
-from tests.bus.foxglove_client import LEGACY_SUBPROTOCOL, SUBPROTOCOL, LiveClient, Received
 from tests.e2e.bagread import mcap_file
+from tests.live.foxglove_client import LEGACY_SUBPROTOCOL, SUBPROTOCOL, LiveClient, Received
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "dock_worker_crossing.yaml"
 WATCHED = ["/clock", "/tf", "/tf_static", "/odom", "/dock_cam_left_rgb", "/perception/tracks"]

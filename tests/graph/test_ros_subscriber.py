@@ -5,11 +5,11 @@ from __future__ import annotations
 import pytest
 
 from harness.bus import Bus
-from harness.bus.messages import msg_type, twist
 from harness.engine import EvalContext
 from harness.errors import GraphError
 from harness.graph import Controller, GraphStage, canonical_name
 from harness.graph.nodes.ros_subscriber import define_message_outputs, message_fields
+from harness.serde.messages import msg_type, twist
 
 K = Controller.Keys
 COUNTER = "def compute(db):\n    db.outputs.count = db.outputs.count + 1\n    return True\n"

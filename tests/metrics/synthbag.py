@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from harness.bus.messages import (
+from harness.geometry import quat_wxyz_from_yaw, wxyz_to_xyzw
+from harness.serde.messages import (
     TYPESTORE,
     clock,
     header,
@@ -29,7 +30,6 @@ from harness.bus.messages import (
     transform_stamped,
     twist,
 )
-from harness.geometry import quat_wxyz_from_yaw, wxyz_to_xyzw
 
 __all__ = ["ROI", "TRIPWIRE", "SynthSpec", "character_xy", "forklift_xy", "write_synthetic_bag"]
 

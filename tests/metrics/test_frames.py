@@ -11,16 +11,6 @@ import pandas as pd
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from harness.bus.messages import (
-    TYPESTORE,
-    clock,
-    header,
-    msg_type,
-    odometry,
-    tf_message,
-    transform_stamped,
-    twist,
-)
 from harness.errors import BagError
 from harness.frames import (
     CLOCK,
@@ -30,6 +20,16 @@ from harness.frames import (
     TWIST,
     decode_batch,
     load_frames,
+)
+from harness.serde.messages import (
+    TYPESTORE,
+    clock,
+    header,
+    msg_type,
+    odometry,
+    tf_message,
+    transform_stamped,
+    twist,
 )
 from tests.conftest import SCENARIOS
 from tests.metrics.synthbag import ODOM_ORIGIN, SynthSpec, forklift_xy, write_synthetic_bag

@@ -16,9 +16,9 @@ import pytest
 from mcap.reader import make_reader
 
 from harness import api
-from harness.bus.messages import TYPESTORE
 from harness.errors import SrrError
 from harness.ros2.domain import lease_domain
+from harness.serde.messages import TYPESTORE
 
 if os.environ.get("SRR_REQUIRE_ROS2") == "1":
     import rclpy  # noqa: F401  (an ImportError here is a collection error, never a skip)

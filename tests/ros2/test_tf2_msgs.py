@@ -7,7 +7,7 @@ never imports it (``test_rclpy_roundtrip`` still sees the wheels as they are). E
 runs a publisher and a subscriber as two more processes (``tf_peer.py``) on a domain of its
 own, discovery limited to this host, and checks:
 
-* the subscriber's raw CDR bytes equal ``harness.bus.messages``' serialization of the same
+* the subscriber's raw CDR bytes equal ``harness.serde.messages``' serialization of the same
   TFMessage, byte for byte (whether rclpy serialized it from its generated class or published
   the rosbags bytes as they are);
 * its typed message has the same values, floats bit for bit;
@@ -33,9 +33,9 @@ from typing import Any
 
 import pytest
 
-from harness.bus.messages import TYPESTORE
 from harness.ros2.errors import Ros2SetupError
 from harness.ros2.rosidl_build import find_toolchain
+from harness.serde.messages import TYPESTORE
 from tests.ros2.conftest import LINES
 from tests.ros2.tf_peer import TRANSFORMS, TYPENAME, as_plain, rosbags_bytes, rosbags_message
 

@@ -3,7 +3,7 @@ with real rclpy, for ``test_tf2_msgs.py``.
 
 ``python -m tests.ros2.tf_peer publish TOPIC typed|raw`` publishes :data:`TRANSFORMS` as one
 TFMessage: ``typed`` builds it with rclpy's generated class, ``raw`` publishes the bytes
-``harness.bus.messages`` serializes (as the recorder writes them). ``/tf`` is volatile and
+``harness.serde.messages`` serializes (as the recorder writes them). ``/tf`` is volatile and
 republished every 50 ms; ``/tf_static`` is transient-local and published once, as
 ``tf2_ros.StaticTransformBroadcaster`` does. It prints ``ready`` after the first publication
 and exits when its standard input closes (or after ``--timeout``), saying on standard output
@@ -26,7 +26,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from harness.bus import messages
+from harness.serde import messages
 
 # (sec, nanosec, parent, child, translation, rotation xyzw). The frame names are chosen so
 # the CDR has no padding (test_tf2_msgs checks it): Fast CDR leaves padding uninitialised,

@@ -18,7 +18,6 @@ from scipy.spatial.transform import Rotation
 import harness.graph as og
 from harness.builders import camera_tf, cameras
 from harness.bus import Envelope
-from harness.bus.messages import deserialize, serialize
 from harness.engine import Simulation
 from harness.errors import GraphError
 from harness.graph.nodes.camera import RENDER_PRODUCTS, RenderProductTable
@@ -33,6 +32,7 @@ from harness.scenario.schema import (
     SensorsSpec,
     WorldSpec,
 )
+from harness.serde.messages import deserialize, serialize
 
 HALL = WorldSpec(size=(30.0, 20.0), wall_height=4.0, shelves=(), dock=DockSpec(enabled=False))
 ALL = ("rgb", "depth", "pointcloud", "camera_info")

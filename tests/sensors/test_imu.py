@@ -13,7 +13,6 @@ import pytest
 import harness.graph as og
 from harness.builders.robot_sensors import imu_graph_path
 from harness.bus import Bus, Envelope
-from harness.bus.messages import deserialize, serialize
 from harness.engine import EvalContext, Simulation
 from harness.errors import GraphError
 from harness.scenario.schema import (
@@ -30,6 +29,7 @@ from harness.scenario.schema import (
     TfTreeSpec,
     WorldSpec,
 )
+from harness.serde.messages import deserialize, serialize
 from harness.sim import World
 
 ROOM = WorldSpec(size=(6.0, 6.0), wall_height=1.0, shelves=(), dock=DockSpec(enabled=False))

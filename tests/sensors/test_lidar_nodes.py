@@ -13,7 +13,6 @@ import pytest
 import harness.graph as og
 from harness.builders.robot_sensors import gate_step, lidar_graph_path
 from harness.bus import Bus, Envelope
-from harness.bus.messages import deserialize, serialize
 from harness.engine import EvalContext, Simulation
 from harness.errors import GraphError
 from harness.scenario.schema import (
@@ -29,6 +28,7 @@ from harness.scenario.schema import (
     TfTreeSpec,
     WorldSpec,
 )
+from harness.serde.messages import deserialize, serialize
 from harness.sim import World
 from harness.sim.lidar import Lidar, LidarConfig
 

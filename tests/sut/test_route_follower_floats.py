@@ -14,7 +14,6 @@ import pytest
 
 from harness import api
 from harness.bus import Bus
-from harness.bus.messages import Pose, odometry, tf_message_of
 from harness.geometry import (
     quat_wxyz_from_yaw,
     quat_wxyz_mul,
@@ -22,6 +21,7 @@ from harness.geometry import (
     xyzw_to_wxyz,
     yaw_from_quat_wxyz,
 )
+from harness.serde.messages import Pose, odometry, tf_message_of
 from harness.sut.base import SutContext
 from harness.sut.route_follower import (
     RouteFollower,

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from harness.bus.messages import make
+from harness.serde.messages import make
 from harness.sut import SutContext, SystemUnderTest
 
 STATS = "std_msgs/msg/Float64MultiArray"

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from harness.bus.messages import tf_message, transform_stamped
+from harness.serde.messages import tf_message, transform_stamped
 from harness.sut import SutContext, SystemUnderTest
 
 

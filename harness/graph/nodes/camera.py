@@ -52,11 +52,11 @@ import numpy as np
 
 from harness.bus.bus import Deferred
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.bus.messages import header, msg_type
 from harness.errors import GraphError, SimulationError
 from harness.graph import Attr, NodeType, register
 from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, aliases, topic_of
 from harness.scenario.prims import frame_of
+from harness.serde.messages import header, msg_type
 from harness.sim.prims import PrimKind
 from harness.sim.render import (
     CameraFrame,

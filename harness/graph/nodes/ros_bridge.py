@@ -7,7 +7,7 @@ from simulation time: ``inputs:timeStamp`` when connected (seconds, as Isaac's
 ReadSimulationTime gives it), otherwise the tick's own time.
 
 Publishers of messages with one shape (clock, odometry, TF) pack their bytes from values with
-a :class:`~harness.bus.cdr.Packer` made for the frame ids they publish, and leave building the
+a :class:`~harness.serde.cdr.Packer` made for the frame ids they publish, and leave building the
 message object to whoever reads it (:meth:`~harness.bus.Bus.publish_serialized`).
 """
 
@@ -21,9 +21,13 @@ import numpy as np
 
 from harness.bus import TopicNameError, resolve_topic
 from harness.bus.bus import Qos
-from harness.bus.cdr import Packer
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.bus.messages import (
+from harness.errors import GraphError
+from harness.geometry import quat_wxyz_conj, quat_wxyz_mul, quat_wxyz_rotate, wxyz_to_xyzw
+from harness.graph import Attr, NodeType, register
+from harness.scenario.prims import frame_of
+from harness.serde.cdr import Packer
+from harness.serde.messages import (
     Pose,
     clock,
     clock_packer,
@@ -33,10 +37,6 @@ from harness.bus.messages import (
     tf_message_of,
     tf_packer,
 )
-from harness.errors import GraphError
-from harness.geometry import quat_wxyz_conj, quat_wxyz_mul, quat_wxyz_rotate, wxyz_to_xyzw
-from harness.graph import Attr, NodeType, register
-from harness.scenario.prims import frame_of
 from harness.sim.cameras import optical_quat
 from harness.sim.prims import PrimKind
 

@@ -3,7 +3,7 @@
 Isaac Sim's ``ROS2Subscriber`` takes its type as ``messagePackage`` / ``messageSubfolder`` /
 ``messageName`` (``std_msgs`` / ``msg`` / ``Bool``) and, once the type is set, grows one
 dynamic output per message field. Here the fields come from the typestore's definition of the
-type (:data:`harness.bus.messages.TYPESTORE`): scalar fields (bool, integers, floats,
+type (:data:`harness.serde.messages.TYPESTORE`): scalar fields (bool, integers, floats,
 strings) become outputs of the matching attribute type, fields of nested messages are
 flattened with ``_`` (``header_frame_id``, ``linear_x``), and arrays and sequences are left
 out. ``std_msgs/Bool`` thus gives ``outputs:data`` (bool).
@@ -28,10 +28,10 @@ from typing import Any
 from rosbags.interfaces import Nodetype
 
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.bus.messages import TYPESTORE
 from harness.errors import GraphError
 from harness.graph import Attr, GraphStage, Node, NodeType, register
 from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, topic_of
+from harness.serde.messages import TYPESTORE
 
 __all__ = ["MessageField", "Subscriber", "define_message_outputs", "message_fields"]
 

@@ -27,7 +27,6 @@ from typing import Any
 import numpy as np
 
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.bus.messages import header, msg_type, quaternion_xyzw
 from harness.errors import GraphError
 from harness.geometry import quat_wxyz_conj, quat_wxyz_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
@@ -41,6 +40,7 @@ from harness.graph.nodes.ros_bridge import (
     topic_of,
 )
 from harness.scenario.schema import LidarSpec
+from harness.serde.messages import header, msg_type, quaternion_xyzw
 from harness.sim.lidar import Lidar, LidarConfig, Scan, noise_rng
 
 __all__ = [

@@ -37,13 +37,13 @@ from typing import Any
 import numpy as np
 
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.bus.messages import header, make, msg_type, time_msg
 from harness.camera_topics import COMPRESSED_FORMATS
 from harness.errors import GraphError, VideoError
 from harness.graph import Attr, NodeType, register
 from harness.graph.nodes.camera import render_products
 from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, topic_of
 from harness.scenario.prims import frame_of
+from harness.serde.messages import header, make, msg_type, time_msg
 from harness.video.codec import (
     DEPTH_PNG_FORMAT,
     H264Encoder,

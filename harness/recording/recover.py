@@ -36,7 +36,8 @@ from mcap.records import Channel, Chunk, Footer, Header, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from harness import yamlio
-from harness.bus.bagfile import (
+from harness.errors import BagError
+from harness.recording.bagfile import (
     ChunkPolicy,
     McapBagWriter,
     TopicMeta,
@@ -44,10 +45,9 @@ from harness.bus.bagfile import (
     dump_metadata,
     write_metadata,
 )
-from harness.bus.bagread import DATA_ERRORS, mcap_profile, ros1_recording
-from harness.bus.mcapread import lz4_failure
-from harness.bus.recorder import TopicStats, digest_update
-from harness.errors import BagError
+from harness.recording.bagread import DATA_ERRORS, mcap_profile, ros1_recording
+from harness.recording.mcapread import lz4_failure
+from harness.recording.recorder import TopicStats, digest_update
 
 __all__ = ["RecoveredBag", "locate_mcap", "recover_bag"]
 

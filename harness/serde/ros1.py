@@ -1,6 +1,6 @@
 """ROS 1 messages: the bus's ROS 2 messages as ROS 1 (Noetic) ones, and back.
 
-The bus always carries ROS 2 Jazzy messages (:mod:`harness.bus.messages`). A run that records
+The bus always carries ROS 2 Jazzy messages (:mod:`harness.serde.messages`). A run that records
 ROS 1 converts each message here, once, as it is recorded:
 
 * **Types** keep their package and name and lose ``/msg/`` in ROS 1 spelling
@@ -33,8 +33,8 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 from rosbags.typesys.store import Typestore
 
-from harness.bus.messages import TYPESTORE as ROS2_TYPESTORE
 from harness.errors import SrrError
+from harness.serde.messages import TYPESTORE as ROS2_TYPESTORE
 
 __all__ = [
     "ROS1_TYPESTORE",

@@ -9,11 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.bus import Bus, Deferred, Recorder
-from harness.bus.messages import clock, serialize
-from harness.bus.recorder import digest_update
+from harness.bus import Bus, Deferred
 from harness.cli import main
 from harness.errors import BagError, SimulationError
+from harness.recording import Recorder
+from harness.recording.recorder import digest_update
+from harness.serde.messages import clock, serialize
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
 
@@ -45,7 +46,7 @@ def test_counts_and_digests_follow_publication_order(tmp_path: Path) -> None:
 def test_a_failing_disk_is_one_line_and_leaves_no_run(tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str],
                                                       monkeypatch: pytest.MonkeyPatch) -> None:
-    from harness.bus.mcap_writer import McapWriter
+    from harness.recording.mcap_writer import McapWriter
 
     calls = {"n": 0}
     real = McapWriter.flush  # where a closed chunk goes to the file

@@ -11,10 +11,10 @@ import pytest
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, IndexType, Writer
 
-from harness.bus.bagread import open_indexed
-from harness.bus.mcapread import McapIndex
 from harness.errors import BagError
 from harness.frames import load_frames
+from harness.recording.bagread import open_indexed
+from harness.recording.mcapread import McapIndex
 from tests.metrics.synthbag import SynthSpec, write_synthetic_bag
 
 SMALL, LARGE, OTHER = 1, 2, 3  # channel ids as the writer numbers them

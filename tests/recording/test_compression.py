@@ -9,9 +9,9 @@ import pytest
 from mcap.reader import make_reader
 
 from harness import api
-from harness.bus.bagfile import ChunkPolicy
-from harness.bus.recover import recover_bag
-from tests.bus.test_recover import SPAN_NS, decoded_count, raw, record
+from harness.recording.bagfile import ChunkPolicy
+from harness.recording.recover import recover_bag
+from tests.recording.test_recover import SPAN_NS, decoded_count, raw, record
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -40,7 +40,7 @@ import numpy as np
 from rosbags.interfaces import Nodetype
 from rosbags.typesys.store import Typestore
 
-from harness.bus.pieces import Piece, Pieces
+from harness.serde.pieces import Piece, Pieces
 
 __all__ = ["CDR_HEADER", "Layout", "Packer", "Serializer", "Unsupported"]
 
@@ -239,7 +239,7 @@ class Layout:
 
     def serialize_pieces(self, msg: Any) -> tuple[Piece, ...]:
         """``msg``'s CDR bytes as pieces in order, each numeric array of
-        :data:`~harness.bus.pieces.LARGE` bytes or more as a read-only view of the message's
+        :data:`~harness.serde.pieces.LARGE` bytes or more as a read-only view of the message's
         own array (not copied); raises :class:`_Mismatch` when it does not fit the layout."""
         out = Pieces(CDR_HEADER)
         for segment in self.segments:

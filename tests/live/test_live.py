@@ -1,5 +1,5 @@
 """The live view: a real foxglove-sdk server fed from a real bus, read by a real WebSocket
-client (tests/bus/foxglove_client.py); its configuration checks and its pacing."""
+client (tests/live/foxglove_client.py); its configuration checks and its pacing."""
 
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ from mcap_ros2.decoder import DecoderFactory
 from websockets.exceptions import InvalidStatus
 
 from harness.bus import TRANSIENT_LOCAL, Bus
-from harness.bus.live import LiveConfig, LiveView, Pacer
-from harness.bus.messages import clock, serialize, tf_message, transform_stamped
 from harness.errors import LiveViewError
-from tests.bus.foxglove_client import LEGACY_SUBPROTOCOL, SUBPROTOCOL, LiveClient, open_client
+from harness.live.view import LiveConfig, LiveView, Pacer
+from harness.serde.messages import clock, serialize, tf_message, transform_stamped
+from tests.live.foxglove_client import LEGACY_SUBPROTOCOL, SUBPROTOCOL, LiveClient, open_client
 
 TF = "tf2_msgs/msg/TFMessage"
 CLOCK = "rosgraph_msgs/msg/Clock"

@@ -22,18 +22,6 @@ from rosbags.rosbag1 import Reader as Rosbag1Reader
 from rosbags.rosbag2 import Reader as Rosbag2Reader
 
 from harness.bus import TRANSIENT_LOCAL, Envelope, Qos
-from harness.bus import messages as m
-from harness.bus.messages import TYPESTORE
-from harness.bus.ros1 import (
-    Ros1Encoder,
-    Ros1TypeError,
-    deserialize_ros1,
-    dropped_fields,
-    msgdef,
-    ros1_name,
-    to_ros2,
-)
-from harness.bus.ros1bag import Ros1Recorder
 from harness.cli import main
 from harness.frames import (
     CLOCK,
@@ -43,6 +31,18 @@ from harness.frames import (
     TWIST,
     decode_batch,
     load_frames,
+)
+from harness.recording.ros1bag import Ros1Recorder
+from harness.serde import messages as m
+from harness.serde.messages import TYPESTORE
+from harness.serde.ros1 import (
+    Ros1Encoder,
+    Ros1TypeError,
+    deserialize_ros1,
+    dropped_fields,
+    msgdef,
+    ros1_name,
+    to_ros2,
 )
 from tests.metrics.synthbag import SynthSpec, write_synthetic_bag
 from tests.metrics.test_frames import BOOL, random_messages
@@ -148,7 +148,7 @@ def test_frames_decode_ros1_as_cdr(msgtype: str) -> None:
 
 def _as_ros1(ros2_bag: Path, bag_dir: Path, fmt: str, max_span_ns: int) -> dict[str, Any]:
     """Record a rosbag2 bag's messages again through the ROS 1 recorder."""
-    from harness.bus.bagfile import ChunkPolicy
+    from harness.recording.bagfile import ChunkPolicy
 
     rec = Ros1Recorder(bag_dir, "bag" if fmt == "bag" else "mcap",
                        chunks=ChunkPolicy(max_span_ns=max_span_ns))
@@ -195,8 +195,8 @@ name: ros1_clock
 duration: 0.1
 clock: {enabled: false}
 graphs:
-  - {name: Ros1Clock, builder: "tests.bus.ros1_plugins:ros1_clock"}
-  - {name: Ros2Clock, builder: "tests.bus.ros1_plugins:ros2_clock", enabled: false}
+  - {name: Ros1Clock, builder: "tests.recording.ros1_plugins:ros1_clock"}
+  - {name: Ros2Clock, builder: "tests.recording.ros1_plugins:ros2_clock", enabled: false}
 """
 
 
@@ -229,7 +229,7 @@ def clocks(tmp_path: Path) -> Path:
      "graphs[1]: mixes ROS 1 and ROS 2 bridge nodes (/World/Ros1ClockGraph/PublishClock is "
      "omni.isaac.ros_bridge.ROS1PublishClock, /World/Ros2ClockGraph/PublishClock is "
      "isaacsim.ros2.bridge.ROS2PublishClock)"),
-    (["systems_under_test=[{name: v, plugin: 'tests.bus.ros1_plugins:Velocity'}]"],
+    (["systems_under_test=[{name: v, plugin: 'tests.recording.ros1_plugins:Velocity'}]"],
      "systems_under_test[0]: systems_under_test[0] (v) publishes /velocity as "
      "geometry_msgs/msg/VelocityStamped, which has no ROS 1 counterpart"),
     (["output.ros=true"], "output.ros: expected one of 1, 2, got True"),
@@ -302,7 +302,7 @@ def test_a_foreign_bag_with_tf_tfmessage(tmp_path: Path) -> None:
     same TF table (the type is read as tf2_msgs/msg/TFMessage)."""
     from rosbags.rosbag1 import Writer
 
-    from harness.bus.ros1 import ROS1_TYPESTORE
+    from harness.serde.ros1 import ROS1_TYPESTORE
 
     tf = m.tf_message([m.transform_stamped(2_000_000_000, "odom", "base_link", [1, 2, 0],
                                            [0, 0, 0, 1])])

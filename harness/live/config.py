@@ -1,5 +1,5 @@
 """What ``srr run --foxglove`` asks for (:class:`LiveConfig`), apart from the server that
-serves it (:mod:`harness.bus.live`): the command line builds it without loading the bus."""
+serves it (:mod:`harness.live.view`): the command line builds it without loading the bus."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ class LiveConfig:
 
     ``host``/``port``: where the WebSocket server listens (port 0: any free port).
     ``wait_s``: hold the first tick until a client subscribes to a topic (and its other
-    subscriptions settled, :mod:`harness.bus.live`), at most this long
+    subscriptions settled, :mod:`harness.live.view`), at most this long
     (None: do not wait). ``rate``: pace the run so simulated time goes at most ``rate`` times
     as fast as the wall clock (None: as fast as it computes)."""
 

@@ -13,8 +13,8 @@ import pytest
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
-from harness.bus.mcap_writer import McapWriter, Payload
-from harness.bus.pieces import LARGE
+from harness.recording.mcap_writer import McapWriter, Payload
+from harness.serde.pieces import LARGE
 
 
 def _calls(seed: int) -> list[tuple[str, tuple[object, ...]]]:
@@ -122,7 +122,7 @@ def test_a_file_written_with_writev_has_the_same_bytes(tmp_path: Path,
 
 
 def test_writev_writes_more_pieces_than_one_call_takes(tmp_path: Path) -> None:
-    from harness.bus.mcap_writer import _writev
+    from harness.recording.mcap_writer import _writev
 
     pieces = [bytes([i % 251]) * (i % 7) for i in range(5000)]
     path = tmp_path / "p"

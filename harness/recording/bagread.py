@@ -5,7 +5,7 @@
 * a ROS 1 ``.bag``: rosbags' rosbag1 reader;
 * a plain MCAP file, ``ros2`` or ``ros1`` profile (a ROS 1 run's ``bag/bag.mcap``, a
   baseline's reference recording): through its chunk and message indexes
-  (:class:`~harness.bus.mcapread.McapIndex`), in file order. :func:`open_indexed` reads a
+  (:class:`~harness.recording.mcapread.McapIndex`), in file order. :func:`open_indexed` reads a
   rosbag2 directory's one finished MCAP file so too (what scoring and the report's images
   read: only the payloads they want leave the disk).
 
@@ -26,7 +26,7 @@ byte-for-byte copy of an MCAP file's records). A programming error (``TypeError`
 ``AttributeError``, ``AssertionError``...) is not translated: it is a bug, with its traceback.
 The few library behaviours that raise a broader exception on bad bytes are caught around that
 library call alone (lz4, rosbags' ROS 1 and MCAP readers, mcap's reader:
-:func:`harness.bus.mcapread.guarded`).
+:func:`harness.recording.mcapread.guarded`).
 """
 
 from __future__ import annotations
@@ -51,10 +51,10 @@ from rosbags.serde import SerdeError
 from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 
 from harness import yamlio
-from harness.bus.mcapread import McapIndex, guarded, lz4_failure
-from harness.bus.messages import TYPESTORE
-from harness.bus.ros1 import Ros1TypeError, deserialize_ros1, ros2_type, to_ros2
 from harness.errors import BagReadError, reason
+from harness.recording.mcapread import McapIndex, guarded, lz4_failure
+from harness.serde.messages import TYPESTORE
+from harness.serde.ros1 import Ros1TypeError, deserialize_ros1, ros2_type, to_ros2
 
 try:  # rosbags decompresses zstd with the standard library's module (Python 3.14) or its backport
     from compression.zstd import ZstdError as _StdZstdError  # type: ignore[import-not-found,unused-ignore]
@@ -307,7 +307,7 @@ class _Rosbag1(_Rosbags):
 
 class _Mcap(Recording):
     """A finished MCAP file, ``ros2`` or ``ros1`` profile, read through its index
-    (:class:`~harness.bus.mcapread.McapIndex`)."""
+    (:class:`~harness.recording.mcapread.McapIndex`)."""
 
     kind = "mcap"
 

@@ -11,7 +11,7 @@ again whenever a client subscribes to them.
 Nothing here changes what is recorded: the view only reads the bytes the recorder serialized,
 and pacing (``rate``) only sleeps between ticks. The server listens on localhost unless told
 otherwise, and only while a run that asked for it is going. Clients reach it through
-:class:`~harness.bus.wsfront.SubprotocolFront`, so those offering only the protocol's older
+:class:`~harness.live.wsfront.SubprotocolFront`, so those offering only the protocol's older
 name, ``foxglove.websocket.v1`` (Lichtblick), connect as well as Foxglove's.
 """
 
@@ -24,10 +24,10 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from harness.bus.bus import Envelope, Qos
-from harness.bus.liveconfig import DEFAULT_PORT, LiveConfig
-from harness.bus.recorder import cdr_bytes, topic_meta
-from harness.bus.wsfront import SubprotocolFront
 from harness.errors import LiveViewError
+from harness.live.config import DEFAULT_PORT, LiveConfig
+from harness.live.wsfront import SubprotocolFront
+from harness.recording.recorder import cdr_bytes, topic_meta
 
 __all__ = ["DEFAULT_PORT", "LATCHED_KEEP", "LiveConfig", "LiveView", "Pacer"]
 
@@ -131,7 +131,7 @@ class LiveView:
 
         # The SDK's server listens on a loopback port of its own, behind srr's front on the
         # address asked for, which also lets in clients of the protocol's older name
-        # (foxglove.websocket.v1: Lichtblick, @foxglove/ws-protocol); see harness.bus.wsfront.
+        # (foxglove.websocket.v1: Lichtblick, @foxglove/ws-protocol); see harness.live.wsfront.
         try:
             view._server = foxglove.start_server(
                 name=name, host="127.0.0.1", port=0, capabilities=[Capability.Time],

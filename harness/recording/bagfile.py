@@ -8,7 +8,7 @@ record, chunk and message indexes, statistics; and ``metadata.yaml`` beside it.
 Crash safety: messages go into a chunk that is closed — compressed (not yet), CRC'd, written
 and flushed to the operating system — as soon as it holds ``max_bytes`` or spans
 ``max_span_ns`` of log (simulation) time, whichever comes first. A killed process therefore
-loses only the chunk being filled; ``harness.bus.recover`` rebuilds the index from the
+loses only the chunk being filled; ``harness.recording.recover`` rebuilds the index from the
 complete chunks. The header is flushed on open, so even a run killed at once leaves a file
 that says what it is. ``fsync`` (off by default) also forces each closed chunk to the disk,
 which only matters for power loss: after SIGKILL the operating system still holds every
@@ -29,7 +29,7 @@ from mcap.writer import CompressionType
 
 from harness import __version__, yamlio
 from harness.atomic import write_text_atomic
-from harness.bus.mcap_writer import McapWriter, Payload, payload_size
+from harness.recording.mcap_writer import McapWriter, Payload, payload_size
 
 __all__ = [
     "MESSAGE_OVERHEAD",

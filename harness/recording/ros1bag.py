@@ -1,8 +1,8 @@
 """Record the bus as ROS 1: a ``.bag`` (rosbags' rosbag1 writer) or MCAP with the ``ros1``
 profile.
 
-:class:`Ros1Recorder` is the :class:`~harness.bus.recorder.Recorder` with the ROS 1 format:
-each message is converted and serialized by :mod:`harness.bus.ros1` (Noetic definitions,
+:class:`Ros1Recorder` is the :class:`~harness.recording.recorder.Recorder` with the ROS 1 format:
+each message is converted and serialized by :mod:`harness.serde.ros1` (Noetic definitions,
 header ``seq`` per topic) on the caller's thread and written, in publication order, with the
 simulation time as its time, into ``<bag_dir>/<name>.bag`` or ``<bag_dir>/<name>.mcap``.
 Counts, bytes and digests are kept as for ROS 2, over the ROS 1 bytes.
@@ -30,10 +30,10 @@ from typing import Any, Literal
 from rosbags.rosbag1 import Writer as Rosbag1Writer
 from rosbags.typesys.msg import normalize_msgtype
 
-from harness.bus.bagfile import ChunkPolicy, McapBagWriter, TopicMeta
 from harness.bus.bus import Envelope, Qos, resolved
-from harness.bus.recorder import Recorder
-from harness.bus.ros1 import ROS1_TYPESTORE, Ros1Encoder, msgdef, ros1_name
+from harness.recording.bagfile import ChunkPolicy, McapBagWriter, TopicMeta
+from harness.recording.recorder import Recorder
+from harness.serde.ros1 import ROS1_TYPESTORE, Ros1Encoder, msgdef, ros1_name
 
 __all__ = ["CALLERID", "Ros1Recorder", "ros1_file"]
 

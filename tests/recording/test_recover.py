@@ -14,13 +14,14 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from harness.bus import TRANSIENT_LOCAL, Bus, Recorder
-from harness.bus.bagfile import ChunkPolicy
-from harness.bus.messages import clock, header, make, tf_message, transform_stamped
-from harness.bus.recorder import digest_update
-from harness.bus.recover import recover_bag
+from harness.bus import TRANSIENT_LOCAL, Bus
 from harness.cli import main
 from harness.errors import BagError
+from harness.recording import Recorder
+from harness.recording.bagfile import ChunkPolicy
+from harness.recording.recorder import digest_update
+from harness.recording.recover import recover_bag
+from harness.serde.messages import clock, header, make, tf_message, transform_stamped
 
 SPAN_NS = 250_000_000
 
@@ -227,7 +228,7 @@ def test_what_is_appended_while_a_bag_is_read_is_not_read(small_bag: Path,
     """The file's length is measured once: a writer appending during the scan (the rest of the
     recording, here written by the scan's own visitor) changes neither what is kept nor the
     bytes said to be dropped, which are never negative."""
-    from harness.bus.recover import _collect, _scan
+    from harness.recording.recover import _collect, _scan
 
     data = (small_bag / "bag.mcap").read_bytes()
     cut = len(data) // 2

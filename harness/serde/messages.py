@@ -4,7 +4,7 @@ Messages are the typestore's generated dataclasses, so what the bus carries is e
 is serialized to CDR. Every stamp comes from simulation time in integer nanoseconds.
 
 :func:`serialize` writes the bytes of rosbags' CDR serializer through layouts compiled once
-per type (:mod:`harness.bus.cdr`). Publishers whose messages keep one shape pack them from
+per type (:mod:`harness.serde.cdr`). Publishers whose messages keep one shape pack them from
 values instead (:func:`clock_packer`, :func:`tf_packer`, :func:`odometry_packer`), without
 building message objects; the ``*_of`` constructors make the same message as an object, for
 whoever reads it.
@@ -20,8 +20,8 @@ import numpy.typing as npt
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-from harness.bus.cdr import Packer, Serializer
-from harness.bus.pieces import Piece
+from harness.serde.cdr import Packer, Serializer
+from harness.serde.pieces import Piece
 
 __all__ = [
     "TYPESTORE",
@@ -135,7 +135,7 @@ def serialize(msg: Any, typename: str) -> bytes:
 def serialize_pieces(msg: Any, typename: str) -> tuple[Piece, ...]:
     """The bytes of :func:`serialize` in pieces, large numeric arrays (an image's pixels) as
     views of the message's own arrays instead of copies (see
-    :meth:`harness.bus.cdr.Serializer.pieces`)."""
+    :meth:`harness.serde.cdr.Serializer.pieces`)."""
     return _SERIALIZER.pieces(msg, typename)
 
 

@@ -1,6 +1,6 @@
 """Bytes assembled in order without copying large buffers: one accumulator for a message's CDR
-in pieces (:meth:`harness.bus.cdr.Layout.serialize_pieces`) and for an MCAP chunk being filled
-(:class:`harness.bus.mcap_writer.McapWriter`).
+in pieces (:meth:`harness.serde.cdr.Layout.serialize_pieces`) and for an MCAP chunk being filled
+(:class:`harness.recording.mcap_writer.McapWriter`).
 
 Small writes are appended to a ``bytearray``; a buffer of :data:`LARGE` bytes or more given to
 :meth:`Pieces.keep` is kept as it is, after the bytes written before it. ``len`` counts every

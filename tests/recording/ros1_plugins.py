@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 from harness import graph as og
-from harness.bus.messages import make
+from harness.serde.messages import make
 from harness.sut import SutContext, SystemUnderTest
 
 keys = og.Controller.Keys

@@ -1,4 +1,4 @@
-"""Read errors of a recording, translated in one place (:mod:`harness.bus.bagread`): what a
+"""Read errors of a recording, translated in one place (:mod:`harness.recording.bagread`): what a
 reader raises on a damaged file is one ``BagReadError`` line naming the file (exit 2); a
 programming error in the reading path is not a damaged file and keeps its traceback. The
 libraries' broader exceptions on bad bytes (lz4's ``RuntimeError``, rosbags' ROS 1 reader's
@@ -21,14 +21,14 @@ from rosbags.rosbag1 import Writer as Rosbag1Writer
 from rosbags.typesys import Stores, get_typestore
 
 from harness.bag import inspect_bag
-from harness.bus import mcapread
-from harness.bus.bagread import mcap_records, open_recording
-from harness.bus.mcapread import McapIndex
-from harness.bus.recover import recover_bag
 from harness.cli import main
 from harness.diff.topics import message_stream
 from harness.errors import BagError, BagReadError
 from harness.frames import load_frames
+from harness.recording import mcapread
+from harness.recording.bagread import mcap_records, open_recording
+from harness.recording.mcapread import McapIndex
+from harness.recording.recover import recover_bag
 from harness.regression.reference import write_reference
 from harness.replay import Playback
 from tests.metrics.synthbag import SynthSpec, write_synthetic_bag

@@ -13,8 +13,8 @@ import pytest
 from rosbags.interfaces import Nodetype
 
 from harness import api
-from harness.bus.cdr import Serializer
-from harness.bus.messages import (
+from harness.serde.cdr import Serializer
+from harness.serde.messages import (
     TYPESTORE,
     Pose,
     clock,
@@ -109,8 +109,8 @@ def test_large_arrays_stay_the_messages_own_buffers() -> None:
     copy) and the fields after it are laid out as if it had been copied: an image, a point
     cloud (a bool after its data), a scan (a float array after a float array of odd
     length)."""
-    from harness.bus.messages import make, serialize_pieces
-    from harness.bus.pieces import LARGE as LARGE_ARRAY
+    from harness.serde.messages import make, serialize_pieces
+    from harness.serde.pieces import LARGE as LARGE_ARRAY
 
     rng = np.random.default_rng(7)
     image = make("sensor_msgs/msg/Image", height=130, width=131, encoding="32FC1", step=524,

@@ -2,7 +2,7 @@
 
 The recorder is a bus tap: it sees each message at publish time, serializes it with the
 rosbags typestore and writes it with the simulation time as log time, through
-:class:`~harness.bus.bagfile.McapBagWriter` (bounded chunks: a crash loses at most the chunk
+:class:`~harness.recording.bagfile.McapBagWriter` (bounded chunks: a crash loses at most the chunk
 being filled). It keeps, per topic, the count, byte total and a SHA-256 digest over
 ``(log time, payload)`` so two runs can be compared without reading the bags back. Topics
 named ``unrecorded`` (raw camera images a camera records only compressed) are counted, not
@@ -44,7 +44,9 @@ from rosbags.interfaces import (
 )
 from rosbags.rosbag2.metadata import dump_qos_v9
 
-from harness.bus.bagfile import (
+from harness.bus.bus import Deferred, Envelope, Qos, resolved
+from harness.errors import BagError
+from harness.recording.bagfile import (
     ChunkPolicy,
     McapBagWriter,
     TopicMeta,
@@ -52,10 +54,8 @@ from harness.bus.bagfile import (
     dump_metadata,
     write_metadata,
 )
-from harness.bus.bus import Deferred, Envelope, Qos, resolved
-from harness.bus.mcap_writer import Payload, payload_size
-from harness.bus.messages import TYPESTORE, serialize, serialize_pieces
-from harness.errors import BagError
+from harness.recording.mcap_writer import Payload, payload_size
+from harness.serde.messages import TYPESTORE, serialize, serialize_pieces
 
 __all__ = ["HASH_LANE_MIN_BYTES", "Recorder", "TopicStats", "cdr_bytes", "digest_update",
            "topic_meta"]
@@ -179,7 +179,7 @@ class Recorder:
 
     Call :meth:`open` with the bus's QoS look-up (so transient-local topics are marked so in
     ``metadata.yaml``), feed it envelopes, then :meth:`close`. ``chunks`` bounds what a crash
-    can lose (see :class:`~harness.bus.bagfile.ChunkPolicy`).
+    can lose (see :class:`~harness.recording.bagfile.ChunkPolicy`).
 
     Messages are serialized on the caller's thread (the message objects are not shared
     further), :class:`~harness.bus.bus.Deferred` ones on a pool (ROS 2 only: another format
@@ -387,7 +387,7 @@ class Recorder:
         return dict(sorted(self._skipped.items()))
 
     # -- the format: a rosbag2 directory with one MCAP file of CDR messages (ROS 2). A
-    # subclass records another (harness.bus.ros1bag: ROS 1) by overriding these.
+    # subclass records another (harness.recording.ros1bag: ROS 1) by overriding these.
     def _open_writer(self) -> Any:
         """The file writer, opened (called once, on the caller's thread)."""
         return McapBagWriter(self.mcap_path, self.chunks)

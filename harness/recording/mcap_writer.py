@@ -11,7 +11,7 @@ order: a test checks that byte for byte. What differs is the cost:
   index entry one tuple;
 * per byte of a large payload (an image: megabytes a frame): the library copies it into a
   ``BytesIO`` chunk and twice more while building the Chunk record, all holding the GIL. Here a
-  chunk is a list of *pieces* (:class:`~harness.bus.pieces.Pieces`): small records are
+  chunk is a list of *pieces* (:class:`~harness.serde.pieces.Pieces`): small records are
   appended to a ``bytearray``, a payload of 64 KiB or more (or each large piece of a payload
   handed over in pieces, see :data:`Payload`) is kept as the caller's buffer. The chunk's
   CRC is computed piece by piece and the chunk goes to the file with ``os.writev``; zlib's CRC
@@ -50,7 +50,7 @@ from mcap.records import (
 )
 from mcap.writer import MCAP0_MAGIC, CompressionType
 
-from harness.bus.pieces import Piece, Pieces
+from harness.serde.pieces import Piece, Pieces
 
 __all__ = ["McapWriter", "Payload", "payload_size"]
 
@@ -114,7 +114,7 @@ def _writev(fd: int, pieces: Sequence[Piece]) -> None:
 class McapWriter:
     """Writes one MCAP file to ``stream`` (see the module docstring). Chunks are closed only
     by :meth:`flush` and :meth:`finish`; the caller decides when (see
-    :class:`~harness.bus.bagfile.McapBagWriter`).
+    :class:`~harness.recording.bagfile.McapBagWriter`).
 
     ``stream`` is written from its current position. An unbuffered file (``open(...,
     buffering=0)``) gets each chunk with ``os.writev`` on its descriptor; any other binary

@@ -11,11 +11,11 @@ Messages come in file order, chunk by chunk, and each chunk is read the cheaper 
   which is faster than going through the message indexes (1.4x on a ROS 1 MCAP bag).
 
 A file without chunk indexes is read by the ``mcap`` library. The format is only what
-ROS-agnostic readers need: channel ids, log times, payload bytes; :mod:`harness.bus.bagread`
+ROS-agnostic readers need: channel ids, log times, payload bytes; :mod:`harness.recording.bagread`
 names the channels' ROS types. Damage raises ``ValueError`` (no summary section, a chunk
 whose records or message index do not agree with its chunk index, a message on a channel the
 summary does not list, a chunk that does not decompress), the ``mcap`` library's errors, the
-zstd decompressor's, ``struct.error`` or ``OSError``: :mod:`harness.bus.bagread` turns these
+zstd decompressor's, ``struct.error`` or ``OSError``: :mod:`harness.recording.bagread` turns these
 into one :class:`~harness.errors.BagReadError` line naming the file.
 Chunk CRCs are not checked: that would cost 5 % of scoring's time (rosbags' reader, which
 ``srr inspect`` and ``srr diff`` use for a rosbag2 directory, checks them).
