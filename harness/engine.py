@@ -23,7 +23,8 @@ from harness.bus import Bus, Envelope
 from harness.graph import GraphStage
 from harness.scenario import Scenario
 from harness.sim import World
-from harness.sut.base import SutContext, SystemUnderTest, load_suts
+from harness.sut.base import SutContext, load_suts
+from harness.sut.participant import Participant
 from harness.wiring import Plan, plan_wiring
 
 __all__ = ["EvalContext", "Simulation"]
@@ -60,7 +61,7 @@ class Simulation:
             self.graph_paths = build_all(build)
         self.origins = build.origins  # node path → scenario field, for the wiring checks
         self.custom_graphs = build.custom_graphs  # graph path → graphs[i] (harness.output)
-        self.suts: list[tuple[str, SystemUnderTest, SutContext]] = load_suts(
+        self.suts: list[tuple[str, Participant, SutContext]] = load_suts(
             scenario, self.bus, source)
         self._started = False
 

@@ -51,6 +51,7 @@ from harness.run.summary import RunSummary, TopicRow
 from harness.scenario import Scenario, scenario_to_mapping
 from harness.scoring import Scores, scenario_frames, score_frames
 from harness.sut.base import SutContext
+from harness.sut.participant import Participant
 
 __all__ = ["Loop", "Progress", "RunResult", "Started", "prepare", "record"]
 
@@ -76,7 +77,7 @@ class Loop:
     counter and ``step``/``close``, plus what the summary says about it."""
 
     bus: Bus
-    suts: Sequence[tuple[str, Any, SutContext]]
+    suts: Sequence[tuple[str, Participant, SutContext]]
     step: Callable[[], None]  # one tick
     close: Callable[[], None]
     ticks: Callable[[], int]
@@ -197,9 +198,7 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
         recorder.open(loop.bus.qos)
         loop.bus.add_tap(recorder)
         for _, sut, _ in loop.suts:  # the ROS 2 bridge publishes the recorder's bytes
-            attach = getattr(sut, "attach_recorder", None)
-            if callable(attach):
-                attach(recorder)
+            sut.attach(recorder)
         if view is not None:
             recorder.add_serialized_tap(view.log)
             view.advertise({t: i.msgtype for t, i in loop.bus.topics().items()}, loop.bus.qos)
@@ -253,7 +252,7 @@ def _summarize(scenario: Scenario, loop: Loop, recorder: Any, *, source: str, sc
                bdir: Path) -> RunSummary:
     """The run's summary, not yet judged (INVALID until :func:`harness.run.judge.judge`)."""
     # what plug-ins noticed while running (the ROS 2 bridge: topics it could not bridge)
-    noticed = [w for _, sut, _ in loop.suts for w in getattr(sut, "warnings", list)()]
+    noticed = [w for _, sut, _ in loop.suts for w in sut.warnings()]
     return RunSummary(
         scenario=scenario.name, scenario_file=source, seed=scenario.seed, srr_gt=loop.srr_gt,
         duration_s=scenario.duration, simulated_s=sim_s, ticks=loop.ticks(),

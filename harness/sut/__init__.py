@@ -12,16 +12,23 @@ from harness._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from harness.sut.base import SutContext, SystemUnderTest, load_sut, load_suts, sut_params
+    from harness.sut.participant import Participant, RunParticipant, as_participant
 
 __all__ = [
+    "Participant",
+    "RunParticipant",
     "SutContext",
     "SystemUnderTest",
+    "as_participant",
     "load_sut",
     "load_suts",
     "sut_params",
 ]
 
 _WHERE = {
+    "Participant": "participant",
+    "RunParticipant": "participant",
+    "as_participant": "participant",
     "SutContext": "base",
     "SystemUnderTest": "base",
     "load_sut": "base",
