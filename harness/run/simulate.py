@@ -14,7 +14,7 @@ from harness.atomic import write_json_atomic
 from harness.bus.live import LiveConfig, LiveView
 from harness.camera_topics import recorded_cameras
 from harness.diskspace import FreeSpace, check_free_space, disk_free, large_bag_notice
-from harness.engine import Simulation
+from harness.engine import Joined, Simulation
 from harness.errors import ScenarioError, SrrError
 from harness.output import check_output_topics, decide_output
 from harness.run.baselines import baselines_dir
@@ -22,14 +22,23 @@ from harness.run.facts import default_run_dir, reproduce_command
 from harness.run.graphs import graphs_of
 from harness.run.participants import LiveViewParticipant, RtspParticipant
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
-from harness.scenario import Scenario, SutSpec, rate_warnings
+from harness.scenario import Scenario, rate_warnings
 from harness.scoring import check_scoring
 from harness.sim.world_file import map_json
 from harness.sut.participant import Participant
 from harness.wiring import check_wiring
 
-__all__ = ["ROS2_BRIDGE", "Notice", "RepeatResult", "check_video", "run_repeat", "run_scenario",
-           "start_streams", "validate", "with_ros2_bridge"]
+__all__ = [
+    "ROS2_BRIDGE",
+    "Notice",
+    "RepeatResult",
+    "check_video",
+    "ros2_bridge",
+    "run_repeat",
+    "run_scenario",
+    "start_streams",
+    "validate",
+]
 
 Notice = Callable[[str], None]
 
@@ -70,7 +79,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     if size_note is not None and notice is not None:
         notice(size_note)
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
-    sim = Simulation(with_ros2_bridge(scenario, run_dir), source=source)
+    sim = Simulation(scenario, source=source, joined=ros2_bridge(scenario, run_dir, source))
     try:
         graphs = graphs_of(sim)  # as built, before any tick
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
@@ -154,17 +163,21 @@ def _serve_streams(sim: Simulation, scenario: Scenario, source: str,
 ROS2_BRIDGE = "ros2_bridge"
 
 
-def with_ros2_bridge(scenario: Scenario, run_dir: Path | None) -> Scenario:
-    """``scenario`` with the ROS 2 bridge as its last system under test when
-    ``ros2.enabled`` (:mod:`harness.ros2.bridge`); as it is otherwise. Without ``run_dir``
-    the bridge only checks (``srr validate``)."""
+def ros2_bridge(scenario: Scenario, run_dir: Path | None,
+                source: str = "<scenario>") -> tuple[Joined, ...]:
+    """The ROS 2 bridge (:mod:`harness.ros2.bridge`) when ``ros2.enabled``, to join the
+    simulation after the scenario's systems under test (it stands for the external nodes,
+    and is listed with them as ``ros2_bridge``); none otherwise. Without ``run_dir`` the
+    bridge only checks (``srr validate``)."""
     if not scenario.ros2.enabled:
-        return scenario
+        return ()
+    from harness.ros2.bridge import Ros2Bridge
+
     params: dict[str, Any] = ({"run_dir": str(run_dir)} if run_dir is not None
                               else {"check_only": True})
-    bridge = SutSpec(name=ROS2_BRIDGE, plugin="harness.ros2.bridge:Ros2Bridge", params=params)
-    return dataclasses.replace(
-        scenario, systems_under_test=(*scenario.systems_under_test, bridge))
+    # named like the entry after the scenario's own, as the wiring checks list it
+    field = f"{source}: systems_under_test[{len(scenario.systems_under_test)}]"
+    return (Joined(ROS2_BRIDGE, Ros2Bridge(), field, params),)
 
 
 def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
@@ -202,7 +215,7 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     baselines_dir(source, None, scenario)  # a baselines: path that is not a folder
     busy = check_video(scenario, source)
-    sim = Simulation(with_ros2_bridge(scenario, None), source=source)
+    sim = Simulation(scenario, source=source, joined=ros2_bridge(scenario, None, source))
     try:
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         plan = sim.plan()
