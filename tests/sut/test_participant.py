@@ -9,6 +9,7 @@ from typing import Any
 import pytest
 
 from harness.bus import Bus
+from harness.bus.recorder import Recorder
 from harness.errors import PluginError
 from harness.run.facts import sut_endpoints
 from harness.scenario import SutSpec, load_scenario
@@ -95,3 +96,49 @@ def test_loaded_plain_plugins_keep_their_own_name_in_the_summary() -> None:
     scenario = load_scenario(Path(__file__).parents[2] / "scenarios" / "dock_empty.yaml")
     ctx = SutContext.for_spec(spec, scenario, Bus(lambda: 0), "f")
     assert sut_endpoints([("plain", p, ctx)])["plain"]["plugin"] == f"{__name__}:Plain"
+
+
+CALLS: list[tuple[str, Any]] = []  # what the Probe below was called with, in order
+
+
+class Probe:
+    """A plain plug-in (no base class) defining every lifecycle hook."""
+
+    def setup(self, ctx: Any) -> None:
+        CALLS.clear()
+        CALLS.append(("setup", ctx.name))
+        ctx.publisher("/cmd_vel", "geometry_msgs/msg/Twist")  # what the scenario scores
+
+    def attach(self, recorder: Any) -> None:
+        CALLS.append(("attach", isinstance(recorder, Recorder)))
+
+    def step(self, now_ns: int) -> None:
+        CALLS.append(("step", now_ns))
+
+    def after_tick(self, now_ns: int) -> None:
+        CALLS.append(("after_tick", now_ns))
+
+    def warnings(self) -> list[str]:
+        CALLS.append(("warnings", None))
+        return ["probe: saw every tick"]
+
+    def shutdown(self) -> None:
+        CALLS.append(("shutdown", None))
+
+
+@pytest.mark.slow
+def test_a_run_calls_every_hook_in_lifecycle_order(tmp_path: Path) -> None:
+    from harness import api
+
+    forklift = Path(__file__).parents[2] / "scenarios" / "forklift_warehouse.yaml"
+    sc = api.load(forklift, duration=0.05, overrides=[
+        f"systems_under_test.route_follower.plugin={__name__}:Probe"])
+    res = api.run_scenario(sc, source=str(forklift), out=tmp_path / "run")
+    hz = sc.physics.tick_hz
+    ticks = [k * 1_000_000_000 // hz for k in range(sc.n_ticks)]
+    # attached to the run's recorder, before the first tick
+    assert CALLS[:2] == [("setup", "route_follower"), ("attach", True)]
+    assert CALLS[2:-2] == [(hook, t) for t in ticks for hook in ("step", "after_tick")]
+    assert CALLS[-2:] == [("shutdown", None), ("warnings", None)]
+    assert "probe: saw every tick" in res.summary["warnings"]
+    assert res.summary["sut_endpoints"]["route_follower"]["plugin"] == f"{__name__}:Probe"
