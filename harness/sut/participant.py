@@ -11,8 +11,11 @@ clocks or globals to find out where the run is:
    (systems under test and the ROS 2 bridge);
 4. ``after_tick(now_ns)`` — after each whole tick (the live view broadcasts the time and
    paces the run);
-5. ``warnings()`` — after the last tick: what it noticed, for the run's summary;
-6. ``shutdown()`` — once at the end, however the run ends.
+5. ``shutdown()`` — once, however the run ends: a system under test when the loop closes
+   after the last tick, the run's own participants (:mod:`harness.run.participants`) once
+   the run's outputs are written;
+6. ``warnings()`` — once the ticks are over: what it noticed, for the run's summary (a
+   system under test is asked after its ``shutdown``).
 
 :class:`Participant` has a no-op default for each hook: subclass it (or
 :class:`~harness.sut.base.SystemUnderTest`) and override what you need. A plug-in that
