@@ -32,7 +32,7 @@ from harness.bus import Bus, Publisher, Qos, TopicNameError, remap_topic
 from harness.bus.endpoints import Endpoint
 from harness.errors import PluginError, ScenarioError
 from harness.scenario import RobotSpec, Scenario, SutSpec, validate_dataclass
-from harness.sut.participant import Participant, as_participant
+from harness.sut.participant import Participant, as_participant, is_plugin
 
 __all__ = ["SutContext", "SystemUnderTest", "import_project_module", "load_sut", "load_suts",
            "sut_params"]
@@ -134,8 +134,7 @@ def load_sut(spec: SutSpec, field: str) -> Participant:
     cls = getattr(module, attr, None)
     if cls is None:
         raise PluginError(f"{field}.plugin: module {module_name!r} has no {attr!r}")
-    if not isinstance(cls, type) or not all(callable(getattr(cls, m, None))
-                                            for m in ("setup", "step", "shutdown")):
+    if not isinstance(cls, type) or not is_plugin(cls):
         raise PluginError(f"{field}.plugin: {spec.plugin} is not a system under test "
                           "(needs setup, step and shutdown)")
     return as_participant(cls(), f"{field}.plugin")

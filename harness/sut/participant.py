@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from harness.sut.base import SutContext
 
 __all__ = ["HOOKS", "Participant", "PlainPlugin", "RunParticipant", "as_participant",
-           "plugin_of"]
+           "is_plugin", "plugin_of"]
 
 HOOKS = ("setup", "attach", "step", "after_tick", "warnings", "shutdown")
 _REQUIRED = ("setup", "step", "shutdown")
@@ -120,13 +120,23 @@ def as_participant(plugin: Any, where: str) -> Participant:
     without ``setup``, ``step`` and ``shutdown`` is a :class:`PluginError` naming ``where``."""
     if isinstance(plugin, Participant):
         return plugin
-    hooks = {name: hook for name in HOOKS
-             if callable(hook := getattr(plugin, name, None))}
-    missing = [name for name in _REQUIRED if name not in hooks]
-    if missing:
+    hooks = _hooks(plugin)
+    if not is_plugin(plugin):
         raise PluginError(f"{where}: {type(plugin).__module__}:{type(plugin).__qualname__} "
                           f"is not a system under test (needs setup, step and shutdown)")
     return PlainPlugin(plugin, hooks)
+
+
+def is_plugin(plugin: Any) -> bool:
+    """Whether ``plugin`` (a class or an instance) defines the required hooks, ``setup``,
+    ``step`` and ``shutdown``."""
+    hooks = _hooks(plugin)
+    return all(name in hooks for name in _REQUIRED)
+
+
+def _hooks(plugin: Any) -> dict[str, Callable[..., Any]]:
+    """The lifecycle hooks ``plugin`` defines: the one place they are looked up by name."""
+    return {name: hook for name in HOOKS if callable(hook := getattr(plugin, name, None))}
 
 
 def plugin_of(participant: Participant) -> Any:
