@@ -50,11 +50,11 @@ from harness.run.simulate import (
     Notice,
     RepeatResult,
     check_video,
+    ros2_bridge,
     run_repeat,
     run_scenario,
     start_streams,
     validate,
-    with_ros2_bridge,
 )
 from harness.scenario import Scenario
 from harness.suite.events import Listener
@@ -87,6 +87,7 @@ __all__ = [
     "replay",
     "report",
     "reproduce_command",
+    "ros2_bridge",
     "run_planned_suite",
     "run_repeat",
     "run_scenario",
@@ -95,7 +96,6 @@ __all__ = [
     "suite",
     "validate",
     "versions",
-    "with_ros2_bridge",
     "write_diff",
 ]
 

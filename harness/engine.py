@@ -14,7 +14,7 @@ Single-threaded and free of wall-clock reads, so a scenario and a seed give the 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -23,10 +23,11 @@ from harness.bus import Bus, Envelope
 from harness.graph import GraphStage
 from harness.scenario import Scenario
 from harness.sim import World
-from harness.sut.base import SutContext, SystemUnderTest, load_suts
+from harness.sut.base import SutContext, load_suts
+from harness.sut.participant import Participant
 from harness.wiring import Plan, plan_wiring
 
-__all__ = ["EvalContext", "Simulation"]
+__all__ = ["EvalContext", "Joined", "Simulation"]
 
 
 @dataclass
@@ -41,11 +42,25 @@ class EvalContext:
     extras: dict[str, Any] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class Joined:
+    """A participant that is not one of the scenario's plug-ins but steps with them, after
+    them (the ROS 2 bridge, which stands for the external nodes): its name, the participant
+    (:class:`~harness.sut.participant.RunParticipant`), ``where`` its errors and the wiring
+    checks name and its parameters."""
+
+    name: str
+    participant: Participant
+    where: str
+    params: Mapping[str, Any] = field(default_factory=dict)
+
+
 class Simulation:
-    """A built scenario, ready to tick. Build it, :meth:`start`, :meth:`run`, :meth:`close`."""
+    """A built scenario, ready to tick. Build it, :meth:`start`, :meth:`run`, :meth:`close`.
+    ``joined`` take part as systems under test after the scenario's own, in order."""
 
     def __init__(self, scenario: Scenario, *, srr_gt: bool | None = None,
-                 source: str = "<scenario>") -> None:
+                 source: str = "<scenario>", joined: Sequence[Joined] = ()) -> None:
         self.scenario = scenario
         self.source = source
         self.srr_gt = scenario.srr_gt if srr_gt is None else srr_gt
@@ -60,8 +75,12 @@ class Simulation:
             self.graph_paths = build_all(build)
         self.origins = build.origins  # node path → scenario field, for the wiring checks
         self.custom_graphs = build.custom_graphs  # graph path → graphs[i] (harness.output)
-        self.suts: list[tuple[str, SystemUnderTest, SutContext]] = load_suts(
+        self.suts: list[tuple[str, Participant, SutContext]] = load_suts(
             scenario, self.bus, source)
+        self.suts += [(j.name, j.participant,
+                       SutContext(name=j.name, params=j.params, scenario=scenario,
+                                  seed=scenario.seed, field=j.where, bus=self.bus))
+                      for j in joined]
         self._started = False
 
     def plan(self) -> Plan:

@@ -44,7 +44,8 @@ from harness.recording.bagread import (
 )
 from harness.scenario import Scenario
 from harness.serde.ros1 import ros1_type
-from harness.sut.base import SutContext, SystemUnderTest, load_suts
+from harness.sut.base import SutContext, load_suts
+from harness.sut.participant import Participant
 from harness.video.codec import H264Decoder, decode_depth_png, decode_rgb
 
 __all__ = ["Playback", "RecordedTopic", "Replay"]
@@ -230,7 +231,7 @@ class Replay:
         self.tick_index = 0
         self.time_ns = 0
         self.bus = Bus(lambda: self.time_ns)
-        self.suts: list[tuple[str, SystemUnderTest, SutContext]] = load_suts(
+        self.suts: list[tuple[str, Participant, SutContext]] = load_suts(
             scenario, self.bus, source)
         self._groups: Iterator[tuple[int, list[tuple[str, str, bytes]]]] = iter(())
         self._decode = _decoder(playback.file, lambda: self.time_ns,

@@ -115,6 +115,7 @@ class Ros2Bridge(SystemUnderTest):
 
     def setup(self, ctx: SutContext) -> None:
         self.ctx = ctx
+        self.setup_notes: list[str] = []
         self.spec: Ros2Spec = ctx.scenario.ros2
         # errors name the scenario file and the ros2 field, not the bridge's own entry
         self.source = ctx.field.rsplit(": systems_under_test", 1)[0]
@@ -289,7 +290,7 @@ class Ros2Bridge(SystemUnderTest):
         return self.lease.domain_id if self.lease is not None else -1
 
     # -- every tick -----------------------------------------------------------------------
-    def attach_recorder(self, recorder: Recorder) -> None:
+    def attach(self, recorder: Recorder) -> None:
         """Publish the bytes the recorder serializes (at the same moment: the recorder is a
         bus tap too) instead of serializing every message a second time."""
         self._via_recorder = True
@@ -362,7 +363,7 @@ class Ros2Bridge(SystemUnderTest):
         return []
 
     def warnings(self) -> list[str]:
-        return [*getattr(self, "setup_notes", []), *(
+        return [*self.setup_notes, *(
             f"ros2: {t} ({m}) is recorded but not published on the ROS 2 graph: no rclpy "
             "type support for it here" for t, m in sorted(self.unbridged.items()))]
 

@@ -16,6 +16,7 @@ from harness.recording import TopicStats
 from harness.run.summary import TopicRow
 from harness.scenario import Scenario
 from harness.sut.base import SutContext
+from harness.sut.participant import plugin_of
 
 __all__ = ["combined_digest", "default_run_dir", "reproduce_command", "sut_endpoints",
            "topic_table", "versions"]
@@ -66,8 +67,9 @@ def sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any]
     """Name → plug-in and the topics it publishes and subscribes (what a replay withholds)."""
     out: dict[str, Any] = {}
     for name, sut, ctx in suts:
+        plugin = type(plugin_of(sut))
         out[name] = {
-            "plugin": f"{type(sut).__module__}:{type(sut).__qualname__}",
+            "plugin": f"{plugin.__module__}:{plugin.__qualname__}",
             "publishes": sorted({e.topic for e in ctx.endpoints if e.kind == "pub"}),
             "subscribes": sorted({e.topic for e in ctx.endpoints if e.kind == "sub"}),
         }

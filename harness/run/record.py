@@ -7,15 +7,25 @@ The steps of :func:`record`, each a function here:
 
 1. :func:`prepare` — refuse a live or non-empty run directory (before anything is built);
 2. :func:`record` — own the directory (:mod:`harness.runlock`) for the steps below;
-3. :func:`_open_recorder` — the in-progress marker, ``scenario.yaml``, the recorder (and the
-   live view's tap);
-4. :func:`_tick_loop` — the ticks, under the disk-space guard; a stop at a tick boundary or
-   Ctrl-C keeps what was recorded;
+3. :func:`_open_recorder` — the in-progress marker, ``scenario.yaml``, the recorder;
+4. :func:`_tick_loop` — the participants attached to the recorder, then the ticks, under the
+   disk-space guard; a stop at a tick boundary or Ctrl-C keeps what was recorded;
 5. :func:`_score` — close the recorder, tabulate the topics and score the recording;
 6. :func:`_summarize` — the run's summary (without its verdict);
 7. :func:`_update_baseline` (``--update-baseline``) and :func:`harness.run.judge.judge`;
 8. :func:`_write_outputs` — ``junit.xml``, ``summary.json`` (the run is complete from here),
    then ``report.html``.
+
+Everything that takes part in the run is a :class:`~harness.sut.participant.RunParticipant`,
+its hooks called here and by the engine, in this order: the systems under test (the
+scenario's plug-ins, then the ROS 2 bridge) are set up, stepped and shut down by the loop
+(:mod:`harness.engine`); the run's own participants (``participants``: the live view, the
+RTSP streams, :mod:`harness.run.participants`) were started before :func:`record`. Once the
+recorder is open, every one is ``attach``-ed (systems under test first, then the run's
+participants, in order); after each tick every one gets ``after_tick``; the loop closes
+(the systems under test's ``shutdown``) when the ticks end; ``warnings`` go into the summary;
+the run's participants are ``shutdown`` last, in reverse order, once the run directory is
+released, however the run ends.
 """
 
 from __future__ import annotations
@@ -34,7 +44,6 @@ from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
 from harness.errors import InvalidRunError, RunStopped, SrrError
 from harness.frames import Frames
-from harness.live.view import LiveView
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.output import ROS2_OUTPUT, OutputKind
@@ -51,6 +60,7 @@ from harness.run.summary import RunSummary, TopicRow
 from harness.scenario import Scenario, scenario_to_mapping
 from harness.scoring import Scores, scenario_frames, score_frames
 from harness.sut.base import SutContext
+from harness.sut.participant import Participant
 
 __all__ = ["Loop", "Progress", "RunResult", "Started", "prepare", "record"]
 
@@ -76,7 +86,7 @@ class Loop:
     counter and ``step``/``close``, plus what the summary says about it."""
 
     bus: Bus
-    suts: Sequence[tuple[str, Any, SutContext]]
+    suts: Sequence[tuple[str, Participant, SutContext]]
     step: Callable[[], None]  # one tick
     close: Callable[[], None]
     ticks: Callable[[], int]
@@ -101,11 +111,15 @@ def prepare(run_dir: Path) -> None:
 def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_ticks: int,
            progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
            update_reason: str = "", free_space: FreeSpace = disk_free,
-           view: LiveView | None = None, started: Started | None = None) -> RunResult:
+           participants: Sequence[Participant] = (),
+           started: Started | None = None) -> RunResult:
     """:func:`write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
     created and locked first (a live owner is refused), and released, its lock file
-    removed, however the run ends (``kill -9`` releases the lock too)."""
+    removed, however the run ends (``kill -9`` releases the lock too). ``participants``
+    (started) are shut down after that, in reverse order, however the run ends."""
     with contextlib.ExitStack() as owned:
+        for p in participants:  # called last, in reverse order
+            owned.callback(p.shutdown)
         try:
             owned.enter_context(runlock.owning(run_dir, "written", fresh=True))
             if started is not None:
@@ -116,7 +130,7 @@ def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_tick
         return write_run(scenario, loop, source=source, run_dir=run_dir, n_ticks=n_ticks,
                          progress=progress, baselines=baselines,
                          update_baseline=update_baseline, update_reason=update_reason,
-                         free_space=free_space, view=view)
+                         free_space=free_space, participants=participants)
 
 
 @dataclass(frozen=True)
@@ -132,16 +146,17 @@ class _Ended:
 def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_ticks: int,
               progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
               update_reason: str = "", free_space: FreeSpace = disk_free,
-              view: LiveView | None = None) -> RunResult:
+              participants: Sequence[Participant] = ()) -> RunResult:
     """Record ``loop`` into ``run_dir``, score it and write the run directory. Until
     ``summary.json`` is written the directory holds ``incomplete.json``
-    (:mod:`harness.runmarker`), so a killed run never looks done. ``view`` (a started live
-    view) gets every message the recorder serializes and, after each tick, the simulation
-    time; it may hold the first tick for a client and pace the loop."""
+    (:mod:`harness.runmarker`), so a killed run never looks done. ``participants`` (the
+    run's own, started: the live view gets every message the recorder serializes and, after
+    each tick, the simulation time; it may hold the first tick for a client and pace the
+    loop) are attached and told of each tick after the systems under test."""
     command = loop.command
     recorder = _open_recorder(scenario, loop, run_dir, source=source, command=command)
     ended = _tick_loop(scenario, loop, recorder, run_dir, n_ticks=n_ticks, progress=progress,
-                       free_space=free_space, view=view)
+                       free_space=free_space, participants=participants)
     runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
     try:  # until summary.json exists the directory is half-written: an error removes it
         scores, frames, topics, sim_s = _score(scenario, loop, recorder, run_dir, source)
@@ -153,7 +168,8 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
             scores, health=(*scores.health, HealthResult(ended.gate, False, ended.stopped)))
     bdir = baselines_dir(source, baselines, scenario)
     summary = _summarize(scenario, loop, recorder, source=source, scores=scores,
-                         topics=topics, sim_s=sim_s, ended=ended, bdir=bdir)
+                         topics=topics, sim_s=sim_s, ended=ended, bdir=bdir,
+                         participants=participants)
     if update_baseline and not ended.interrupted:
         _update_baseline(scenario, summary, bdir, run_dir, update_reason)
     j = judge(scenario, scores, bdir, digest=summary.digest, scene_files=summary.scene_files)
@@ -185,8 +201,10 @@ def _open_recorder(scenario: Scenario, loop: Loop, run_dir: Path, *, source: str
 
 def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, n_ticks: int,
                progress: Progress | None, free_space: FreeSpace,
-               view: LiveView | None) -> _Ended:
-    """Open the recorder on the bus (and the live view on the recorder), then run the ticks.
+               participants: Sequence[Participant]) -> _Ended:
+    """Open the recorder on the bus and attach every participant to it (the systems under
+    test, then ``participants``), then run the ticks, each followed by every participant's
+    ``after_tick``.
     A low disk or a :class:`RunStopped` stops the loop at a tick boundary and Ctrl-C ends it,
     what was recorded kept; any other error removes the run directory. The loop is closed
     however it ends."""
@@ -196,18 +214,14 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
     try:
         recorder.open(loop.bus.qos)
         loop.bus.add_tap(recorder)
-        for _, sut, _ in loop.suts:  # the ROS 2 bridge publishes the recorder's bytes
-            attach = getattr(sut, "attach_recorder", None)
-            if callable(attach):
-                attach(recorder)
-        if view is not None:
-            recorder.add_serialized_tap(view.log)
-            view.advertise({t: i.msgtype for t, i in loop.bus.topics().items()}, loop.bus.qos)
-            view.wait_for_client()
+        everyone = (*(sut for _, sut, _ in loop.suts), *participants)
+        for p in everyone:  # the ROS 2 bridge publishes the recorder's bytes; the live view
+            p.attach(recorder)  # serves them
         for _ in range(n_ticks):
             loop.step()
-            if view is not None:
-                view.tick()
+            now_ns = (loop.ticks() - 1) * 1_000_000_000 // hz  # the tick just run
+            for p in everyone:
+                p.after_tick(now_ns)
             if progress is not None:
                 progress(loop.ticks(), n_ticks)
             if loop.ticks() % hz == 0:  # flat resident memory however long the run
@@ -250,10 +264,11 @@ def _score(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path,
 
 def _summarize(scenario: Scenario, loop: Loop, recorder: Any, *, source: str, scores: Scores,
                topics: dict[str, TopicRow], sim_s: float, ended: _Ended,
-               bdir: Path) -> RunSummary:
+               bdir: Path, participants: Sequence[Participant]) -> RunSummary:
     """The run's summary, not yet judged (INVALID until :func:`harness.run.judge.judge`)."""
-    # what plug-ins noticed while running (the ROS 2 bridge: topics it could not bridge)
-    noticed = [w for _, sut, _ in loop.suts for w in getattr(sut, "warnings", list)()]
+    # what participants noticed while running (the ROS 2 bridge: topics it could not bridge)
+    noticed = [w for p in (*(sut for _, sut, _ in loop.suts), *participants)
+               for w in p.warnings()]
     return RunSummary(
         scenario=scenario.name, scenario_file=source, seed=scenario.seed, srr_gt=loop.srr_gt,
         duration_s=scenario.duration, simulated_s=sim_s, ticks=loop.ticks(),

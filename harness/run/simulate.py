@@ -13,21 +13,32 @@ from typing import Any
 from harness.atomic import write_json_atomic
 from harness.camera_topics import recorded_cameras
 from harness.diskspace import FreeSpace, check_free_space, disk_free, large_bag_notice
-from harness.engine import Simulation
+from harness.engine import Joined, Simulation
 from harness.errors import ScenarioError, SrrError
 from harness.live.view import LiveConfig, LiveView
 from harness.output import check_output_topics, decide_output
 from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir, reproduce_command
 from harness.run.graphs import graphs_of
+from harness.run.participants import LiveViewParticipant, RtspParticipant
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
-from harness.scenario import Scenario, SutSpec, rate_warnings
+from harness.scenario import Scenario, rate_warnings
 from harness.scoring import check_scoring
 from harness.sim.world_file import map_json
+from harness.sut.participant import Participant
 from harness.wiring import check_wiring
 
-__all__ = ["ROS2_BRIDGE", "Notice", "RepeatResult", "check_video", "run_repeat", "run_scenario",
-           "start_streams", "validate", "with_ros2_bridge"]
+__all__ = [
+    "ROS2_BRIDGE",
+    "Notice",
+    "RepeatResult",
+    "check_video",
+    "ros2_bridge",
+    "run_repeat",
+    "run_scenario",
+    "start_streams",
+    "validate",
+]
 
 Notice = Callable[[str], None]
 
@@ -68,7 +79,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     if size_note is not None and notice is not None:
         notice(size_note)
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
-    sim = Simulation(with_ros2_bridge(scenario, run_dir), source=source)
+    sim = Simulation(scenario, source=source, joined=ros2_bridge(scenario, run_dir, source))
     try:
         graphs = graphs_of(sim)  # as built, before any tick
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
@@ -85,28 +96,29 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     except BaseException:
         sim.close()
         raise
+    # the run's own participants (harness.run.participants), shut down in reverse order
+    participants: list[Participant] = ([LiveViewParticipant(view, sim.bus)]
+                                       if view is not None else [])
     try:
-        start_streams(sim, scenario, source, notice)
+        _, hub = _serve_streams(sim, scenario, source, notice)
+        if hub is not None:
+            participants.append(RtspParticipant(hub))
+        world_map = (map_json(sim.world.world_file)  # the file's static geometry, for the map
+                     if sim.world.world_file is not None else None)
     except BaseException:
         sim.close()
-        if view is not None:
-            view.close()
+        for p in reversed(participants):
+            p.shutdown()
         raise
-    world_map = (map_json(sim.world.world_file)  # the file's static geometry, for the map
-                 if sim.world.world_file is not None else None)
     loop = Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
                 sim.srr_gt, command=reproduce_command(source, scenario, run_dir),
                 warnings=tuple(warnings), graph_paths=tuple(sim.graph_paths),
                 scene_files=dict(sim.world.scene_files), world_map=world_map, output=output,
                 graphs=graphs)
-    try:
-        return record(scenario, loop, source=source, run_dir=run_dir,
-                       n_ticks=scenario.n_ticks, progress=progress, baselines=baselines,
-                       update_baseline=update_baseline, update_reason=update_reason,
-                       free_space=free_space, view=view, started=started)
-    finally:
-        if view is not None:
-            view.close()
+    return record(scenario, loop, source=source, run_dir=run_dir, n_ticks=scenario.n_ticks,
+                  progress=progress, baselines=baselines, update_baseline=update_baseline,
+                  update_reason=update_reason, free_space=free_space,
+                  participants=participants, started=started)
 
 
 def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>",
@@ -114,6 +126,12 @@ def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>
     """Serve the scenario's RTSP streams (``rtsp.enabled``): bind every camera's port now, so
     a port in use stops the run before anything is written, then wait for clients
     (``rtsp.wait_s``). Returns the stream URLs. The servers stop with the simulation."""
+    return _serve_streams(sim, scenario, source, notice)[0]
+
+
+def _serve_streams(sim: Simulation, scenario: Scenario, source: str,
+                   notice: Notice | None) -> tuple[list[str], Any]:
+    """:func:`start_streams`, and the servers (an ``RtspHub``; None: no stream)."""
     from harness.builders.rtsp_cameras import stream_cameras
     from harness.errors import StreamError
     from harness.graph.nodes.video import rtsp_hub
@@ -121,7 +139,7 @@ def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>
 
     cams = stream_cameras(scenario)
     if not cams:
-        return []
+        return [], None
     spec = scenario.rtsp
     try:
         hub = rtsp_hub(sim.ctx, rate=spec.rate)
@@ -139,23 +157,27 @@ def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>
         missing = hub.wait_for_clients(spec.wait_s)
         if missing:
             say(f"rtsp: no client on {', '.join(missing)}; starting anyway")
-    return urls
+    return urls, hub
 
 
 ROS2_BRIDGE = "ros2_bridge"
 
 
-def with_ros2_bridge(scenario: Scenario, run_dir: Path | None) -> Scenario:
-    """``scenario`` with the ROS 2 bridge as its last system under test when
-    ``ros2.enabled`` (:mod:`harness.ros2.bridge`); as it is otherwise. Without ``run_dir``
-    the bridge only checks (``srr validate``)."""
+def ros2_bridge(scenario: Scenario, run_dir: Path | None,
+                source: str = "<scenario>") -> tuple[Joined, ...]:
+    """The ROS 2 bridge (:mod:`harness.ros2.bridge`) when ``ros2.enabled``, to join the
+    simulation after the scenario's systems under test (it stands for the external nodes,
+    and is listed with them as ``ros2_bridge``); none otherwise. Without ``run_dir`` the
+    bridge only checks (``srr validate``)."""
     if not scenario.ros2.enabled:
-        return scenario
+        return ()
+    from harness.ros2.bridge import Ros2Bridge
+
     params: dict[str, Any] = ({"run_dir": str(run_dir)} if run_dir is not None
                               else {"check_only": True})
-    bridge = SutSpec(name=ROS2_BRIDGE, plugin="harness.ros2.bridge:Ros2Bridge", params=params)
-    return dataclasses.replace(
-        scenario, systems_under_test=(*scenario.systems_under_test, bridge))
+    # named like the entry after the scenario's own, as the wiring checks list it
+    field = f"{source}: systems_under_test[{len(scenario.systems_under_test)}]"
+    return (Joined(ROS2_BRIDGE, Ros2Bridge(), field, params),)
 
 
 def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
@@ -193,7 +215,7 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
     baselines_dir(source, None, scenario)  # a baselines: path that is not a folder
     busy = check_video(scenario, source)
-    sim = Simulation(with_ros2_bridge(scenario, None), source=source)
+    sim = Simulation(scenario, source=source, joined=ros2_bridge(scenario, None, source))
     try:
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         plan = sim.plan()

@@ -8,7 +8,10 @@ the loop; a plug-in gets narrow hooks and never reads clocks or globals:
 * ``shutdown()`` once at the end.
 
 Messages arrive through subscription callbacks (delivered between graph evaluation and
-``step``); time is only what the engine passes in.
+``step``); time is only what the engine passes in. These are three of the hooks of
+:class:`~harness.sut.participant.RunParticipant`, the lifecycle of everything that takes part
+in a run; a plug-in class that does not subclass :class:`SystemUnderTest` is wrapped once, as
+it is loaded (:func:`~harness.sut.participant.as_participant`).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from harness.bus import Bus, Publisher, Qos, TopicNameError, remap_topic
 from harness.bus.endpoints import Endpoint
 from harness.errors import PluginError, ScenarioError
 from harness.scenario import RobotSpec, Scenario, SutSpec, validate_dataclass
+from harness.sut.participant import Participant, as_participant, is_plugin
 
 __all__ = ["SutContext", "SystemUnderTest", "import_project_module", "load_sut", "load_suts",
            "sut_params"]
@@ -92,17 +96,9 @@ class SutContext:
         self.bus.subscribe(self._declare("sub", topic, msgtype), msgtype, callback)
 
 
-class SystemUnderTest:
-    """Base class for plug-ins; override what you need."""
-
-    def setup(self, ctx: SutContext) -> None:
-        """Advertise, subscribe and read parameters."""
-
-    def step(self, now_ns: int) -> None:
-        """Called once per tick with the simulation time in nanoseconds."""
-
-    def shutdown(self) -> None:
-        """Called once after the last tick."""
+class SystemUnderTest(Participant):
+    """Base class for plug-ins: every hook of :class:`~harness.sut.participant.Participant`
+    does nothing; override what you need (``setup``, ``step`` and ``shutdown``, mostly)."""
 
 
 def sut_params(cls: type[Any], ctx: SutContext) -> Any:
@@ -123,8 +119,10 @@ def import_project_module(name: str) -> ModuleType:
     return importlib.import_module(name)
 
 
-def load_sut(spec: SutSpec, field: str) -> SystemUnderTest:
-    """Import ``spec.plugin`` (``"module:Class"``) and instantiate it. Modules are found on
+def load_sut(spec: SutSpec, field: str) -> Participant:
+    """Import ``spec.plugin`` (``"module:Class"``) and instantiate it, as a
+    :class:`~harness.sut.participant.Participant` (a class that does not subclass one is
+    wrapped, :func:`~harness.sut.participant.as_participant`). Modules are found on
     the Python path and, after it, in the current directory (as ``python -m`` would), so a
     project's own plug-ins work from its root without being installed."""
     module_name, _, attr = spec.plugin.partition(":")
@@ -136,15 +134,14 @@ def load_sut(spec: SutSpec, field: str) -> SystemUnderTest:
     cls = getattr(module, attr, None)
     if cls is None:
         raise PluginError(f"{field}.plugin: module {module_name!r} has no {attr!r}")
-    if not isinstance(cls, type) or not all(callable(getattr(cls, m, None))
-                                            for m in ("setup", "step", "shutdown")):
+    if not isinstance(cls, type) or not is_plugin(cls):
         raise PluginError(f"{field}.plugin: {spec.plugin} is not a system under test "
                           "(needs setup, step and shutdown)")
-    return cls()  # type: ignore[no-any-return]
+    return as_participant(cls(), f"{field}.plugin")
 
 
 def load_suts(scenario: Scenario, bus: Bus, source: str = "<scenario>"
-              ) -> list[tuple[str, SystemUnderTest, SutContext]]:
+              ) -> list[tuple[str, Participant, SutContext]]:
     """Every enabled system under test of ``scenario``, loaded (not yet set up), with its
     context on ``bus``: (name, plug-in, context) in scenario order."""
     out = []

@@ -117,10 +117,9 @@ def _graph_items(stage: GraphStage, origins: Mapping[str, NodeOrigin], sc: Scena
 
 
 def _sut_items(suts: Sequence[tuple[str, Any, SutContext]], sc: Scenario) -> list[PlannedTopic]:
-    index = {s.name: i for i, s in enumerate(sc.systems_under_test)}
     out: list[PlannedTopic] = []
     for name, _, ctx in suts:
-        field = f"systems_under_test[{index[name]}]"
+        field = ctx.field.rsplit(": ", 1)[-1]  # "systems_under_test[i]", after the file
         for ep in ctx.endpoints:
             out.append(PlannedTopic(ep.kind, ep.topic, ep.msgtype, ep.required, field,
                                     f"{field} ({name})", graph=False))
