@@ -72,6 +72,23 @@ def _find_hook(find: Callable[[str], str]) -> Iterator[None]:
         substitution_args._eval_find, substitution_args._eval_dict["find"] = saved
 
 
+def _missing_arg(err: BaseException) -> str | None:
+    """The name of the ``$(arg ...)`` without a value behind ``err``, if that is its cause."""
+    seen: set[int] = set()
+    todo: list[BaseException | None] = [err]
+    while todo:
+        cur = todo.pop()
+        if cur is None or id(cur) in seen:
+            continue
+        seen.add(id(cur))
+        if isinstance(cur, substitution_args.ArgException):
+            return str(cur)
+        exc = getattr(cur, "exc", None)
+        todo += [exc if isinstance(exc, BaseException) else None, cur.__cause__,
+                 cur.__context__]
+    return None
+
+
 def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> Expanded:
     """Run xacro on ``path`` with ``args`` (``$(arg name)``); ``$(find pkg)`` is looked up in
     ``packages``. Raises :class:`XacroError`."""
@@ -100,6 +117,11 @@ def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> 
             raise XacroError(f"not well-formed XML ({where}): {err}") from err
         except (xacro.XacroException, OSError, ValueError, TypeError, NameError,
                 KeyError, AttributeError, SyntaxError) as err:
+            missing = _missing_arg(err)
+            if missing is not None:
+                name = missing
+                raise XacroError(f"$(arg {name}) has no value: give it in the model's args "
+                                 f"(or a default in <xacro:arg name=\"{name}\">)") from err
             if unknown:
                 raise XacroError(f"$(find {unknown[0]}): package {unknown[0]!r} not found "
                                  f"({packages.describe()})") from err
