@@ -170,6 +170,15 @@ def test_srr_validate_refuses_a_xacro_file_given_as_urdf(
     assert "is a xacro file: write 'xacro: robot/urdf/xbot.urdf.xacro'" in err
 
 
+def test_a_world_file_given_as_xacro_is_refused(tmp_path: Path) -> None:
+    path = write(tmp_path, tree(tmp_path))
+    data = yaml.safe_load(path.read_text())
+    data["world"] = {"model": {"urdf": "robot/urdf/xbot.urdf.xacro"}}
+    path.write_text(yaml.safe_dump(data))
+    err = error_of(path)
+    assert err.field == "world.model.urdf" and "is a xacro file" in err.message
+
+
 def test_args_belong_to_a_xacro_file(tmp_path: Path) -> None:
     root = tree(tmp_path)
     urdf = tmp_path / "plain.urdf"
@@ -187,9 +196,9 @@ def test_srr_validate_answers_a_missing_package_with_exit_2(
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "Traceback" not in err
     assert err.startswith(f"srr validate: {path}: robots[0].model.xacro: ")
+    assert "package 'xbot_description' not found" in err
 
 
-@pytest.mark.slow
 def test_srr_runs_a_xacro_robot_and_records_its_digest(tmp_path: Path) -> None:
     teleop = [{"name": "teleop", "plugin": "harness.sut.teleop:ScriptedTeleop",
                "params": {"rate_hz": 10, "cmd_vel_topic": "cmd_vel",

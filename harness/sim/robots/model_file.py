@@ -168,7 +168,7 @@ def _parse(path: Path, kind: ModelKind, packages: PackagePath,
         else:
             spec = mujoco.MjSpec.from_file(str(path))
     except ValueError as err:
-        shown = "the URDF xacro made of it" if kind == "xacro" else kind.upper()
+        shown = "the URDF xacro made of it" if kind == "xacro" else f"it as {kind.upper()}"
         raise ModelFileError(f"MuJoCo cannot read {shown}: {one_line(err)}") from err
     return spec, urdf_types, inputs
 
