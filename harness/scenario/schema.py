@@ -472,7 +472,7 @@ class ModelFile:
     urdf: str | None = None
     mjcf: str | None = None
     xacro: str | None = None
-    args: dict[str, str | float | bool] = field(default_factory=dict)
+    args: dict[str, str | int | float | bool] = field(default_factory=dict)
     drive: Literal["diff_drive", "swivel_drive"] = "diff_drive"
     package_paths: tuple[str, ...] = ()
     drives: dict[str, DriveSpec] = field(default_factory=dict)

@@ -101,6 +101,9 @@ def test_args_change_the_model_and_its_digest(tmp_path: Path) -> None:
     assert pos[2] == pytest.approx(0.07, abs=2e-3)  # the axle is the wheels' radius up
     assert bigger.scene_files["robots[0].model"] != first
     assert digest(write(tmp_path, root)) == first
+    # an int stays an int: xacro reads "0" as false (a float would be "0.0", no boolean)
+    off = build(write(tmp_path, root, model={"args": {"with_lidar": 0}}))
+    assert "lidar_link" not in off.robot("bot").links
 
 
 def test_editing_any_file_xacro_read_changes_the_digest(tmp_path: Path) -> None:
