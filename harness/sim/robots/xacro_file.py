@@ -15,6 +15,7 @@ Errors are :class:`XacroError` with a one-line message.
 
 from __future__ import annotations
 
+import re
 import threading
 import xml.parsers.expat
 from collections.abc import Callable, Iterator, Mapping
@@ -72,6 +73,24 @@ def _find_hook(find: Callable[[str], str]) -> Iterator[None]:
         substitution_args._eval_find, substitution_args._eval_dict["find"] = saved
 
 
+_CLASS_PREFIX = re.compile(r"^<class '[\w.]+'>: ")
+
+
+def _describe(err: BaseException) -> str:
+    """xacro's message without the repeats it adds: a wrapped exception's class and text
+    when its own message already says them, an OSError's errno form."""
+    if not isinstance(err, xacro.XacroException):
+        return str(err)
+    msg = _CLASS_PREFIX.sub("", str(err.args[0]) if err.args and err.args[0] else "")
+    inner = err.exc
+    parts = [msg]
+    if inner is not None and not isinstance(inner, OSError) and str(inner) not in msg:
+        parts.append(str(inner))
+    if err.suffix:
+        parts.append(str(err.suffix))
+    return " ".join(p for p in parts if p)
+
+
 def _missing_arg(err: BaseException) -> str | None:
     """The name of the ``$(arg ...)`` without a value behind ``err``, if that is its cause."""
     seen: set[int] = set()
@@ -115,6 +134,9 @@ def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> 
         except xml.parsers.expat.ExpatError as err:
             where = xacro.filestack[-1] if xacro.filestack else main
             raise XacroError(f"not well-formed XML ({where}): {err}") from err
+        except RecursionError as err:
+            raise XacroError("xacro cannot expand it: too deep a recursion (a macro that "
+                             "calls itself?)") from err
         except (xacro.XacroException, OSError, ValueError, TypeError, NameError,
                 KeyError, AttributeError, SyntaxError) as err:
             missing = _missing_arg(err)
@@ -127,7 +149,8 @@ def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> 
                                  f"({packages.describe()})") from err
             where = xacro.filestack[-1] if xacro.filestack else None
             shown = f" (in {where})" if where and Path(where).resolve() != main else ""
-            raise XacroError(f"xacro cannot expand it: {_one_line(str(err))}{shown}") from err
+            raise XacroError(f"xacro cannot expand it: {_one_line(_describe(err))}{shown}") \
+                from err
         read = [Path(f).resolve() for f in xacro.all_includes]
     files: list[Path] = []
     for file in read:
