@@ -29,7 +29,7 @@ from xacro import substitution_args
 
 from harness.sim.robots.paths import PackagePath
 
-__all__ = ["XacroError", "XacroInputs", "expand_xacro"]
+__all__ = ["Expanded", "XacroError", "XacroInputs", "expand_xacro"]
 
 _LOCK = threading.Lock()
 
@@ -139,9 +139,8 @@ def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> 
                              "calls itself?)") from err
         except (xacro.XacroException, OSError, ValueError, TypeError, NameError,
                 KeyError, AttributeError, SyntaxError) as err:
-            missing = _missing_arg(err)
-            if missing is not None:
-                name = missing
+            name = _missing_arg(err)
+            if name is not None:
                 raise XacroError(f"$(arg {name}) has no value: give it in the model's args "
                                  f"(or a default in <xacro:arg name=\"{name}\">)") from err
             if unknown:
