@@ -20,6 +20,7 @@ from harness.scenario.schema import (
     DiffDriveControl,
     ForkliftControl,
     H264Spec,
+    ModelFile,
     RobotSpec,
     SafetyScoring,
     Scenario,
@@ -149,6 +150,9 @@ def _check_world(sc: Scenario, v: Validator) -> None:
                "model file)")
     if not model.path.strip():
         v.fail(f"world.model.{model.kind}", "must not be empty")
+    if model.urdf is not None and _is_xacro(model.urdf):
+        v.fail("world.model.urdf", f"{model.urdf} is a xacro file: srr reads xacro only for "
+               "robots (model: {xacro: ...}); expand it to URDF with xacro first")
     if model.mode == "replace":
         default = WorldSpec()
         for name in _PROCEDURAL_FIELDS:
@@ -190,11 +194,7 @@ def _check_robots(sc: Scenario, v: Validator) -> None:
                 v.fail(f"robots[{i}].articulation_prim", str(err))
         model = robot.model_file
         if model is not None:
-            if (model.urdf is None) == (model.mjcf is None):
-                v.fail(f"robots[{i}].model", "set exactly one of 'urdf' and 'mjcf' (the "
-                       "path of the robot's model file)")
-            if not model.path.strip():
-                v.fail(f"robots[{i}].model.{model.kind}", "must not be empty")
+            _check_model_file(v, f"robots[{i}].model", model)
         else:
             _check_builtin_joints(v, f"robots[{i}].control", robot)
         if robot.namespace is not None:
@@ -218,6 +218,26 @@ def _check_robots(sc: Scenario, v: Validator) -> None:
                     v.fail(f"robots[{i}].articulation_prim",
                            f"{inner.prim} lies inside {outer.prim}, the prim of robots[{k}] "
                            f"({outer.name})")
+
+
+def _check_model_file(v: Validator, where: str, model: ModelFile) -> None:
+    """Exactly one of ``urdf``/``mjcf``/``xacro``, not empty; ``args`` only for ``xacro``;
+    a ``.xacro`` file given as ``urdf`` is refused (it is no URDF until xacro expands it)."""
+    if sum(p is not None for p in (model.urdf, model.mjcf, model.xacro)) != 1:
+        v.fail(where, "set exactly one of 'urdf', 'mjcf' and 'xacro' (the path of the "
+               "robot's model file)")
+    if not model.path.strip():
+        v.fail(f"{where}.{model.kind}", "must not be empty")
+    if model.urdf is not None and _is_xacro(model.urdf):
+        v.fail(f"{where}.urdf", f"{model.urdf} is a xacro file: write 'xacro: {model.urdf}' "
+               "(srr expands it with xacro, with 'args' for its $(arg ...))")
+    if model.args and model.xacro is None:
+        v.fail(f"{where}.args", "arguments are for a xacro file: set 'xacro', not "
+               f"'{model.kind}'")
+
+
+def _is_xacro(path: str) -> bool:
+    return path.strip().lower().endswith(".xacro")
 
 
 def _check_builtin_joints(v: Validator, where: str, robot: RobotSpec) -> None:

@@ -454,7 +454,10 @@ class DriveSpec:
 
 @dataclass(frozen=True)
 class ModelFile:
-    """A robot described by a file: ``model: {urdf: PATH}`` or ``model: {mjcf: PATH}``.
+    """A robot described by a file: ``model: {urdf: PATH}``, ``model: {mjcf: PATH}`` or
+    ``model: {xacro: PATH, args: {NAME: VALUE}}`` (a ``.xacro`` file the ``xacro`` package
+    expands to URDF, given ``args`` for its ``$(arg NAME)``; its ``$(find PKG)`` is the
+    package's directory on the package path below).
 
     Paths are relative to the scenario file the robot entry is written in, or ``package://``
     URIs looked up in ``package_paths`` (relative to the same file), then ``SRR_PACKAGE_PATH``
@@ -468,6 +471,8 @@ class ModelFile:
 
     urdf: str | None = None
     mjcf: str | None = None
+    xacro: str | None = None
+    args: dict[str, str | int | float | bool] = field(default_factory=dict)
     drive: Literal["diff_drive", "swivel_drive"] = "diff_drive"
     package_paths: tuple[str, ...] = ()
     drives: dict[str, DriveSpec] = field(default_factory=dict)
@@ -475,14 +480,24 @@ class ModelFile:
     footprint_radius: float = num(0.5, 0.0, 50.0, lo_open=True)
 
     @property
-    def kind(self) -> Literal["urdf", "mjcf"]:
+    def kind(self) -> Literal["urdf", "mjcf", "xacro"]:
         """Which format the file is in (the loader makes sure exactly one is set)."""
+        if self.xacro is not None:
+            return "xacro"
         return "urdf" if self.urdf is not None else "mjcf"
 
     @property
     def path(self) -> str:
         """The file as written in the scenario."""
+        if self.xacro is not None:
+            return self.xacro
         return self.urdf if self.urdf is not None else self.mjcf or ""
+
+    @property
+    def xacro_args(self) -> dict[str, str]:
+        """``args`` as the text xacro substitutes (``true``/``false`` for booleans)."""
+        return {k: (str(v).lower() if isinstance(v, bool) else str(v))
+                for k, v in self.args.items()}
 
 
 @dataclass(frozen=True)

@@ -179,7 +179,7 @@ ASCII_STL = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0
     (lambda t: diffbot(control={"joint_names": ["a", "b"], "wheelbase": 1.0}),
      "robots[0].control.wheelbase", ["unknown field"]),
     (lambda t: pallet(model={"urdf": "x.urdf"}), "robots[0].model",
-     ["exactly one of 'urdf' and 'mjcf'"]),
+     ["exactly one of 'urdf', 'mjcf' and 'xacro'"]),
 ])
 def test_bad_models_name_scenario_field_and_model_file(tmp_path: Path, make: Any, field: str,
                                                        words: list[str]) -> None:

@@ -258,7 +258,7 @@ def add_model_robot(spec: mujoco.MjSpec, robot: RobotSpec,
         raise src.error(f"model.{model.kind}", str(err)) from err
     shown = str(path)
     try:
-        loaded = load_model_file(path, model.kind, packages)
+        loaded = load_model_file(path, model.kind, packages, model.xacro_args)
     except ModelFileError as err:
         raise src.error(f"model.{model.kind}", f"{shown}: {err}") from err
     # A robot whose control graph is off is parked: its joints need no role and no drive.
@@ -310,4 +310,4 @@ def add_model_robot(spec: mujoco.MjSpec, robot: RobotSpec,
         base_prim=f"{prim}/{loaded.root}", robot_front=ROBOT_FRONT,
         default_base_frame=loaded.root, joints=types.MappingProxyType(joints),
         actuators=types.MappingProxyType(actuators), links=types.MappingProxyType(links),
-        assets=loaded.assets, file_digest=file_digest(path, loaded.assets))
+        assets=loaded.assets, file_digest=file_digest(path, loaded.assets, loaded.xacro))

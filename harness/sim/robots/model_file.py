@@ -12,6 +12,8 @@ module prepares what it reads and checks that the result stands on its own:
   kept (MuJoCo drops them from URDF by default), links joined by fixed joints stay separate
   bodies (each link keeps its name, for TF and sensor mounts) and paths are not stripped.
   URDF joint types are read from the XML too, since a fixed joint leaves no MuJoCo joint.
+* xacro: expanded to URDF by the ``xacro`` package (:mod:`.xacro_file`), then read as a URDF
+  whose relative paths start from the ``.xacro`` file's directory.
 * MJCF: read with its includes; mesh, texture and height-field files are resolved against the
   file's ``meshdir``/``texturedir``.
 * Every asset file is read once into memory and named by its content hash, so the world's
@@ -38,10 +40,14 @@ import mujoco
 
 from harness.sim.robots.common import ActuatorMode
 from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
+from harness.sim.robots.xacro_file import XacroError, XacroInputs, expand_xacro
 
-__all__ = ["JointInfo", "LoadedModel", "ModelFileError", "ParsedModel", "file_digest",
+__all__ = ["JointInfo", "LoadedModel", "ModelFileError", "ModelKind", "ParsedModel",
+           "file_digest",
            "included_files", "load_model_file", "one_line", "read_model_file"]
 
+#: The formats a model file can be written in.
+ModelKind = Literal["urdf", "mjcf", "xacro"]
 _URDF_COMPILER = {"discardvisual": "false", "fusestatic": "false", "strippath": "false"}
 _JOINT_KINDS = {
     mujoco.mjtJoint.mjJNT_HINGE: "hinge",
@@ -78,7 +84,8 @@ class LoadedModel:
     the files it needs, by the names ``spec`` uses. ``links``: body names, model order, the
     root first. ``actuators``: joint → (actuator name, servo mode or None for another kind)
     for the actuators the file puts on single joints. ``joint_inertia``: each 1-dof joint's
-    inertia at the reference pose (kg·m²)."""
+    inertia at the reference pose (kg·m²). ``kind`` is the format MuJoCo read (a xacro
+    file's is ``urdf``); ``xacro``: what a xacro file's expansion read."""
 
     path: Path
     kind: Literal["urdf", "mjcf"]
@@ -91,6 +98,7 @@ class LoadedModel:
     actuators: Mapping[str, tuple[str, ActuatorMode | None]]
     mass: float
     joint_inertia: Mapping[str, float]
+    xacro: XacroInputs | None = None
 
 
 def one_line(err: BaseException) -> str:
@@ -100,10 +108,12 @@ def one_line(err: BaseException) -> str:
     return text if len(text) <= 300 else text[:297] + "..."
 
 
-def _read_urdf(path: Path, packages: PackagePath) -> tuple[str, dict[str, str]]:
-    """The URDF text prepared for MuJoCo, and its joints' URDF types."""
+def _read_urdf(path: Path, packages: PackagePath,
+               text: str | None = None) -> tuple[str, dict[str, str]]:
+    """The URDF text prepared for MuJoCo, and its joints' URDF types. ``text``: the URDF
+    (a xacro file's expansion) when it is not ``path``'s content."""
     try:
-        root = ET.fromstring(path.read_bytes())
+        root = ET.fromstring(path.read_bytes() if text is None else text)
     except ET.ParseError as err:
         raise ModelFileError(f"not well-formed XML: {err}") from err
     except OSError as err:
@@ -135,23 +145,32 @@ def _read_urdf(path: Path, packages: PackagePath) -> tuple[str, dict[str, str]]:
     return ET.tostring(root, encoding="unicode"), types_
 
 
-def _parse(path: Path, kind: Literal["urdf", "mjcf"],
-           packages: PackagePath) -> tuple[mujoco.MjSpec, dict[str, str]]:
+def _parse(path: Path, kind: ModelKind, packages: PackagePath,
+           args: Mapping[str, str]) -> tuple[mujoco.MjSpec, dict[str, str], XacroInputs | None]:
     if not path.exists():
         raise ModelFileError("file not found")
     if not path.is_file():
         raise ModelFileError("is not a file")
     urdf_types: dict[str, str] = {}
+    inputs: XacroInputs | None = None
     try:
-        if kind == "urdf":
+        if kind == "xacro":
+            try:
+                expanded = expand_xacro(path, args, packages)
+            except XacroError as err:
+                raise ModelFileError(str(err)) from err
+            inputs = expanded.inputs
+            text, urdf_types = _read_urdf(path, packages, expanded.text)
+            spec = mujoco.MjSpec.from_string(text)
+        elif kind == "urdf":
             text, urdf_types = _read_urdf(path, packages)
             spec = mujoco.MjSpec.from_string(text)
         else:
             spec = mujoco.MjSpec.from_file(str(path))
     except ValueError as err:
-        raise ModelFileError(f"MuJoCo cannot read it as {kind.upper()}: "
-                             f"{one_line(err)}") from err
-    return spec, urdf_types
+        shown = "the URDF xacro made of it" if kind == "xacro" else f"it as {kind.upper()}"
+        raise ModelFileError(f"MuJoCo cannot read {shown}: {one_line(err)}") from err
+    return spec, urdf_types, inputs
 
 
 def _take_assets(spec: mujoco.MjSpec, path: Path, packages: PackagePath) -> dict[str, bytes]:
@@ -204,29 +223,32 @@ def _describe(kind: str, limited: bool, urdf_type: str | None) -> str:
 class ParsedModel:
     """A model file as MuJoCo reads it, not yet checked: ``spec`` (fresh) names its asset
     files by the keys of ``assets`` (their bytes, in memory); ``urdf_types``: a URDF's joint
-    types by joint name (empty for MJCF)."""
+    types by joint name (empty for MJCF); ``xacro``: what a xacro file's expansion read
+    (None for another kind)."""
 
     path: Path
-    kind: Literal["urdf", "mjcf"]
+    kind: ModelKind
     spec: mujoco.MjSpec
     assets: Mapping[str, bytes]
     urdf_types: Mapping[str, str]
+    xacro: XacroInputs | None = None
 
 
-def read_model_file(path: Path, kind: Literal["urdf", "mjcf"],
-                    packages: PackagePath) -> ParsedModel:
-    """Parse ``path`` (a URDF prepared as the module says) and bring its asset files into
-    memory; what the model is for (a robot, a world) is the caller's to check."""
-    spec, urdf_types = _parse(path, kind, packages)
+def read_model_file(path: Path, kind: ModelKind, packages: PackagePath,
+                    args: Mapping[str, str] | None = None) -> ParsedModel:
+    """Parse ``path`` (a URDF prepared as the module says; a xacro file expanded with
+    ``args`` first) and bring its asset files into memory; what the model is for (a robot,
+    a world) is the caller's to check."""
+    spec, urdf_types, inputs = _parse(path, kind, packages, args or {})
     assets = _take_assets(spec, path, packages)
     return ParsedModel(path, kind, spec, types.MappingProxyType(assets),
-                       types.MappingProxyType(urdf_types))
+                       types.MappingProxyType(urdf_types), inputs)
 
 
-def load_model_file(path: Path, kind: Literal["urdf", "mjcf"],
-                    packages: PackagePath) -> LoadedModel:
+def load_model_file(path: Path, kind: ModelKind, packages: PackagePath,
+                    args: Mapping[str, str] | None = None) -> LoadedModel:
     """Parse ``path``, bring its asset files into memory and compile it alone to check it."""
-    parsed = read_model_file(path, kind, packages)
+    parsed = read_model_file(path, kind, packages, args)
     spec, urdf_types, assets = parsed.spec, parsed.urdf_types, dict(parsed.assets)
     for i, act in enumerate(spec.actuators):  # named, so the world can find them again
         if not act.name:
@@ -278,7 +300,8 @@ def load_model_file(path: Path, kind: Literal["urdf", "mjcf"],
         if jname and jname not in actuators:
             actuators[jname] = (aname, _servo_mode(model, a))
     return LoadedModel(
-        path=path, kind=kind, spec=spec, assets=types.MappingProxyType(assets),
+        path=path, kind="mjcf" if kind == "mjcf" else "urdf", xacro=parsed.xacro, spec=spec,
+        assets=types.MappingProxyType(assets),
         root=tops[0].name, links=tuple(links), link_parents=types.MappingProxyType(parents),
         joints=types.MappingProxyType(joints), actuators=types.MappingProxyType(actuators),
         mass=float(model.body_mass[1:].sum()), joint_inertia=types.MappingProxyType(inertia))
@@ -316,15 +339,25 @@ def included_files(path: Path) -> list[tuple[str, Path]]:
     return found
 
 
-def file_digest(path: Path, assets: Mapping[str, bytes]) -> str:
+def file_digest(path: Path, assets: Mapping[str, bytes],
+                xacro: XacroInputs | None = None) -> str:
     """SHA-256 over a model file's bytes, its assets' names (content hashes, see
     :func:`_take_assets`: every mesh, texture and height field, wherever it is named) and
     the bytes of every file it includes (:func:`included_files`): what changes when any file
     that shapes the model does. A file without includes has the digest it had before srr
-    hashed includes."""
+    hashed includes. For a xacro file (``xacro``), its includes are the files xacro read
+    (each by its bytes, in the order read, not by its path, which differs between
+    machines), and the arguments it was given count too."""
     digest = hashlib.sha256(path.read_bytes())
     for key in sorted(assets):
         digest.update(key.encode())
+    if xacro is not None:
+        for file in xacro.files:
+            digest.update(b"\0xacro input\0")
+            digest.update(hashlib.sha256(file.read_bytes()).digest())
+        for name, value in xacro.args:
+            digest.update(f"\0xacro arg {name}={value}\0".encode())
+        return digest.hexdigest()
     for name, file in included_files(path):
         digest.update(f"\0include {name}\0".encode())
         digest.update(hashlib.sha256(file.read_bytes()).digest())

@@ -1,0 +1,158 @@
+"""Expand a ``.xacro`` robot description into URDF text with the ``xacro`` package.
+
+``xacro`` (the ROS macro processor, from PyPI) does the expansion: properties, macros,
+conditionals, ``xacro:include``, ``$(arg name)`` with the scenario's ``args`` and the file's
+``xacro:arg`` defaults. ``$(find pkg)`` is answered from srr's package path — the same
+directories ``package://`` URIs are looked up in (:class:`~.paths.PackagePath`), not ROS's
+ament index — and is the package's directory.
+
+``xacro`` keeps its state in module globals (the files it read, the arguments, the ``find``
+function), so one expansion runs at a time, under a lock, and the ``find`` hook is put back
+afterwards.
+
+Errors are :class:`XacroError` with a one-line message.
+"""
+
+from __future__ import annotations
+
+import re
+import threading
+import xml.parsers.expat
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import xacro
+from xacro import substitution_args
+
+from harness.sim.robots.paths import PackagePath
+
+__all__ = ["Expanded", "XacroError", "XacroInputs", "expand_xacro"]
+
+_LOCK = threading.Lock()
+
+
+class XacroError(Exception):
+    """A xacro file that cannot be expanded; the message is one line."""
+
+
+@dataclass(frozen=True)
+class XacroInputs:
+    """What an expansion read besides the main file: every file it included (``xacro:include``,
+    ``xacro.load_yaml``), in the order it read them, each once; and the arguments it was
+    given (sorted by name)."""
+
+    files: tuple[Path, ...]
+    args: tuple[tuple[str, str], ...]
+
+
+@dataclass(frozen=True)
+class Expanded:
+    """The URDF text a xacro file expands to, and what it was made from."""
+
+    text: str
+    inputs: XacroInputs
+
+
+def _one_line(text: str) -> str:
+    flat = " ".join(part.strip() for part in text.splitlines() if part.strip())
+    return flat if len(flat) <= 300 else flat[:297] + "..."
+
+
+@contextmanager
+def _find_hook(find: Callable[[str], str]) -> Iterator[None]:
+    """``$(find pkg)`` (and ``find`` in ``$(eval ...)``) answered by ``find`` for the block."""
+    saved = substitution_args._eval_find, substitution_args._eval_dict["find"]
+    substitution_args._eval_find = find
+    substitution_args._eval_dict["find"] = find
+    try:
+        yield
+    finally:
+        substitution_args._eval_find, substitution_args._eval_dict["find"] = saved
+
+
+_CLASS_PREFIX = re.compile(r"^<class '[\w.]+'>: ")
+
+
+def _describe(err: BaseException) -> str:
+    """xacro's message without the repeats it adds: a wrapped exception's class and text
+    when its own message already says them, an OSError's errno form."""
+    if not isinstance(err, xacro.XacroException):
+        return str(err)
+    msg = _CLASS_PREFIX.sub("", str(err.args[0]) if err.args and err.args[0] else "")
+    inner = err.exc
+    parts = [msg]
+    if inner is not None and not isinstance(inner, OSError) and str(inner) not in msg:
+        parts.append(str(inner))
+    if err.suffix:
+        parts.append(str(err.suffix))
+    return " ".join(p for p in parts if p)
+
+
+def _missing_arg(err: BaseException) -> str | None:
+    """The name of the ``$(arg ...)`` without a value behind ``err``, if that is its cause."""
+    seen: set[int] = set()
+    todo: list[BaseException | None] = [err]
+    while todo:
+        cur = todo.pop()
+        if cur is None or id(cur) in seen:
+            continue
+        seen.add(id(cur))
+        if isinstance(cur, substitution_args.ArgException):
+            return str(cur)
+        exc = getattr(cur, "exc", None)
+        todo += [exc if isinstance(exc, BaseException) else None, cur.__cause__,
+                 cur.__context__]
+    return None
+
+
+def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> Expanded:
+    """Run xacro on ``path`` with ``args`` (``$(arg name)``); ``$(find pkg)`` is looked up in
+    ``packages``. Raises :class:`XacroError`."""
+    if not path.exists():
+        raise XacroError("file not found")
+    if not path.is_file():
+        raise XacroError("is not a file")
+    main = path.resolve()
+    unknown: list[str] = []
+
+    def find(package: str) -> str:
+        root = packages.find(package)
+        if root is None:
+            unknown.append(package)
+            raise XacroError(f"$(find {package}): package {package!r} not found "
+                             f"({packages.describe()})")
+        return str(root.resolve())
+
+    with _LOCK, _find_hook(find):
+        xacro.all_includes = []
+        try:
+            doc: Any = xacro.process_file(str(main), mappings=dict(args), verbosity=0)
+            text = str(doc.toxml())
+        except xml.parsers.expat.ExpatError as err:
+            where = xacro.filestack[-1] if xacro.filestack else main
+            raise XacroError(f"not well-formed XML ({where}): {err}") from err
+        except RecursionError as err:
+            raise XacroError("xacro cannot expand it: too deep a recursion (a macro that "
+                             "calls itself?)") from err
+        except (xacro.XacroException, OSError, ValueError, TypeError, NameError,
+                KeyError, AttributeError, SyntaxError) as err:
+            name = _missing_arg(err)
+            if name is not None:
+                raise XacroError(f"$(arg {name}) has no value: give it in the model's args "
+                                 f"(or a default in <xacro:arg name=\"{name}\">)") from err
+            if unknown:
+                raise XacroError(f"$(find {unknown[0]}): package {unknown[0]!r} not found "
+                                 f"({packages.describe()})") from err
+            where = xacro.filestack[-1] if xacro.filestack else None
+            shown = f" (in {where})" if where and Path(where).resolve() != main else ""
+            raise XacroError(f"xacro cannot expand it: {_one_line(_describe(err))}{shown}") \
+                from err
+        read = [Path(f).resolve() for f in xacro.all_includes]
+    files: list[Path] = []
+    for file in read:
+        if file != main and file not in files and file.is_file():
+            files.append(file)
+    return Expanded(text, XacroInputs(tuple(files), tuple(sorted(args.items()))))
