@@ -16,14 +16,17 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+import io
 import json
+import re
+import tokenize
 import types
 from collections.abc import Mapping
 from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
 from harness.validation import TINY
 
-__all__ = ["DRAFT", "SchemaBuilder", "dumps", "json_schema", "plain"]
+__all__ = ["DRAFT", "SchemaBuilder", "dumps", "field_comments", "json_schema", "plain"]
 
 DRAFT = "https://json-schema.org/draft/2020-12/schema"
 
@@ -43,16 +46,60 @@ def plain(value: Any) -> Any:
     return value
 
 
+#: A field's line in a class body: four spaces, its name, a colon.
+_FIELD_LINE = re.compile(r"^    (\w+)\s*:")
+
+
+def _unmark(text: str) -> str:
+    """reST markup dropped: roles and double backquotes."""
+    for markup in (":class:", ":mod:", ":func:", ":data:", ":meth:"):
+        text = text.replace(markup, "")
+    return text.replace("``", "`").replace("`~", "`")
+
+
+def field_comments(cls: type) -> dict[str, str]:
+    """The comments written with each field of ``cls`` in its source: the comment lines
+    right above the field and the one at the end of its line (empty where there is no
+    source)."""
+    try:
+        source = inspect.getsource(cls)
+    except (OSError, TypeError):
+        return {}
+    lines = source.splitlines()
+    comments: dict[int, str] = {}  # line number (1-based) -> its comment
+    alone: set[int] = set()  # lines that hold only a comment
+    try:
+        for tok in tokenize.generate_tokens(io.StringIO(source).readline):
+            if tok.type == tokenize.COMMENT:
+                row = tok.start[0]
+                comments[row] = tok.string.lstrip("#").strip()
+                if not lines[row - 1][:tok.start[1]].strip():
+                    alone.add(row)
+    except (tokenize.TokenError, SyntaxError):
+        return {}
+    out: dict[str, str] = {}
+    for row, line in enumerate(lines, 1):
+        m = _FIELD_LINE.match(line)
+        if not m:
+            continue
+        above: list[str] = []
+        r = row - 1
+        while r in alone:
+            above.insert(0, comments[r])
+            r -= 1
+        parts = above + ([comments[row]] if row in comments and row not in alone else [])
+        if parts:
+            out[m.group(1)] = " ".join(parts)
+    return out
+
+
 def _description(cls: type) -> str | None:
     """A dataclass's own docstring (not the one dataclasses makes up from its signature),
     reST markup dropped."""
     doc = cls.__dict__.get("__doc__")
     if not doc:
         return None
-    text = inspect.cleandoc(doc)
-    for markup in (":class:", ":mod:", ":func:", ":data:", ":meth:"):
-        text = text.replace(markup, "")
-    return text.replace("``", "`").replace("`~", "`")
+    return _unmark(inspect.cleandoc(doc))
 
 
 class SchemaBuilder:
@@ -77,11 +124,14 @@ class SchemaBuilder:
         hints = get_type_hints(cls)
         props: dict[str, Any] = {}
         required: list[str] = []
+        notes = field_comments(cls)
         for f in dataclasses.fields(cls):
             if f.metadata.get("internal"):
                 continue
             key = f.metadata.get("key", f.name)
             schema = self.value(hints[f.name], f.metadata)
+            if f.name in notes:
+                schema = {"description": _unmark(notes[f.name]), **schema}
             if f.default is not dataclasses.MISSING:
                 schema = {**schema, "default": plain(f.default)}
             elif f.default_factory is not dataclasses.MISSING:

@@ -169,3 +169,13 @@ def test_cli_prints_and_writes_the_schema(tmp_path: Path,
     assert json.loads(out.read_text(encoding="utf-8")) == api.json_schema("suite")
     assert main(["schema", "suite", "--out", str(tmp_path / "no" / "x.json")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_descriptions_come_from_the_dataclasses() -> None:
+    """Hover texts: a dataclass's docstring, and the comments written with a field."""
+    defs = api.json_schema("scenario")["$defs"]
+    assert defs["PhysicsSpec"]["description"].startswith("Playback tick and physics step")
+    assert defs["RobotSpec"]["properties"]["articulation_prim"]["description"] == \
+        "default /World/<name>"
+    assert "max silence" in defs["HealthScoring"]["properties"]["sut_outputs"]["description"]
+    assert "description" not in defs["PhysicsSpec"]["properties"]["tick_hz"]
