@@ -14,11 +14,14 @@ cross-field rules a loader checks after the validator (``srr validate`` is the f
 
 from __future__ import annotations
 
+import ast
 import dataclasses
+import functools
 import inspect
 import io
 import json
 import re
+import sys
 import tokenize
 import types
 from collections.abc import Mapping
@@ -57,39 +60,59 @@ def _unmark(text: str) -> str:
     return text.replace("``", "`").replace("`~", "`")
 
 
+@dataclasses.dataclass(frozen=True)
+class _Source:
+    """A module's source as :func:`field_comments` reads it."""
+
+    lines: tuple[str, ...]
+    comments: dict[int, str]  # line number (1-based) -> its comment's text
+    alone: frozenset[int]  # the lines that hold only a comment
+    classes: dict[str, tuple[int, int]]  # top-level class -> its first and last line
+
+
+@functools.lru_cache(maxsize=32)
+def _module_source(module: str) -> _Source | None:
+    try:
+        text = inspect.getsource(sys.modules[module])
+        tree = ast.parse(text)
+        tokens = list(tokenize.generate_tokens(io.StringIO(text).readline))
+    except (KeyError, OSError, TypeError, SyntaxError, tokenize.TokenError):
+        return None
+    lines = tuple(text.splitlines())
+    comments: dict[int, str] = {}
+    alone: set[int] = set()
+    for tok in tokens:
+        if tok.type == tokenize.COMMENT:
+            row = tok.start[0]
+            comments[row] = tok.string.lstrip("#").strip()
+            if not lines[row - 1][:tok.start[1]].strip():
+                alone.add(row)
+    classes = {node.name: (node.lineno, node.end_lineno or node.lineno) for node in tree.body
+               if isinstance(node, ast.ClassDef)}
+    return _Source(lines, comments, frozenset(alone), classes)
+
+
 def field_comments(cls: type) -> dict[str, str]:
-    """The comments written with each field of ``cls`` in its source: the comment lines
-    right above the field and the one at the end of its line (empty where there is no
-    source)."""
-    try:
-        source = inspect.getsource(cls)
-    except (OSError, TypeError):
+    """The comments written with each field of ``cls`` (a class at the top level of its
+    module) in its source: the comment lines right above the field and the one at the end of
+    its line; empty where there is no source."""
+    src = _module_source(cls.__module__)
+    if src is None or cls.__name__ not in src.classes:
         return {}
-    lines = source.splitlines()
-    comments: dict[int, str] = {}  # line number (1-based) -> its comment
-    alone: set[int] = set()  # lines that hold only a comment
-    try:
-        for tok in tokenize.generate_tokens(io.StringIO(source).readline):
-            if tok.type == tokenize.COMMENT:
-                row = tok.start[0]
-                comments[row] = tok.string.lstrip("#").strip()
-                if not lines[row - 1][:tok.start[1]].strip():
-                    alone.add(row)
-    except (tokenize.TokenError, SyntaxError):
-        return {}
+    first, last = src.classes[cls.__name__]
     out: dict[str, str] = {}
-    for row, line in enumerate(lines, 1):
-        m = _FIELD_LINE.match(line)
+    for row in range(first + 1, last + 1):
+        m = _FIELD_LINE.match(src.lines[row - 1])
         if not m:
             continue
         above: list[str] = []
         r = row - 1
-        while r in alone:
-            above.insert(0, comments[r])
+        while r in src.alone:
+            above.insert(0, src.comments[r])
             r -= 1
-        parts = above + ([comments[row]] if row in comments and row not in alone else [])
-        if parts:
-            out[m.group(1)] = " ".join(parts)
+        own = [src.comments[row]] if row in src.comments and row not in src.alone else []
+        if above or own:
+            out[m.group(1)] = " ".join(above + own)
     return out
 
 
