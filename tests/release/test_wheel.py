@@ -5,9 +5,10 @@ names the installed version and ``srr run`` runs a bundled scenario from a folde
 repository, compares it with its baseline and passes.
 
 The fresh environment has no srr but the wheel's: it sees the test environment's third-party
-packages through a ``.pth`` line naming their site-packages folder, a plain path entry (the
-editable install's finder there is not loaded, since ``.pth`` files are read only in the
-environment's own site-packages), and PYTHONPATH is cleared.
+packages through a ``.pth`` file naming the folders this interpreter imports from (but the
+checkout), plain path entries after its own site-packages (an editable install's finder in
+them is not loaded: ``.pth`` files are read only in the environment's own site-packages),
+and PYTHONPATH is cleared; the test checks that ``harness`` is imported from the wheel.
 """
 
 from __future__ import annotations
@@ -17,7 +18,6 @@ import os
 import shutil
 import subprocess
 import sys
-import sysconfig
 import zipfile
 from pathlib import Path
 
@@ -70,7 +70,9 @@ def test_wheel_installs_in_a_fresh_venv_and_runs_a_scenario(tmp_path: Path) -> N
     py = venv / "bin" / "python"
     site = Path(_run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
                      tmp_path).stdout.strip())
-    deps = dict.fromkeys(sysconfig.get_paths()[k] for k in ("purelib", "platlib"))
+    # where this interpreter finds its packages, but not the sources (the checkout)
+    deps = [p for p in dict.fromkeys(sys.path)
+            if p and Path(p).is_dir() and not Path(p).resolve().is_relative_to(ROOT)]
     (site / "_srr_test_deps.pth").write_text("".join(f"{d}\n" for d in deps), encoding="utf-8")
     _run([sys.executable, "-m", "pip", "--python", str(py), "install", "--no-deps", "--no-index",
           "-q", str(wheel)], tmp_path)
