@@ -179,3 +179,55 @@ def test_descriptions_come_from_the_dataclasses() -> None:
         "default /World/<name>"
     assert "max silence" in defs["HealthScoring"]["properties"]["sut_outputs"]["description"]
     assert "description" not in defs["PhysicsSpec"]["properties"]["tick_hz"]
+
+
+def _leaves(node: Any, path: tuple[Any, ...] = ()) -> list[tuple[tuple[Any, ...], Any]]:
+    if isinstance(node, dict):
+        return [leaf for k, v in node.items() for leaf in _leaves(v, (*path, k))]
+    if isinstance(node, list):
+        return [leaf for i, v in enumerate(node) for leaf in _leaves(v, (*path, i))]
+    return [(path, node)]
+
+
+def _wrong(value: Any) -> list[Any]:
+    """Values of another type (a string for a number or a boolean, a number for a string),
+    and for a number, numbers out of any range (below the least, above the greatest)."""
+    if isinstance(value, str):
+        return [12345]
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return ["wrong"]
+    # an integer stays one: JSON has one number type, so a schema's "integer" also takes 2.0,
+    # which srr refuses for an integer field
+    return ["wrong", 0, -1, -10**12, 10**12] if isinstance(value, int) else \
+        ["wrong", 0.0, -1.0, -1e12, 1e12]
+
+
+@pytest.mark.parametrize("name", ["turtlebot3_room", "diffbot_urdf", "camera_publishing"])
+def test_schema_and_validator_agree_on_every_value(
+        name: str, validators: dict[str, Draft202012Validator]) -> None:
+    """Each value of a bundled scenario (without includes) replaced by one of another type:
+    the schema refuses it exactly when srr's validator does (a plug-in's `params` take any
+    value, in both)."""
+    good = _read(ROOT / "scenarios" / f"{name}.yaml")
+    assert "include" not in good
+    refused = 0
+    differ: list[str] = []
+    for path, bad in ((path, bad) for path, value in _leaves(good) for bad in _wrong(value)):
+        data = copy.deepcopy(good)
+        node: Any = data
+        for part in path[:-1]:
+            node = node[part]
+        node[path[-1]] = bad
+        schema_ok = not _errors(validators["scenario"], data)
+        try:
+            scenario_from_mapping(data, f"{name}.yaml")
+            srr_ok = True
+        except ScenarioError:
+            srr_ok = False
+        if schema_ok != srr_ok:
+            differ.append(f"{'.'.join(map(str, path))}={bad!r}: schema "
+                          f"{'accepts' if schema_ok else 'refuses'}, srr "
+                          f"{'accepts' if srr_ok else 'refuses'}")
+        refused += not srr_ok
+    assert differ == [], "\n".join(differ)
+    assert refused > 20
