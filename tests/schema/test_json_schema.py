@@ -157,6 +157,9 @@ def test_broken_suite_fails(validators: dict[str, Draft202012Validator]) -> None
     for key, value in (("defaults", {"repeats": 2}), ("suite", 3), ("scenarios", "a.yaml")):
         assert _errors(v, {**data, key: value}), key
     assert _errors(v, {**data, "scenarios": [{"path": "a.yaml", "rpeat": 2}]})
+    for entry in ({"repeat": 0}, {"repeat": 1001}, {"timeout": 0}, {"timeout": -1.5}):
+        assert _errors(v, {**data, "scenarios": [{"path": "a.yaml", **entry}]}), entry
+        assert _errors(v, {**data, "defaults": entry}), entry
     assert _errors(v, {"suite": "x"})  # scenarios is required
 
 
