@@ -8,8 +8,10 @@ integer, ``int | float`` a number), ``Literal`` choices, ranges (``minimum``,
 ``exclusiveMinimum``, ``maximum``; a range open at 0 starts at :data:`~harness.validation.TINY`
 as the validator's does), a field without a default is required, and a key no field has is
 refused (``additionalProperties: false``) unless the file is read with ``unknown="ignore"``.
-What it cannot say: that a number is finite, that a string holds no NUL character, and the
-cross-field rules a loader checks after the validator (``srr validate`` is the full check).
+What it cannot say: that a number is finite, that a string holds no NUL character, that an
+integer is not written ``2.0`` (JSON has one number type: a schema's integer takes it, srr
+does not), and the cross-field rules a loader checks after the validator (``srr validate`` is
+the full check).
 """
 
 from __future__ import annotations
