@@ -63,6 +63,7 @@ from harness.suite.runner import SuitePlan, SuiteResult, plan_suite, run_suite
 __all__ = [
     "PROJECT_MARKERS",
     "ROS2_BRIDGE",
+    "SCHEMA_KINDS",
     "LiveConfig",
     "Notice",
     "Progress",
@@ -81,6 +82,7 @@ __all__ = [
     "default_run_dir",
     "diff_runs",
     "graph_text",
+    "json_schema",
     "load",
     "plan_suite",
     "recover",
@@ -174,3 +176,24 @@ def write_diff(result: DiffResult, path: str | Path) -> Path:
     from harness.diff.html import write_diff as _write
 
     return _write(result, path)
+
+
+#: The files ``srr schema`` describes.
+SCHEMA_KINDS = ("scenario", "suite")
+
+
+def json_schema(kind: str = "scenario") -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) of a scenario file (and the fragments it includes) or
+    of a suite file, generated from the dataclasses the loaders validate them into."""
+    from harness.scenario.jsonschema import scenario_schema
+    from harness.schemagen import json_schema as schema_of
+    from harness.suite.spec import SuiteFile
+
+    if kind == "scenario":
+        return scenario_schema()
+    if kind == "suite":
+        doc = schema_of(SuiteFile, title="srr suite file")
+        doc["description"] = "An srr suite file (`srr suite FILE`)."
+        return doc
+    raise SrrError(f"srr schema: no schema for {kind!r} (expected one of "
+                   f"{', '.join(SCHEMA_KINDS)})")

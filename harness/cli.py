@@ -124,6 +124,11 @@ def _parser() -> argparse.ArgumentParser:
     val.add_argument("scenario", type=Path)
     val.add_argument("--set", dest="overrides", action="append", default=[])
 
+    sch = sub.add_parser("schema", help="print the JSON Schema of scenario or suite files "
+                         "(for editors)")
+    sch.add_argument("kind", nargs="?", choices=("scenario", "suite"), default="scenario")
+    sch.add_argument("--out", type=Path, help="write it to this file instead")
+
     gr = sub.add_parser("graph", help="print the scenario's action graphs")
     gr.add_argument("scenario", type=Path)
     gr.add_argument("--format", choices=("mermaid", "json"), default="mermaid")
@@ -414,6 +419,21 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_schema(args: argparse.Namespace) -> int:
+    from harness import api
+    from harness.atomic import write_text_atomic
+    from harness.schemagen import dumps
+
+    _writable("--out", args.out)
+    text = dumps(api.json_schema(args.kind))
+    if args.out is None:
+        sys.stdout.write(text)
+    else:
+        write_text_atomic(args.out, text)
+        _stdout().print(f"{args.kind} schema: {args.out}", markup=False)
+    return 0
+
+
 def _cmd_graph(args: argparse.Namespace) -> int:
     from harness import api
 
@@ -620,7 +640,7 @@ def _cmd_suite(args: argparse.Namespace) -> int:
 COMMANDS = {"run": _cmd_run, "suite": _cmd_suite, "replay": _cmd_replay, "validate": _cmd_validate,
             "graph": _cmd_graph, "inspect": _cmd_inspect, "baseline": _cmd_baseline,
             "report": _cmd_report, "recover": _cmd_recover, "diff": _cmd_diff,
-            "ros2": _cmd_ros2}
+            "ros2": _cmd_ros2, "schema": _cmd_schema}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -262,7 +262,8 @@ def _check_builtin_joints(v: Validator, where: str, robot: RobotSpec) -> None:
 
 
 def _check_cameras(sc: Scenario, v: Validator) -> None:
-    """Unique names and resolutions in range; no camera on another camera's or a robot's prim."""
+    """Unique names; no camera on another camera's or a robot's prim (resolutions: their
+    ``range`` in the schema)."""
     from harness.scenario.prims import check_prim_path
 
     cams: dict[str, int] = {}
@@ -280,7 +281,6 @@ def _check_cameras(sc: Scenario, v: Validator) -> None:
                 check_prim_path(cam.prim)
             except SrrError as err:
                 v.fail(f"cameras[{i}].camera_prim", str(err))
-        _check_resolution(v, f"cameras[{i}].resolution", cam.resolution)
         _check_record(v, f"cameras[{i}]", cam.record,
                       {s: f"{cam.name}_{s}" for s in ("rgb", "depth") if s in cam.outputs},
                       f"cameras[{i}].outputs has no '{{stream}}'", cam.resolution)
@@ -291,12 +291,6 @@ def _check_cameras(sc: Scenario, v: Validator) -> None:
                    f"{prims[cam.prim]}")
         prims[cam.prim] = f"cameras[{i}] ({cam.name})"
     _check_rtsp(sc, v)
-
-
-def _check_resolution(v: Validator, path: str, resolution: tuple[int, int]) -> None:
-    w, h = resolution
-    if not (1 <= w <= 8192 and 1 <= h <= 8192):
-        v.fail(path, f"must be within 1..8192, got {w}x{h}")
 
 
 _MOUNT_PATH = re.compile(r"^(/[A-Za-z0-9._~-]+)+$")
@@ -332,7 +326,6 @@ def _check_robot_cameras(sc: Scenario, v: Validator) -> None:
         if cam is None:
             continue
         where = f"robots[{i}].sensors.camera"
-        _check_resolution(v, f"{where}.resolution", cam.resolution)
         if not cam.graph and cam.record != CameraRecordSpec():
             v.fail(f"{where}.record", "has no effect with graph: false (the graphs: builder "
                    "that publishes the camera decides what it records)")

@@ -377,7 +377,7 @@ class RobotCameraSpec:
     info_topic: str = "camera/camera_info"
     depth_topic: str | None = None
     frame_id: str = "camera"
-    resolution: tuple[int, int] = (320, 240)
+    resolution: tuple[int, int] = field(default=(320, 240), metadata=_range(1, 8192))
     fovy_deg: float = num(60.0, 1.0, 170.0)
     fps: float = num(30.0, 0.0, 60.0, lo_open=True)
     record: CameraRecordSpec = CameraRecordSpec()
@@ -573,7 +573,7 @@ class CameraSpec:
     enabled: bool = True
     camera_prim: str | None = None  # default /World/<name>
     spawn: Pose = Pose(position=(0.0, 0.0, 3.0))
-    resolution: tuple[int, int] = (256, 256)
+    resolution: tuple[int, int] = field(default=(256, 256), metadata=_range(1, 8192))
     fovy_deg: float = num(60.0, 1.0, 170.0)
     fps: float = num(30.0, 0.0, 60.0, lo_open=True)
     outputs: tuple[Literal["rgb", "depth", "pointcloud", "camera_info"], ...] = (

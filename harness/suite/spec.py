@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -87,6 +87,10 @@ def _is_scenario(data: Any) -> bool:
 
 #: More repeats of one scenario than this is a typo (and would not fit in memory as runs).
 MAX_REPEAT = 1000
+#: The ranges of a suite file's ``repeat`` and ``timeout`` (seconds), as field metadata
+#: (harness.validation checks them; ``srr schema suite`` says them).
+_REPEAT = {"range": (1, MAX_REPEAT, False)}
+_TIMEOUT = {"range": (0, None, True)}
 
 
 def _count(value: Any, file: str, field: str, *, integer: bool) -> Any:
@@ -130,8 +134,8 @@ class EntryFile:
 
     path: str
     name: str | None = None
-    repeat: int | None = None
-    timeout: int | float | None = None
+    repeat: int | None = field(default=None, metadata=_REPEAT)
+    timeout: int | float | None = field(default=None, metadata=_TIMEOUT)
     set: dict[str, Any] | tuple[str, ...] | None = None
     sweep: Any = None  # checked by parse_sweep
 
@@ -140,8 +144,8 @@ class EntryFile:
 class DefaultsFile:
     """A suite file's ``defaults:``."""
 
-    repeat: int | None = None
-    timeout: int | float | None = None
+    repeat: int | None = field(default=None, metadata=_REPEAT)
+    timeout: int | float | None = field(default=None, metadata=_TIMEOUT)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -89,8 +89,8 @@ scenarios:
 @pytest.mark.parametrize(("body", "field", "words"), [
     ("scenarios: []", "scenarios", "no scenarios"),
     ("scenarios: [{path: nowhere.yaml}]", "scenarios[0].path", "no such file"),
-    ("scenarios: [{path: FORKLIFT, repeat: 0}]", "scenarios[0].repeat", "whole number > 0"),
-    ("scenarios: [{path: FORKLIFT, timeout: -1}]", "scenarios[0].timeout", "seconds > 0"),
+    ("scenarios: [{path: FORKLIFT, repeat: 0}]", "scenarios[0].repeat", "must be >= 1, got 0"),
+    ("scenarios: [{path: FORKLIFT, timeout: -1}]", "scenarios[0].timeout", "must be > 0, got -1"),
     ("scenarios: [{path: FORKLIFT, colour: red}]", "scenarios[0].colour",
      "unknown field (expected path, name, repeat, timeout, set, sweep)"),
     ("scenarios: [FORKLIFT, 5]", "scenarios[1]", "expected a string or a mapping, got 5"),
