@@ -144,7 +144,7 @@ class Bus:
     def __init__(self, now_ns: Callable[[], int]) -> None:
         self._now_ns = now_ns
         self._topics: dict[str, TopicInfo] = {}
-        self._subs: dict[str, list[Callback]] = {}
+        self._subs: dict[str, list[Callback | _EnvelopeCallback]] = {}
         self._queue: deque[Envelope | _Redelivery] = deque()
         self._taps: list[Tap] = []
         self._taps_defer = True  # every tap takes Deferred messages as they are
@@ -167,6 +167,18 @@ class Bus:
         return Publisher(self, topic, msgtype)
 
     def subscribe(self, topic: str, msgtype: str, callback: Callback) -> None:
+        self._subscribe(topic, msgtype, callback)
+
+    def subscribe_envelopes(self, topic: str, msgtype: str,
+                            callback: Callable[[Envelope], None]) -> None:
+        """Like :meth:`subscribe`, but ``callback`` gets each message's :class:`Envelope`,
+        in the same order among the topic's subscribers: a subscriber that keeps only the
+        latest message reads ``resolved(env.msg)`` when it needs it, so a message published
+        as bytes is built only if read (and only once, whoever reads it)."""
+        self._subscribe(topic, msgtype, _EnvelopeCallback(callback))
+
+    def _subscribe(self, topic: str, msgtype: str,
+                   callback: Callback | _EnvelopeCallback) -> None:
         info = self._declare(topic, msgtype, None)
         self._subs.setdefault(topic, []).append(callback)
         if info.qos.durability == "transient_local":
@@ -225,14 +237,22 @@ class Bus:
         while self._queue:
             env = self._queue.popleft()
             if isinstance(env, _Redelivery):
-                env.callback(resolved(env.env.msg))
+                if isinstance(env.callback, _EnvelopeCallback):
+                    env.callback.callback(env.env)
+                else:
+                    env.callback(resolved(env.env.msg))
                 delivered += 1
                 continue
             subs = self._subs.get(env.topic)
             if subs:
-                msg = resolved(env.msg)
+                msg = _UNSET  # built on the first subscriber that takes the message
                 for cb in subs:
-                    cb(msg)
+                    if isinstance(cb, _EnvelopeCallback):
+                        cb.callback(env)
+                    else:
+                        if msg is _UNSET:
+                            msg = resolved(env.msg)
+                        cb(msg)
                     delivered += 1
         return delivered
 
@@ -255,4 +275,13 @@ class Bus:
 @dataclass(frozen=True)
 class _Redelivery:
     env: Envelope
-    callback: Callback
+    callback: Callback | _EnvelopeCallback
+
+
+class _EnvelopeCallback:
+    """A subscriber that takes envelopes (see :meth:`Bus.subscribe_envelopes`)."""
+
+    __slots__ = ("callback",)
+
+    def __init__(self, callback: Callable[[Envelope], None]) -> None:
+        self.callback = callback

@@ -186,11 +186,12 @@ class Recorder:
     builds them on the caller's thread); writing to MCAP and hashing run on background
     threads, in publication order, so they overlap with rendering and physics (see the module
     doc). Messages are handed to the writer thread in batches of up to ``batch`` messages
-    (fewer when they reach ``batch_bytes``; a deferred message counts no bytes, its size not
-    yet known), so small messages cost the two threads one hand-off per batch rather than one
-    each. The queue holds at most ``queue_size`` messages in all (``queue_size // batch``
-    batches, at least one) and ``put`` blocks: the recorder slows the loop down rather than
-    dropping anything. An error on a background thread is raised again by the next
+    (fewer when they reach ``batch_bytes``, or ``deferred_batch`` messages once a deferred
+    one is among them: a deferred message counts no bytes, its size not yet known, so this
+    bounds the images in flight), so small messages cost the two threads one hand-off per
+    batch rather than one each. The queue holds at most ``queue_size // batch`` batches (at
+    least one) and ``put`` blocks: the recorder slows the loop down rather than dropping
+    anything. An error on a background thread is raised again by the next
     :meth:`write` or by :meth:`close`.
     """
 
@@ -200,10 +201,10 @@ class Recorder:
     #: type); False in a format that converts messages (ROS 1), which builds them inline.
     _defer_ok = True
 
-    def __init__(self, bag_dir: Path, *, queue_size: int = 64,
+    def __init__(self, bag_dir: Path, *, queue_size: int = 256,
                  chunks: ChunkPolicy | None = None,
-                 unrecorded: Collection[str] = (), batch: int = 16,
-                 batch_bytes: int = 1 << 20) -> None:
+                 unrecorded: Collection[str] = (), batch: int = 64,
+                 batch_bytes: int = 1 << 20, deferred_batch: int = 16) -> None:
         self.bag_dir = Path(bag_dir)
         # Topics published but not written (a camera's raw images when it records them
         # compressed): counted, and still handed to the serialized taps.
@@ -216,6 +217,7 @@ class Recorder:
         self._writer: Any = None
         self._state: dict[str, _TopicState] = {}
         self._batch_limit = max(1, batch)
+        self._deferred_limit = max(1, min(batch, deferred_batch))
         self._batch_bytes_limit = batch_bytes
         self._batch: list[tuple[_TopicState, int, bytes | Future[Payload]]] = []
         self._batch_bytes = 0
@@ -285,7 +287,7 @@ class Recorder:
                 self._pool = ThreadPoolExecutor(_POOL_THREADS, thread_name_prefix="srr-cdr")
             self._batch.append((st, env.stamp_ns,
                                 self._pool.submit(_serialize_deferred, msg, env.msgtype)))
-            if len(self._batch) >= self._batch_limit:
+            if len(self._batch) >= self._deferred_limit:
                 self._hand_over()
             return
         data = self._serialize(env)

@@ -107,7 +107,7 @@ class Ros1Recorder(Recorder):
 
     _defer_ok = False  # a deferred image is built here and converted, like any message
 
-    def __init__(self, bag_dir: Path, fmt: Ros1Format, *, queue_size: int = 64,
+    def __init__(self, bag_dir: Path, fmt: Ros1Format, *, queue_size: int = 256,
                  chunks: ChunkPolicy | None = None, unrecorded: Collection[str] = ()) -> None:
         super().__init__(bag_dir, queue_size=queue_size, chunks=chunks, unrecorded=unrecorded)
         self.format: Ros1Format = fmt

@@ -28,7 +28,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from harness.bus import Bus, Publisher, Qos, TopicNameError, remap_topic
+from harness.bus import Bus, Envelope, Publisher, Qos, TopicNameError, remap_topic
 from harness.bus.endpoints import Endpoint
 from harness.errors import PluginError, ScenarioError
 from harness.scenario import RobotSpec, Scenario, SutSpec, validate_dataclass
@@ -94,6 +94,12 @@ class SutContext:
 
     def subscribe(self, topic: str, msgtype: str, callback: Callable[[Any], None]) -> None:
         self.bus.subscribe(self._declare("sub", topic, msgtype), msgtype, callback)
+
+    def subscribe_envelopes(self, topic: str, msgtype: str,
+                            callback: Callable[[Envelope], None]) -> None:
+        """:meth:`subscribe`, handing ``callback`` each message's envelope (its ``msg`` built
+        when read: see :meth:`harness.bus.Bus.subscribe_envelopes`)."""
+        self.bus.subscribe_envelopes(self._declare("sub", topic, msgtype), msgtype, callback)
 
 
 class SystemUnderTest(Participant):

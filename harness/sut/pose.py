@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from harness.bus import Envelope, resolved
 from harness.geometry import (
     quat_wxyz_mul,
     quat_wxyz_mul_floats,
@@ -35,14 +36,20 @@ class OdomPose:
                  world_frame: str = "world", odom_frame: str = "") -> None:
         self.world_frame = world_frame
         self.odom_frame = odom_frame
-        self.odom: Any = None
+        self._odom: Envelope | None = None
         self._static: dict[str, tuple[str, _Transform]] = {}
         self._chain: tuple[str, _Transform | None] | None = None
-        ctx.subscribe(odom_topic, "nav_msgs/msg/Odometry", self._on_odom)
+        # the latest envelope only: a message is built when pose() reads it, not per message
+        ctx.subscribe_envelopes(odom_topic, "nav_msgs/msg/Odometry", self._on_odom)
         ctx.subscribe(tf_static_topic, "tf2_msgs/msg/TFMessage", self._on_tf)
 
-    def _on_odom(self, msg: Any) -> None:
-        self.odom = msg
+    def _on_odom(self, env: Envelope) -> None:
+        self._odom = env
+
+    @property
+    def odom(self) -> Any:
+        """The latest odometry message, or None before the first."""
+        return None if self._odom is None else resolved(self._odom.msg)
 
     def _on_tf(self, msg: Any) -> None:
         for tf in msg.transforms:
@@ -71,12 +78,13 @@ class OdomPose:
 
     def pose(self) -> tuple[float, float, float] | None:
         """Robot pose in the world frame, or None until odom and its static chain are known."""
-        if self.odom is None:
+        odom = self.odom
+        if odom is None:
             return None
-        chain = self.world_from(self.odom_frame or self.odom.header.frame_id)
+        chain = self.world_from(self.odom_frame or odom.header.frame_id)
         if chain is None:
             return None
-        p, q = self.odom.pose.pose.position, self.odom.pose.pose.orientation
+        p, q = odom.pose.pose.position, odom.pose.pose.orientation
         # Python floats: the arithmetic of quat_wxyz_rotate / quat_wxyz_mul on arrays, term for
         # term (see harness.geometry), without building arrays.
         t0, q0 = chain

@@ -66,3 +66,35 @@ def test_a_tap_reading_msg_and_a_late_latched_subscriber() -> None:
     bus.subscribe("/clock_static", CLOCK, late.append)
     bus.spin()
     assert late == [clock(9)] and late[0] is seen[0].msg and builds == [9]
+
+
+def test_an_envelope_subscriber_builds_only_what_it_reads() -> None:
+    """``subscribe_envelopes``: each message's envelope, in order with the topic's other
+    subscribers; a message is built when read, once, shared with object subscribers."""
+    bus = Bus(lambda: 0)
+    order: list[tuple[str, Any]] = []
+    bus.subscribe_envelopes("/clock", CLOCK, lambda env: order.append(("env", env)))
+    bus.subscribe("/clock", CLOCK, lambda msg: order.append(("msg", msg)))
+    first = _publish(bus, 1)
+    bus.spin()
+    assert [kind for kind, _ in order] == ["env", "msg"] and first == [1]
+    assert order[0][1].msg is order[1][1]  # the envelope's message is the one delivered
+
+    envs: list[Envelope] = []
+    alone = Bus(lambda: 0)
+    alone.subscribe_envelopes("/clock", CLOCK, envs.append)
+    builds = [_publish(alone, ns) for ns in (1, 2, 3)]
+    alone.spin()
+    assert [env.stamp_ns for env in envs] == [0, 0, 0] and builds == [[], [], []]
+    assert envs[-1].msg == clock(3) and builds == [[], [], [3]]  # only the latest, on reading
+
+
+def test_a_late_envelope_subscriber_of_a_latched_topic_gets_the_envelope() -> None:
+    bus = Bus(lambda: 0)
+    bus.advertise("/clock_static", CLOCK, TRANSIENT_LOCAL)
+    builds = _publish(bus, 9, "/clock_static")
+    bus.spin()
+    late: list[Envelope] = []
+    bus.subscribe_envelopes("/clock_static", CLOCK, late.append)
+    bus.spin()
+    assert len(late) == 1 and late[0].msg == clock(9) and builds == [9]
