@@ -174,3 +174,22 @@ def test_docs_build_without_warnings(tmp_path: Path) -> None:
     cli = (out / "reference" / "cli.html").read_text(encoding="utf-8")
     for command in _subcommands(_parser()):
         assert command in cli, f"reference/cli.html does not document `srr {command}`"
+
+
+# -- counts the docs state, against what they count --------------------------------------
+
+def test_nightly_suite_counts_match_the_suite_file() -> None:
+    from harness.suite.plan import plan_runs
+    from harness.suite.spec import load_suite
+
+    text = (DOCS / "howto" / "nightly-suite.md").read_text(encoding="utf-8")
+    m = re.search(r"the (\w+) scenarios that ship a baseline.*?= (\d+) runs", text, re.DOTALL)
+    assert m is not None, "nightly-suite.md: no 'the N scenarios that ship a baseline ... = M runs'"
+    words = {"seven": 7, "eight": 8, "nine": 9, "ten": 10, "eleven": 11, "twelve": 12}
+    spec = load_suite([ROOT / "scenarios" / "suites" / "nightly.yaml"])
+    runs = plan_runs(spec)
+    plain = [e for e in spec.entries if not e.sweep]
+    assert int(m.group(2)) == len(runs), (
+        f"the docs say {m.group(2)} runs, the suite plans {len(runs)}")
+    assert words.get(m.group(1)) == len(plain), (
+        f"the docs say {m.group(1)} scenarios, the suite has {len(plain)} without a sweep")
