@@ -193,3 +193,18 @@ def test_nightly_suite_counts_match_the_suite_file() -> None:
         f"the docs say {m.group(2)} runs, the suite plans {len(runs)}")
     assert words.get(m.group(1)) == len(plain), (
         f"the docs say {m.group(1)} scenarios, the suite has {len(plain)} without a sweep")
+
+
+def test_docs_workflow_builds_with_warnings_as_errors_and_publishes() -> None:
+    import yaml
+
+    wf = yaml.safe_load((ROOT / ".github" / "workflows" / "docs.yml").read_text(encoding="utf-8"))
+    steps = [s for job in wf["jobs"].values() for s in job["steps"]]
+    runs = "\n".join(s.get("run", "") for s in steps)
+    uses = [s.get("uses", "") for s in steps]
+    build = next(line for line in runs.splitlines() if "sphinx" in line)
+    assert " -W " in f" {build} " and " docs " in f" {build} ", build
+    assert ".[docs]" in runs
+    for action in ("actions/upload-artifact@", "actions/upload-pages-artifact@",
+                   "actions/deploy-pages@"):
+        assert any(u.startswith(action) for u in uses), f"docs.yml: no {action} step"
