@@ -32,4 +32,3 @@ html_title = "srr"
 autodoc_typehints = "description"
 autodoc_member_order = "bysource"
 nitpicky = False
-suppress_warnings = ["myst.xref_missing"]

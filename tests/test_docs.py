@@ -171,9 +171,32 @@ def test_docs_build_without_warnings(tmp_path: Path) -> None:
     assert proc.returncode == 0, f"sphinx -W failed:\n{proc.stderr[-4000:]}"
     assert (out / "index.html").is_file()
     assert (out / "get-started" / "first-scenario.html").is_file()
+    for page in out.rglob("*.html"):  # the generated pages too
+        assert not unexplained(page.read_text(encoding="utf-8")), page
     cli = (out / "reference" / "cli.html").read_text(encoding="utf-8")
     for command in _subcommands(_parser()):
         assert command in cli, f"reference/cli.html does not document `srr {command}`"
+
+
+# -- words a reader cannot look up ------------------------------------------------------
+
+# The reference systems are named by what they are (docs/explanation/reference-graphs.md),
+# not by the numbers of their files; no page cites a design note or an issue the reader
+# does not have.
+_UNEXPLAINED = re.compile(r"\bseeds? ?0\d\d\b|\bissue \d+|DESIGN\.md", re.IGNORECASE)
+
+
+def unexplained(text: str) -> list[str]:
+    return [m.group(0) for m in _UNEXPLAINED.finditer(text)]
+
+
+def test_docs_name_no_seed_numbers_issues_or_design_notes() -> None:
+    bad = {str(p.relative_to(ROOT)): found for p in [*_pages(), ROOT / "README.md"]
+           if (found := unexplained(p.read_text(encoding="utf-8")))}
+    assert not bad, bad
+    assert unexplained("as in seed 001, see DESIGN.md (issue 13)") == [
+        "seed 001", "DESIGN.md", "issue 13"]
+    assert unexplained("`tests/e2e/seed000_graphs.py`, seed 7") == []
 
 
 # -- counts the docs state, against what they count --------------------------------------

@@ -106,8 +106,12 @@ def _doc(cls: type) -> str:
     return " ".join(doc.split("\n\n")[0].split())
 
 
+def _label(page: str, cls: type) -> str:
+    return f"{page}-{cls.__name__.lower()}"
+
+
 def _rows(cls: type, prefix: str, seen: set[type], rows: list[str],
-          blocks: list[tuple[str, type]]) -> None:
+          blocks: list[tuple[str, type]], page: str) -> None:
     hints = typing.get_type_hints(cls)
     for f in dataclasses.fields(cls):
         if f.metadata.get("internal") or f.name.startswith("_"):
@@ -117,6 +121,9 @@ def _rows(cls: type, prefix: str, seen: set[type], rows: list[str],
         path = f"{prefix}{key}"
         nested = _nested(tp)
         type_text = _type_name(tp).replace("|", "\\|")
+        for sub in nested:  # the block's name links to its table below
+            type_text = re.sub(rf"\b{sub.__name__}\b",
+                               f"{{ref}}`{sub.__name__} <{_label(page, sub)}>`", type_text)
         rows.append(f"| `{path}` | {type_text} | {_default(f)} | {_range(f)} |")
         for sub in nested:
             if sub in seen:
@@ -129,7 +136,7 @@ def _rows(cls: type, prefix: str, seen: set[type], rows: list[str],
             blocks.append((sub_prefix, sub))
 
 
-def fields_table(root: type) -> str:
+def fields_table(root: type, page: str) -> str:
     """Every field under ``root``, one table per block, in file order."""
     out: list[str] = []
     queue: list[tuple[str, type]] = [("", root)]
@@ -137,7 +144,7 @@ def fields_table(root: type) -> str:
     while queue:
         prefix, cls = queue.pop(0)
         title = prefix.rstrip(".") or "top level"
-        out.append(f"\n## `{title}`\n")
+        out.append(f"\n({_label(page, cls)})=\n## `{title}`\n")
         doc = _doc(cls)
         if doc:
             out.append(f"{doc} (`{cls.__module__}.{cls.__qualname__}`)\n")
@@ -146,7 +153,7 @@ def fields_table(root: type) -> str:
         out.append("| field | type | default | range |\n| --- | --- | --- | --- |")
         rows: list[str] = []
         blocks: list[tuple[str, type]] = []
-        _rows(cls, prefix, seen, rows, blocks)
+        _rows(cls, prefix, seen, rows, blocks, page)
         out.extend(rows)
         queue.extend(blocks)
     return "\n".join(out) + "\n"
@@ -172,9 +179,9 @@ def generate(out_dir: Path) -> None:
 
     out_dir.mkdir(parents=True, exist_ok=True)
     pages = {
-        "scenario-fields.md": fields_table(Scenario),
-        "suite-fields.md": fields_table(SuiteFile),
-        "summary-fields.md": fields_table(RunSummary),
+        "scenario-fields.md": fields_table(Scenario, "scenario"),
+        "suite-fields.md": fields_table(SuiteFile, "suite"),
+        "summary-fields.md": fields_table(RunSummary, "summary"),
         "graph-nodes.md": node_table(),
     }
     for name, text in pages.items():
