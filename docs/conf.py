@@ -32,3 +32,5 @@ html_title = "srr"
 autodoc_typehints = "description"
 autodoc_member_order = "bysource"
 nitpicky = False
+# option names such as --set stay as written (no en dashes), in help texts and prose alike
+smartquotes = False
