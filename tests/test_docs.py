@@ -3,8 +3,10 @@
 
 * The whole site is built with Sphinx's ``-W`` (warnings are errors) into a temporary folder.
 * Every fenced ``yaml`` block of ``docs/**/*.md`` that is a whole scenario (it has
-  ``format_version``) is written to a file and checked by ``srr validate``. A block whose
-  first line is ``# docs: not validated`` is skipped (a deliberately wrong example).
+  ``format_version``) is written to a file and checked by ``srr validate``, beside the
+  ``python`` blocks of its page that start with ``# file: NAME.py`` (the plug-ins it
+  names). A block whose first line is ``# docs: not validated`` is skipped (a deliberately
+  wrong example).
 * Every ``srr`` command line shown in the docs and in README.md — in ``bash`` blocks and in
   inline code — names a command of the parser, and each of its ``--options`` is one that
   command takes.
@@ -38,14 +40,18 @@ def _blocks(text: str, lang: str) -> list[str]:
     return re.findall(rf"^```{lang}[^\n]*\n(.*?)^```", text, re.MULTILINE | re.DOTALL)
 
 
-def scenario_blocks() -> list[tuple[str, str]]:
-    """(page:index, text) of every yaml block that is a whole scenario."""
+def scenario_blocks() -> list[tuple[str, str, dict[str, str]]]:
+    """(page:index, text, the page's files) of every yaml block that is a whole scenario;
+    the files are the page's python blocks headed ``# file: NAME.py``, by name."""
     found = []
     for page in _pages():
-        for i, block in enumerate(_blocks(page.read_text(encoding="utf-8"), "yaml")):
+        text = page.read_text(encoding="utf-8")
+        files = {m.group(1): block for block in _blocks(text, "python")
+                 if (m := re.match(r"# file: (\w+\.py)\n", block))}
+        for i, block in enumerate(_blocks(text, "yaml")):
             if re.search(r"^format_version:", block, re.MULTILINE) and not block.startswith(
                     SKIP_MARK):
-                found.append((f"{page.relative_to(ROOT)}:{i}", block))
+                found.append((f"{page.relative_to(ROOT)}:{i}", block, files))
     return found
 
 
@@ -139,13 +145,15 @@ def test_the_command_check_can_fail() -> None:
 # -- every whole scenario in the docs is valid -------------------------------------------
 
 def test_the_docs_show_whole_scenarios() -> None:
-    names = [name for name, _ in scenario_blocks()]
+    names = [name for name, _, _ in scenario_blocks()]
     assert any("first-scenario" in n for n in names), names
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("where", "text"), scenario_blocks(), ids=lambda v: str(v)[:40])
-def test_scenario_in_docs_validates(where: str, text: str, tmp_path: Path,
+@pytest.mark.parametrize(("where", "text", "files"), scenario_blocks(),
+                         ids=lambda v: str(v)[:40] if isinstance(v, str) else "")
+def test_scenario_in_docs_validates(where: str, text: str, files: dict[str, str],
+                                    tmp_path: Path,
                                     monkeypatch: pytest.MonkeyPatch,
                                     capsys: pytest.CaptureFixture[str]) -> None:
     # beside copies of the bundled scenarios, so a snippet's includes resolve as they would
@@ -153,6 +161,8 @@ def test_scenario_in_docs_validates(where: str, text: str, tmp_path: Path,
     shutil.copytree(ROOT / "scenarios", tmp_path / "scenarios")
     path = tmp_path / "scenarios" / "docs_snippet.yaml"
     path.write_text(text, encoding="utf-8")
+    for name, source in files.items():  # plug-ins import from the working directory
+        (tmp_path / name).write_text(source, encoding="utf-8")
     monkeypatch.chdir(tmp_path)
     code = main(["validate", str(path)])
     out = capsys.readouterr()
