@@ -103,7 +103,12 @@ def _doc(cls: type) -> str:
     doc = inspect.getdoc(cls) or ""
     if doc.startswith(f"{cls.__name__}("):  # the dataclass's generated signature
         return ""
-    return " ".join(doc.split("\n\n")[0].split())
+    return _plain(" ".join(doc.split("\n\n")[0].split()))
+
+
+def _plain(text: str) -> str:
+    """Sphinx roles in a docstring (``:meth:`to_json```) as code for Markdown."""
+    return re.sub(r":\w+:`~?([^`]+)`", r"`\1`", text).replace("|", "\\|")
 
 
 def _label(page: str, cls: type) -> str:
@@ -166,8 +171,7 @@ def node_table() -> str:
     rows = ["| node type | Isaac Sim names (aliases) | what it does |", "| --- | --- | --- |"]
     for name, cls in sorted(registry.all_types().items()):
         aliases = ", ".join(f"`{a}`" for a in registry.DEFAULT_REGISTRY.aliases(name)) or "—"
-        doc = " ".join((inspect.getdoc(cls) or "").split("\n\n")[0].split())
-        doc = re.sub(r":\w+:`~?([^`]+)`", r"`\1`", doc).replace("|", "\\|")
+        doc = _plain(" ".join((inspect.getdoc(cls) or "").split("\n\n")[0].split()))
         rows.append(f"| `{name}` | {aliases} | {doc} |")
     return "\n".join(rows) + "\n"
 
