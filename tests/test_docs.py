@@ -7,6 +7,10 @@
   ``python`` blocks of its page that start with ``# file: NAME.py`` (the plug-ins it
   names). A block whose first line is ``# docs: not validated`` is skipped (a deliberately
   wrong example).
+* Every other ``yaml`` block (a fragment: a few top-level blocks of a scenario) is checked by
+  ``srr validate`` too, put on top of a bundled scenario (``dock_nominal.yaml``; a fragment
+  with its own ``include`` gets only ``format_version`` and ``name``). A fragment that is a
+  suite file is checked as ``srr suite`` checks one before its first run.
 * Every ``srr`` command line shown in the docs and in README.md — in ``bash`` blocks and in
   inline code — names a command of the parser, and each of its ``--options`` is one that
   command takes.
@@ -164,6 +168,46 @@ def test_scenario_in_docs_validates(where: str, text: str, files: dict[str, str]
     for name, source in files.items():  # plug-ins import from the working directory
         (tmp_path / name).write_text(source, encoding="utf-8")
     monkeypatch.chdir(tmp_path)
+    code = main(["validate", str(path)])
+    out = capsys.readouterr()
+    assert code == 0, f"{where}: srr validate exited {code}: {out.err.strip()}"
+
+
+def fragment_blocks() -> list[tuple[str, str]]:
+    """(page:index, text) of every yaml block that is not a whole scenario nor skipped."""
+    found = []
+    for page in _pages():
+        for i, block in enumerate(_blocks(page.read_text(encoding="utf-8"), "yaml")):
+            if not re.search(r"^format_version:", block, re.MULTILINE) and not block.startswith(
+                    SKIP_MARK):
+                found.append((f"{page.relative_to(ROOT)}:{i}", block))
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("where", "text"), fragment_blocks(), ids=lambda v: str(v)[:40])
+def test_fragment_in_docs_validates(where: str, text: str, tmp_path: Path,
+                                    monkeypatch: pytest.MonkeyPatch,
+                                    capsys: pytest.CaptureFixture[str]) -> None:
+    import yaml
+
+    from harness.suite.spec import load_suite
+
+    shutil.copytree(ROOT / "scenarios", tmp_path / "scenarios")
+    monkeypatch.chdir(tmp_path)
+    fragment = yaml.safe_load(text)
+    assert isinstance(fragment, dict), f"{where}: a yaml block that is no mapping"
+    if "suite" in fragment or "scenarios" in fragment:
+        path = tmp_path / "scenarios" / "suites" / "docs_suite.yaml"
+        path.write_text(text, encoding="utf-8")
+        assert load_suite([path]).entries, where
+        return
+    base: dict[str, object] = {"format_version": 1, "name": "docs_fragment"}
+    if "include" not in fragment:
+        base = yaml.safe_load((ROOT / "scenarios" / "dock_nominal.yaml").read_text(
+            encoding="utf-8"))
+    path = tmp_path / "scenarios" / "docs_fragment.yaml"
+    path.write_text(yaml.safe_dump({**base, **fragment}, sort_keys=False), encoding="utf-8")
     code = main(["validate", str(path)])
     out = capsys.readouterr()
     assert code == 0, f"{where}: srr validate exited {code}: {out.err.strip()}"
