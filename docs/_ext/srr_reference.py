@@ -176,6 +176,20 @@ def node_table() -> str:
     return "\n".join(rows) + "\n"
 
 
+def metrics_table(baseline: Path) -> str:
+    """Every metric a scored run of ``baseline``'s scenario gives (control, perception and
+    safety), with its unit and better direction, as srr wrote them when blessing it."""
+    import json
+
+    metrics = json.loads(baseline.read_text(encoding="utf-8"))["metrics"]
+    better = {"lower": "lower", "higher": "higher", "none": "—"}
+    rows = ["| metric | unit | better |", "| --- | --- | --- |"]
+    for name, m in sorted(metrics.items()):
+        rows.append(f"| `{name}` | {m.get('unit') or '—'} | "
+                    f"{better.get(str(m.get('direction')), m.get('direction'))} |")
+    return "\n".join(rows) + "\n"
+
+
 def generate(out_dir: Path) -> None:
     from harness.run.summary import RunSummary
     from harness.scenario.schema import Scenario
@@ -187,6 +201,8 @@ def generate(out_dir: Path) -> None:
         "suite-fields.md": fields_table(SuiteFile, "suite"),
         "summary-fields.md": fields_table(RunSummary, "summary"),
         "graph-nodes.md": node_table(),
+        "metrics.md": metrics_table(Path(__file__).resolve().parents[2] / "baselines"
+                                    / "dock_worker_crossing.json"),
     }
     for name, text in pages.items():
         path = out_dir / name
