@@ -20,7 +20,8 @@ external process exits) the run stops INVALID naming the output
 (:class:`~harness.errors.RunStopped`), never a silently degraded run.
 
 Messages whose type has no rclpy type support in this environment are not bridged; they are
-listed once in the run's warnings (``tf2_msgs`` is one with the PyPI wheels: see the README).
+listed once in the run's warnings (``tf2_msgs`` is one with the PyPI wheels: see
+docs/howto/ros2.md).
 """
 
 from __future__ import annotations

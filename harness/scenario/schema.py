@@ -253,7 +253,7 @@ class WorldSpec:
 
 @dataclass(frozen=True)
 class ClockSpec:
-    """The top-level ``clock:`` block of the forklift seed's robots.yaml."""
+    """The top-level ``clock:`` block of the forklift scene's robots.yaml."""
 
     enabled: bool = True
     clock_topic: str = "clock"
@@ -502,7 +502,7 @@ class ModelFile:
 
 @dataclass(frozen=True)
 class RobotSpec:
-    """One block of the ``robots:`` list (forklift seed's robots.yaml shape)."""
+    """One block of the ``robots:`` list (the forklift scene's robots.yaml shape)."""
 
     name: str
     model: Literal["forklift", "turtlebot3_waffle_pi"] | ModelFile
@@ -562,7 +562,7 @@ class RobotSpec:
 
 @dataclass(frozen=True)
 class CameraSpec:
-    """One entry of ``cameras:`` (forklift seed's cameras.yaml shape) for a fixed camera.
+    """One entry of ``cameras:`` (the forklift scene's cameras.yaml shape) for a fixed camera.
 
     ``port`` and ``mount_path`` (default ``/<name>``) serve the camera over RTSP when the
     ``rtsp:`` block is enabled; ``record`` says how the bag holds its images. ``outputs``
@@ -822,7 +822,7 @@ class Ros2Spec:
 @dataclass(frozen=True)
 class RtspSpec:
     """``rtsp:`` block: every enabled camera with a ``port`` streams h264 over RTSP at
-    ``rtsp://<host>:<port><mount_path>`` (seed 002's ``/World/RTSPMultiGraph``).
+    ``rtsp://<host>:<port><mount_path>`` (the forklift scene's ``/World/RTSPMultiGraph``).
 
     ``fps``: the rate of the graph's one simulation gate (``step = round(tick_hz / fps)``),
     hence of every stream. ``wait_s``: hold the first tick until every stream has a client,
