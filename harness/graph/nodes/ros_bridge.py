@@ -199,6 +199,8 @@ class _TfPublisher(_Publisher):
         self._static = self.is_static(db)  # fixed once the publisher exists
         self._last_key: tuple[Any, ...] | None = None
         self._packers: dict[tuple[tuple[str, str], ...], Packer] = {}
+        self._frames: tuple[str, str] | None = None
+        self._one: Packer | None = None
         return STATIC_QOS if self._static else None
 
     def unchanged(self, key: tuple[Any, ...]) -> bool:
@@ -222,11 +224,14 @@ class _TfPublisher(_Publisher):
             frames = tuple((pose.parent, pose.child) for pose in poses)
             values = tuple(value for pose in poses for value in (
                 sec, nanosec, *pose.translation, *pose.rotation_xyzw))
+        raw = self._packer_of(frames).pack(*values)
+        self._pub.publish_serialized(raw, partial(tf_message_of, ns, poses))
+
+    def _packer_of(self, frames: tuple[tuple[str, str], ...]) -> Packer:
         packer = self._packers.get(frames)
         if packer is None:
             packer = self._packers[frames] = tf_packer(frames)
-        raw = packer.pack(*values)
-        self._pub.publish_serialized(raw, partial(tf_message_of, ns, poses))
+        return packer
 
     def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
         """The transforms this node publishes, as TF edges (see :meth:`endpoints`)."""
@@ -266,7 +271,14 @@ class PublishRawTransformTree(_TfPublisher):
         parent, child = i.parentFrameId, i.childFrameId
         if self._static and self.unchanged((parent, child, tr, rot)):
             return True
-        self.emit(stamp_of(db, ctx), [Pose(parent, child, tr, rot)])
+        ns = stamp_of(db, ctx)
+        frames = (parent, child)
+        packer = self._one  # one transform: its packer kept, without emit's lookups
+        if packer is None or frames != self._frames:
+            self._frames, packer = frames, self._packer_of((frames,))
+            self._one = packer
+        raw = packer.pack(*divmod(ns, 1_000_000_000), *tr, *rot)
+        self._pub.publish_serialized(raw, partial(_one_transform, ns, parent, child, tr, rot))
         return True
 
     def edges(self, value: Callable[[str], Any]) -> list[TfEdge]:
@@ -380,6 +392,11 @@ class PublishTransformTree(_TfPublisher):
             return True
         self.emit(stamp_of(db, ctx), [Pose(*pose) for pose in poses])
         return True
+
+
+def _one_transform(ns: int, parent: str, child: str, translation: tuple[float, ...],
+                   rotation_xyzw: tuple[float, ...]) -> Any:
+    return tf_message_of(ns, [Pose(parent, child, translation, rotation_xyzw)])
 
 
 def _paths(value: Sequence[Any] | str | None) -> list[str]:
