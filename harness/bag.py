@@ -9,8 +9,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from harness import yamlio
-from harness.errors import BagError
 from harness.recording.bagread import open_recording, reading, ros1_recording
+from harness.recording.errors import BagError
 
 __all__ = ["BagInfo", "BagTopic", "inspect_bag"]
 
@@ -38,7 +38,7 @@ def inspect_bag(path: str | Path) -> BagInfo:
     and list its topics, counting messages by reading every record (so truncation is
     noticed). ``storage`` is ``mcap`` for ROS 2, ``rosbag1`` or ``mcap (ros1)`` for ROS 1;
     types as recorded (``sensor_msgs/Image`` in a ROS 1 recording), latched ROS 1 topics as
-    ``transient_local``. Raises :class:`~harness.errors.BagError`."""
+    ``transient_local``. Raises :class:`~harness.recording.errors.BagError`."""
     p = Path(path)
     if (p / "bag" / "metadata.yaml").exists() or ros1_recording(p / "bag") is not None:
         p = p / "bag"

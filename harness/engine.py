@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from harness.builders import BuildContext, build_all
 from harness.bus import Bus, Envelope
@@ -27,19 +27,27 @@ from harness.sut.base import SutContext, load_suts
 from harness.sut.participant import Participant
 from harness.wiring import Plan, plan_wiring
 
-__all__ = ["EvalContext", "Joined", "Simulation"]
+__all__ = ["Closeable", "EvalContext", "Joined", "Simulation"]
+
+
+class Closeable(Protocol):
+    """A resource a run holds until it ends: :meth:`Simulation.close` closes it."""
+
+    def close(self) -> None: ...
 
 
 @dataclass
 class EvalContext:
-    """What graph nodes see while they compute: the tick, its time, the world and the bus."""
+    """What graph nodes see while they compute: the tick, its time, the world and the bus.
+    ``extras``: the run's shared resources by name (the render products, the RTSP servers),
+    created by the nodes on first use and closed when the run ends."""
 
     tick: int
     time_ns: int
     world: World
     bus: Bus
     seed: int = 0
-    extras: dict[str, Any] = field(default_factory=dict)
+    extras: dict[str, Closeable] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -126,6 +134,4 @@ class Simulation:
         for _, sut, _ in self.suts:
             sut.shutdown()
         for extra in self.ctx.extras.values():  # e.g. the render products' GL contexts
-            close = getattr(extra, "close", None)
-            if callable(close):
-                close()
+            extra.close()

@@ -1,27 +1,24 @@
 """The small error hierarchy of srr.
 
 Every error a user can cause derives from :class:`SrrError`; the CLI turns it into one line and
-an exit code. Library code raises these and never calls ``sys.exit`` or prints.
+its ``exit_code``. Library code raises these and never calls ``sys.exit`` or prints. Errors
+narrow per package: a package's own live in its ``errors.py`` (:mod:`harness.recording.errors`,
+:mod:`harness.graph.errors`, :mod:`harness.video.errors`, :mod:`harness.live.errors`,
+:mod:`harness.sut.errors`, :mod:`harness.run.errors`); those kept here are raised from more
+than one layer (:class:`ScenarioError` from the validator up, :class:`SimulationError` from
+the scenario's prims up, :class:`RunStopped` from the ROS 2 bridge and the run).
 """
 
 from __future__ import annotations
 
 __all__ = [
     "VALUE_LIMIT",
-    "BagError",
-    "BagReadError",
     "DiskSpaceError",
-    "GraphError",
-    "InvalidRunError",
-    "LiveViewError",
-    "PluginError",
     "RunInUseError",
     "RunStopped",
     "ScenarioError",
     "SimulationError",
     "SrrError",
-    "StreamError",
-    "VideoError",
     "reason",
     "shorten",
 ]
@@ -126,12 +123,6 @@ class ScenarioError(SrrError):
         super().__init__(f"{where}: {self.message}")
 
 
-class GraphError(SrrError):
-    """An action graph could not be built: unknown node type, attribute or connection."""
-
-
-class PluginError(SrrError):
-    """A system-under-test plug-in could not be loaded or broke its contract."""
 
 
 class SimulationError(SrrError):
@@ -140,46 +131,14 @@ class SimulationError(SrrError):
     exit_code = 3
 
 
-class BagError(SrrError):
-    """A recorded bag is missing, truncated or corrupt."""
-
-
-class BagReadError(BagError):
-    """A recording's bytes do not read: what a reader (rosbags, mcap, a decompressor, the
-    file system) raised on a damaged, truncated or foreign file, translated where the
-    recording is opened (:mod:`harness.recording.bagread`). ``file``: the recording as the user
-    named it; the message is ``<file>: <what>: <reason>``."""
-
-    def __init__(self, file: object, what: str, why: str) -> None:
-        self.file = str(file)
-        self.what = what
-        self.why = why
-        super().__init__(f"{file}: {what}: {why}")
 
 
 class DiskSpaceError(SrrError):
     """Not enough free disk space to start a run (its estimated bag size plus the margin)."""
 
 
-class LiveViewError(SrrError):
-    """The live view (``--foxglove``) cannot start: a bad address, a port in use, or the
-    foxglove-sdk package missing."""
 
 
-class VideoError(SrrError):
-    """An image or video encoder or decoder failed: an encoder that cannot open (NVENC
-    without an NVIDIA GPU), a frame of the wrong size, bytes that do not decode."""
-
-
-class StreamError(SrrError):
-    """A camera stream (RTSP) cannot be served: GStreamer's RTSP server missing, a port in
-    use, an address that cannot be bound."""
-
-
-class InvalidRunError(SrrError):
-    """A health gate tripped, so the run's scores cannot be trusted."""
-
-    exit_code = 3
 
 
 class RunInUseError(SrrError):

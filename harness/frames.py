@@ -62,13 +62,13 @@ from pandas.api.types import union_categoricals
 from rosbags.serde import SerdeError
 
 from harness.bus.endpoints import tf_tree_of
-from harness.errors import BagError
 from harness.geometry import (
     quat_xyzw_mul_columns,
     quat_xyzw_rotate_columns,
     yaw_from_quat_xyzw_columns,
 )
 from harness.recording.bagread import Encoding, open_indexed, ros1_recording
+from harness.recording.errors import BagError
 from harness.serde.messages import TYPESTORE
 from harness.serde.ros1 import deserialize_ros1
 

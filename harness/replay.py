@@ -31,7 +31,7 @@ from typing import Any
 from harness import yamlio
 from harness.bus import Bus, Qos
 from harness.camera_topics import CompressedStream, compressed_streams, recorded_cameras
-from harness.errors import BagError, VideoError, reason
+from harness.errors import reason
 from harness.graph.nodes.camera import depth_image_message, rgb_image_message
 from harness.output import ROS2_OUTPUT, OutputKind
 from harness.recording.bagread import (
@@ -42,11 +42,13 @@ from harness.recording.bagread import (
     reading,
     ros1_recording,
 )
+from harness.recording.errors import BagError
 from harness.scenario import Scenario
 from harness.serde.ros1 import ros1_type
 from harness.sut.base import SutContext, load_suts
 from harness.sut.participant import Participant
 from harness.video.codec import H264Decoder, decode_depth_png, decode_rgb
+from harness.video.errors import VideoError
 
 __all__ = ["Playback", "RecordedTopic", "Replay"]
 

@@ -33,8 +33,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from harness.builders.base import BuildContext
-from harness.errors import GraphError, ScenarioError, reason
+from harness.errors import ScenarioError, reason
 from harness.graph import GraphStage
+from harness.graph.errors import GraphError
 from harness.scenario import GraphSpec, RobotSpec, Scenario
 from harness.sut.base import import_project_module
 

@@ -21,8 +21,8 @@ The disk is ``safety_indicator.indicator_prim`` or the seed's default
 from __future__ import annotations
 
 from harness.builders.base import BuildContext, fresh_graph
-from harness.errors import GraphError
 from harness.graph import Controller
+from harness.graph.errors import GraphError
 from harness.graph.nodes.ros_subscriber import define_message_outputs
 from harness.scenario import RobotSpec
 from harness.sim.prims import PrimKind

@@ -19,8 +19,9 @@ from harness.diff.metrics import metric_deltas, summary_metrics
 from harness.diff.result import DiffResult, RunInfo, TopicDiff
 from harness.diff.tolerance import Tolerance, glob_match, parse_tolerance
 from harness.diff.topics import diff_bags
-from harness.errors import BagError, SrrError
+from harness.errors import SrrError
 from harness.recording.bagread import ros1_recording
+from harness.recording.errors import BagError
 from harness.scenario.schema import ToleranceSpec
 from harness.summary import replay_note
 

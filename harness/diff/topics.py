@@ -32,8 +32,9 @@ import numpy as np
 from harness.diff.fields import as_float, walk
 from harness.diff.result import Divergence, FieldDiff, TopicDiff, TopicStatus, Worst
 from harness.diff.tolerance import Tolerance, glob_match, tolerance_for
-from harness.errors import BagError, reason
+from harness.errors import reason
 from harness.recording.bagread import DECODE_ERRORS, deserialize, open_recording
+from harness.recording.errors import BagError
 
 __all__ = ["diff_bags", "message_stream"]
 
@@ -294,7 +295,7 @@ def message_stream(bag: Path
     """The topics of a rosbag2 directory or a ROS 1 run's ``bag/`` (name → type as
     recorded) and an iterator of ``(topic, type, log time, payload)`` over every message, in
     the reader's order, which closes the bag when exhausted. Read errors (when opening or
-    later) are :class:`~harness.errors.BagReadError` naming the bag."""
+    later) are :class:`~harness.recording.errors.BagReadError` naming the bag."""
     reader = open_recording(bag, shown=bag)
     types = {c.topic: c.recorded_type for c in reader.connections}
 

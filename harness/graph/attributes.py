@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from harness.errors import GraphError
+from harness.graph.errors import GraphError
 
 __all__ = [
     "ATTRIBUTE_TYPES",

@@ -17,7 +17,6 @@ import enum
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
-from harness.errors import GraphError
 from harness.graph.engine import (
     Attribute,
     Graph,
@@ -26,6 +25,7 @@ from harness.graph.engine import (
     is_valid_graph_path,
     split_attribute_name,
 )
+from harness.graph.errors import GraphError
 
 __all__ = ["Controller", "GraphPipelineStage", "Keys"]
 

@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from types import MappingProxyType, TracebackType
 from typing import Any, Literal
 
-from harness.errors import GraphError
 from harness.graph.attributes import (
     EXECUTION,
     Attr,
@@ -27,6 +26,7 @@ from harness.graph.attributes import (
     converter,
     is_valid_attr_name,
 )
+from harness.graph.errors import GraphError
 from harness.graph.node import NodeType
 from harness.graph.program import NodeRuntime, Program, compile_program
 from harness.graph.registry import DEFAULT_REGISTRY, Registry

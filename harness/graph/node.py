@@ -11,8 +11,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol
 
-from harness.errors import GraphError
 from harness.graph.attributes import Attr
+from harness.graph.errors import GraphError
 
 if TYPE_CHECKING:
     from harness.bus.endpoints import Endpoint, TfEdge
@@ -34,7 +34,7 @@ NODE_KINDS: tuple[str, ...] = ("event", "action", "data")
 class AttributeLookupError(GraphError, AttributeError):
     """An unknown attribute was named on ``db.inputs`` / ``db.outputs``.
 
-    It is a :class:`~harness.errors.GraphError` and also an :class:`AttributeError`, so
+    It is a :class:`~harness.graph.errors.GraphError` and also an :class:`AttributeError`, so
     ``getattr(db.inputs, "x", default)`` and ``hasattr`` behave as usual.
     """
 

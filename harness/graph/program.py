@@ -45,8 +45,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from harness.errors import GraphError, SrrError
+from harness.errors import SrrError
 from harness.graph.attributes import EXECUTION, Attr, Converter, converter
+from harness.graph.errors import GraphError
 from harness.graph.node import MISSING, Database, NodeType, OutputSetter
 
 __all__ = [

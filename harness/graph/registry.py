@@ -17,8 +17,8 @@ import difflib
 from collections.abc import Callable, Iterable
 from typing import TypeVar
 
-from harness.errors import GraphError
 from harness.graph.attributes import EXECUTION
+from harness.graph.errors import GraphError
 from harness.graph.node import NODE_KINDS, NodeType
 
 __all__ = [

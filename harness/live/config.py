@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from harness.errors import LiveViewError
+from harness.live.errors import LiveViewError
 
 __all__ = ["DEFAULT_PORT", "LiveConfig"]
 

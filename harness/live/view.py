@@ -24,8 +24,8 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from harness.bus.bus import Envelope, Qos
-from harness.errors import LiveViewError
 from harness.live.config import DEFAULT_PORT, LiveConfig
+from harness.live.errors import LiveViewError
 from harness.live.wsfront import SubprotocolFront
 from harness.recording.recorder import cdr_bytes, topic_meta
 
@@ -106,7 +106,7 @@ class LiveView:
     def start(cls, config: LiveConfig, *, topics: Mapping[str, str] | None = None,
               notice: Notice | None = None, name: str = "srr") -> LiveView:
         """Create a channel for each of ``topics`` (topic → message type: what the run will
-        publish), then start the server (:class:`~harness.errors.LiveViewError` when the SDK
+        publish), then start the server (:class:`~harness.live.errors.LiveViewError` when the SDK
         is missing or the address cannot be bound).
 
         Channels made before the server starts reach a client in the one ``advertise`` it gets

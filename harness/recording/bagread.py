@@ -20,7 +20,8 @@ one into the bus's ROS 2 message.
 This module is the one place where a recording's read errors are translated: what the readers
 raise on a damaged, truncated or foreign file (:data:`READ_ERRORS`: rosbags', mcap's, the
 decompressors', ``struct.error``, ``ValueError``, ``OSError``...) becomes one
-:class:`~harness.errors.BagReadError` line naming the file, raised ``from`` the reader's error,
+:class:`~harness.recording.errors.BagReadError` line naming the file, raised ``from`` the
+reader's error,
 when the recording is opened and while its messages are read (:func:`mcap_records` for a
 byte-for-byte copy of an MCAP file's records). A programming error (``TypeError``,
 ``AttributeError``, ``AssertionError``...) is not translated: it is a bug, with its traceback.
@@ -51,7 +52,8 @@ from rosbags.serde import SerdeError
 from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 
 from harness import yamlio
-from harness.errors import BagReadError, reason
+from harness.errors import reason
+from harness.recording.errors import BagReadError
 from harness.recording.mcapread import McapIndex, guarded, lz4_failure
 from harness.serde.messages import TYPESTORE
 from harness.serde.ros1 import Ros1TypeError, deserialize_ros1, ros2_type, to_ros2
@@ -79,7 +81,7 @@ DATA_ERRORS: tuple[type[Exception], ...] = (
 
 #: :data:`DATA_ERRORS` and ``OSError`` (a file missing, unreadable, or a directory): every
 #: error a reader raises for the file rather than for a bug, translated into
-#: :class:`~harness.errors.BagReadError`.
+#: :class:`~harness.recording.errors.BagReadError`.
 READ_ERRORS: tuple[type[Exception], ...] = (*DATA_ERRORS, OSError)
 
 #: What decoding one recorded payload (:func:`deserialize`) raises when its bytes or its type
@@ -90,7 +92,7 @@ DECODE_ERRORS: tuple[type[Exception], ...] = (SerdeError, Ros1TypeError, *DATA_E
 @contextmanager
 def reading(file: object, what: str = "cannot read bag") -> Iterator[None]:
     """Translate :data:`READ_ERRORS` raised inside into one
-    :class:`~harness.errors.BagReadError` line, ``<file>: <what>: <reason>``."""
+    :class:`~harness.recording.errors.BagReadError` line, ``<file>: <what>: <reason>``."""
     try:
         yield
     except READ_ERRORS as err:
@@ -139,7 +141,7 @@ def mcap_records(file: Path, shown: object = None, what: str = "cannot read bag"
                  ) -> Iterator[tuple[Schema | None, Channel, Message]]:
     """Every message of an MCAP file with its schema and channel, in file order, as the
     ``mcap`` library reads them (publish times and sequence numbers included: what a
-    byte-for-byte copy needs); read errors become :class:`~harness.errors.BagReadError`
+    byte-for-byte copy needs); read errors become :class:`~harness.recording.errors.BagReadError`
     naming ``shown`` (default: the file)."""
     with reading(file if shown is None else shown, what), Path(file).open("rb") as f:
         yield from guarded(make_reader(f).iter_messages(log_time_order=False))
@@ -353,7 +355,7 @@ def open_recording(path: str | Path, *, shown: object = None, what: str = "canno
                    ) -> Recording:
     """Open a rosbag2 directory, a ``.bag`` or ``.mcap`` file, or a run's ``bag/`` directory
     holding a ROS 1 recording. What is wrong with the file, when it is opened or while its
-    messages are read, is raised as one :class:`~harness.errors.BagReadError` line
+    messages are read, is raised as one :class:`~harness.recording.errors.BagReadError` line
     ``<shown>: <what>: <reason>`` (``shown``: the path as the user named it; default the
     file read); a ``path`` that holds none of these is one too (``metadata.yaml: missing``)."""
     p = Path(path)

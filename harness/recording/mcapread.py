@@ -16,7 +16,7 @@ names the channels' ROS types. Damage raises ``ValueError`` (no summary section,
 whose records or message index do not agree with its chunk index, a message on a channel the
 summary does not list, a chunk that does not decompress), the ``mcap`` library's errors, the
 zstd decompressor's, ``struct.error`` or ``OSError``: :mod:`harness.recording.bagread` turns these
-into one :class:`~harness.errors.BagReadError` line naming the file.
+into one :class:`~harness.recording.errors.BagReadError` line naming the file.
 Chunk CRCs are not checked: that would cost 5 % of scoring's time (rosbags' reader, which
 ``srr inspect`` and ``srr diff`` use for a rosbag2 directory, checks them).
 """

@@ -45,7 +45,6 @@ from rosbags.interfaces import (
 from rosbags.rosbag2.metadata import dump_qos_v9
 
 from harness.bus.bus import Deferred, Envelope, Qos, resolved
-from harness.errors import BagError
 from harness.recording.bagfile import (
     ChunkPolicy,
     McapBagWriter,
@@ -54,6 +53,7 @@ from harness.recording.bagfile import (
     dump_metadata,
     write_metadata,
 )
+from harness.recording.errors import BagError
 from harness.recording.mcap_writer import Payload, payload_size
 from harness.serde.messages import TYPESTORE, serialize, serialize_pieces
 

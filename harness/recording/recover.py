@@ -10,8 +10,9 @@ written under a temporary name and renamed into place, so the bag directory neve
 half-written ``.mcap``. The file's length is measured once, before it is read, and nothing
 after it is read: a file that something still appends to cannot make the two passes disagree.
 
-What is refused (:class:`~harness.errors.BagError`, nothing written): an empty file, a file
-that is not MCAP, one cut inside its header, and a file that is corrupt rather than cut short
+What is refused (:class:`~harness.recording.errors.BagError`, nothing written): an empty
+file, a file that is not MCAP, one cut inside its header, and a file that is corrupt rather
+than cut short
 — a chunk that fails its CRC with readable chunks after it, or any damage in a file that ends
 with a footer (it was finished, so the damage did not come from a crash). A file that is
 whole is reported as valid and left alone (``metadata.yaml`` is rewritten only if it is
@@ -36,7 +37,6 @@ from mcap.records import Channel, Chunk, Footer, Header, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from harness import yamlio
-from harness.errors import BagError
 from harness.recording.bagfile import (
     ChunkPolicy,
     McapBagWriter,
@@ -46,6 +46,7 @@ from harness.recording.bagfile import (
     write_metadata,
 )
 from harness.recording.bagread import DATA_ERRORS, mcap_profile, ros1_recording
+from harness.recording.errors import BagError
 from harness.recording.mcapread import lz4_failure
 from harness.recording.recorder import TopicStats, digest_update
 

@@ -19,8 +19,9 @@ from pathlib import Path
 
 from mcap.writer import CompressionType, Writer
 
-from harness.errors import BagError, reason
+from harness.errors import reason
 from harness.recording.bagread import mcap_records, open_recording, ros1_recording
+from harness.recording.errors import BagError
 from harness.serde.ros1 import ros2_type
 
 __all__ = ["KEPT_TYPES", "ReferenceInfo", "kept", "reference_path", "write_reference"]

@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from harness.errors import VideoError
 from harness.recording.bagread import Recording, open_indexed
 from harness.video.codec import H264Decoder, decode_rgb
+from harness.video.errors import VideoError
 from harness.video.sei import nal_units
 
 __all__ = ["IMAGE_TYPE", "IMAGE_TYPES", "Keyframe", "data_uri", "encode_png", "image_array",

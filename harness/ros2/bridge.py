@@ -39,13 +39,14 @@ from pathlib import Path
 from typing import Any
 
 from harness.bus.bus import Envelope, Qos
-from harness.errors import PluginError, RunStopped, SrrError
+from harness.errors import RunStopped, SrrError
 from harness.recording.recorder import Recorder, cdr_bytes
 from harness.ros2.domain import DomainLease, lease_domain
 from harness.ros2.processes import ExternalProcess, start_processes, stop_processes
 from harness.scenario.schema import Ros2OutputSpec, Ros2Spec
 from harness.serde.messages import deserialize
 from harness.sut.base import SutContext, SystemUnderTest
+from harness.sut.errors import PluginError
 
 __all__ = ["Ros2Bridge", "message_class"]
 

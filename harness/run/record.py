@@ -42,7 +42,7 @@ from harness import runlock, runmarker, yamlio
 from harness.bus import Bus
 from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
-from harness.errors import InvalidRunError, RunStopped, SrrError
+from harness.errors import RunStopped, SrrError
 from harness.frames import Frames
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
@@ -53,6 +53,7 @@ from harness.report.graphs import RunGraphs, write_graphs
 from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.run.baselines import baseline_name, baselines_dir, scene_config
+from harness.run.errors import InvalidRunError
 from harness.run.facts import combined_digest, sut_endpoints, topic_table, versions
 from harness.run.graphs import rebuild_graphs
 from harness.run.judge import judge

@@ -55,9 +55,9 @@ def recover(path: str | Path) -> RecoverResult:
     be rebuilt, gets a ``summary.json`` (and ``junit.xml``) marked ``recovered: true`` with
     verdict INVALID: per-topic counts and digests of what was kept, no scores (the run did not
     finish, so nothing is compared with the baseline). A finished run with a valid bag is left
-    as it is. Raises :class:`~harness.errors.BagError` (nothing written) when the bag cannot
-    be recovered, and :class:`~harness.errors.RunInUseError` (nothing touched) when the run
-    is still being written: its lock is held (:mod:`harness.runlock`); a lock left by a dead
+    as it is. Raises :class:`~harness.recording.errors.BagError` (nothing written) when the
+    bag cannot be recovered, and :class:`~harness.errors.RunInUseError` (nothing touched) when
+    the run is still being written: its lock is held (:mod:`harness.runlock`); a lock left by a dead
     process is free. The run directory is owned while it is recovered."""
     p = Path(path)
     base = p.parent if p.is_file() else p

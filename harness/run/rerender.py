@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from harness import runlock
-from harness.errors import BagError
 from harness.recording.bagread import ros1_recording
+from harness.recording.errors import BagError
 from harness.report.html import write_report
 from harness.run.graphs import rebuild_graphs
 from harness.scenario import load_scenario

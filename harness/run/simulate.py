@@ -133,8 +133,8 @@ def _serve_streams(sim: Simulation, scenario: Scenario, source: str,
                    notice: Notice | None) -> tuple[list[str], Any]:
     """:func:`start_streams`, and the servers (an ``RtspHub``; None: no stream)."""
     from harness.builders.rtsp_cameras import stream_cameras
-    from harness.errors import StreamError
     from harness.graph.nodes.video import rtsp_hub
+    from harness.video.errors import StreamError
     from harness.video.rtsp import StreamConfig
 
     cams = stream_cameras(scenario)
@@ -235,9 +235,9 @@ def check_video(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ..
     import socket
 
     from harness.builders.rtsp_cameras import stream_cameras
-    from harness.errors import StreamError, VideoError
     from harness.video import gst
     from harness.video.codec import check_encoder, settings_of
+    from harness.video.errors import StreamError, VideoError
 
     wanted = [(f"{c.field}.record.h264", c.record.h264)
               for c in recorded_cameras(scenario) if "h264" in c.record.rgb]

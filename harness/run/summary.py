@@ -17,9 +17,9 @@ from harness.summary import SUMMARY_NAME, SummaryFile, check_summary, fail, read
 
 __all__ = ["SCHEMA_VERSION", "BaselineRef", "RunSummary", "TopicRow"]
 
-#: The version of the summary format :class:`RunSummary` writes and reads. Version 1 is the
-#: format srr has always written, with no ``schema_version`` key; a later version writes its
-#: number there, and a summary of a version newer than this one is refused.
+#: The version of the summary format :class:`RunSummary` writes (as ``schema_version``) and
+#: reads. A summary without the key, as srr wrote them before, is version 1; a summary of a
+#: version newer than this one is refused.
 SCHEMA_VERSION = 1
 
 
@@ -151,9 +151,11 @@ class RunSummary:
         return all(h.ok for h in self.health)
 
     def to_json(self) -> dict[str, Any]:
-        """The mapping ``summary.json`` holds (written with sorted keys)."""
+        """The mapping ``summary.json`` holds (written with sorted keys), ``schema_version``
+        included."""
         out: dict[str, Any] = {
-            "scenario": self.scenario, "scenario_file": self.scenario_file, "seed": self.seed,
+            "schema_version": SCHEMA_VERSION, "scenario": self.scenario,
+            "scenario_file": self.scenario_file, "seed": self.seed,
             "srr_gt": self.srr_gt, "duration_s": self.duration_s,
             "simulated_s": self.simulated_s, "ticks": self.ticks, "tick_hz": self.tick_hz,
             "interrupted": self.interrupted}

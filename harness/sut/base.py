@@ -30,8 +30,9 @@ import numpy as np
 
 from harness.bus import Bus, Envelope, Publisher, Qos, TopicNameError, remap_topic
 from harness.bus.endpoints import Endpoint
-from harness.errors import PluginError, ScenarioError
+from harness.errors import ScenarioError
 from harness.scenario import RobotSpec, Scenario, SutSpec, validate_dataclass
+from harness.sut.errors import PluginError
 from harness.sut.participant import Participant, as_participant, is_plugin
 
 __all__ = ["SutContext", "SystemUnderTest", "import_project_module", "load_sut", "load_suts",

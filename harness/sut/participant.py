@@ -29,7 +29,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-from harness.errors import PluginError
+from harness.sut.errors import PluginError
 
 if TYPE_CHECKING:
     from harness.recording.recorder import Recorder

@@ -25,11 +25,11 @@ import numpy.typing as npt
 from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
 
-from harness.errors import PluginError
 from harness.geometry import mat_from_quat_wxyz, xyzw_to_wxyz
 from harness.scenario.schema import num
 from harness.serde.messages import header, make
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
+from harness.sut.errors import PluginError
 from harness.sut.zones import points_in_polygon
 
 __all__ = ["DepthPeopleTracker", "PerceptionParams", "Track", "cluster_people"]

@@ -23,10 +23,10 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from harness.errors import PluginError
 from harness.scenario.schema import num
 from harness.serde.messages import twist
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
+from harness.sut.errors import PluginError
 from harness.sut.pose import OdomPose
 
 __all__ = ["RouteFollower", "RouteFollowerParams", "clip", "pure_pursuit"]

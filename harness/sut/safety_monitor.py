@@ -12,10 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from harness.errors import PluginError
 from harness.scenario.schema import num
 from harness.serde.messages import make
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
+from harness.sut.errors import PluginError
 from harness.sut.pose import OdomPose
 from harness.sut.zones import point_in_polygon, side_of_line
 

@@ -18,10 +18,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from harness.bus import Publisher
-from harness.errors import PluginError
 from harness.scenario.schema import num
 from harness.serde.messages import twist
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
+from harness.sut.errors import PluginError
 
 __all__ = ["ScriptedTeleop", "Segment", "TeleopParams", "command_at"]
 

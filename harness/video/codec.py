@@ -29,7 +29,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from harness.errors import VideoError
+from harness.video.errors import VideoError
 from harness.video.sei import insert_sim_time
 
 __all__ = [
@@ -128,7 +128,7 @@ class H264Encoder:
 
     The FFmpeg encoder is opened on the first frame (so building a graph never needs one).
     An encoder that cannot open — ``nvenc`` without an NVIDIA GPU and driver, say — raises
-    :class:`~harness.errors.VideoError` with FFmpeg's reason."""
+    :class:`~harness.video.errors.VideoError` with FFmpeg's reason."""
 
     def __init__(self, width: int, height: int, fps: float, settings: H264Settings,
                  where: str = "h264") -> None:
@@ -260,7 +260,7 @@ def settings_of(spec: Any) -> H264Settings:
 
 def check_encoder(settings: H264Settings) -> None:
     """Open (and close) the encoder ``settings`` ask for, on a small picture: a
-    :class:`~harness.errors.VideoError` when it cannot open here (NVENC without an NVIDIA GPU
+    :class:`~harness.video.errors.VideoError` when it cannot open here (NVENC without an NVIDIA GPU
     that has an encoder, an unknown preset)."""
     H264Encoder(64, 64, 30, settings, f"h264.encoder {settings.encoder}")._open()
 

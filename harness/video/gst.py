@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from harness.errors import StreamError
+from harness.video.errors import StreamError
 
 __all__ = ["APT_PACKAGES", "Gst", "gi_search_path", "load"]
 
@@ -75,7 +75,7 @@ def _missing(what: str) -> StreamError:
 
 def load() -> Gst:
     """Import and initialise GStreamer and its RTSP server (once per process), or raise
-    :class:`~harness.errors.StreamError` saying what to install."""
+    :class:`~harness.video.errors.StreamError` saying what to install."""
     global _loaded
     if _loaded is not None:
         return _loaded

@@ -19,7 +19,7 @@ on frames that refer to pictures it never had.
 The RTP timestamps of a client's stream start at its first frame and advance by simulation
 time (90 kHz clock); the SEI carries the absolute simulation time (:mod:`harness.video.sei`).
 Servers listen on ``127.0.0.1`` unless told otherwise, only while a run that asked for them
-is going; a port that cannot be bound is a :class:`~harness.errors.StreamError` naming it.
+is going; a port that cannot be bound is a :class:`~harness.video.errors.StreamError` naming it.
 """
 
 from __future__ import annotations
@@ -30,9 +30,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
-from harness.errors import StreamError
 from harness.video import gst
 from harness.video.codec import EncodedFrame
+from harness.video.errors import StreamError
 
 __all__ = ["DEFAULT_HOST", "RtspHub", "RtspStream", "StreamConfig"]
 

@@ -19,8 +19,9 @@ from typing import Any, Literal
 
 from harness.bus import TopicNameError
 from harness.bus.endpoints import TfEdge
-from harness.errors import GraphError, ScenarioError
+from harness.errors import ScenarioError
 from harness.graph import GraphStage, Node
+from harness.graph.errors import GraphError
 from harness.scenario import Scenario
 from harness.sut.base import SutContext
 

@@ -9,8 +9,8 @@ import pytest
 from harness.builders import BuildContext, build_all
 from harness.builders.custom import RobotPrims
 from harness.cli import main
-from harness.errors import GraphError
 from harness.graph import GraphStage, stage_to_dict
+from harness.graph.errors import GraphError
 from harness.scenario import load_scenario
 from harness.sim import World
 from tests.builders import graph_plugins

@@ -7,8 +7,8 @@ import pytest
 
 from harness.builders.safety_indicator import ALARM_COLOR, MUTED_COLOR, graph_path
 from harness.engine import Simulation
-from harness.errors import GraphError
 from harness.graph import stage_to_dict
+from harness.graph.errors import GraphError
 from harness.scenario.schema import Pose, RobotSpec, SafetyIndicatorSpec, Scenario
 from harness.serde.messages import msg_type
 

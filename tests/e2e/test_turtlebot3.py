@@ -20,10 +20,10 @@ import pytest
 
 from harness.bus import Bus
 from harness.cli import main
-from harness.errors import PluginError
 from harness.geometry import yaw_from_quat_wxyz
 from harness.scenario import load_scenario
 from harness.sut.base import SutContext
+from harness.sut.errors import PluginError
 from harness.sut.teleop import ScriptedTeleop, Segment, command_at
 from tests.conftest import ROOT, SCENARIOS
 from tests.e2e.bagread import decoded

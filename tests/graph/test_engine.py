@@ -7,8 +7,8 @@ from typing import Any
 import pytest
 
 import harness.graph as og
-from harness.errors import GraphError
 from harness.graph import Attr, Database, GraphStage, NodeType, Registry
+from harness.graph.errors import GraphError
 
 from .conftest import Counter, Ctx, run_ticks
 

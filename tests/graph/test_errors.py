@@ -7,8 +7,8 @@ import re
 import pytest
 
 import harness.graph as og
-from harness.errors import GraphError
 from harness.graph import Attr, GraphStage, NodeType, Registry, register
+from harness.graph.errors import GraphError
 from harness.graph.registry import DEFAULT_REGISTRY
 
 from .conftest import run_ticks

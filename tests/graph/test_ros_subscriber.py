@@ -6,8 +6,8 @@ import pytest
 
 from harness.bus import Bus
 from harness.engine import EvalContext
-from harness.errors import GraphError
 from harness.graph import Controller, GraphStage, canonical_name
+from harness.graph.errors import GraphError
 from harness.graph.nodes.ros_subscriber import define_message_outputs, message_fields
 from harness.serde.messages import msg_type, twist
 

@@ -19,8 +19,8 @@ from typing import List, Optional  # noqa: UP035  (kept as the seed wrote it)
 import pytest
 
 import harness.graph as og
-from harness.errors import GraphError
 from harness.graph import usdrt
+from harness.graph.errors import GraphError
 from tests.seed001 import Camera, is_prim_path_valid, publish_camera_tf, set_target_prims
 
 from .conftest import Ctx, run_ticks

@@ -13,7 +13,7 @@ from mcap_ros2.decoder import DecoderFactory
 from websockets.exceptions import InvalidStatus
 
 from harness.bus import TRANSIENT_LOCAL, Bus
-from harness.errors import LiveViewError
+from harness.live.errors import LiveViewError
 from harness.live.view import LiveConfig, LiveView, Pacer
 from harness.serde.messages import clock, serialize, tf_message, transform_stamped
 from tests.live.foxglove_client import LEGACY_SUBPROTOCOL, SUBPROTOCOL, LiveClient, open_client

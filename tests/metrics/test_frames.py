@@ -11,7 +11,6 @@ import pandas as pd
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from harness.errors import BagError
 from harness.frames import (
     CLOCK,
     MARKER_ARRAY,
@@ -21,6 +20,7 @@ from harness.frames import (
     decode_batch,
     load_frames,
 )
+from harness.recording.errors import BagError
 from harness.serde.messages import (
     TYPESTORE,
     clock,

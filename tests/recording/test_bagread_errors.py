@@ -23,10 +23,10 @@ from rosbags.typesys import Stores, get_typestore
 from harness.bag import inspect_bag
 from harness.cli import main
 from harness.diff.topics import message_stream
-from harness.errors import BagError, BagReadError
 from harness.frames import load_frames
 from harness.recording import mcapread
 from harness.recording.bagread import mcap_records, open_recording
+from harness.recording.errors import BagError, BagReadError
 from harness.recording.mcapread import McapIndex
 from harness.recording.recover import recover_bag
 from harness.regression.reference import write_reference

@@ -11,9 +11,9 @@ import pytest
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, IndexType, Writer
 
-from harness.errors import BagError
 from harness.frames import load_frames
 from harness.recording.bagread import open_indexed
+from harness.recording.errors import BagError
 from harness.recording.mcapread import McapIndex
 from tests.metrics.synthbag import SynthSpec, write_synthetic_bag
 

@@ -11,8 +11,9 @@ import pytest
 
 from harness.bus import Bus, Deferred
 from harness.cli import main
-from harness.errors import BagError, SimulationError
+from harness.errors import SimulationError
 from harness.recording import Recorder
+from harness.recording.errors import BagError
 from harness.recording.recorder import digest_update
 from harness.serde.messages import clock, serialize
 

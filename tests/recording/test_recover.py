@@ -16,9 +16,9 @@ from mcap_ros2.decoder import DecoderFactory
 
 from harness.bus import TRANSIENT_LOCAL, Bus
 from harness.cli import main
-from harness.errors import BagError
 from harness.recording import Recorder
 from harness.recording.bagfile import ChunkPolicy
+from harness.recording.errors import BagError
 from harness.recording.recorder import digest_update
 from harness.recording.recover import recover_bag
 from harness.serde.messages import clock, header, make, tf_message, transform_stamped

@@ -1,7 +1,8 @@
 """The typed run summary: summaries written by srr before :class:`RunSummary` existed (a run
 judged against a baseline, an open-loop replay, a run recovered by ``srr recover``; kept in
-``data/``) read back typed and write back byte for byte; a fresh run's summary is the one
-its result holds; a malformed or newer summary is one line naming the file and the field."""
+``data/``, without ``schema_version``) read back typed as version 1 and write back with that
+key; a fresh run's summary is the one its result holds; a malformed or newer summary is one
+line naming the file and the field."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ import pytest
 
 from harness import api
 from harness.errors import SrrError
-from harness.run.summary import RunSummary
+from harness.run.summary import SCHEMA_VERSION, RunSummary
 from harness.summary import SUMMARY_NAME, read_summary
 
 DATA = Path(__file__).parent / "data"
@@ -24,11 +25,28 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.parametrize("kind", ["run", "replay", "recovered"])
-def test_a_summary_of_earlier_srr_reads_and_writes_back_unchanged(kind: str,
-                                                                  tmp_path: Path) -> None:
-    s = RunSummary.read(DATA / kind)
-    s.write(tmp_path)
-    assert (tmp_path / SUMMARY_NAME).read_bytes() == (DATA / kind / SUMMARY_NAME).read_bytes()
+def test_a_summary_of_earlier_srr_reads_and_writes_back_with_its_version(
+        kind: str, tmp_path: Path) -> None:
+    """Written before ``schema_version`` existed: read as version 1 and written back the same
+    but for that key, which a rewrite then keeps byte for byte."""
+    before = (DATA / kind / SUMMARY_NAME).read_text()
+    assert "schema_version" not in json.loads(before)
+    RunSummary.read(DATA / kind).write(tmp_path)
+    after = (tmp_path / SUMMARY_NAME).read_text()
+    assert json.loads(after) == json.loads(before) | {"schema_version": 1}
+    assert after == json.dumps(json.loads(after), indent=2, sort_keys=True) + "\n"
+    again = tmp_path / "again"
+    again.mkdir()
+    RunSummary.read(tmp_path).write(again)
+    assert (again / SUMMARY_NAME).read_bytes() == (tmp_path / SUMMARY_NAME).read_bytes()
+
+
+def test_a_summary_without_its_version_reads_as_version_1(tmp_path: Path) -> None:
+    data = json.loads((DATA / "run" / SUMMARY_NAME).read_text())
+    without = RunSummary.from_json(data)
+    with_1 = RunSummary.from_json(data | {"schema_version": 1})
+    assert without == with_1 and "schema_version" not in without.more
+    assert without.to_json()["schema_version"] == 1 == SCHEMA_VERSION
 
 
 def test_typed_parts_of_a_judged_run() -> None:
@@ -56,7 +74,8 @@ def test_keys_it_does_not_know_are_kept(tmp_path: Path) -> None:
     data = json.loads((DATA / "replay" / SUMMARY_NAME).read_text())
     data["from_a_later_srr"] = {"x": 1}
     s = RunSummary.from_json(data)
-    assert s.more == {"from_a_later_srr": {"x": 1}} and s.to_json() == data
+    assert s.more == {"from_a_later_srr": {"x": 1}}
+    assert s.to_json() == data | {"schema_version": 1}
 
 
 @pytest.mark.parametrize(("field", "value", "message"), [

@@ -19,7 +19,7 @@ import harness.graph as og
 from harness.builders import camera_tf, cameras
 from harness.bus import Envelope
 from harness.engine import Simulation
-from harness.errors import GraphError
+from harness.graph.errors import GraphError
 from harness.graph.nodes.camera import RENDER_PRODUCTS, RenderProductTable
 from harness.scenario.schema import (
     CameraSpec,

@@ -14,7 +14,7 @@ import harness.graph as og
 from harness.builders.robot_sensors import gate_step, lidar_graph_path
 from harness.bus import Bus, Envelope
 from harness.engine import EvalContext, Simulation
-from harness.errors import GraphError
+from harness.graph.errors import GraphError
 from harness.scenario.schema import (
     ClockSpec,
     DiffDriveControl,

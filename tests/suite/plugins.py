@@ -13,8 +13,8 @@ import signal
 import time
 from pathlib import Path
 
-from harness.errors import PluginError
 from harness.sut.base import SutContext
+from harness.sut.errors import PluginError
 from harness.sut.route_follower import RouteFollower
 
 #: Environment variable naming a file :class:`Staller` creates once it blocks.

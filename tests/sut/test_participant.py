@@ -9,12 +9,12 @@ from typing import Any
 import pytest
 
 from harness.bus import Bus
-from harness.errors import PluginError
 from harness.recording.recorder import Recorder
 from harness.run.facts import sut_endpoints
 from harness.scenario import SutSpec, load_scenario
 from harness.sut import Participant, RunParticipant, SutContext, SystemUnderTest
 from harness.sut.base import load_sut
+from harness.sut.errors import PluginError
 from harness.sut.participant import HOOKS, PlainPlugin, as_participant, plugin_of
 
 

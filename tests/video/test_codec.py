@@ -9,7 +9,6 @@ import av
 import numpy as np
 import pytest
 
-from harness.errors import VideoError
 from harness.video import (
     SIM_TIME_UUID,
     H264Decoder,
@@ -24,6 +23,7 @@ from harness.video import (
     read_sim_time,
 )
 from harness.video.codec import decode_rgb
+from harness.video.errors import VideoError
 from harness.video.sei import nal_units, sim_time_sei
 
 W, H = 96, 64

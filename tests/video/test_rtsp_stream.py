@@ -17,9 +17,9 @@ import pytest
 
 from harness import api
 from harness.cli import main
-from harness.errors import StreamError
 from harness.graph.nodes.video import RTSP_HUB
 from harness.video import psnr, read_sim_time, sim_time_of_user_data
+from harness.video.errors import StreamError
 from tests.e2e.bagread import decoded
 
 SCENARIO = Path(__file__).with_name("rtsp_two_cameras.yaml")

@@ -52,8 +52,9 @@ import numpy as np
 
 from harness.bus.bus import Deferred
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.errors import GraphError, SimulationError
+from harness.errors import SimulationError
 from harness.graph import Attr, NodeType, register
+from harness.graph.errors import GraphError
 from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, aliases, topic_of
 from harness.scenario.prims import frame_of
 from harness.serde.messages import header, msg_type

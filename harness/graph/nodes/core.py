@@ -12,8 +12,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, cast
 
-from harness.errors import GraphError
 from harness.graph.attributes import Attr
+from harness.graph.errors import GraphError
 from harness.graph.node import Database, NodeType
 from harness.graph.registry import register
 

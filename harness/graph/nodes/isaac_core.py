@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from harness.errors import GraphError
 from harness.geometry import (
     QuatTuple,
     quat_wxyz_conj_floats,
@@ -20,6 +19,7 @@ from harness.geometry import (
     yaw_between,
 )
 from harness.graph import Attr, NodeType, register
+from harness.graph.errors import GraphError
 
 __all__ = ["ArticulationController", "ComputeOdometry", "DifferentialController", "robot_root"]
 

@@ -16,9 +16,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from harness.errors import GraphError, SimulationError
+from harness.errors import SimulationError
 from harness.geometry import quat_wxyz_from_yaw, quat_wxyz_mul_floats, yaw_between
 from harness.graph import Attr, NodeType, register
+from harness.graph.errors import GraphError
 from harness.sim.prims import PrimKind
 
 __all__ = ["ReadPrimPose", "SetPrimColor"]

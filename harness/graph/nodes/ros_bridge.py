@@ -22,9 +22,9 @@ import numpy as np
 from harness.bus import TopicNameError, resolve_topic
 from harness.bus.bus import Qos
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.errors import GraphError
 from harness.geometry import quat_wxyz_conj, quat_wxyz_mul, quat_wxyz_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
+from harness.graph.errors import GraphError
 from harness.scenario.prims import frame_of
 from harness.serde.cdr import Packer
 from harness.serde.messages import (

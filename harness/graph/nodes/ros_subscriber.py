@@ -28,8 +28,8 @@ from typing import Any
 from rosbags.interfaces import Nodetype
 
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.errors import GraphError
 from harness.graph import Attr, GraphStage, Node, NodeType, register
+from harness.graph.errors import GraphError
 from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, topic_of
 from harness.serde.messages import TYPESTORE
 

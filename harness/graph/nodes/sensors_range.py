@@ -27,9 +27,9 @@ from typing import Any
 import numpy as np
 
 from harness.bus.endpoints import Endpoint, TfEdge
-from harness.errors import GraphError
 from harness.geometry import quat_wxyz_conj, quat_wxyz_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
+from harness.graph.errors import GraphError
 from harness.graph.nodes.camera import point_cloud_message, render_products
 from harness.graph.nodes.ros_bridge import (
     BRIDGE_INPUTS,

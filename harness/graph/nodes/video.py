@@ -38,8 +38,8 @@ import numpy as np
 
 from harness.bus.endpoints import Endpoint, TfEdge
 from harness.camera_topics import COMPRESSED_FORMATS
-from harness.errors import GraphError, VideoError
 from harness.graph import Attr, NodeType, register
+from harness.graph.errors import GraphError
 from harness.graph.nodes.camera import render_products
 from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, topic_of
 from harness.scenario.prims import frame_of
@@ -53,6 +53,7 @@ from harness.video.codec import (
     encode_png,
     reformatter,
 )
+from harness.video.errors import VideoError
 
 __all__ = ["COMPRESSED_FORMATS", "RTSP_HUB", "CompressedCameraHelper", "RTSPCameraHelper",
            "compressed_image_message", "compressed_video_message", "rtsp_hub"]
