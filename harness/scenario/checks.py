@@ -38,14 +38,9 @@ def check_semantics(sc: Scenario, v: Validator) -> None:
         v.fail("format_version", f"unsupported version {sc.format_version} (this srr reads "
                f"{FORMAT_VERSION})")
     _check_name(v, "name", sc.name)
-    names: dict[str, int] = {}
+    robots: dict[str, int] = {}
     for i, robot in enumerate(sc.robots):
-        if robot.name in names:
-            j = names[robot.name]
-            v.fail(f"robots[{i}].name", f"duplicate robot name {robot.name!r} (also robots[{j}], "
-                   f"from {v.file_for(f'robots[{j}]')})")
-        names[robot.name] = i
-        _check_name(v, f"robots[{i}].name", robot.name)
+        _check_unique_name(v, robots, "robots", "robot", i, robot.name)
     for name, route in sc.routes.items():
         if len(route.waypoints) < 2:
             v.fail(f"routes.{name}.waypoints", "a route needs at least two waypoints")
@@ -270,12 +265,7 @@ def _check_cameras(sc: Scenario, v: Validator) -> None:
     prims: dict[str, str] = {r.prim: f"robots[{i}] ({r.name})"
                              for i, r in enumerate(sc.robots) if r.enabled}
     for i, cam in enumerate(sc.cameras):
-        if cam.name in cams:
-            j = cams[cam.name]
-            v.fail(f"cameras[{i}].name", f"duplicate camera name {cam.name!r} (also "
-                   f"cameras[{j}], from {v.file_for(f'cameras[{j}]')})")
-        cams[cam.name] = i
-        _check_name(v, f"cameras[{i}].name", cam.name)
+        _check_unique_name(v, cams, "cameras", "camera", i, cam.name)
         if cam.camera_prim:
             try:
                 check_prim_path(cam.prim)
@@ -543,6 +533,18 @@ def _check_names(v: Validator, obj: Any, path: str) -> None:
 #: Fields that hold a list of topic names, and mappings keyed by topic names.
 _TOPIC_LISTS = frozenset({"marker_topics"})
 _TOPIC_KEYED = frozenset({"expected_rates", "sut_outputs"})
+
+def _check_unique_name(v: Validator, seen: dict[str, int], block: str, kind: str, i: int,
+                       name: str) -> None:
+    """``block[i]``'s name unique among those ``seen`` so far (a duplicate names where the
+    first one is) and valid; records it in ``seen``."""
+    if name in seen:
+        j = seen[name]
+        v.fail(f"{block}[{i}].name", f"duplicate {kind} name {name!r} (also {block}[{j}], "
+               f"from {v.file_for(f'{block}[{j}]')})")
+    seen[name] = i
+    _check_name(v, f"{block}[{i}].name", name)
+
 
 def _check_name(v: Validator, path: str, name: str) -> None:
     if not name or not all(c.isascii() and (c.isalnum() or c == "_") for c in name) \
