@@ -277,8 +277,8 @@ class _Rosbag2(_Rosbags):
 
     def _connection(self, c: Any) -> Connection:
         qos = getattr(c.ext, "offered_qos_profiles", []) or []
-        latched = bool(qos) and qos[0].durability.name.lower() == "transient_local"
         durability = qos[0].durability.name.lower() if qos else "volatile"
+        latched = durability == "transient_local"
         return Connection(c.id, c.topic, c.msgtype, c.msgtype, latched, c.msgcount,
                           durability=durability)
 
