@@ -11,15 +11,15 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from harness import __version__
+from harness import __version__, yamlio
 from harness.recording import TopicStats
 from harness.run.summary import TopicRow
-from harness.scenario import Scenario
+from harness.scenario import Scenario, scenario_to_mapping
 from harness.sut.base import SutContext
 from harness.sut.participant import plugin_of
 
 __all__ = ["combined_digest", "default_run_dir", "reproduce_command", "sut_endpoints",
-           "topic_table", "versions"]
+           "topic_table", "versions", "write_scenario"]
 
 
 def versions() -> dict[str, str]:
@@ -79,3 +79,10 @@ def sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any]
 def reproduce_command(source: str, scenario: Scenario, run_dir: Path) -> str:
     return (f"srr run {source} --seed {scenario.seed} --duration {scenario.duration:g} "
             f"--out {run_dir}")
+
+
+def write_scenario(run_dir: Path, scenario: Scenario) -> None:
+    """The run directory's ``scenario.yaml``: the resolved scenario (includes expanded,
+    defaults filled, overrides applied), written so that srr reads it back the same."""
+    (Path(run_dir) / "scenario.yaml").write_text(
+        yamlio.dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from harness import runlock, runmarker, yamlio
+from harness import runlock, runmarker
 from harness.bus import Bus
 from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
@@ -54,11 +54,17 @@ from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.run.baselines import baseline_name, baselines_dir, scene_config
 from harness.run.errors import InvalidRunError
-from harness.run.facts import combined_digest, sut_endpoints, topic_table, versions
+from harness.run.facts import (
+    combined_digest,
+    sut_endpoints,
+    topic_table,
+    versions,
+    write_scenario,
+)
 from harness.run.graphs import rebuild_graphs
 from harness.run.judge import judge
 from harness.run.summary import RunSummary, TopicRow
-from harness.scenario import Scenario, scenario_to_mapping
+from harness.scenario import Scenario
 from harness.scoring import Scores, scenario_frames, score_frames
 from harness.sut.base import SutContext
 from harness.sut.participant import Participant
@@ -189,8 +195,7 @@ def _open_recorder(scenario: Scenario, loop: Loop, run_dir: Path, *, source: str
     """The in-progress marker, the resolved ``scenario.yaml`` and the action graphs, then the
     recorder (not yet opened) of the loop's output."""
     runmarker.mark(run_dir, "recording", scenario_file=source, command=command)
-    (run_dir / "scenario.yaml").write_text(
-        yamlio.dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
+    write_scenario(run_dir, scenario)
     if loop.graphs is not None:
         write_graphs(run_dir, loop.graphs)
     rec = scenario.recording

@@ -18,18 +18,15 @@ import contextlib
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
-
 from harness import runmarker
 from harness.errors import SrrError
 from harness.metrics.types import HealthResult
 from harness.report.junit import junit_cases, write_junit
-from harness.run.facts import combined_digest, reproduce_command, versions
+from harness.run.facts import combined_digest, reproduce_command, versions, write_scenario
 from harness.run.loading import load
 from harness.run.recover import recover
 from harness.run.rerender import report
 from harness.run.summary import RunSummary
-from harness.scenario import scenario_to_mapping
 from harness.suite.plan import RunSpec
 from harness.summary import SUMMARY_NAME
 
@@ -86,8 +83,7 @@ def _write(run_path: Path, spec: RunSpec, detail: str) -> None:
     removed."""
     scenario = load(spec.scenario_file, overrides=list(spec.overrides))
     run_path.mkdir(parents=True, exist_ok=True)
-    (run_path / "scenario.yaml").write_text(
-        yaml.safe_dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
+    write_scenario(run_path, scenario)
     summary = RunSummary(
         scenario=scenario.name, scenario_file=spec.scenario_file, seed=scenario.seed,
         srr_gt=scenario.srr_gt, duration_s=scenario.duration, simulated_s=0.0, ticks=0,
