@@ -14,8 +14,12 @@ order: a test checks that byte for byte. What differs is the cost:
   chunk is a list of *pieces* (:class:`~harness.serde.pieces.Pieces`): small records are
   appended to a ``bytearray``, a payload of 64 KiB or more (or each large piece of a payload
   handed over in pieces, see :data:`Payload`) is kept as the caller's buffer. The chunk's
-  CRC is computed piece by piece and the chunk goes to the file with ``os.writev``; zlib's CRC
-  and the write release the GIL, so the payload's bytes are never touched by Python code. A
+  CRC is computed piece by piece and the chunk goes to the file with ``os.writev``; the CRC
+  and the write release the GIL, so the payload's bytes are never touched by Python code.
+  The CRC-32 is ISA-L's (the ``isal`` package) where installed: the same checksum as zlib's
+  at ten times its speed (22 against 2.1 GB/s on the H200 host; at 4 × 640×480 rgb + depth a
+  camera set is 8.6 MB, so zlib's CRC alone held the writer thread 4 ms a set), else
+  zlib's. A
   caller must not change a buffer after handing it over. A compressed chunk is joined once and
   compressed.
 
@@ -27,7 +31,6 @@ from __future__ import annotations
 
 import os
 import struct
-import zlib
 from collections.abc import Sequence
 from io import FileIO
 from typing import IO, Any
@@ -51,6 +54,11 @@ from mcap.records import (
 from mcap.writer import MCAP0_MAGIC, CompressionType
 
 from harness.serde.pieces import Piece, Pieces
+
+try:  # the same CRC-32 as zlib.crc32, with SIMD (see the module docstring)
+    from isal.isal_zlib import crc32
+except ImportError:  # pragma: no cover - a platform without isal's wheels
+    from zlib import crc32
 
 __all__ = ["McapWriter", "Payload", "payload_size"]
 
@@ -246,8 +254,8 @@ class McapWriter:
         for offset in offsets:
             offset.write(summary)
         data = _take(summary)
-        crc = zlib.crc32(data)
-        crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4,
+        crc = crc32(data)
+        crc = crc32(struct.pack("<BQQQ", Opcode.FOOTER, 8 + 8 + 4,
                                      0 if not data else start, offsets_start), crc)
         self._write((data,))
         Footer(summary_start=0 if not data else start, summary_offset_start=offsets_start,
@@ -266,11 +274,11 @@ class McapWriter:
         if self._compression == CompressionType.NONE:
             crc = 0
             for piece in pieces:
-                crc = zlib.crc32(piece, crc)
+                crc = crc32(piece, crc)
             compression, body = "", pieces
         else:
             raw = b"".join(pieces)
-            crc = zlib.crc32(raw)
+            crc = crc32(raw)
             compression, packed = _compress(raw, self._compression)
             body = (packed,)
         stored = sum(len(piece) for piece in body)
