@@ -160,12 +160,10 @@ class Formula:
 
     @property
     def unit(self) -> str:
-        """The robustness's unit: its signals' one unit, ``bool`` when all are boolean,
-        else empty (mixed units, or a ``topic`` field)."""
+        """The robustness's unit: its signals' one physical unit (``m``, ``m/s``), else
+        empty (boolean signals, whose robustness is ±1; mixed units; a ``topic`` field)."""
         units = {s.unit for s in self.signals}
-        if len(units) == 1:
-            return units.pop()
-        return ""
+        return units.pop() if len(units) == 1 and units != {"bool"} else ""
 
 
 def _args(toks: list[_Tok], i: int, name: str) -> tuple[tuple[str, ...], int]:
