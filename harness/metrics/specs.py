@@ -34,7 +34,8 @@ __all__ = ["as_bool", "held", "spec_metric", "tick_grid", "violation_windows"]
 
 def tick_grid(end_ns: int, tick_hz: int) -> np.ndarray:
     """``floor(k · 10⁹ / tick_hz)`` for every tick ``k`` at or before ``end_ns``."""
-    k_max = max(0, end_ns) * tick_hz // 1_000_000_000
+    # the largest k with floor(k · 10⁹ / hz) <= end_ns, i.e. k · 10⁹ < (end_ns + 1) · hz
+    k_max = ((max(0, end_ns) + 1) * tick_hz - 1) // 1_000_000_000
     return (np.arange(k_max + 1, dtype=np.int64) * 1_000_000_000) // tick_hz
 
 
@@ -87,6 +88,8 @@ def spec_metric(name: str, formula: Formula, signals: Mapping[str, np.ndarray],
     if grid.size == 0:
         return result(None, "not evaluated: no ticks recorded")
     arrays = {v: np.asarray(signals[v], dtype=np.float64) for v in names}
+    if any(a.shape != grid.shape for a in arrays.values()):
+        raise ValueError(f"{metric}: every signal needs one value per tick ({grid.size})")
     defined = np.logical_and.reduce([np.isfinite(a) for a in arrays.values()])
     start = int(np.argmax(defined)) if defined.any() else grid.size
     if start >= grid.size:

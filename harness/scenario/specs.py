@@ -25,6 +25,7 @@ import io
 import logging
 import math
 import re
+import warnings
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from fractions import Fraction
@@ -341,7 +342,9 @@ def _balanced(words: list[str]) -> bool:
 
 def _rtamt() -> Any:
     try:
-        import rtamt  # the `stl` extra; imported only for scenarios that have specs
+        with warnings.catch_warnings():  # its ANTLR 4.7 runtime imports typing.io
+            warnings.simplefilter("ignore", DeprecationWarning)
+            import rtamt  # the `stl` extra; imported only for scenarios that have specs
     except ImportError as err:
         raise SpecError("specs need the 'stl' extra (rtamt): pip install 'srr[stl]'") from err
     return rtamt
