@@ -27,7 +27,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from harness.metrics.types import MetricResult
-from harness.scenario.specs import Formula, evaluate
+from harness.scenario.specs import Formula, SpecError, evaluate
 
 __all__ = ["as_bool", "held", "spec_metric", "tick_grid", "violation_windows"]
 
@@ -100,7 +100,10 @@ def spec_metric(name: str, formula: Formula, signals: Mapping[str, np.ndarray],
         return result(None, "not evaluated: a signal loses its value during the run")
     g = grid[start:]
     columns = {v: a[start:].tolist() for v, a in arrays.items()}
-    trace_list, is_always = evaluate(formula, columns, int(g.size))
+    try:
+        trace_list, is_always = evaluate(formula, columns, int(g.size))
+    except SpecError as err:
+        return result(None, f"not evaluated: {err}")
     trace = np.asarray(trace_list, dtype=np.float64)
     value = float(trace.min()) if is_always else float(trace[0])
     t_end = int(grid[-1]) + (int(grid[1] - grid[0]) if grid.size > 1 else 0)

@@ -367,6 +367,8 @@ def rtamt_spec(text: str, variables: Collection[str]) -> Any:
         log.setLevel(logging.ERROR)  # rtamt warns on the root logger about implicit variables
         with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
             spec.parse()
+    except RecursionError as err:
+        raise SpecError("not a formula rtamt can parse: it nests too deeply") from err
     except Exception as err:  # rtamt raises RTAMTException, KeyError, ... for bad input
         msg = str(err).replace("RTAMT Exception: ", "").strip().splitlines()
         first = msg[0] if msg else type(err).__name__
@@ -388,13 +390,19 @@ def _untranslate(message: str) -> str:
 def evaluate(formula: Formula, columns: Mapping[str, list[float]], n: int
              ) -> tuple[list[float], bool]:
     """rtamt's robustness trace over ``n`` ticks: of ``φ`` for a formula ``always φ`` (and
-    True), else of the whole formula (and False)."""
+    True), else of the whole formula (and False). :class:`SpecError` when the values make
+    its arithmetic fail (a division by zero, the root of a negative number)."""
     text = formula.body if formula.body is not None else formula.text
     spec = rtamt_spec(text, [s.var for s in formula.signals])
     data: dict[str, list[Any]] = {"time": list(range(n))}
     data.update(columns)
     sink = io.StringIO()
-    with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
-        trace = spec.evaluate(data)
+    try:
+        with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
+            trace = spec.evaluate(data)
+    except RecursionError as err:
+        raise SpecError("rtamt cannot evaluate it: it nests too deeply") from err
+    except (ArithmeticError, ValueError) as err:  # x / 0, sqrt(-1), ...: Python's math
+        raise SpecError(f"rtamt cannot evaluate it on this run: {err}") from err
     values = [float(v) if not isinstance(v, bool) else (1.0 if v else -1.0) for _, v in trace]
     return [v if not math.isnan(v) else -math.inf for v in values], formula.body is not None

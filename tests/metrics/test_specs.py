@@ -90,6 +90,17 @@ def test_evaluation_starts_where_every_signal_has_a_value() -> None:
     assert gone.value is None and "speed(forklift): /x: not in the recording" in gone.detail
 
 
+@pytest.mark.parametrize(("formula", "words"), [
+    ("always (speed(forklift) / 0 > 1)", "float division by zero"),
+    ("always (sqrt(speed(forklift)) > 1)", "math domain error")])
+def test_arithmetic_that_fails_on_the_values_leaves_the_spec_not_evaluated(
+        formula: str, words: str) -> None:
+    grid = tick_grid(1_000_000_000, HZ)
+    m = spec_metric("x", parse_formula(formula, CTX), {"s0": np.full(grid.size, -2.0)}, grid)
+    assert m.value is None and m.verdict == "FAIL"
+    assert m.detail == f"not evaluated: rtamt cannot evaluate it on this run: {words}"
+
+
 def test_violation_windows_of_an_empty_or_all_negative_trace() -> None:
     grid = np.array([0, 10, 20], dtype=np.int64)
     assert violation_windows(np.array([1.0, 0.0, 2.0]), grid, 30) == ()

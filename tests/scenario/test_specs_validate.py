@@ -8,6 +8,8 @@ import json
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from harness import api
 from harness.cli import main
@@ -172,3 +174,23 @@ def test_the_schema_has_the_specs_block(capsys: pytest.CaptureFixture[str]) -> N
     assert spec["required"] == ["name", "formula"]
     assert set(spec["properties"]) == {"name", "formula", "required", "enabled"}
     assert spec["additionalProperties"] is False
+
+
+_PIECES = st.sampled_from([
+    "always", "eventually", "[0, 0.5]", "[0:1]", "[1,", "]", "(", ")", "->", "<->", "and",
+    "or", "not", ">=", "<", "!==", "==", "=", "!", "&", "1", "0.5", "-", "+", "*", "/",
+    "clearance(forklift, worker)", "clearance(", "speed(forklift)", "alarm", "muted",
+    "in_zone(worker, loading_roi)", "tracking_error(forklift)", "topic('/odom', 'a.b[0]')",
+    "'x'", ",", "until", "since", "prev", "next", "rise", "abs", "pow(", "G", "X", "é", "٣",
+    "\u00a0", "\n", "s", "ms", "@", "{", ";", "1e999", "nan", "inf"])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(_PIECES, max_size=12).map(" ".join) | st.text(max_size=40))
+def test_any_text_parses_or_is_one_spec_error(text: str) -> None:
+    try:
+        f = parse_formula(text, CTX)
+    except SpecError as err:
+        assert str(err) and "\n" not in str(err)
+    else:
+        assert f.signals and f.text
