@@ -346,7 +346,7 @@ def _rtamt() -> Any:
             warnings.simplefilter("ignore", DeprecationWarning)
             import rtamt  # the `stl` extra; imported only for scenarios that have specs
     except ImportError as err:
-        raise SpecError("specs need the 'stl' extra (rtamt): pip install 'srr[stl]'") from err
+        raise SpecError("specs need the 'stl' extra (rtamt): pip install -e '.[stl]'") from err
     return rtamt
 
 

@@ -5,6 +5,9 @@ object or zone, a wrong arity or a bound that is no whole tick is one line namin
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -194,3 +197,27 @@ def test_any_text_parses_or_is_one_spec_error(text: str) -> None:
         assert str(err) and "\n" not in str(err)
     else:
         assert f.signals and f.text
+
+
+def test_rtamt_is_imported_only_for_specs_and_its_absence_is_one_line() -> None:
+    """A scenario without specs never imports rtamt (the ``stl`` extra); without the extra,
+    one with specs is refused in one line naming the field."""
+    root = Path(__file__).resolve().parents[2]
+    code = (
+        "import sys\n"
+        "from harness.errors import ScenarioError\n"
+        "from harness.scenario import load_scenario\n"
+        f"load_scenario({str(root / 'scenarios' / 'dock_worker_crossing.yaml')!r})\n"
+        "print('rtamt' in sys.modules)\n"
+        "sys.modules['rtamt'] = None  # as if the extra were not installed\n"
+        "try:\n"
+        f"    load_scenario({str(root / 'scenarios' / 'dock_worker_crossing_specs.yaml')!r})\n"
+        "except ScenarioError as err:\n"
+        "    print(err)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env={**os.environ, "PYTHONPATH": str(root)}).stdout
+    first, second = out.splitlines()
+    assert first == "False"
+    assert second.endswith("dock_worker_crossing_specs.yaml: specs[0].formula: spec "
+                           "'keep_clear': specs need the 'stl' extra (rtamt): "
+                           "pip install -e '.[stl]'"), second
