@@ -41,6 +41,8 @@ Tables (all times are simulation time in integer nanoseconds):
   the topic is a ``tf_static`` one, ``t_ns`` the header stamp.
 * ``tf_static``: ``parent, child, x, y, z, qx, qy, qz, qw``: the static rows of ``tf``, the
   chain that places odometry in the world frame.
+* ``fields``: ``(topic, field path) →`` :class:`FieldSeries`, the numeric fields asked for
+  with ``fields=`` (the ``topic(...)`` signals of a scenario's specs), by log time.
 
 Few-valued string columns (``name``, ``topic``, ``frame``, ``cls``) are pandas categoricals;
 they compare and filter like strings. Tables keep the bag's order (time order per topic).
@@ -51,8 +53,9 @@ from __future__ import annotations
 import re
 import struct
 from array import array
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from dataclasses import field as dataclass_field
 from pathlib import Path
 from typing import Any
 
@@ -67,7 +70,7 @@ from harness.geometry import (
     quat_xyzw_rotate_columns,
     yaw_from_quat_xyzw_columns,
 )
-from harness.recording.bagread import Encoding, open_indexed, ros1_recording
+from harness.recording.bagread import DECODE_ERRORS, Encoding, open_indexed, ros1_recording
 from harness.recording.errors import BagError
 from harness.serde.messages import TYPESTORE
 from harness.serde.ros1 import deserialize_ros1
@@ -80,6 +83,7 @@ __all__ = [
     "SUPPORTED_TYPES",
     "TF_MESSAGE",
     "TWIST",
+    "FieldSeries",
     "Frames",
     "decode_batch",
     "load_frames",
@@ -102,6 +106,50 @@ _MARKER_ADD = 0  # ADD and MODIFY share the value; DELETE = 2 and DELETEALL = 3 
 
 
 @dataclass(frozen=True)
+class FieldSeries:
+    """One numeric field of one topic: ``value`` at each message's log time ``t_ns`` (a bool
+    field is 1 or 0). ``error`` says why there are no values (no such topic, a path the
+    message does not have, not a number); empty when the field was read."""
+
+    t_ns: np.ndarray
+    value: np.ndarray
+    error: str = ""
+
+
+def field_path(path: str) -> list[str | int]:
+    """``twist.twist.linear.x`` / ``ranges[3]`` as attribute names and list indexes."""
+    out: list[str | int] = []
+    for part in path.split("."):
+        name, *idx = part.split("[")
+        out.append(name)
+        out += [int(i.rstrip("]")) for i in idx]
+    return out
+
+
+def _field_value(msg: Any, steps: Sequence[str | int], path: str) -> float:
+    """The number at ``steps`` in ``msg``; ValueError saying what is wrong."""
+    v = msg
+    for step in steps:
+        if isinstance(step, int):
+            try:
+                v = v[step]
+            except (IndexError, TypeError, KeyError) as err:
+                raise ValueError(f"{path}: no item [{step}]") from err
+        else:
+            if not hasattr(v, step) or step.startswith("_"):
+                have = ", ".join(k for k in getattr(v, "__dataclass_fields__", {})
+                                 if not k.startswith("_"))
+                raise ValueError(f"{path}: no field {step!r}" + (f" (fields: {have})"
+                                                                 if have else ""))
+            v = getattr(v, step)
+    if isinstance(v, bool | np.bool_):
+        return 1.0 if v else 0.0
+    if isinstance(v, int | float | np.integer | np.floating):
+        return float(v)
+    raise ValueError(f"{path}: not a number ({type(v).__name__})")
+
+
+@dataclass(frozen=True)
 class Frames:
     """A run's recorded frames. Treat the tables as read-only: metrics never mutate them."""
 
@@ -119,6 +167,7 @@ class Frames:
     end_ns: int
     message_count: int
     world_frame: str = "world"
+    fields: Mapping[tuple[str, str], FieldSeries] = dataclass_field(default_factory=dict)
 
     def gt(self, name: str) -> pd.DataFrame:
         """Ground-truth poses of one object, sorted by time."""
@@ -685,13 +734,16 @@ def _join_parts(parts: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
 
 def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = None,
                 muted_topic: str = "/safety/is_muted", clock_topic: str = "/clock",
-                world_frame: str = "world", fast: bool = True) -> Frames:
+                world_frame: str = "world", fast: bool = True,
+                fields: Sequence[tuple[str, str]] = ()) -> Frames:
     """Read a rosbag2 directory (or a run directory holding ``bag/``, or a plain ``.mcap``
     file such as a baseline's reference recording, or a ROS 1 recording: a ``.bag`` file or
     a ``bag/`` directory holding one, or a ``ros1``-profile MCAP) into :class:`Frames`.
 
     ``marker_topics``: the ``MarkerArray`` topics that carry tracks; None takes every topic
-    of that type. Raises :class:`BagError` for a missing, truncated or undecodable bag.
+    of that type. ``fields``: (topic, field path) of numeric fields to read as well
+    (:attr:`Frames.fields`). Raises :class:`BagError` for a missing, truncated or
+    undecodable bag.
     """
     p = Path(bag_dir)
     if (p / "bag" / "metadata.yaml").exists() or ros1_recording(p / "bag") is not None:
@@ -718,6 +770,10 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
         # the transform tree's topics go straight into the tf table's columns
         tree = {cid for cid, topic in wanted.items()
                 if tf_tree_of(topic) is not None and GT_TOPIC.match(topic) is None}
+        # topic(...) fields: decoded message by message (few topics, any type)
+        field_conns = {c.id: c for c in conns if any(c.topic == t for t, _ in fields)}
+        field_rows: dict[tuple[str, str], tuple[array[int], array[float], list[str]]] = {
+            f: (array("q"), array("d"), []) for f in fields}
         log: dict[int, array[int]] = {c.id: array("q") for c in conns}
         raws: dict[int, list[bytes]] = {cid: [] for cid in wanted}
         parts: dict[int, list[dict[str, Any]]] = {cid: [] for cid in wanted}
@@ -732,9 +788,12 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
             parts[cid].append(cols)
             raws[cid] = []
 
-        for conn, t_ns, raw in reader.scan(set(wanted)):
+        for conn, t_ns, raw in reader.scan(set(wanted) | set(field_conns)):
             cid = conn.id
             log[cid].append(t_ns)
+            if cid in field_conns:
+                assert raw is not None
+                _read_fields(reader, conn, t_ns, raw, field_rows)
             if cid in wanted:
                 assert raw is not None
                 raws[cid].append(raw)
@@ -823,4 +882,42 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
         end_ns=end_ns,
         message_count=int(topics["count"].sum()) if len(topics) else 0,
         world_frame=world_frame,
+        fields=_field_series(field_rows, {c.topic for c in conns}),
     )
+
+
+_FieldRows = dict[tuple[str, str], tuple["array[int]", "array[float]", list[str]]]
+
+
+def _read_fields(reader: Any, conn: Any, t_ns: int, raw: bytes, rows: _FieldRows) -> None:
+    """Append the asked-for fields of one message of ``conn`` (the first error of a field
+    is kept, and the field reads no further)."""
+    wanted = [(f, r) for f, r in rows.items() if f[0] == conn.topic and not r[2]]
+    if not wanted:
+        return
+    try:
+        msg = reader.decode(raw, conn)
+    except DECODE_ERRORS as err:
+        for _, r in wanted:
+            r[2].append(f"cannot decode a {conn.msgtype} message: {err}")
+        return
+    for (_, path), (ts, vs, errs) in wanted:
+        try:
+            value = _field_value(msg, field_path(path), path)
+        except ValueError as err:
+            errs.append(f"{conn.msgtype} {err}")
+            continue
+        ts.append(t_ns)
+        vs.append(value)
+
+
+def _field_series(rows: _FieldRows, topics: set[str]) -> dict[tuple[str, str], FieldSeries]:
+    out = {}
+    for (topic, path), (ts, vs, errs) in rows.items():
+        t = np.frombuffer(ts, dtype=np.int64) if ts else np.zeros(0, np.int64)
+        v = np.frombuffer(vs, dtype=np.float64) if vs else np.zeros(0)
+        error = errs[0] if errs else "" if t.size else \
+            f"{topic}: no messages" if topic in topics else f"{topic}: not in the recording"
+        order = np.argsort(t, kind="stable")
+        out[(topic, path)] = FieldSeries(t[order], v[order], error)
+    return out

@@ -32,11 +32,16 @@ from harness.metrics import (
     perception_metrics,
     safety_metrics,
 )
+from harness.metrics.control import route_distance
+from harness.metrics.specs import as_bool, held, spec_metric, tick_grid
 from harness.scenario import ControlScoring, RobotSpec, Scenario
+from harness.scenario.checks import spec_context
+from harness.scenario.specs import Formula, SignalRef, parse_formula
 from harness.sut.zones import points_in_polygon
 
-__all__ = ["ROBOT_RADIUS", "Scores", "check_scoring", "expected_rates", "odom_topic",
-           "robot_radius", "scenario_frames", "score_frames", "score_run"]
+__all__ = ["GT_SIGNALS", "ROBOT_RADIUS", "Scores", "check_scoring", "expected_rates",
+           "odom_topic", "robot_radius", "scenario_frames", "score_frames", "score_run",
+           "spec_fields", "spec_metrics"]
 
 # Footprint circle radius per model (half the diagonal of the chassis), for clearance and
 # collisions against workers; a model file's is its ``footprint_radius``.
@@ -135,6 +140,20 @@ def check_scoring(sc: Scenario, *, srr_gt: bool, source: str = "<scenario>") -> 
     file = sc.file_for("scoring", source)
     need_gt = bool(s.control_blocks) or any(block is not None and block.enabled
                                             for block in (s.perception, s.safety))
+    specs = [(i, spec) for i, spec in enumerate(sc.specs) if spec.enabled]
+    if s.record_only and specs:
+        raise ScenarioError(sc.file_for("specs", source), f"specs[{specs[0][0]}]",
+                            "a record-only scenario scores nothing, and this spec is "
+                            "enabled: remove one of them (or disable the spec)")
+    if specs and not srr_gt:
+        ctx = spec_context(sc)
+        for i, spec in specs:
+            gt = [r.text for r in parse_formula(spec.formula, ctx).signals
+                  if r.name in GT_SIGNALS]
+            if gt:
+                raise ScenarioError(sc.file_for("specs", source), f"specs[{i}].formula",
+                                    f"spec {spec.name!r}: {gt[0]} needs ground truth: set "
+                                    "srr_gt: true or run with --srr-gt")
     if s.record_only and need_gt:
         scored = next(n for n, on in (("control", bool(s.control_blocks)), ("perception",
                       s.perception is not None and s.perception.enabled),
@@ -193,6 +212,7 @@ def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
         metrics += safety_metrics(frames, tripwire=Tripwire(wire.a, wire.b, wire.inside),
                                   roi=sc.zones.loading_roi, robot=s.safety.robot,
                                   min_window_s=s.safety.min_window_s)
+    metrics += spec_metrics(sc, frames)
     outputs = {resolve_topic(t): OutputSpec(min_count=1, first_within_s=silence,
                                             max_silence_s=silence)
                for t, silence in s.health.sut_outputs.items()}
@@ -215,7 +235,8 @@ def scenario_frames(sc: Scenario | None, bag_dir: Path) -> Frames:
             markers = [resolve_topic(t) for t in p.marker_topics]
         if s is not None:
             muted = resolve_topic(s.muted_topic)
-    return load_frames(bag_dir, marker_topics=markers, muted_topic=muted)
+    return load_frames(bag_dir, marker_topics=markers, muted_topic=muted,
+                       fields=spec_fields(sc) if sc is not None else ())
 
 
 def score_run(sc: Scenario, bag_dir: Path, *, srr_gt: bool,
@@ -224,3 +245,132 @@ def score_run(sc: Scenario, bag_dir: Path, *, srr_gt: bool,
               source: str = "<scenario>") -> Scores:
     return score_frames(sc, scenario_frames(sc, bag_dir), srr_gt=srr_gt, published=published,
                         recorded=recorded, duration_s=duration_s, source=source)
+
+
+# --------------------------------------------------------------------------- specs
+
+#: Signals computed from ground truth (``/gt/<name>/tf``): a spec using one needs srr_gt.
+GT_SIGNALS = frozenset({"clearance", "distance", "speed", "in_zone", "tracking_error"})
+#: Where the ``alarm`` signal is read (the reference safety monitor's ``alarm_topic``).
+ALARM_TOPIC = "/safety/alarm"
+
+
+def _formulas(sc: Scenario) -> list[tuple[str, bool, Formula]]:
+    """(name, required, parsed formula) of every enabled spec."""
+    if not sc.specs:
+        return []
+    ctx = spec_context(sc)
+    return [(spec.name, spec.required, parse_formula(spec.formula, ctx))
+            for spec in sc.specs if spec.enabled]
+
+
+def _topic_field(ref: SignalRef) -> tuple[str, str]:
+    return resolve_topic(ref.args[0]), ref.args[1]
+
+
+def _bool_topic(sc: Scenario, ref: SignalRef) -> str:
+    if ref.name == "alarm":
+        return ALARM_TOPIC
+    s = sc.scoring.safety
+    return resolve_topic(s.muted_topic if s is not None else "/safety/is_muted")
+
+
+def spec_fields(sc: Scenario) -> list[tuple[str, str]]:
+    """(topic, field path) of every ``topic(...)`` and safety signal the specs read."""
+    out: list[tuple[str, str]] = []
+    for _, _, f in _formulas(sc):
+        for ref in f.signals:
+            key = _topic_field(ref) if ref.name == "topic" else \
+                (_bool_topic(sc, ref), "data") if ref.name in ("alarm", "muted") else None
+            if key is not None and key not in out:
+                out.append(key)
+    return out
+
+
+def _gt_name(sc: Scenario, name: str) -> tuple[str, float]:
+    """The ground-truth name (``/gt/<name>/tf``) and footprint radius of a robot or a
+    worker named in a formula."""
+    for r in sc.robots:
+        if r.enabled and r.name == name:
+            return r.name, robot_radius(r)
+    for i, w in enumerate(sc.workers):
+        if w.enabled and name in (sc.worker_name(i), f"character_{i}"):
+            return f"character_{i}", w.radius
+    raise KeyError(name)  # pragma: no cover - parse_formula checked the name
+
+
+def _signal(sc: Scenario, frames: Frames, ref: SignalRef, grid: np.ndarray
+            ) -> tuple[np.ndarray, str]:
+    """A signal's values on ``grid`` (NaN where undefined), or why it has none at all."""
+    def xy(name: str) -> tuple[np.ndarray, str]:
+        gt_name, _ = _gt_name(sc, name)
+        g = frames.gt(gt_name)
+        if len(g) == 0:
+            return np.zeros((0, 2)), f"no ground truth /gt/{gt_name}/tf in the recording"
+        t = g["t_ns"].to_numpy(np.int64)
+        return np.stack([held(t, g["x"].to_numpy(), grid),
+                         held(t, g["y"].to_numpy(), grid)], axis=1), ""
+
+    if ref.name in ("alarm", "muted"):
+        f = frames.fields[(_bool_topic(sc, ref), "data")]
+        if f.error and f.t_ns.size == 0 and not f.error.endswith("no messages"):
+            return np.zeros(0), f.error
+        return as_bool(held(f.t_ns, f.value, grid, before=0.0)), ""
+    if ref.name == "topic":
+        f = frames.fields[_topic_field(ref)]
+        return (np.zeros(0), f.error) if f.error else (held(f.t_ns, f.value, grid), "")
+    if ref.name == "speed":
+        gt_name, _ = _gt_name(sc, ref.args[0])
+        g = frames.gt(gt_name)
+        if len(g) < 2:
+            return np.zeros(0), f"fewer than two ground-truth samples of {gt_name}"
+        t = g["t_ns"].to_numpy(np.int64)
+        dt = np.diff(t) / 1e9
+        step = np.hypot(np.diff(g["x"].to_numpy()), np.diff(g["y"].to_numpy()))
+        v = np.divide(step, dt, out=np.full(step.shape, np.nan), where=dt > 0)
+        return held(t[1:], v, grid), ""
+    p, why = xy(ref.args[0])
+    if why:
+        return p, why
+    undefined = np.isnan(p[:, 0])
+    if ref.name in ("clearance", "distance"):
+        q, why = xy(ref.args[1])
+        if why:
+            return q, why
+        d = np.hypot(*(p - q).T)
+        if ref.name == "clearance":
+            d = d - _gt_name(sc, ref.args[0])[1] - _gt_name(sc, ref.args[1])[1]
+        return d, ""
+    if ref.name == "in_zone":
+        if ref.args[1] == "loading_roi":
+            inside = points_in_polygon(p, sc.zones.loading_roi)
+        else:
+            wire = sc.zones.trailer_tripwire
+            assert wire is not None  # parse_formula checked the zone
+            inside = Tripwire(wire.a, wire.b, wire.inside).past(p[:, 0], p[:, 1])
+        return as_bool(np.where(undefined, np.nan, inside.astype(np.float64))), ""
+    assert ref.name == "tracking_error"
+    block = next(b for b in sc.scoring.control_blocks if (b.robot or ref.args[0]) == ref.args[0])
+    d, _ = route_distance(np.nan_to_num(p), sc.routes[block.route].waypoints)
+    return np.where(undefined, np.nan, d), ""
+
+
+def spec_metrics(sc: Scenario, frames: Frames) -> list[MetricResult]:
+    """``spec.<name>.robustness`` of every enabled spec (:mod:`harness.metrics.specs`)."""
+    formulas = _formulas(sc)
+    if not formulas:
+        return []
+    grid = tick_grid(frames.end_ns, sc.physics.tick_hz)
+    out = []
+    for name, required, formula in formulas:
+        signals: dict[str, np.ndarray] = {}
+        undefined: dict[str, str] = {}
+        for ref in formula.signals:
+            values, why = _signal(sc, frames, ref, grid)
+            if why:
+                undefined[ref.var] = why
+            else:
+                signals[ref.var] = values
+        out.append(spec_metric(name, formula, signals, grid, required=required,
+                               undefined=undefined))
+    return out

@@ -16,8 +16,8 @@ from harness.scenario.schema import ToleranceSpec
 
 __all__ = ["metric_deltas", "summary_metrics"]
 
-_GROUPS = ("control", "perception", "safety", "health")
-Group = Literal["control", "perception", "safety", "health"]
+_GROUPS = ("control", "perception", "safety", "health", "spec")
+Group = Literal["control", "perception", "safety", "health", "spec"]
 
 
 def summary_metrics(summary: Mapping[str, Any], source: Path) -> list[MetricResult]:

@@ -1,7 +1,8 @@
 """Metrics: pure functions from recorded frames to typed results with units.
 
-``control``, ``perception``, ``safety`` give :class:`MetricResult` lists; ``health`` gives
-:class:`HealthResult` gates. Read a run with :func:`harness.frames.load_frames` first.
+``control``, ``perception``, ``safety`` and ``specs`` (STL formulas) give
+:class:`MetricResult` lists; ``health`` gives :class:`HealthResult` gates. Read a run with
+:func:`harness.frames.load_frames` first.
 Names are imported from their submodules on first use (:mod:`harness._lazy`)."""
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ if TYPE_CHECKING:
     from harness.metrics.health import OutputSpec, health_gates
     from harness.metrics.perception import MotCounts, clear_mot, perception_metrics
     from harness.metrics.safety import Tripwire, safety_metrics
+    from harness.metrics.specs import spec_metric
     from harness.metrics.types import Direction, HealthResult, MetricResult
 
 __all__ = [
@@ -29,6 +31,7 @@ __all__ = [
     "health_gates",
     "perception_metrics",
     "safety_metrics",
+    "spec_metric",
 ]
 
 _WHERE = {
@@ -40,6 +43,7 @@ _WHERE = {
     "perception_metrics": "perception",
     "Tripwire": "safety",
     "safety_metrics": "safety",
+    "spec_metric": "specs",
     "Direction": "types",
     "HealthResult": "types",
     "MetricResult": "types",

@@ -25,7 +25,7 @@ class MetricResult:
     value: float | None
     unit: str
     direction: Direction
-    group: Literal["control", "perception", "safety", "health"]
+    group: Literal["control", "perception", "safety", "health", "spec"]
     detail: str = ""
     windows: tuple[tuple[float, float], ...] = field(default=())
     verdict: str | None = None

@@ -8,8 +8,11 @@ scenario's name and description, which baseline it names, the tolerances and the
 settings, how the bag is written (``recording``: chunking, fsync, the disk guard; a camera's
 ``record``, fixed or on a robot: raw or compressed images; ``output``: ROS 1 or ROS 2, bag or
 MCAP, whose messages carry the same values), whether images render on a background thread
-(``render.overlap``: the same bytes either way), live outputs (``ros2``, ``rtsp``) and the
-sweep a suite may expand the scenario into (``sweep``: each point is its own configuration).
+(``render.overlap``: the same bytes either way), live outputs (``ros2``, ``rtsp``), the
+sweep a suite may expand the scenario into (``sweep``: each point is its own configuration)
+and the ``specs`` (formulas judge the recording, they do not change it; each spec is its own
+metric, compared by name: a spec added to a scenario is a ``new`` metric, not another
+configuration).
 :func:`comparable_config` is that part of a resolved scenario, as plain data (a run adds
 ``scene_files``, the digests of the model files its scene is built from);
 :func:`config_differences` names what differs, field by field. A baseline blessed before srr
@@ -30,7 +33,7 @@ __all__ = ["EXCLUDED", "comparable_config", "config_differences", "with_defaults
 #: Top-level keys, and ``scoring`` sub-keys, that do not make two configurations different.
 EXCLUDED = frozenset({"format_version", "name", "description", "baseline", "baselines",
                       "systems_under_test", "recording", "output", "sweep", "ros2",
-                      "rtsp"})
+                      "rtsp", "specs"})
 EXCLUDED_SCORING = frozenset({"tolerances", "health"})
 #: Keys of each ``cameras`` entry that do not make two configurations different.
 EXCLUDED_CAMERA = frozenset({"record"})

@@ -48,9 +48,14 @@ class Verdict:
 
 def absolute_failures(metrics: Sequence[MetricResult]) -> list[str]:
     """Criteria that fail a run whatever the baseline says: the safety match-rate band
-    (FAIL below 80 %) and a route goal that was not reached."""
+    (FAIL below 80 %), a route goal that was not reached and a required spec that was
+    violated or could not be evaluated (its metric's verdict FAIL)."""
     out = []
     for m in metrics:
+        if m.group == "spec" and m.verdict == "FAIL":
+            out.append(f"{m.name}: required spec " + (
+                f"violated (robustness {m.value:.4g})" if m.value is not None else
+                "not evaluated") + f" — {m.detail}")
         if m.name == "safety.match_rate" and m.value is not None and m.value < NEAR_AT:
             out.append(f"safety.match_rate {m.value:.1f} % is below {NEAR_AT:g} % (FAIL band)")
         if GOAL_REACHED.match(m.name) and m.value is not None and m.value < GOAL_REACHED_AT:

@@ -27,9 +27,11 @@ from harness.scenario.schema import (
     WorldSpec,
     gated_rate,
 )
+from harness.scenario.specs import ZONES, SignalContext, SpecError, parse_formula
 from harness.validation import Validator, close_match, join
 
-__all__ = ["H264_PRESETS", "RATE_TOLERANCE", "check_semantics", "rate_warnings", "sensor_rates"]
+__all__ = ["H264_PRESETS", "RATE_TOLERANCE", "check_semantics", "rate_warnings", "sensor_rates",
+           "spec_context"]
 
 
 def check_semantics(sc: Scenario, v: Validator) -> None:
@@ -53,6 +55,7 @@ def check_semantics(sc: Scenario, v: Validator) -> None:
     _check_suts(sc, v)
     _check_graphs(sc, v)
     _check_control_scoring(sc, v)
+    _check_specs(sc, v)
     _check_output(sc, v)
     _check_rates(sc, v)
 
@@ -551,3 +554,38 @@ def _check_name(v: Validator, path: str, name: str) -> None:
             or name[0].isdigit():  # names become prim paths and ROS names: ASCII only
         v.fail(path, f"must be letters, digits and '_' and not start with a digit (ASCII "
                f"only), got {name!r}")
+
+
+def spec_context(sc: Scenario) -> SignalContext:
+    """What ``specs:`` formulas may name in ``sc``: enabled robots and workers (by name and
+    as ``character_<i>``), its zones, the robots a control block routes, the tick rate."""
+    robots = [r.name for r in sc.robots if r.enabled]
+    objects = set(robots)
+    for i, w in enumerate(sc.workers):
+        if w.enabled:
+            objects |= {sc.worker_name(i), f"character_{i}"}
+    zones = {"loading_roi"} if len(sc.zones.loading_roi) >= 3 else set()
+    if sc.zones.trailer_tripwire is not None:
+        zones.add("trailer")
+    only = robots[0] if len(robots) == 1 else ""
+    routed = {b.robot or only for b in sc.scoring.control_blocks} - {""}
+    assert zones <= set(ZONES)
+    return SignalContext(objects=objects, zones=zones, routed=routed,
+                         tick_hz=sc.physics.tick_hz)
+
+
+def _check_specs(sc: Scenario, v: Validator) -> None:
+    """Every spec's name unique and valid (it names a metric), its formula one that parses
+    and names only signals, objects and zones the scenario has."""
+    if not sc.specs:
+        return
+    ctx = spec_context(sc)
+    seen: dict[str, int] = {}
+    for i, spec in enumerate(sc.specs):
+        _check_unique_name(v, seen, "specs", "spec", i, spec.name)
+        if not spec.enabled:
+            continue
+        try:
+            parse_formula(spec.formula, ctx)
+        except SpecError as err:
+            v.fail(f"specs[{i}].formula", f"spec {spec.name!r}: {err}")

@@ -49,6 +49,7 @@ __all__ = [
     "ScoringSpec",
     "SensorsSpec",
     "ShelfSpec",
+    "StlSpec",
     "SutSpec",
     "TfTreeSpec",
     "ToleranceSpec",
@@ -763,6 +764,22 @@ class ScoringSpec:
 
 
 @dataclass(frozen=True)
+class StlSpec:
+    """One entry of ``specs:``: a signal temporal logic ``formula`` over srr's signals
+    (ground-truth clearance, speed and zones, the safety topics, tracking errors, recorded
+    topic fields; :mod:`harness.scenario.specs`), evaluated on the tick grid of the recorded
+    run. It gives the metric ``spec.<name>.robustness`` (negative: violated) with the
+    windows where it is violated. ``required``: a violation (or a formula that cannot be
+    evaluated) fails the run whatever the baseline says; false: the robustness is only
+    scored and compared with the baseline."""
+
+    name: str
+    formula: str
+    required: bool = True
+    enabled: bool = True
+
+
+@dataclass(frozen=True)
 class Ros2QosSpec:
     """QoS of one topic on the live ROS 2 graph (``ros2.qos``), overriding the default."""
 
@@ -859,6 +876,7 @@ class Scenario:
     systems_under_test: tuple[SutSpec, ...] = ()
     graphs: tuple[GraphSpec, ...] = ()
     scoring: ScoringSpec = ScoringSpec()
+    specs: tuple[StlSpec, ...] = ()
     recording: RecordingSpec = RecordingSpec()
     output: OutputSpec = OutputSpec()
     render: RenderSpec = RenderSpec()
