@@ -99,6 +99,7 @@ __all__ = [
     "validate",
     "versions",
     "write_diff",
+    "write_summary_md",
 ]
 
 
@@ -176,6 +177,21 @@ def write_diff(result: DiffResult, path: str | Path) -> Path:
     from harness.diff.html import write_diff as _write
 
     return _write(result, path)
+
+
+def write_summary_md(result: SuiteResult | RunResult, path: str | Path, *,
+                     link_base: str | None = None) -> Path:
+    """Write the pull-request summary of a suite's or a run's result (``--summary-md FILE``):
+    GitHub-flavoured Markdown from the same result that gives the exit code, capped at
+    GitHub's comment size. Report links are the suite folder's (the run directory's)
+    relative paths under ``link_base``, by default that folder relative to ``path``."""
+    if isinstance(result, SuiteResult):
+        from harness.suite.markdown import write_markdown as write_suite
+
+        return write_suite(result, Path(path), link_base=link_base)
+    from harness.run.markdown import write_markdown as write_run
+
+    return write_run(result.run_summary, result.run_dir, Path(path), link_base=link_base)
 
 
 #: The files ``srr schema`` describes.
