@@ -81,6 +81,7 @@ __all__ = [
     "combined_digest",
     "default_run_dir",
     "diff_runs",
+    "export_rerun",
     "graph_text",
     "json_schema",
     "load",
@@ -168,6 +169,16 @@ def run_planned_suite(plan: SuitePlan, *, executor: str = "local", jobs: int | N
                RayExecutor(address=address, jobs=jobs, baselines=baselines, gpu_share=gpu_share))
     return run_suite(plan, ex, out=out, history=history, listen=listen,
                      bless_reason=bless_reason, baselines=baselines)
+
+
+def export_rerun(run_dir: str | Path, out: str | Path) -> Any:
+    """Write a finished run (its bag and ``summary.json``) as a Rerun recording ``out``
+    (``srr export RUN_DIR --rerun FILE.rrd``; needs the rerun extra) on the ``sim_time``
+    timeline; returns :class:`harness.export.rerun.RerunExport`. Bad input, a live run or a
+    missing rerun-sdk raise :class:`SrrError` (exit 2)."""
+    from harness.export.rerun import export_rerun as _export
+
+    return _export(run_dir, out)
 
 
 def write_diff(result: DiffResult, path: str | Path) -> Path:

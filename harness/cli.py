@@ -185,6 +185,11 @@ def _parser() -> argparse.ArgumentParser:
     dif.add_argument("--html", type=Path, default=None, help="write a one-page view of both runs")
     dif.add_argument("--json", type=Path, default=None, help="write the result as JSON")
 
+    exp = sub.add_parser("export", help="write a finished run for another viewer (Rerun)")
+    exp.add_argument("run_dir", type=Path)
+    exp.add_argument("--rerun", type=Path, required=True, metavar="FILE.rrd",
+                     help="a Rerun recording on the sim_time timeline (needs the rerun extra)")
+
     base = sub.add_parser("baseline", help="manage baselines")
     base_sub = base.add_subparsers(dest="baseline_command", required=True, parser_class=_Parser)
     bl = base_sub.add_parser("bless", help="make a finished run its scenario's baseline")
@@ -529,6 +534,18 @@ def _cmd_recover(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_export(args: argparse.Namespace) -> int:
+    from harness import api
+
+    res = api.export_rerun(args.run_dir, args.rerun)
+    _stdout().print(f"{res.path}: {len(res.rows)} entities, {sum(res.rows.values())} rows on "
+                    f"sim_time, {res.bytes / 1e6:.1f} MB", markup=False)
+    if res.skipped:
+        _stdout().print("not exported (no Rerun type for them): " + ", ".join(
+            f"{t} ({m})" for t, m in res.skipped.items()), markup=False)
+    return 0
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from harness import api
 
@@ -672,7 +689,7 @@ def _cmd_suite(args: argparse.Namespace) -> int:
 COMMANDS = {"run": _cmd_run, "suite": _cmd_suite, "replay": _cmd_replay, "validate": _cmd_validate,
             "graph": _cmd_graph, "inspect": _cmd_inspect, "baseline": _cmd_baseline,
             "report": _cmd_report, "recover": _cmd_recover, "diff": _cmd_diff,
-            "ros2": _cmd_ros2, "schema": _cmd_schema}
+            "ros2": _cmd_ros2, "schema": _cmd_schema, "export": _cmd_export}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
