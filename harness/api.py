@@ -30,6 +30,7 @@ from harness.diff import DiffResult, Tolerance
 from harness.diff import diff_runs as _diff_runs
 from harness.engine import Simulation
 from harness.errors import SrrError
+from harness.export.rerun import RerunExport
 from harness.graph import stage_to_json, stage_to_mermaid
 from harness.live.config import LiveConfig
 from harness.run.baselines import (
@@ -69,6 +70,7 @@ __all__ = [
     "Progress",
     "RecoverResult",
     "RepeatResult",
+    "RerunExport",
     "RunResult",
     "Started",
     "SuitePlan",
@@ -171,10 +173,10 @@ def run_planned_suite(plan: SuitePlan, *, executor: str = "local", jobs: int | N
                      bless_reason=bless_reason, baselines=baselines)
 
 
-def export_rerun(run_dir: str | Path, out: str | Path) -> Any:
+def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:
     """Write a finished run (its bag and ``summary.json``) as a Rerun recording ``out``
     (``srr export RUN_DIR --rerun FILE.rrd``; needs the rerun extra) on the ``sim_time``
-    timeline; returns :class:`harness.export.rerun.RerunExport`. Bad input, a live run or a
+    timeline; returns what was written (:class:`RerunExport`). Bad input, a live run or a
     missing rerun-sdk raise :class:`SrrError` (exit 2)."""
     from harness.export.rerun import export_rerun as _export
 

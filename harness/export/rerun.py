@@ -123,25 +123,57 @@ class _Frames:
 
 
 class _Writer:
+    """Logs to the recording: row by row (:meth:`log`, at the time :meth:`at` set), or
+    gathered per entity and sent as columns at the end (:meth:`add`, :meth:`finish`: the
+    transforms, positions and scalars, most of the rows)."""
+
     def __init__(self, rr: ModuleType, rec: Any) -> None:
         self.rr, self.rec = rr, rec
         self.rows: dict[str, int] = {}
+        self.t_ns = 0
+        self.gathered: dict[tuple[str, str], tuple[list[int], list[Any]]] = {}
 
     def at(self, t_ns: int) -> None:
-        self.rec.set_time(TIMELINE, duration=np.timedelta64(int(t_ns), "ns"))
+        self.t_ns = int(t_ns)
+        self.rec.set_time(TIMELINE, duration=np.timedelta64(self.t_ns, "ns"))
 
     def log(self, path: str, item: Any, *, static: bool = False) -> None:
         self.rec.log(path, item, static=static)
         self.rows[path] = self.rows.get(path, 0) + (0 if static else 1)
 
+    def add(self, kind: str, path: str, value: Any) -> None:
+        """One row of ``kind`` (``transform``: (xyz, xyzw); ``position``: xyz; ``scalar``)
+        at the current time."""
+        times, values = self.gathered.setdefault((kind, path), ([], []))
+        times.append(self.t_ns)
+        values.append(value)
+
+    def finish(self) -> None:
+        rr = self.rr
+        for (kind, path), (times, values) in self.gathered.items():
+            if kind == "transform":
+                cols = rr.Transform3D.columns(
+                    translation=np.array([v[0] for v in values], dtype=np.float64),
+                    quaternion=np.array([v[1] for v in values], dtype=np.float64))
+            elif kind == "position":
+                cols = rr.Points3D.columns(positions=np.array(values, dtype=np.float64))
+            else:
+                cols = rr.Scalars.columns(scalars=np.array(values, dtype=np.float64))
+            self._send(path, np.array(times, dtype="timedelta64[ns]"), cols)
+        self.gathered.clear()
+
     def columns(self, path: str, t_s: np.ndarray, values: np.ndarray) -> None:
+        """A scalar series at times ``t_s`` (seconds)."""
         if t_s.size == 0:
             return
         t_ns = np.round(np.asarray(t_s, dtype=np.float64) * 1e9).astype("timedelta64[ns]")
+        self._send(path, t_ns, self.rr.Scalars.columns(
+            scalars=np.asarray(values, dtype=np.float64)))
+
+    def _send(self, path: str, t_ns: np.ndarray, cols: Any) -> None:
         self.rec.send_columns(path, indexes=[self.rr.TimeColumn(TIMELINE, duration=t_ns)],
-                              columns=self.rr.Scalars.columns(
-                                  scalars=np.asarray(values, dtype=np.float64)))
-        self.rows[path] = self.rows.get(path, 0) + int(t_s.size)
+                              columns=cols)
+        self.rows[path] = self.rows.get(path, 0) + int(t_ns.size)
 
 
 def _quat(r: Any) -> list[float]:
@@ -208,10 +240,13 @@ class _Exporter:
         elif kind == _TF:
             static = conn.topic.endswith("tf_static") or conn.latched
             for t in msg.transforms:
-                self.w.log(self.frames.path(t.child_frame_id), self.rr.Transform3D(
-                    translation=_vec(t.transform.translation),
-                    quaternion=self.rr.Quaternion(xyzw=_quat(t.transform.rotation))),
-                    static=static)
+                path = self.frames.path(t.child_frame_id)
+                xyz, xyzw = _vec(t.transform.translation), _quat(t.transform.rotation)
+                if static:
+                    self.w.log(path, self.rr.Transform3D(
+                        translation=xyz, quaternion=self.rr.Quaternion(xyzw=xyzw)), static=True)
+                else:
+                    self.w.add("transform", path, (xyz, xyzw))
         elif kind == _ODOM:
             p = msg.pose.pose.position
             self._position(f"{self.frames.path(msg.header.frame_id)}/odometry/"
@@ -228,12 +263,12 @@ class _Exporter:
             self.w.log(f"{self.frames.path(frame)}/{_topic_path(self.rr, conn.topic)}",
                        self.rr.Points3D(pts))
         elif kind == _BOOL:
-            self.w.log(f"/topics/{_topic_path(self.rr, conn.topic)}",
-                       self.rr.Scalars([1.0 if msg.data else 0.0]))
+            self.w.add("scalar", f"/topics/{_topic_path(self.rr, conn.topic)}",
+                       1.0 if msg.data else 0.0)
         elif kind == _TWIST:
             base = f"/topics/{_topic_path(self.rr, conn.topic)}"
-            self.w.log(f"{base}/linear_x", self.rr.Scalars([float(msg.linear.x)]))
-            self.w.log(f"{base}/angular_z", self.rr.Scalars([float(msg.angular.z)]))
+            self.w.add("scalar", f"{base}/linear_x", float(msg.linear.x))
+            self.w.add("scalar", f"{base}/angular_z", float(msg.angular.z))
 
     def _gt(self, conn: Connection, msg: Any) -> None:
         for t in msg.transforms:
@@ -243,7 +278,7 @@ class _Exporter:
                            f"{_part(self.rr, name)}", _vec(t.transform.translation))
 
     def _position(self, base: str, xyz: list[float]) -> None:
-        self.w.log(base, self.rr.Points3D([xyz]))
+        self.w.add("position", base, xyz)
         self.paths.setdefault(f"{base}/path", []).append(xyz)
 
     def _camera(self, conn: Connection, msg: Any) -> None:
@@ -274,6 +309,7 @@ class _Exporter:
                 sample=bytes(np.asarray(msg.data, dtype=np.uint8))))
 
     def finish(self) -> None:
+        self.w.finish()
         for path, pts in self.paths.items():
             self.w.log(path, self.rr.LineStrips3D([pts]), static=True)
 
