@@ -191,9 +191,12 @@ def _image(rr: ModuleType, msg: Any) -> Any:
     if enc in ("32fc1", "16uc1", "mono16"):
         dtype = np.dtype(np.float32 if enc == "32fc1" else np.uint16)
         dtype = dtype.newbyteorder(">" if msg.is_bigendian else "<")
-        depth = rows[:, : w * dtype.itemsize].copy().view(dtype).reshape(h, w)
-        return (rr.DepthImage(depth.astype(dtype.newbyteorder("="))) if enc != "mono16" else
-                rr.Image(depth.astype(np.uint16), color_model="L"))
+        values = rows[:, : w * dtype.itemsize].copy().view(dtype).reshape(h, w)
+        values = values.astype(dtype.newbyteorder("="))
+        if enc == "mono16":
+            return rr.Image(values, color_model="L")
+        # REP 118: 32FC1 depth in metres, 16UC1 in millimetres
+        return rr.DepthImage(values, meter=1.0 if enc == "32fc1" else 1000.0)
     channels = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1, "8uc1": 1,
                 "8uc3": 3}.get(enc)
     if channels is None:

@@ -122,6 +122,10 @@ def test_a_dock_run_reads_back_in_rerun(dock: Path, tmp_path: Path) -> None:
     img = [(t, m) for topic, _, t, m in msgs if topic == "/dock_cam_left_rgb"][-1]
     buf = dict(_column(batches["/cameras/dock_cam_left_rgb"], "Image:buffer"))
     assert bytes(buf[img[0]][0]) == bytes(img[1].data)
+    depth = [(t, m) for topic, _, t, m in msgs if topic == "/dock_cam_left_depth"][-1]
+    dbuf = dict(_column(batches["/cameras/dock_cam_left_depth"], "DepthImage:buffer"))
+    meter = dict(_column(batches["/cameras/dock_cam_left_depth"], "DepthImage:meter"))
+    assert bytes(dbuf[depth[0]][0]) == bytes(depth[1].data) and meter[depth[0]] == [1.0]
     # h264: the first sample is the stream's first access unit, byte for byte
     video = [(t, m) for topic, _, t, m in msgs if topic == "/dock_cam_left_rgb/h264"]
     samples = _column(batches["/cameras/dock_cam_left_rgb/h264"], "VideoStream:sample")
