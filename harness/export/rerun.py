@@ -14,9 +14,11 @@ digest, so the same run exports the same data. The entities:
   (``LineStrips3D``, static); a robot's odometry (``nav_msgs/Odometry``) likewise under its
   odometry frame, ``/tf/…/<odom frame>/odometry/<topic>``;
 * ``/tf/…/<frame>/scan/<topic>``: each ``LaserScan`` as 3D points in its frame;
-* ``/cameras/<topic>``: raw images (``Image``, depth as ``DepthImage`` in metres), JPEG and
-  PNG (``EncodedImage``; 16-bit depth PNG as ``EncodedDepthImage``, millimetres) and h264
-  (``VideoStream``);
+* ``/tf/…/<optical frame>/image``: a ``Pinhole`` per camera frame (from its first
+  ``CameraInfo``), with ``<topic>`` under it for each image stream of that frame: raw images
+  (``Image``; depth as ``DepthImage``, 32FC1 in metres, 16UC1 in millimetres), JPEG and PNG
+  (``EncodedImage``; 16-bit depth PNG as ``EncodedDepthImage``, millimetres) and h264
+  (``VideoStream``); streams of a frame without camera info go to ``/cameras/<topic>``;
 * ``/tf/<frame>/<topic>``: the tracked objects' positions (``MarkerArray``), ``/topics/…``:
   ``Bool`` and ``Twist`` topics as scalars;
 * ``/metrics/…``: the series behind the scores (:func:`harness.report.data.load_run`: cross-
@@ -57,6 +59,7 @@ _ODOM = "nav_msgs/msg/Odometry"
 _MARKERS = "visualization_msgs/msg/MarkerArray"
 _BOOL = "std_msgs/msg/Bool"
 _TWIST = "geometry_msgs/msg/Twist"
+_INFO = "sensor_msgs/msg/CameraInfo"
 
 
 @dataclass(frozen=True)
@@ -224,15 +227,35 @@ class _Exporter:
         self.paths: dict[str, list[list[float]]] = {}  # entity → positions over time
         self.video: set[str] = set()
         self.skipped: dict[str, str] = {}
+        self.pinholes: dict[str, Any] = {}  # optical frame → its first CameraInfo
 
     def tf_tree(self) -> None:
-        """First pass: the frames' parents, from the TF topics alone."""
-        tf = [c for c in self.bag.connections if c.msgtype == _TF]
-        with_tf = {c.id for c in tf if not c.topic.startswith("/gt/")}
-        for conn, _, raw in self.bag.scan(with_tf):
-            if conn.id in with_tf and raw is not None:
-                for t in self.bag.decode(raw, conn).transforms:
+        """First pass, over the TF and camera-info topics alone: the frames' parents, and the
+        first intrinsics of each camera frame."""
+        tf = {c.id for c in self.bag.connections
+              if c.msgtype == _TF and not c.topic.startswith("/gt/")}
+        info = {c.id for c in self.bag.connections if c.msgtype == _INFO}
+        for conn, _, raw in self.bag.scan(tf | info):
+            if raw is None or conn.id not in tf | info:
+                continue
+            msg = self.bag.decode(raw, conn)
+            if conn.id in tf:
+                for t in msg.transforms:
                     self.frames.add(t.header.frame_id, t.child_frame_id)
+            elif msg.header.frame_id not in self.pinholes and int(msg.width) > 0:
+                self.pinholes[msg.header.frame_id] = msg
+
+    def pinhole_entities(self) -> None:
+        """A ``Pinhole`` (static) per camera frame, the images of that frame under it: Rerun
+        shows them in the camera's frustum (depth as points) and in 2D."""
+        for frame, info in sorted(self.pinholes.items()):
+            k = np.asarray(info.k, dtype=np.float64).reshape(3, 3)
+            self.w.log(self._camera_entity(frame), self.rr.Pinhole(
+                image_from_camera=k, resolution=[int(info.width), int(info.height)],
+                camera_xyz=self.rr.ViewCoordinates.RDF), static=True)
+
+    def _camera_entity(self, frame: str) -> str:
+        return f"{self.frames.path(frame)}/image"
 
     def message(self, conn: Connection, t_ns: int, raw: bytes) -> None:
         msg = self.bag.decode(raw, conn)
@@ -285,7 +308,9 @@ class _Exporter:
         self.paths.setdefault(f"{base}/path", []).append(xyz)
 
     def _camera(self, conn: Connection, msg: Any) -> None:
-        path = f"/cameras/{_topic_path(self.rr, conn.topic)}"
+        frame = str(msg.frame_id if conn.msgtype == _VIDEO else msg.header.frame_id)
+        base = self._camera_entity(frame) if frame in self.pinholes else "/cameras"
+        path = f"{base}/{_topic_path(self.rr, conn.topic)}"
         rr = self.rr
         if conn.msgtype == _RAW:
             image = _image(rr, msg)
@@ -375,9 +400,10 @@ def _write(rr: ModuleType, run_dir: Path, summary: dict[str, Any], tmp: Path) ->
         with open_indexed(run_dir / "bag", shown=run_dir / "bag", what="cannot export") as bag:
             ex = _Exporter(rr, w, bag, _robots(run_dir))
             ex.tf_tree()
+            ex.pinhole_entities()
             wanted = [c for c in bag.connections if c.msgtype in _HANDLED]
             ex.skipped.update({c.topic: c.msgtype for c in bag.connections
-                               if c.msgtype not in _HANDLED})
+                               if c.msgtype not in _HANDLED | {_INFO}})
             for conn, t_ns, raw in bag.messages(wanted):
                 ex.message(conn, t_ns, raw)
             ex.finish()

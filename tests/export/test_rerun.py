@@ -94,10 +94,19 @@ def test_a_dock_run_reads_back_in_rerun(dock: Path, tmp_path: Path) -> None:
     assert rows["/tf/world/odom/odometry/odom"] == per_topic["/odom"]
     assert rows["/tf/world/workers/character_0/path#static"] == 1
     # cameras: every recorded image, raw, h264, JPEG and 16-bit PNG depth
-    for topic in ("/dock_cam_left_rgb", "/dock_cam_left_depth", "/dock_cam_left_rgb/h264",
-                  "/dock_cam_right_rgb/compressed", "/dock_cam_right_depth/compressed"):
-        assert rows[f"/cameras{topic}"] == per_topic[topic] > 0, topic
-    assert rows["/cameras/dock_cam_left_rgb/h264#static"] == 1  # the codec
+    # under each camera's pinhole, in its optical frame, from its camera info
+    left, right = "/tf/world/dock_cam_left/image", "/tf/world/dock_cam_right/image"
+    for base, topic in ((left, "/dock_cam_left_rgb"), (left, "/dock_cam_left_depth"),
+                        (left, "/dock_cam_left_rgb/h264"),
+                        (right, "/dock_cam_right_rgb/compressed"),
+                        (right, "/dock_cam_right_depth/compressed")):
+        assert rows[f"{base}{topic}"] == per_topic[topic] > 0, topic
+    assert rows[f"{left}/dock_cam_left_rgb/h264#static"] == 1  # the codec
+    info = next(m for topic, _, _, m in msgs if topic == "/dock_cam_left_camera_info")
+    (pinhole,) = batches[left]
+    assert pinhole.column("Pinhole:image_from_camera").to_pylist()[0][0] == pytest.approx(
+        list(np.asarray(info.k).reshape(3, 3).T.ravel()))  # Rerun's matrices: column-major
+    assert pinhole.column("Pinhole:resolution").to_pylist()[0][0] == [info.width, info.height]
     # metric series, one value per frame the scoring scored
     ticks = per_topic["/clock"]
     assert rows["/metrics/control/forklift/cross_track_error"] == ticks
@@ -120,15 +129,15 @@ def test_a_dock_run_reads_back_in_rerun(dock: Path, tmp_path: Path) -> None:
     t_w, p = gt[-1]
     assert w[t_w][0] == pytest.approx([p.x, p.y, p.z], abs=1e-5)
     img = [(t, m) for topic, _, t, m in msgs if topic == "/dock_cam_left_rgb"][-1]
-    buf = dict(_column(batches["/cameras/dock_cam_left_rgb"], "Image:buffer"))
+    buf = dict(_column(batches[f"{left}/dock_cam_left_rgb"], "Image:buffer"))
     assert bytes(buf[img[0]][0]) == bytes(img[1].data)
     depth = [(t, m) for topic, _, t, m in msgs if topic == "/dock_cam_left_depth"][-1]
-    dbuf = dict(_column(batches["/cameras/dock_cam_left_depth"], "DepthImage:buffer"))
-    meter = dict(_column(batches["/cameras/dock_cam_left_depth"], "DepthImage:meter"))
+    dbuf = dict(_column(batches[f"{left}/dock_cam_left_depth"], "DepthImage:buffer"))
+    meter = dict(_column(batches[f"{left}/dock_cam_left_depth"], "DepthImage:meter"))
     assert bytes(dbuf[depth[0]][0]) == bytes(depth[1].data) and meter[depth[0]] == [1.0]
     # h264: the first sample is the stream's first access unit, byte for byte
     video = [(t, m) for topic, _, t, m in msgs if topic == "/dock_cam_left_rgb/h264"]
-    samples = _column(batches["/cameras/dock_cam_left_rgb/h264"], "VideoStream:sample")
+    samples = _column(batches[f"{left}/dock_cam_left_rgb/h264"], "VideoStream:sample")
     assert samples[0][0] == video[0][0] and bytes(samples[0][1][0]) == bytes(video[0][1].data)
     # a file Rerun reads as one recording of srr, named after the run
     (entry,) = rerun_chunk.RrdReader(rrd).recordings()
