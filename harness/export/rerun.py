@@ -41,8 +41,9 @@ from typing import Any
 import numpy as np
 
 from harness import runlock
-from harness.errors import SrrError
-from harness.recording.bagread import Connection, Recording, open_indexed
+from harness.errors import SrrError, reason
+from harness.recording.bagread import DECODE_ERRORS, Connection, Recording, open_indexed
+from harness.recording.errors import BagError
 from harness.summary import read_summary
 
 __all__ = ["TIMELINE", "RerunExport", "export_rerun", "rerun_module"]
@@ -235,10 +236,10 @@ class _Exporter:
         tf = {c.id for c in self.bag.connections
               if c.msgtype == _TF and not c.topic.startswith("/gt/")}
         info = {c.id for c in self.bag.connections if c.msgtype == _INFO}
-        for conn, _, raw in self.bag.scan(tf | info):
+        for conn, t_ns, raw in self.bag.scan(tf | info):
             if raw is None or conn.id not in tf | info:
                 continue
-            msg = self.bag.decode(raw, conn)
+            msg = self.decode(conn, t_ns, raw)
             if conn.id in tf:
                 for t in msg.transforms:
                     self.frames.add(t.header.frame_id, t.child_frame_id)
@@ -257,9 +258,23 @@ class _Exporter:
     def _camera_entity(self, frame: str) -> str:
         return f"{self.frames.path(frame)}/image"
 
+    def decode(self, conn: Connection, t_ns: int, raw: bytes) -> Any:
+        try:
+            return self.bag.decode(raw, conn)
+        except DECODE_ERRORS as err:
+            raise BagError(f"{self.bag.shown}: a {conn.msgtype} message on {conn.topic} at "
+                           f"{t_ns / 1e9:.3f} s does not decode: {reason(err)}") from err
+
     def message(self, conn: Connection, t_ns: int, raw: bytes) -> None:
-        msg = self.bag.decode(raw, conn)
+        msg = self.decode(conn, t_ns, raw)
         self.w.at(t_ns)
+        try:
+            self._message(conn, msg)
+        except (ValueError, IndexError) as err:  # decoded, but its fields disagree
+            raise BagError(f"{self.bag.shown}: a {conn.msgtype} message on {conn.topic} at "
+                           f"{t_ns / 1e9:.3f} s does not export: {reason(err)}") from err
+
+    def _message(self, conn: Connection, msg: Any) -> None:
         kind = conn.msgtype
         if kind == _TF and conn.topic.startswith("/gt/"):
             self._gt(conn, msg)
