@@ -409,21 +409,23 @@ def _write(rr: ModuleType, run_dir: Path, summary: dict[str, Any], tmp: Path) ->
     rec.save(str(tmp))
     w = _Writer(rr, rec)
     try:
-        rec.send_recording_name(f"{summary.get('scenario', 'run')} ({run_dir.name})")
-        w.log("/summary", rr.TextDocument(_summary_text(summary), media_type="text/markdown"),
-              static=True)
-        with open_indexed(run_dir / "bag", shown=run_dir / "bag", what="cannot export") as bag:
-            ex = _Exporter(rr, w, bag, _robots(run_dir))
-            ex.tf_tree()
-            ex.pinhole_entities()
-            wanted = [c for c in bag.connections if c.msgtype in _HANDLED]
-            ex.skipped.update({c.topic: c.msgtype for c in bag.connections
-                               if c.msgtype not in _HANDLED | {_INFO}})
-            for conn, t_ns, raw in bag.messages(wanted):
-                ex.message(conn, t_ns, raw)
-            ex.finish()
-        _metric_series(rr, w, run_dir, summary)
-        rec.flush()
+        # a damaged value beyond float32 (Rerun's positions, transforms) becomes inf, unwarned
+        with np.errstate(over="ignore"):
+            rec.send_recording_name(f"{summary.get('scenario', 'run')} ({run_dir.name})")
+            w.log("/summary", rr.TextDocument(_summary_text(summary), media_type="text/markdown"),
+                  static=True)
+            with open_indexed(run_dir / "bag", shown=run_dir / "bag", what="cannot export") as bag:
+                ex = _Exporter(rr, w, bag, _robots(run_dir))
+                ex.tf_tree()
+                ex.pinhole_entities()
+                wanted = [c for c in bag.connections if c.msgtype in _HANDLED]
+                ex.skipped.update({c.topic: c.msgtype for c in bag.connections
+                                   if c.msgtype not in _HANDLED | {_INFO}})
+                for conn, t_ns, raw in bag.messages(wanted):
+                    ex.message(conn, t_ns, raw)
+                ex.finish()
+            _metric_series(rr, w, run_dir, summary)
+            rec.flush()
     finally:
         rec.disconnect()
     return RerunExport(tmp, tmp.stat().st_size, dict(sorted(w.rows.items())),
