@@ -30,6 +30,7 @@ from harness.diff import DiffResult, Tolerance
 from harness.diff import diff_runs as _diff_runs
 from harness.engine import Simulation
 from harness.errors import SrrError
+from harness.export.rerun import RerunExport
 from harness.graph import stage_to_json, stage_to_mermaid
 from harness.live.config import LiveConfig
 from harness.run.baselines import (
@@ -69,6 +70,7 @@ __all__ = [
     "Progress",
     "RecoverResult",
     "RepeatResult",
+    "RerunExport",
     "RunResult",
     "Started",
     "SuitePlan",
@@ -81,6 +83,7 @@ __all__ = [
     "combined_digest",
     "default_run_dir",
     "diff_runs",
+    "export_rerun",
     "graph_text",
     "json_schema",
     "load",
@@ -99,6 +102,7 @@ __all__ = [
     "validate",
     "versions",
     "write_diff",
+    "write_summary_md",
 ]
 
 
@@ -169,6 +173,16 @@ def run_planned_suite(plan: SuitePlan, *, executor: str = "local", jobs: int | N
                      bless_reason=bless_reason, baselines=baselines)
 
 
+def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:
+    """Write a finished run (its bag and ``summary.json``) as a Rerun recording ``out``
+    (``srr export RUN_DIR --rerun FILE.rrd``; needs the rerun extra) on the ``sim_time``
+    timeline; returns what was written (:class:`RerunExport`). Bad input, a live run or a
+    missing rerun-sdk raise :class:`SrrError` (exit 2)."""
+    from harness.export.rerun import export_rerun as _export
+
+    return _export(run_dir, out)
+
+
 def write_diff(result: DiffResult, path: str | Path) -> Path:
     """Write the one-page HTML view of ``result`` (``srr diff --html FILE``): both runs'
     trajectories on one map, their time series overlaid, metric deltas, the topic table and
@@ -176,6 +190,21 @@ def write_diff(result: DiffResult, path: str | Path) -> Path:
     from harness.diff.html import write_diff as _write
 
     return _write(result, path)
+
+
+def write_summary_md(result: SuiteResult | RunResult, path: str | Path, *,
+                     link_base: str | None = None) -> Path:
+    """Write the pull-request summary of a suite's or a run's result (``--summary-md FILE``):
+    GitHub-flavoured Markdown from the same result that gives the exit code, capped at
+    GitHub's comment size. Report links are the suite folder's (the run directory's)
+    relative paths under ``link_base``, by default that folder relative to ``path``."""
+    if isinstance(result, SuiteResult):
+        from harness.suite.markdown import write_markdown as write_suite
+
+        return write_suite(result, Path(path), link_base=link_base)
+    from harness.run.markdown import write_markdown as write_run
+
+    return write_run(result.run_summary, result.run_dir, Path(path), link_base=link_base)
 
 
 #: The files ``srr schema`` describes.

@@ -91,6 +91,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="free disk space to keep: refuse to start below the estimated bag "
                      "size plus this, stop the run below it (recording.min_free_mb)")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    _summary_md_options(run)
     fox = run.add_argument_group("live view", "serve the run over the Foxglove WebSocket "
                                  "protocol while it goes (needs the live extra)")
     fox.add_argument("--foxglove", action="store_true",
@@ -170,6 +171,7 @@ def _parser() -> argparse.ArgumentParser:
                     help="bless the first repeat of every valid, non-flaky group")
     su.add_argument("--reason", default=None, help="why (with --update-baselines)")
     su.add_argument("--quiet", "-q", action="store_true", help="no live lines")
+    _summary_md_options(su)
 
     dif = sub.add_parser("diff", help="compare two runs: recorded topics, first divergence, "
                          "metrics side by side")
@@ -182,6 +184,11 @@ def _parser() -> argparse.ArgumentParser:
                      "every field of the topic)")
     dif.add_argument("--html", type=Path, default=None, help="write a one-page view of both runs")
     dif.add_argument("--json", type=Path, default=None, help="write the result as JSON")
+
+    exp = sub.add_parser("export", help="write a finished run for another viewer (Rerun)")
+    exp.add_argument("run_dir", type=Path)
+    exp.add_argument("--rerun", type=Path, required=True, metavar="FILE.rrd",
+                     help="a Rerun recording on the sim_time timeline (needs the rerun extra)")
 
     base = sub.add_parser("baseline", help="manage baselines")
     base_sub = base.add_subparsers(dest="baseline_command", required=True, parser_class=_Parser)
@@ -198,6 +205,29 @@ def _parser() -> argparse.ArgumentParser:
     setup.add_argument("--cache", type=Path, default=None,
                        help="cache folder (default $SRR_ROS2_CACHE, else ~/.cache/srr/ros2)")
     return p
+
+
+def _summary_md_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--summary-md", type=Path, default=None, metavar="FILE",
+                   help="write a GitHub-flavoured Markdown summary (a pull request's comment "
+                   "or $GITHUB_STEP_SUMMARY)")
+    p.add_argument("--summary-link-base", default=None, metavar="URL",
+                   help="prefix of the summary's report links (default: the output folder "
+                   "relative to FILE)")
+
+
+def _check_summary_md(args: argparse.Namespace) -> None:
+    if args.summary_link_base is not None and args.summary_md is None:
+        raise SrrError("--summary-link-base: only with --summary-md FILE")
+    _writable("--summary-md", args.summary_md)
+
+
+def _write_summary_md(args: argparse.Namespace, result: Any) -> None:
+    from harness import api
+
+    if args.summary_md is not None:
+        path = api.write_summary_md(result, args.summary_md, link_base=args.summary_link_base)
+        _stdout().print(f"summary: {path}", markup=False)
 
 
 def _progress(quiet: bool) -> Any:
@@ -282,6 +312,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
         overrides.append("rtsp.enabled=true")
     if args.compression is not None:
         overrides.append(f"recording.compression={args.compression}")
+    _check_summary_md(args)
+    if args.summary_md is not None and args.repeat != 1:
+        raise SrrError("--summary-md: one run, not a --repeat series (srr suite --repeat N "
+                       "summarizes repeats)")
     scenario = api.load(args.scenario, seed=args.seed, duration=args.duration,
                         srr_gt=args.srr_gt, overrides=overrides)
     if args.update_baseline and args.repeat != 1:
@@ -329,6 +363,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         _stdout().print(str(rep.out_dir))
         return rep.exit_code
     _print_run(res)
+    _write_summary_md(args, res)
     return res.exit_code
 
 
@@ -499,6 +534,18 @@ def _cmd_recover(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_export(args: argparse.Namespace) -> int:
+    from harness import api
+
+    res = api.export_rerun(args.run_dir, args.rerun)
+    _stdout().print(f"{res.path}: {len(res.rows)} entities, {sum(res.rows.values())} rows on "
+                    f"sim_time, {res.bytes / 1e6:.1f} MB", markup=False)
+    if res.skipped:
+        _stdout().print("not exported (no Rerun type for them): " + ", ".join(
+            f"{t} ({m})" for t, m in res.skipped.items()), markup=False)
+    return 0
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from harness import api
 
@@ -607,6 +654,7 @@ def _cmd_suite(args: argparse.Namespace) -> int:
 
     if args.update_baselines and not args.reason:
         raise SrrError("--update-baselines: say why with --reason TEXT")
+    _check_summary_md(args)
     live = not args.quiet and _stdout().is_terminal
     holder: dict[str, Any] = {}
 
@@ -634,13 +682,14 @@ def _cmd_suite(args: argparse.Namespace) -> int:
         _stdout().print(f"blessed {path}", markup=False)
     _stdout().print(f"verdict: {res.verdict}", markup=False)
     _stdout().print(f"{res.out_dir / 'index.html'}", markup=False)
+    _write_summary_md(args, res)
     return int(res.exit_code)
 
 
 COMMANDS = {"run": _cmd_run, "suite": _cmd_suite, "replay": _cmd_replay, "validate": _cmd_validate,
             "graph": _cmd_graph, "inspect": _cmd_inspect, "baseline": _cmd_baseline,
             "report": _cmd_report, "recover": _cmd_recover, "diff": _cmd_diff,
-            "ros2": _cmd_ros2, "schema": _cmd_schema}
+            "ros2": _cmd_ros2, "schema": _cmd_schema, "export": _cmd_export}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -82,7 +82,7 @@ def one_clean_line(code: int, err: str, command: str) -> None:
 @settings(max_examples=40, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(damage=damages, command=st.sampled_from(["inspect", "report", "replay", "bless",
-                                                "diff", "recover"]))
+                                                "diff", "recover", "export"]))
 def test_damaged_mcap(good_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
                       damage: Damage, command: str) -> None:
     run = copy_run(good_run, tmp_path)
@@ -94,17 +94,20 @@ def test_damaged_mcap(good_run: Path, tmp_path: Path, capsys: pytest.CaptureFixt
     shutil.rmtree(out, ignore_errors=True)
     shutil.rmtree(bdir, ignore_errors=True)
     (tmp_path / "d.html").unlink(missing_ok=True)  # examples share tmp_path
+    (tmp_path / "x.rrd").unlink(missing_ok=True)
     argv = {"inspect": ["inspect", str(run / "bag")], "report": ["report", str(run)],
             "replay": ["replay", str(run), "--out", str(out), "-q"],
             "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
                       str(bdir)],
             "diff": ["diff", str(good_run), str(run), "--html", str(tmp_path / "d.html")],
-            "recover": ["recover", str(run)]}[command]
+            "recover": ["recover", str(run)],
+            "export": ["export", str(run), "--rerun", str(tmp_path / "x.rrd")]}[command]
     damaged = mcap.read_bytes()
     code, err = cli(capsys, *argv)
     one_clean_line(code, err, argv[0])
     if code == 2:
         assert not out.exists() and not (tmp_path / "d.html").exists()
+        assert not (tmp_path / "x.rrd").exists() and not list(tmp_path.glob(".*.partial"))
         assert (run / "report.html").read_bytes() == report_before
         assert not list(bdir.glob("*.json")) if bdir.exists() else True
         assert mcap.read_bytes() == damaged  # recover leaves what it refuses untouched
@@ -129,7 +132,7 @@ def ros1_run(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFa
 @settings(max_examples=25, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(damage=damages, command=st.sampled_from(["inspect", "report", "replay", "bless",
-                                                "diff", "recover"]))
+                                                "diff", "recover", "export"]))
 def test_damaged_ros1_recording(ros1_run: Path, tmp_path: Path,
                                 capsys: pytest.CaptureFixture[str], damage: Damage,
                                 command: str) -> None:
@@ -142,17 +145,20 @@ def test_damaged_ros1_recording(ros1_run: Path, tmp_path: Path,
     out, bdir = tmp_path / "out", tmp_path / "baselines"
     shutil.rmtree(out, ignore_errors=True)
     shutil.rmtree(bdir, ignore_errors=True)
+    (tmp_path / "x.rrd").unlink(missing_ok=True)
     argv = {"inspect": ["inspect", str(run / "bag")], "report": ["report", str(run)],
             "replay": ["replay", str(run), "--out", str(out), "-q"],
             "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
                       str(bdir)],
             "diff": ["diff", str(ros1_run), str(run)],
-            "recover": ["recover", str(run)]}[command]
+            "recover": ["recover", str(run)],
+            "export": ["export", str(run), "--rerun", str(tmp_path / "x.rrd")]}[command]
     damaged = file.read_bytes()
     code, err = cli(capsys, *argv)
     one_clean_line(code, err, argv[0])
     if code == 2:
         assert not out.exists() and (run / "report.html").read_bytes() == report_before
+        assert not (tmp_path / "x.rrd").exists()
         assert not list(bdir.glob("*.json")) if bdir.exists() else True
         assert file.read_bytes() == damaged
     if damaged != original and len(damaged) < len(original) * 0.999:
@@ -167,7 +173,7 @@ SUMMARIES = ["", "{", "[]", "null", '{"verdict": 3}', '{"scenario": "x"}',
 
 
 @pytest.mark.parametrize("text", SUMMARIES)
-@pytest.mark.parametrize("command", ["report", "replay", "bless"])
+@pytest.mark.parametrize("command", ["report", "replay", "bless", "export"])
 def test_malformed_summary(good_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
                            text: str, command: str) -> None:
     run = copy_run(good_run, tmp_path)
@@ -176,9 +182,11 @@ def test_malformed_summary(good_run: Path, tmp_path: Path, capsys: pytest.Captur
     argv = {"report": ["report", str(run)],
             "replay": ["replay", str(run), "--out", str(tmp_path / "out"), "-q"],
             "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
-                      str(tmp_path / "b")]}[command]
+                      str(tmp_path / "b")],
+            "export": ["export", str(run), "--rerun", str(tmp_path / "b.rrd")]}[command]
     code, err = cli(capsys, *argv)
     assert code == 2, err
+    assert not (tmp_path / "b.rrd").exists()
     one_clean_line(code, err, argv[0])
     assert "summary.json" in err, err
     assert not (tmp_path / "out").exists() and not (tmp_path / "b").exists()

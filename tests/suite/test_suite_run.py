@@ -127,6 +127,15 @@ def _check_misbehaving(res: Any, out: Path) -> None:
     assert all(by_name[f"pid#{k}"].find("failure").get("type") == "flaky" for k in (1, 2))
     assert junit.get("errors") == "3"
     assert (out / "index.html").is_file()
+    # the pull-request summary: from the same result, the same exit code and rows
+    md = api.write_summary_md(res, out / "pr.md").read_text(encoding="utf-8")
+    assert md.startswith("## 💥 srr suite `misbehaving`: **INVALID** (exit code 3)\n")
+    broken = md.split("### Crashed, timed-out and invalid runs\n\n", 1)[1].split("\n\n")[0]
+    assert [line.split(" | ")[:2] for line in broken.splitlines()[2:]] == [
+        ["| `segfault#1`", "crashed"], ["| `hang#1`", "timed out"], ["| `stuck#1`", "timed out"]]
+    flaky = md.split("### Flaky groups\n\n", 1)[1].split("\n\n")[0].splitlines()[2:]
+    assert len(flaky) == 1 and flaky[0].startswith("| `pid` | ") and "`/cmd_vel`" in flaky[0]
+    assert "[#1](runs/pid/nominal/r1/report.html)" in flaky[0]
 
 
 def test_local_suite_survives_crash_timeout_and_catches_flaky(suite_file: Path,

@@ -1,0 +1,1 @@
+"""Run directories written out for other tools' viewers (``srr export``): :mod:`.rerun`."""
