@@ -222,6 +222,7 @@ def _encode_topic(reader: Any, group: Sequence[Any], root: Path, clips: Sequence
                 if spec.start_s <= t_s <= spec.end_s:
                     if o is None:
                         rel = f"clips/c{k + 1:02d}-{name}.webm"
+                        (root / "clips").mkdir(exist_ok=True)
                         o = open_clips[k] = _Open(WebmWriter(root / rel, w, h, fps, settings),
                                                   f"{VIDEO_DIR}/{rel}", ts, ts)
                     o.writer.add(a, round((ts - o.t0_ns) / 1e6))
@@ -250,7 +251,7 @@ def write_videos(bag_dir: Path, report_dir: Path, clips: Sequence[ClipSpec] = ()
     final = report_dir / VIDEO_DIR
     tmp = report_dir / f".{VIDEO_DIR}.tmp"
     shutil.rmtree(tmp, ignore_errors=True)
-    (tmp / "clips").mkdir(parents=True)
+    tmp.mkdir(parents=True)
     try:
         videos: list[VideoFile] = []
         per_clip: list[list[VideoFile]] = [[] for _ in clips]

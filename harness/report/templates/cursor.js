@@ -1,8 +1,9 @@
 /* The page's time cursor (report.html, diff.html): one simulation time shared by the
    videos, every time-series panel and the map. Plain script, no network.
-   - videos: <video data-t0> (sim time of the file's first frame; sim t = t0 + video time)
-   - panels: <g class="t-axis" data-t0 data-t1 data-x0 data-x1 data-y0 data-y1> in each svg
-   - map: <g class="map-frame" data-sx="d0 r0 k" data-sy="d0 r0 k"> and the JSON of
+   - videos: video elements with data-t0 (sim time of the file's first frame; sim time =
+     t0 + video time)
+   - panels: g.t-axis in each svg (data-t0 data-t1 data-x0 data-x1 data-y0 data-y1)
+   - map: g.map-frame (data-sx, data-sy: "d0 r0 k", px = r0 + (x - d0) k) and the JSON of
      #srr-tracks (name, kind, run, color, t, x, y)
    - anything with data-seek="t" seeks there on click; data-until="t" then plays to t.
    window.srrCursor = {seek(t), time(), play(), pause()} */
