@@ -600,7 +600,8 @@ def _cmd_diff(args: argparse.Namespace) -> int:
         write_json_atomic(args.json, result.to_dict())
         _stdout().print(f"json: {args.json}", markup=False)
     if args.html is not None:
-        _stdout().print(f"html: {api.write_diff(result, args.html, video=args.video)}", markup=False)
+        page = api.write_diff(result, args.html, video=args.video)
+        _stdout().print(f"html: {page}", markup=False)
     return result.exit_code
 
 

@@ -30,8 +30,8 @@ from markupsafe import Markup
 from harness import __version__
 from harness.atomic import write_text_atomic
 from harness.diff.result import DiffResult, TopicDiff
-from harness.report.data import Moment, RunData, load_run
 from harness.errors import SrrError
+from harness.report.data import Moment, RunData, load_run
 from harness.report.html import cursor_context, fmt_value
 from harness.report.images import (
     IMAGE_TYPE,

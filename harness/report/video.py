@@ -24,6 +24,7 @@ clips of at most :data:`MAX_CLIP_S` each. The encoder is :class:`harness.video.c
 
 from __future__ import annotations
 
+import itertools
 import json
 import re
 import shutil
@@ -195,14 +196,8 @@ def _encode_topic(reader: Any, group: Sequence[Any], root: Path, clips: Sequence
         min_gap = int(1e9 / MAX_FPS) - 1
         last_kept = -(2**62)
 
-        def stream() -> Iterator[tuple[int, np.ndarray]]:
-            yield first[0], first[1]  # type: ignore[misc]
-            for ts, px in frames:
-                if px is not None:
-                    yield ts, px
-
-        for ts, px in stream():
-            if ts - last_kept < min_gap:
+        for ts, px in itertools.chain([first], frames):
+            if px is None or ts - last_kept < min_gap:
                 continue
             last_kept = ts
             a = _even_rgb(px)
@@ -239,14 +234,16 @@ def _encode_topic(reader: Any, group: Sequence[Any], root: Path, clips: Sequence
 
 def write_videos(bag_dir: Path, report_dir: Path, clips: Sequence[ClipSpec] = (), *,
                  rates_hz: Mapping[str, float] | None = None,
-                 settings: WebmSettings = WebmSettings()) -> VideoSet | None:
+                 settings: WebmSettings | None = None) -> VideoSet | None:
     """Encode every camera stream of the bag (and the ``clips`` of each) into
     ``report_dir/video/`` with its manifest; returns what was written, or None (and no
     ``video/`` folder) when the bag has no colour camera images.
 
     The files are written into a temporary folder that replaces ``video/`` only once every
     file is complete: a failure (:class:`SrrError`) leaves the previous videos as they were.
-    ``rates_hz``: topic → message rate (the summary's), the nominal frame rate of each."""
+    ``rates_hz``: topic → message rate (the summary's), the nominal frame rate of each;
+    ``settings``: the encoder's (VP9, CRF 30, a keyframe every 2 s by default)."""
+    settings = settings or WebmSettings()
     clips = list(clips)[:MAX_CLIPS]
     final = report_dir / VIDEO_DIR
     tmp = report_dir / f".{VIDEO_DIR}.tmp"

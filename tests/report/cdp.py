@@ -34,31 +34,25 @@ class Page:
         self.ws = ws
         self._id = 0
 
-    def call(self, method: str, timeout: float = 60.0, *, until_event: str | None = None,
-             **params: Any) -> dict[str, Any]:
-        """Send a command and return its result; with ``until_event``, return only once
-        that event has come too (``Page.loadEventFired`` after ``Page.navigate``)."""
+    def call(self, method: str, timeout: float = 60.0, **params: Any) -> dict[str, Any]:
+        """Send a command and return its result (events in between are dropped)."""
         self._id += 1
         mid = self._id
         self.ws.send(json.dumps({"id": mid, "method": method, "params": params}))
-        result: dict[str, Any] | None = None
-        seen = until_event is None
-        while result is None or not seen:
+        while True:
             msg = json.loads(self.ws.recv(timeout=timeout))
             if msg.get("id") == mid:
                 if "error" in msg:
                     raise AssertionError(f"{method}: {msg['error']}")
-                result = dict(msg.get("result", {}))
-            elif until_event is not None and msg.get("method") == until_event:
-                seen = True
-        return result
+                return dict(msg.get("result", {}))
 
     def eval(self, expression: str, timeout: float = 60.0) -> Any:
         res = self.call("Runtime.evaluate", timeout=timeout, expression=expression,
                         awaitPromise=True, returnByValue=True)
         if "exceptionDetails" in res:
             d = res["exceptionDetails"]
-            raise AssertionError(f"page script failed: {d.get('exception', {}).get('description') or d}")
+            why = d.get("exception", {}).get("description") or d
+            raise AssertionError(f"page script failed: {why}")
         return res["result"].get("value")
 
 
@@ -68,8 +62,8 @@ def open_page(binary: str, tmp: Path, url: str) -> Iterator[Page]:
     profile = tmp / f"cdp-profile-{len(list(tmp.glob('cdp-profile-*')))}"
     profile.mkdir()
     cmd = [binary, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", "--remote-debugging-port=0",
-           f"--window-size={VIEWPORT[0]},{VIEWPORT[1]}", "--autoplay-policy=no-user-gesture-required",
-           "--mute-audio",
+           f"--window-size={VIEWPORT[0]},{VIEWPORT[1]}",
+           "--autoplay-policy=no-user-gesture-required", "--mute-audio",
            # file:// pages are one origin: a canvas with a drawn video frame can be read back
            "--allow-file-access-from-files", "about:blank"]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -87,8 +81,21 @@ def open_page(binary: str, tmp: Path, url: str) -> Iterator[Page]:
         page_ws = next(t["webSocketDebuggerUrl"] for t in targets if t["type"] == "page")
         with connect(page_ws, max_size=2**26, open_timeout=30) as ws:
             page = Page(ws)
-            page.call("Page.enable")
-            page.call("Page.navigate", url=url, until_event="Page.loadEventFired")
+            page.call("Page.navigate", url=url)
+            # the page is ours once its document has loaded (an evaluation in the blank
+            # page it replaces may fail: the context goes away)
+            check = (f"location.href === {json.dumps(url)} && "
+                     "document.readyState === 'complete'")
+            deadline = time.monotonic() + STARTUP_S
+            while True:
+                try:
+                    if page.eval(check) is True:
+                        break
+                except AssertionError:
+                    pass
+                if time.monotonic() > deadline:
+                    raise AssertionError(f"{url} did not load")
+                time.sleep(0.05)
             yield page
     finally:
         proc.terminate()

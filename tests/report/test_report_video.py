@@ -141,7 +141,7 @@ def test_seeking_to_a_moment_shows_the_recorded_frame(page: Page,
         return max(i for i, ft in enumerate(times) if ft <= t + 1e-9)
 
     def moving(m: Any) -> bool:  # the moment's frame differs from the one before it
-        return any(0 < (i := shown_at(t, m.t_s))
+        return any((i := shown_at(t, m.t_s)) > 0
                    and psnr(frames[t][i][1], frames[t][i - 1][1]) < 40 for t in topics)
 
     moment = next(m for m in data.moments if moving(m))

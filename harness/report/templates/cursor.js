@@ -32,7 +32,6 @@
     l.setAttribute("y1", g.getAttribute("data-y0"));
     l.setAttribute("y2", g.getAttribute("data-y1"));
     svg.appendChild(l);
-    svg.classList.add("seekable");
     svg.addEventListener("click", function (ev) {
       var p = svg.createSVGPoint();
       p.x = ev.clientX; p.y = ev.clientY;
