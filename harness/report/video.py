@@ -280,9 +280,13 @@ def write_videos(bag_dir: Path, report_dir: Path, clips: Sequence[ClipSpec] = ()
         tmp.rename(final)
         shutil.rmtree(old, ignore_errors=True)
         return result
-    except (VideoError, OSError) as err:
+    except SrrError as err:  # a bag that does not open
         shutil.rmtree(tmp, ignore_errors=True)
         raise SrrError(f"{final}: the camera videos could not be written: {err}") from err
+    except Exception as err:  # a damaged chunk or message, a full disk: the videos only
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise SrrError(f"{final}: the camera videos could not be written "
+                       f"({type(err).__name__}: {err})") from err
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

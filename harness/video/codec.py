@@ -293,8 +293,9 @@ class WebmSettings:
     def options(self, fps: float) -> dict[str, str]:
         gop = str(max(1, round(self.keyframe_s * fps)))
         if self.codec == "vp9":
-            # constant quality (b=0), one thread, no row threads: the same bytes every run
-            return {"crf": str(self.crf), "b": "0", "deadline": "good", "cpu-used": "4",
+            # constant quality (b=0), one thread, no row threads: the same bytes every run;
+            # realtime speed 6: ~10x faster than "good" speed 4 for ~10 % more bytes
+            return {"crf": str(self.crf), "b": "0", "deadline": "realtime", "cpu-used": "6",
                     "row-mt": "0", "g": gop, "auto-alt-ref": "0", "lag-in-frames": "0"}
         return {"crf": str(self.crf), "preset": "8", "g": gop,
                 "svtav1-params": "lp=1:pin=0"}
