@@ -5,7 +5,8 @@ Runs ``scenarios/dock_worker_crossing.yaml`` once as bundled (36 s, two 160×120
 5 Hz, raw images in the bag), then, alternating, best of ``--repeats``:
 
 * ``write_report`` without videos and with them (VP9 WebM of each camera plus the clips):
-  the difference is the time the videos add to the run;
+  the difference is the time the videos add to the run (wall and CPU time of the process,
+  which other jobs on the machine disturb less);
 * the bytes of ``video/`` (whole-run files, clips) beside ``report.html`` and the bag;
 * the page in headless Chromium (DevTools protocol, network blocked): from navigation to the
   ``load`` event, and to every ``<video>`` having its first frame (``readyState`` ≥ 2).
@@ -75,14 +76,16 @@ def main() -> None:
         res = api.run_scenario(sc, source=str(SCENARIO), out=tmp / "run")
         run_s = time.perf_counter() - t0
         run = res.run_dir
-        plain, video = [], []
+        plain, video, plain_cpu, video_cpu = [], [], [], []
         for _ in range(args.repeats):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             write_report(run, video=False)
             plain.append(time.perf_counter() - t0)
-            t0 = time.perf_counter()
+            plain_cpu.append(time.process_time() - c0)
+            t0, c0 = time.perf_counter(), time.process_time()
             write_report(run, video=True)
             video.append(time.perf_counter() - t0)
+            video_cpu.append(time.process_time() - c0)
         vs = read_videos(run)
         assert vs is not None
         whole = sum(v.bytes for v in vs.videos)
@@ -95,6 +98,7 @@ def main() -> None:
                         for v in vs.videos],
             "report_s_without_video": min(plain), "report_s_with_video": min(video),
             "video_s": min(video) - min(plain),
+            "video_cpu_s": min(video_cpu) - min(plain_cpu),
             "video_bytes_whole_run": whole, "video_bytes_clips": clips, "clips": len(vs.clips),
             "report_html_bytes": (run / "report.html").stat().st_size,
             "bag_bytes": _bytes(run / "bag"),

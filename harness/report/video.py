@@ -190,6 +190,10 @@ def _encode_topic(reader: Any, group: Sequence[Any], root: Path, clips: Sequence
             continue
         topic = group[0].topic if group[0].msgtype == IMAGE_TYPE else conn.topic
         name = _slug(topic)
+        n = 1
+        while (root / f"{name}.webm").exists():  # "/a/b" and "/a_b": one name, two files
+            n += 1
+            name = f"{_slug(topic)}-{n}"
         main: _Open | None = None
         open_clips: dict[int, _Open] = {}
         done: dict[int, VideoFile] = {}
