@@ -23,6 +23,7 @@ from harness import api
 from harness.cli import main
 from harness.recording.bagread import open_indexed
 from harness.report.data import load_run
+from harness.report.html import clip_specs
 from harness.report.images import image_array
 from harness.report.video import read_videos
 from harness.video.codec import psnr
@@ -106,6 +107,13 @@ def test_videos_are_vp9_files_beside_the_report(failing_run: api.RunResult) -> N
         assert f'<video src="{v.file}" data-t0="{v.t0_s:.6f}"' in html
         frames = _frames(run / "bag", v.topic)
         assert v.frames == len(frames) and v.t0_s == frames[0][0]
+    # a clip for each regressed metric's windows and each moment, listed above the plots
+    data = load_run(run)
+    assert [c.spec for c in vs.clips] == clip_specs(data)
+    assert {c.spec.kind for c in vs.clips} == {"metric", "moment"}
+    for m in data.moments:
+        assert any(c.spec.start_s <= m.t_s <= c.spec.end_s for c in vs.clips)
+    assert html.index('id="clips"') < html.index('id="focus"')
     for c in vs.clips:
         assert f'href="{c.files[0].file}"' in html
         assert all(c.spec.start_s - 1e-6 <= f.t0_s <= f.last_s <= c.spec.end_s + 1e-6
