@@ -323,10 +323,14 @@ def clip_specs(data: RunData) -> list[ClipSpec]:
             seen.add(key)
             out.append(ClipSpec(label, at, start, stop, kind))
 
+    names: dict[tuple[float, float], list[str]] = {}  # window → the metrics it explains
     for name in _headline(data).metrics:
-        for a, b in metric_windows(name, data)[:3]:
-            when = f"@{a:.2f} s" if abs(b - a) < 1e-9 else f"{a:.2f}–{b:.2f} s"
-            add(f"{name} {when}", a, a, b, "metric")
+        for w in metric_windows(name, data)[:3]:
+            names.setdefault(w, []).append(name)
+    for (a, b), ms in names.items():
+        when = f"@{a:.2f} s" if abs(b - a) < 1e-9 else f"{a:.2f}–{b:.2f} s"
+        more = f" +{len(ms) - 1} more" if len(ms) > 1 else ""
+        add(f"{ms[0]}{more} {when}", a, a, b, "metric")
     for m in data.moments:
         add(f"M{m.number} {m.t_s:.2f} s — {m.label}", m.t_s, m.t_s, m.t_s, "moment")
     return out
