@@ -1,10 +1,11 @@
-"""``srr diff --html``: one self-contained page with both runs, opened in a real headless
-Chromium with the network unreachable."""
+"""``srr diff --html``: one page with both runs (and their camera videos side by side),
+opened in a real headless Chromium with the network unreachable."""
 
 from __future__ import annotations
 
 import json
 import re
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -200,3 +201,24 @@ def test_both_runs_play_side_by_side_on_one_cursor(chromium: str,
                 + v.currentTime; })); } });
           document.getElementById("cursor-play").click(); })""")
         assert min(played) > 2.5 and max(played) - min(played) < 0.5, played
+
+
+def test_a_run_without_videos_gets_them_beside_the_page(runs: Runs, tmp_path: Path) -> None:
+    """A run rendered with --no-video: its bag's cameras are encoded beside the page; the
+    run directory is not written."""
+    b = tmp_path / "dock_12"
+    shutil.copytree(runs.get("dock_12"), b)
+    assert main(["report", str(b), "--no-video"]) == 0
+    before = sorted(p.relative_to(b) for p in b.rglob("*"))
+    page = tmp_path / "out" / "diff.html"
+    page.parent.mkdir()
+    assert main(["diff", str(runs.get("dock_11")), str(b), "--html", str(page)]) == 1
+    assert sorted(p.relative_to(b) for p in b.rglob("*")) == before
+    srcs = re.findall(r'<video src="([^"]*)"[^>]*data-run="(a|b)"', page.read_text())
+    assert sorted(r for _, r in srcs) == ["a", "a", "b", "b"]
+    for src, run in srcs:
+        assert (page.parent / src).is_file()
+        assert src.startswith("diff.html.video/b/video/") == (run == "b"), src
+    assert main(["diff", str(runs.get("dock_11")), str(b), "--html", str(page),
+                 "--no-video"]) == 1
+    assert "<video" not in page.read_text()
