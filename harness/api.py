@@ -13,6 +13,7 @@ that every published message was recorded, and writes the run directory:
     graphs.json     the action graphs as built (``srr graph --format json``), and
     graphs.mmd      as Mermaid (``srr graph``): the report draws them from here
     report.html     the reviewer's page (harness.report), written last
+    video/          its camera videos and clips (WebM), played in report.html
     incomplete.json only while the run has not finished (harness.runmarker): a killed run
                     keeps it, and ``recover`` turns such a directory back into a valid one
     run.lock        only while a process writes the directory (harness.runlock): its lock
@@ -183,13 +184,14 @@ def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:
     return _export(run_dir, out)
 
 
-def write_diff(result: DiffResult, path: str | Path) -> Path:
+def write_diff(result: DiffResult, path: str | Path, *, video: bool = True) -> Path:
     """Write the one-page HTML view of ``result`` (``srr diff --html FILE``): both runs'
-    trajectories on one map, their time series overlaid, metric deltas, the topic table and
-    camera keyframes side by side at the first divergence and the worst moments."""
+    trajectories on one map, their time series overlaid, metric deltas, the topic table,
+    camera keyframes side by side at the first divergence and the worst moments, and (unless
+    ``video`` is False) both runs' camera videos side by side on one time cursor."""
     from harness.diff.html import write_diff as _write
 
-    return _write(result, path)
+    return _write(result, path, video=video)
 
 
 def write_summary_md(result: SuiteResult | RunResult, path: str | Path, *,

@@ -143,6 +143,8 @@ def _parser() -> argparse.ArgumentParser:
 
     rep = sub.add_parser("report", help="(re-)render a run directory's report.html")
     rep.add_argument("run_dir", type=Path)
+    rep.add_argument("--no-video", dest="video", action="store_false",
+                     help="no camera videos in the page (and remove the run's video/ folder)")
 
     su = sub.add_parser("suite", help="run many scenarios (sweeps, repeats) in parallel or on "
                         "Ray; write summary.json, junit.xml and index.html")
@@ -183,6 +185,8 @@ def _parser() -> argparse.ArgumentParser:
                      "'/odom:pose.pose.position.*=0.01,0.05' (repeatable; no field glob: "
                      "every field of the topic)")
     dif.add_argument("--html", type=Path, default=None, help="write a one-page view of both runs")
+    dif.add_argument("--no-video", dest="video", action="store_false",
+                     help="--html without the runs' camera videos")
     dif.add_argument("--json", type=Path, default=None, help="write the result as JSON")
 
     exp = sub.add_parser("export", help="write a finished run for another viewer (Rerun)")
@@ -549,7 +553,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 def _cmd_report(args: argparse.Namespace) -> int:
     from harness import api
 
-    path = api.report(args.run_dir)
+    path = api.report(args.run_dir, video=args.video)
     _stdout().print(str(path), markup=False)
     return 0
 
@@ -643,7 +647,8 @@ def _cmd_diff(args: argparse.Namespace) -> int:
         write_json_atomic(args.json, result.to_dict())
         _stdout().print(f"json: {args.json}", markup=False)
     if args.html is not None:
-        _stdout().print(f"html: {api.write_diff(result, args.html)}", markup=False)
+        page = api.write_diff(result, args.html, video=args.video)
+        _stdout().print(f"html: {page}", markup=False)
     return result.exit_code
 
 

@@ -7,9 +7,13 @@ the pixels that differ) at the numbered moments — the first divergence, each c
 differing frame, the largest gap between the runs' robots and workers — the time series of
 both runs overlaid, and every numeric field that differs.
 
-Like the per-run report it has no script and loads nothing: inline SVG (drawn by
-:mod:`harness.report.plots`), base64 PNG, inline CSS. The runs are read with
-:func:`harness.report.data.load_run`, so what is plotted is what the report plots.
+Both runs' camera videos play side by side under one time cursor shared with the map and
+the time series (the report's cursor, ``templates/cursor.js``): the videos each run's report
+wrote (``<run>/video/``), linked relatively; for a run without them (rendered with
+``--no-video``, or from before srr wrote videos) they are encoded beside the page, into
+``<page>.video/a`` or ``b`` — a run directory is only read. Otherwise the page loads nothing:
+inline SVG (drawn by :mod:`harness.report.plots`), base64 PNG, inline CSS. The runs are read
+with :func:`harness.report.data.load_run`, so what is plotted is what the report plots.
 """
 
 from __future__ import annotations
@@ -26,8 +30,9 @@ from markupsafe import Markup
 from harness import __version__
 from harness.atomic import write_text_atomic
 from harness.diff.result import DiffResult, TopicDiff
+from harness.errors import SrrError
 from harness.report.data import Moment, RunData, load_run
-from harness.report.html import fmt_value
+from harness.report.html import cursor_context, fmt_value
 from harness.report.images import (
     IMAGE_TYPE,
     IMAGE_TYPES,
@@ -36,8 +41,16 @@ from harness.report.images import (
     encode_png,
     nearest_images,
 )
-from harness.report.plots import BASELINE, CANDIDATE, map_legend, map_svg, time_panels
+from harness.report.plots import (
+    BASELINE,
+    CANDIDATE,
+    map_legend,
+    map_svg,
+    map_tracks,
+    time_panels,
+)
 from harness.report.templates import template
+from harness.report.video import VideoSet, read_videos, write_videos
 
 __all__ = ["diff_moments", "render_diff", "write_diff"]
 
@@ -202,10 +215,24 @@ def _run_info(r: Any, data: RunData | None) -> list[tuple[str, str]]:
     return out
 
 
+def _run_videos(data: RunData, key: str, page: Path) -> tuple[VideoSet | None, str | None]:
+    """The run's report videos, or (none there) its bag's encoded beside the page."""
+    found = read_videos(data.run_dir)
+    if found is not None or not (data.run_dir / "bag").is_dir():
+        return found, None
+    try:
+        return write_videos(data.run_dir / "bag", page.parent / f"{page.name}.video" / key), \
+            None
+    except SrrError as err:
+        return None, f"camera videos: {err}"
+
+
 def render_diff(result: DiffResult, *, data_a: RunData | None = None,
-                data_b: RunData | None = None) -> str:
+                data_b: RunData | None = None, page: Path | None = None,
+                videos: tuple[VideoSet | None, VideoSet | None] = (None, None)) -> str:
     """The HTML text of the comparison page. ``data_a`` / ``data_b`` (what
-    :func:`load_run` gives) are read from the run directories when not passed."""
+    :func:`load_run` gives) are read from the run directories when not passed. ``videos``:
+    A's and B's camera videos, linked relative to ``page`` (the page's path)."""
     a = data_a if data_a is not None else load_run(result.a.path)
     b = data_b if data_b is not None else load_run(result.b.path)
     moments = diff_moments(result, a, b)
@@ -238,7 +265,15 @@ def render_diff(result: DiffResult, *, data_a: RunData | None = None,
     moved = sum(m.status != "ok" for m in result.metrics)
     if result.metrics:
         counts.append(f"{moved} of {len(result.metrics)} metrics moved beyond tolerance")
-    toc = [("runs", "Runs"), ("topics", "Topics"), ("metrics", "Metrics")]
+    sets = [(k, f"{k.upper()}: ", vs) for k, vs in zip("ab", videos, strict=True)
+            if vs is not None]
+    cursor = cursor_context(max(a.end_s, b.end_s), map_tracks(runs) if has_map else [], sets,
+                            (page or Path("diff.html")).absolute().parent)
+    cursor["videos"].sort(key=lambda v: (v["topic"], v["run"]))  # each camera: A beside B
+    toc = [("runs", "Runs")]
+    if cursor["videos"]:
+        toc.append(("video", "Video"))
+    toc += [("topics", "Topics"), ("metrics", "Metrics")]
     if has_map:
         toc.append(("map", "Map"))
     if kf_rows:
@@ -272,6 +307,7 @@ def render_diff(result: DiffResult, *, data_a: RunData | None = None,
         "keyframes": kf_rows,
         "panels": [{"key": p.key, "group": p.group, "title": p.title, "svg": Markup(p.svg),
                     "legend": p.legend, "note": p.note, "highlight": ""} for p in panels],
+        "cursor": cursor,
         "fields": fields[:MAX_FIELDS],
         "fields_more": max(0, len(fields) - MAX_FIELDS),
         "srr_version": __version__,
@@ -279,8 +315,17 @@ def render_diff(result: DiffResult, *, data_a: RunData | None = None,
     return template("diff.html").render(**ctx)
 
 
-def write_diff(result: DiffResult, path: str | Path) -> Path:
-    """Render the page and write it to ``path`` atomically; returns the path."""
+def write_diff(result: DiffResult, path: str | Path, *, video: bool = True) -> Path:
+    """Render the page and write it to ``path`` atomically, with both runs' camera videos
+    (``video=False``: none); returns the path."""
     path = Path(path)
-    write_text_atomic(path, render_diff(result))
+    a, b = load_run(result.a.path), load_run(result.b.path)
+    videos: tuple[VideoSet | None, VideoSet | None] = (None, None)
+    if video:
+        (va, pa), (vb, pb) = _run_videos(a, "a", path), _run_videos(b, "b", path)
+        videos = (va, vb)
+        a.problems.extend([pa] if pa else [])
+        b.problems.extend([pb] if pb else [])
+    write_text_atomic(path, render_diff(result, data_a=a, data_b=b, page=path,
+                                        videos=videos))
     return path

@@ -1,7 +1,8 @@
 """Outputs for people and CI systems: the HTML report of a run, the suite page, JUnit XML.
 
-* :func:`write_report` / :func:`render_report` (:mod:`harness.report.html`): one
-  self-contained ``report.html`` per run directory (``srr report RUN_DIR``).
+* :func:`write_report` / :func:`render_report` (:mod:`harness.report.html`): one static
+  ``report.html`` per run directory (``srr report RUN_DIR``), with the camera videos and
+  clips beside it in ``video/`` (:mod:`harness.report.video`).
 * :func:`write_suite_page` / :func:`render_suite_page` (:mod:`harness.report.suite_page`):
   ``OUT/index.html`` of ``srr suite`` from its ``summary.json`` — groups worst first with
   links to every repeat's report, statistics, sweep plots and night-to-night history.

@@ -8,12 +8,18 @@ keyframes at those moments, the other time series, every metric, the health gate
 action graphs, the topic table, versions and the command to reproduce the run, and the
 resolved scenario.
 
-The page has no script and loads nothing: plots are inline SVG, images base64 PNG, CSS
-inline.
+Each camera's recording plays in the page (:mod:`harness.report.video`: WebM files in
+``video/`` beside the page, linked relatively) under one time cursor shared with every time
+series and the map (a small inline script, ``templates/cursor.js``); short clips around the
+regressed or failing metrics' windows and the moments are listed right under the summary.
+Otherwise the page loads nothing: plots are inline SVG, keyframes base64 PNG (kept for
+printing and for runs without cameras), CSS inline.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import shlex
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -24,6 +30,7 @@ from markupsafe import Markup
 
 from harness import __version__
 from harness.atomic import write_text_atomic
+from harness.errors import SrrError
 from harness.frames import Frames
 from harness.metrics.safety import NEAR_AT
 from harness.regression.verdict import GOAL_REACHED, GOAL_REACHED_AT
@@ -36,13 +43,24 @@ from harness.report.plots import (
     RunStyle,
     map_legend,
     map_svg,
+    map_tracks,
     time_panels,
 )
 from harness.report.templates import template
+from harness.report.video import (
+    CLIP_PAD_S,
+    MAX_CLIP_S,
+    MAX_CLIPS,
+    ClipSpec,
+    VideoSet,
+    remove_videos,
+    write_videos,
+)
 from harness.scenario import Scenario
 from harness.summary import replay_note
 
-__all__ = ["GraphRebuild", "fmt_value", "fmt_windows", "render_report", "write_report"]
+__all__ = ["GraphRebuild", "clip_specs", "cursor_context", "fmt_value", "fmt_windows",
+           "render_report", "write_report"]
 
 #: The action graphs of a run directory without ``graphs.json``, from its scenario, summary
 #: and directory (``harness.api`` builds the scene again; the report itself never does).
@@ -78,6 +96,15 @@ def fmt_windows(ws: Sequence[tuple[float, float]], limit: int = 3) -> str:
         parts.append(f"@{a:.2f}" if abs(b - a) < 1e-9 else f"{a:.2f}–{b:.2f}")
     more = len(ws) - limit
     return ", ".join(parts) + (f" +{more} more" if more > 0 else "")
+
+
+def window_links(ws: Sequence[tuple[float, float]], limit: int = 3) -> dict[str, Any] | None:
+    """The windows of :func:`fmt_windows` as links the page's cursor seeks to (their start)."""
+    if not ws:
+        return None
+    links = [{"text": f"@{a:.2f}" if abs(b - a) < 1e-9 else f"{a:.2f}–{b:.2f}", "t": a}
+             for a, b in list(ws)[:limit]]
+    return {"links": links, "more": max(0, len(ws) - limit)}
 
 
 def _human_bytes(n: Any) -> str:
@@ -120,6 +147,7 @@ def _comparison_row(e: dict[str, Any], data: RunData) -> dict[str, Any]:
         "better": {"lower": "lower is better", "higher": "higher is better"}.get(
             str(direction), ""),
         "when": fmt_windows(metric_windows(e["name"], data)),
+        "windows": window_links(metric_windows(e["name"], data)),
         "detail": m.get("detail", ""),
     }
 
@@ -139,6 +167,7 @@ def _metric_row(m: dict[str, Any], data: RunData) -> dict[str, Any]:
         "verdict": m.get("verdict") or "",
         "detail": m.get("detail", ""),
         "when": fmt_windows(metric_windows(m["name"], data)),
+        "windows": window_links(metric_windows(m["name"], data)),
         "failing": _failing(m),
     }
 
@@ -278,17 +307,83 @@ def _exact_command(data: RunData) -> str:
     return " ".join(shlex.quote(p) for p in parts)
 
 
+def clip_specs(data: RunData) -> list[ClipSpec]:
+    """What the report's clips show, most important first: each window of the regressed
+    (or failing) metrics, then each moment; :data:`CLIP_PAD_S` before and after, at most
+    :data:`MAX_CLIP_S` long, at most :data:`MAX_CLIPS`, none twice."""
+    end = data.end_s
+    out: list[ClipSpec] = []
+    seen: set[tuple[float, float]] = set()
+
+    def add(label: str, at: float, a: float, b: float, kind: str) -> None:
+        start = max(0.0, a - CLIP_PAD_S)
+        stop = min(end, max(b, a) + CLIP_PAD_S, start + MAX_CLIP_S)
+        key = (round(start, 2), round(stop, 2))
+        if stop > start and key not in seen and len(out) < MAX_CLIPS:
+            seen.add(key)
+            out.append(ClipSpec(label, at, start, stop, kind))
+
+    names: dict[tuple[float, float], list[str]] = {}  # window → the metrics it explains
+    for name in _headline(data).metrics:
+        for w in metric_windows(name, data)[:3]:
+            names.setdefault(w, []).append(name)
+    for (a, b), ms in names.items():
+        when = f"@{a:.2f} s" if abs(b - a) < 1e-9 else f"{a:.2f}–{b:.2f} s"
+        more = f" +{len(ms) - 1} more" if len(ms) > 1 else ""
+        add(f"{ms[0]}{more} {when}", a, a, b, "metric")
+    for m in data.moments:
+        add(f"M{m.number} {m.t_s:.2f} s — {m.label}", m.t_s, m.t_s, m.t_s, "moment")
+    return out
+
+
+def _safe_json(value: Any) -> Markup:
+    """JSON for an inline ``<script type="application/json">`` (``</`` cannot end it)."""
+    return Markup(json.dumps(value, separators=(",", ":")).replace("</", "<\\/"))
+
+
+def cursor_context(end_s: float, tracks: list[dict[str, object]],
+                   videos: Sequence[tuple[str, str, VideoSet]], page_dir: Path
+                   ) -> dict[str, Any]:
+    """What the time cursor's bar and script need: the time axis's end, the map's tracks
+    and each run's videos — ``(run key, label prefix, VideoSet of the run's folder)`` with
+    the files linked relative to ``page_dir`` (``/``-separated, so ``file://`` finds them)."""
+    items = []
+    for run, prefix, vs in videos:
+        for v in vs.videos:
+            src = Path(os.path.relpath(vs.path(v), page_dir)).as_posix()
+            items.append({"src": src, "t0_s": v.t0_s, "topic": v.topic, "run": run,
+                          "width": v.width, "height": v.height,
+                          "label": f"{prefix}{v.topic} · {v.frames} frames"})
+    return {"end_s": end_s, "videos": items, "tracks_json": _safe_json(tracks)}
+
+
+def _clips(videos: VideoSet | None) -> list[dict[str, Any]]:
+    if videos is None:
+        return []
+    return [{"label": c.spec.label, "kind": c.spec.kind, "at": c.spec.at_s,
+             "start": c.spec.start_s, "end": c.spec.end_s,
+             "files": [{"href": f.file, "topic": f.topic, "bytes": _human_bytes(f.bytes)}
+                       for f in c.files]} for c in videos.clips]
+
+
 def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
                   scenario: Scenario | None = None, frames: Frames | None = None,
-                  rebuild_graphs: GraphRebuild | None = None) -> str:
+                  rebuild_graphs: GraphRebuild | None = None,
+                  videos: VideoSet | None = None) -> str:
     """The HTML text of a run directory's report.
 
     ``summary``, ``scenario`` and ``frames`` may be passed when the caller already has them
     (``run_scenario`` does); otherwise they are read from ``run_dir``. The action graphs are
     the run's ``graphs.json``; for a run directory without one, ``rebuild_graphs`` (given by
     :mod:`harness.api`, which can build the scene) supplies them, or the page says they are
-    missing. Raises :class:`SrrError` when ``run_dir`` is not a run directory."""
+    missing. ``videos``: the run's videos (:func:`write_report` writes them), played in the
+    page; None: none. Raises :class:`SrrError` when ``run_dir`` is not a run directory."""
     data = load_run(Path(run_dir), summary=summary, scenario=scenario, frames=frames)
+    return _render(data, rebuild_graphs, videos, [])
+
+
+def _render(data: RunData, rebuild_graphs: GraphRebuild | None, videos: VideoSet | None,
+            video_problems: list[str]) -> str:
     s = data.summary
     verdict = str(s.get("verdict", "INVALID"))
     head = _headline(data)
@@ -305,7 +400,8 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
     others = [p for p in panels if p not in focus]
     graphs, mermaid, graph_problem = _graphs(data, rebuild_graphs)
     kf_rows, kf_problem = _keyframes(data)
-    problems = list(data.problems) + [p for p in (graph_problem, kf_problem) if p]
+    problems = list(data.problems) + [p for p in (graph_problem, kf_problem) if p] \
+        + video_problems
 
     reasons = [str(r) for r in s.get("reasons", [])]
     baseline = s.get("baseline")
@@ -327,6 +423,11 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
         no_baseline = next((r for r in reasons if "baseline" in r), "")
         reasons = [r for r in reasons if r != no_baseline]
     toc = [("headline", "Summary")]
+    clips = _clips(videos)
+    if clips:
+        toc.append(("clips", "Clips"))
+    if videos is not None:
+        toc.append(("video", "Video"))
     if focus:
         toc.append(("focus", "In time"))
     if data.scenario is not None and data.tracks:
@@ -382,6 +483,10 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
         "map_legend": map_legend(data) if data.tracks else [],
         "moments": data.moments,
         "keyframes": kf_rows,
+        "clips": clips,
+        "cursor": cursor_context(
+            data.end_s, map_tracks(data) if data.scenario is not None and data.tracks else [],
+            [("", "", videos)] if videos is not None else [], data.run_dir),
         "comparison": [_comparison_row(e, data) for e in s.get("comparison") or []],
         "not_compared": all(isinstance(e, dict) and e.get("status") == "not_compared"
                             for e in s.get("comparison") or []),
@@ -406,11 +511,26 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
 
 def write_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
                  scenario: Scenario | None = None, frames: Frames | None = None,
-                 rebuild_graphs: GraphRebuild | None = None) -> Path:
-    """Render and write ``<run_dir>/report.html`` (atomically); returns its path."""
+                 rebuild_graphs: GraphRebuild | None = None, video: bool = True) -> Path:
+    """Render and write ``<run_dir>/report.html`` (atomically), with the camera videos and
+    clips in ``<run_dir>/video/`` (written first; ``video=False``, or a bag without camera
+    images: none, and an old ``video/`` folder is removed). A bag whose images cannot be
+    encoded costs the videos, not the report: the page says why. Returns the page's path."""
     run_dir = Path(run_dir)
-    text = render_report(run_dir, summary=summary, scenario=scenario, frames=frames,
-                         rebuild_graphs=rebuild_graphs)
+    data = load_run(run_dir, summary=summary, scenario=scenario, frames=frames)
+    videos: VideoSet | None = None
+    problems: list[str] = []
+    if video and (run_dir / "bag").is_dir():
+        rates = {name: float(t["rate_hz"]) for name, t in
+                 (data.summary.get("topics") or {}).items()
+                 if isinstance(t, dict) and isinstance(t.get("rate_hz"), (int, float))}
+        try:
+            videos = write_videos(run_dir / "bag", run_dir, clip_specs(data), rates_hz=rates)
+        except SrrError as err:
+            problems.append(f"camera videos: {err}")
+    else:
+        remove_videos(run_dir)
+    text = _render(data, rebuild_graphs, videos, problems)
     path = run_dir / REPORT_NAME
     write_text_atomic(path, text)
     return path

@@ -80,22 +80,25 @@ def data_uri(png: bytes) -> str:
     return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
 
 
-def _shrink(a: np.ndarray) -> np.ndarray:
-    factor = -(-a.shape[1] // MAX_WIDTH)
+def _shrink(a: np.ndarray, max_width: int | None = MAX_WIDTH) -> np.ndarray:
+    if max_width is None:
+        return a
+    factor = -(-a.shape[1] // max_width)
     return a[::factor, ::factor] if factor > 1 else a
 
 
-def image_array(msg: object) -> np.ndarray | None:
+def image_array(msg: object, max_width: int | None = MAX_WIDTH) -> np.ndarray | None:
     """An ``(h, w, 3)`` RGB or ``(h, w)`` grey array of a ``sensor_msgs/Image`` (or of a
     JPEG or PNG ``sensor_msgs/CompressedImage``), or None for encodings that are not colour or
-    8-bit grey (depth images)."""
+    8-bit grey (depth images). Wider than ``max_width``: shrunk by an integer factor (None:
+    full size)."""
     if getattr(msg, "__msgtype__", "") == COMPRESSED_TYPE:
         fmt = str(getattr(msg, "format", "")).lower()
         if ";" in fmt or not ("jpeg" in fmt or "png" in fmt):  # "16UC1; png": depth
             return None
         blob = bytes(msg.data)  # type: ignore[attr-defined]
         try:
-            return _shrink(decode_rgb(blob, "mjpeg" if "jpeg" in fmt else "png"))
+            return _shrink(decode_rgb(blob, "mjpeg" if "jpeg" in fmt else "png"), max_width)
         except VideoError:
             return None
     enc = str(getattr(msg, "encoding", "")).lower()
@@ -111,7 +114,7 @@ def image_array(msg: object) -> np.ndarray | None:
         a = a[:, :, :3]
     if ch == 1:
         a = a[:, :, 0]
-    return _shrink(a)
+    return _shrink(a, max_width)
 
 
 def _is_idr(data: bytes) -> bool:

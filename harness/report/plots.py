@@ -29,7 +29,7 @@ from harness.report.data import (
     Track,
     world_map,
 )
-from harness.report.svg import Scale, Svg, decimate, nice_ticks, tick_label
+from harness.report.svg import Scale, Svg, decimate, fmt_num, nice_ticks, tick_label
 from harness.scenario import Scenario
 
 __all__ = [
@@ -43,6 +43,7 @@ __all__ = [
     "control_panel",
     "map_legend",
     "map_svg",
+    "map_tracks",
     "perception_panels",
     "safety_panel",
     "time_panels",
@@ -143,6 +144,10 @@ class TimeAxis:
         svg.text(WIDTH - RIGHT, bottom + 26, "sim time (s)", class_="axis-label",
                  text_anchor="end")
         svg.line(LEFT, bottom, WIDTH - RIGHT, bottom, class_="axis")
+        # where the page's time cursor finds this panel's axis (sim seconds → x)
+        svg.el("g", class_="t-axis", data_t0="0", data_t1=f"{self.end_s:.6g}",
+               data_x0=fmt_num(LEFT), data_x1=fmt_num(WIDTH - RIGHT), data_y0=fmt_num(top),
+               data_y1=fmt_num(bottom))
         for m in moments:
             x = self.x(m.t_s)
             svg.line(x, top - 6, x, bottom, class_="moment-line")
@@ -635,6 +640,9 @@ def map_svg(data: RunData | Sequence[tuple[RunData, RunStyle]], *, width: float 
                      text_anchor="end")
     for run, st in layers:
         _map_run(svg, X, Y, run, st, planned=run is data)
+    # world → map pixels, for the page's time cursor: px = r0 + (x - d0) * k
+    svg.el("g", class_="map-frame", data_sx=f"{X.d0:.6g} {X.r0:.6g} {X.k:.6g}",
+           data_sy=f"{Y.d0:.6g} {Y.r0:.6g} {Y.k:.6g}")
     robots = [t for t in data.tracks if t.kind == "robot"]
     workers = [t for t in data.tracks if t.kind == "worker"]
     focus = robots[0] if robots else None
@@ -714,6 +722,30 @@ def _map_run(svg: Svg, X: Scale, Y: Scale, data: RunData, st: RunStyle | None, *
                 if hit:
                     svg.path(f"M{X(hit[0]) - 6:.1f},{Y(hit[1]) - 6:.1f}l12,12m0,-12l-12,12",
                              class_="collision", title=_prefix(st, f"collision at {t0:.2f} s"))
+
+
+def map_tracks(data: RunData | Sequence[tuple[RunData, RunStyle]], max_hz: float = 20.0
+               ) -> list[dict[str, object]]:
+    """The robots' and workers' trajectories for the page's time cursor, which puts a marker
+    on the map at each one's position at the cursor's time: name, kind, run key ("" for one
+    run), colour, times (s) and world x, y (m), at most ``max_hz`` samples a second."""
+    out: list[dict[str, object]] = []
+    for run, st in _layers(data):
+        for tr in run.tracks:
+            if tr.t.size == 0:
+                continue
+            span = float(tr.t[-1] - tr.t[0])
+            step = max(1, int(tr.t.size / max(span * max_hz, 1.0)))
+            idx = np.unique(np.append(np.arange(0, tr.t.size, step), tr.t.size - 1))
+            idx = idx[np.isfinite(tr.t[idx]) & np.isfinite(tr.x[idx]) & np.isfinite(tr.y[idx])]
+            color = (COLORS["robot"] if tr.kind == "robot" else COLORS["worker"]) \
+                if st is None else (st.color if tr.kind == "robot" else st.color2)
+            out.append({"name": tr.name, "kind": tr.kind, "run": "" if st is None else st.key,
+                        "color": color,
+                        "t": [round(float(v), 3) for v in tr.t[idx]],
+                        "x": [round(float(v), 3) for v in tr.x[idx]],
+                        "y": [round(float(v), 3) for v in tr.y[idx]]})
+    return out
 
 
 def map_legend(data: RunData | Sequence[tuple[RunData, RunStyle]]

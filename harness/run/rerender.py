@@ -16,10 +16,12 @@ from harness.summary import read_summary
 __all__ = ["report"]
 
 
-def report(run_dir: str | Path) -> Path:
-    """Re-render a run directory's ``report.html`` (``srr report``). Unlike the lenient
-    renderer, which notes what it could not read, this refuses a run directory whose
-    summary, scenario or bag does not read back (SrrError, exit 2) and writes nothing then."""
+def report(run_dir: str | Path, *, video: bool = True) -> Path:
+    """Re-render a run directory's ``report.html`` and its camera videos (``srr report``;
+    ``video=False``: the page without videos, and an old ``video/`` folder removed). Unlike
+    the lenient renderer, which notes what it could not read, this refuses a run directory
+    whose summary, scenario or bag does not read back (SrrError, exit 2) and writes nothing
+    then."""
     run = Path(run_dir)
     runlock.refuse_if_live(run)
     summary = read_summary(run)
@@ -28,4 +30,4 @@ def report(run_dir: str | Path) -> Path:
         raise BagError(f"{run / 'bag'}: metadata.yaml: missing (not a rosbag2 directory)")
     frames = scenario_frames(scenario, run / "bag")
     return write_report(run, summary=summary, scenario=scenario, frames=frames,
-                        rebuild_graphs=rebuild_graphs)
+                        rebuild_graphs=rebuild_graphs, video=video)

@@ -1,10 +1,11 @@
-"""``srr diff --html``: one self-contained page with both runs, opened in a real headless
-Chromium with the network unreachable."""
+"""``srr diff --html``: one page with both runs (and their camera videos side by side),
+opened in a real headless Chromium with the network unreachable."""
 
 from __future__ import annotations
 
 import json
 import re
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +17,7 @@ from harness.diff.html import diff_moments
 from harness.report.data import load_run
 from tests.diff.conftest import Runs
 from tests.report.browser import page_requests, run_chromium
+from tests.report.cdp import open_page
 
 pytestmark = pytest.mark.slow
 
@@ -60,6 +62,23 @@ PROBE = """<script>
 </script>"""
 
 
+# Resolves, once every <video> has its first frame, with what each plays.
+LOADED = """Promise.all(Array.prototype.map.call(document.querySelectorAll("video"),
+  function (v) { return new Promise(function (ok) {
+    function out() { ok({ready: v.readyState, topic: v.getAttribute("data-topic"),
+                         run: v.getAttribute("data-run"), src: decodeURI(v.src.slice(7))}); }
+    if (v.readyState >= 2) { out(); } else { v.addEventListener("loadeddata", out); } }); }))"""
+# Seeks the cursor and resolves, once every <video> has seeked, with their times.
+SEEK = """(function (t) {
+  var vs = Array.prototype.slice.call(document.querySelectorAll("video"));
+  var done = Promise.all(vs.map(function (v) { return new Promise(function (ok) {
+    v.addEventListener("seeked", function () { ok(); }, {once: true}); }); }));
+  srrCursor.seek(t);
+  return done.then(function () { return vs.map(function (v) {
+    return {t0: parseFloat(v.getAttribute("data-t0")), time: v.currentTime}; }); });
+})(%r)"""
+
+
 def _probe(chromium: str, page: Path, tmp: Path) -> dict[str, Any]:
     copy = tmp / "probe.html"
     copy.write_text(page.read_text(encoding="utf-8").replace("</body>", PROBE + "</body>"),
@@ -80,10 +99,17 @@ def dock_page(runs: Runs, tmp_path_factory: pytest.TempPathFactory) -> tuple[Pat
 
 
 def test_page_is_self_contained(dock_page: tuple[Path, Any]) -> None:
-    html = dock_page[0].read_text(encoding="utf-8")
-    assert "<script" not in html and "<link" not in html and "<iframe" not in html
+    page = dock_page[0]
+    html = page.read_text(encoding="utf-8")
+    assert "<script src" not in html and "<link" not in html and "<iframe" not in html
+    videos = []
     for attr, value in re.findall(r'\s(src|href)="([^"]*)"', html):
-        assert value.startswith(("data:image/png;base64,", "#")), (attr, value[:60])
+        if not value.startswith(("data:image/png;base64,", "#")):
+            # the runs' own videos, linked relative to the page
+            assert attr == "src" and value.endswith(".webm"), (attr, value[:60])
+            assert (page.parent / value).is_file()
+            videos.append(value)
+    assert len(videos) == 4  # two cameras of each run
     assert not re.search(r"(?i)@import|@font-face|url\(", html)
 
 
@@ -146,3 +172,53 @@ def test_identical_runs_page(chromium: str, runs: Runs, tmp_path: Path) -> None:
     assert p["mapA"] == 1 and p["mapB"] == 1 and p["rows"] == 0
     assert {s for _, s in p["topics"]} == {"identical"}
     assert p["metrics"] and {s for _, s in p["metrics"]} == {"ok"}
+
+
+def test_both_runs_play_side_by_side_on_one_cursor(chromium: str,
+                                                   dock_page: tuple[Path, Any],
+                                                   runs: Runs, tmp_path: Path) -> None:
+    """Each camera's A and B video side by side, from the runs' own report videos; a seek
+    puts all four at the same simulation time, playing keeps them together."""
+    page, _ = dock_page
+    with open_page(chromium, tmp_path, page.as_uri()) as p:
+        vids = p.eval(LOADED)
+        assert len(vids) == 4 and all(v["ready"] >= 2 for v in vids)
+        assert [(v["topic"], v["run"]) for v in vids] == [
+            ("/dock_cam_left_rgb", "a"), ("/dock_cam_left_rgb", "b"),
+            ("/dock_cam_right_rgb", "a"), ("/dock_cam_right_rgb", "b")]
+        for v in vids:  # the runs' own files, not copies
+            run = runs.get("dock_11" if v["run"] == "a" else "dock_12")
+            assert Path(v["src"]).resolve().is_relative_to(run.resolve() / "video")
+        seeked = p.eval(SEEK % 3.3)
+        assert all(abs(v["t0"] + v["time"] - 3.3) < 0.01 for v in seeked)
+        p.eval(SEEK % 1.0)
+        played = p.eval("""new Promise(function (ok) {
+          var vs = Array.prototype.slice.call(document.querySelectorAll("video"));
+          vs[0].addEventListener("timeupdate", function f() {
+            if (vs[0].currentTime > 3.0) { vs[0].removeEventListener("timeupdate", f);
+              srrCursor.pause();
+              ok(vs.map(function (v) { return parseFloat(v.getAttribute("data-t0"))
+                + v.currentTime; })); } });
+          document.getElementById("cursor-play").click(); })""")
+        assert min(played) > 2.5 and max(played) - min(played) < 0.5, played
+
+
+def test_a_run_without_videos_gets_them_beside_the_page(runs: Runs, tmp_path: Path) -> None:
+    """A run rendered with --no-video: its bag's cameras are encoded beside the page; the
+    run directory is not written."""
+    b = tmp_path / "dock_12"
+    shutil.copytree(runs.get("dock_12"), b)
+    assert main(["report", str(b), "--no-video"]) == 0
+    before = sorted(p.relative_to(b) for p in b.rglob("*"))
+    page = tmp_path / "out" / "diff.html"
+    page.parent.mkdir()
+    assert main(["diff", str(runs.get("dock_11")), str(b), "--html", str(page)]) == 1
+    assert sorted(p.relative_to(b) for p in b.rglob("*")) == before
+    srcs = re.findall(r'<video src="([^"]*)"[^>]*data-run="(a|b)"', page.read_text())
+    assert sorted(r for _, r in srcs) == ["a", "a", "b", "b"]
+    for src, run in srcs:
+        assert (page.parent / src).is_file()
+        assert src.startswith("diff.html.video/b/video/") == (run == "b"), src
+    assert main(["diff", str(runs.get("dock_11")), str(b), "--html", str(page),
+                 "--no-video"]) == 1
+    assert "<video" not in page.read_text()

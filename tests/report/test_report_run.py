@@ -50,9 +50,12 @@ def test_run_writes_a_self_contained_report(failing_run: api.RunResult) -> None:
               and not r[2].startswith("data:")]
     assert remote == [], f"remote references: {remote[:5]}"
     for tag, attr, value in parser.refs:
-        if attr in ("src", "href"):
-            assert value.startswith(("data:image/png;base64,", "#")), (tag, attr, value[:60])
-    assert "script" not in parser.tags and "link" not in parser.tags
+        if attr in ("src", "href") and not value.startswith(("data:image/png;base64,", "#")):
+            # the camera videos: files of the run directory, linked relatively
+            assert value.startswith("video/") and value.endswith(".webm"), (tag, attr, value)
+            assert (failing_run.run_dir / value).is_file()
+    assert "link" not in parser.tags
+    assert not any(tag == "script" and attr == "src" for tag, attr, _ in parser.refs)
     assert "iframe" not in parser.tags and "object" not in parser.tags
     assert not re.search(r"(?i)@import|@font-face|url\(\s*['\"]?(https?:)?//", html)
     assert "mermaid.js" not in html and "mermaid.min.js" not in html

@@ -29,15 +29,15 @@ def test_every_template_file_is_package_data() -> None:
     a package-data pattern of pyproject.toml."""
     globs = _package_data()
     files = [p for p in TEMPLATES.iterdir() if p.is_file() and p.suffix != ".py"]
-    assert {p.suffix for p in files} == {".html", ".css"}
+    assert {p.suffix for p in files} == {".html", ".css", ".js"}
     for p in files:
         rel = p.relative_to(HARNESS).as_posix()
         assert any(fnmatchcase(rel, g) for g in globs), f"{rel} is not package data"
 
 
 def test_the_loader_lists_every_page_and_nothing_else() -> None:
-    names = {n for n in environment().list_templates() if n.endswith((".html", ".css"))}
-    on_disk = {p.name for p in TEMPLATES.iterdir() if p.suffix in (".html", ".css")}
+    names = {n for n in environment().list_templates() if n.endswith((".html", ".css", ".js"))}
+    on_disk = {p.name for p in TEMPLATES.iterdir() if p.suffix in (".html", ".css", ".js")}
     assert names == on_disk
     assert {"page.html", "macros.html", "report.html", "diff.html", "suite.html"} <= names
 

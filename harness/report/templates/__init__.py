@@ -9,6 +9,8 @@ package data:
   ``diff.css`` what the ``srr diff --html`` page adds to it;
 * ``macros.html`` the pieces the pages share: notices, the map with its moments, series-plot
   panels and their legends, key-value lists and run cards, metric tables;
+* ``cursor.js`` the time cursor of the report and diff pages (videos, plots and map on one
+  simulation time), inlined by the ``cursor_data`` macro;
 * ``report.html`` (a run's ``report.html``), ``diff.html`` (``srr diff --html``) and
   ``suite.html`` (``srr suite``'s ``index.html``).
 
