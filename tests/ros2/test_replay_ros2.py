@@ -1,0 +1,110 @@
+"""`srr replay --ros2`: a recording played into real external rclpy nodes, in lockstep.
+
+The recording is a short dock run whose safety monitor is the external rclpy node of
+tests/ros2/ext_safety_node.py (recorded with `srr run --ros2`, blessed as its own baseline in
+a scratch folder): the forklift starts just before the trailer, so the mute engages within a
+few seconds of simulated time. Each replay plays that recording back into the same node (or a
+changed one) on a ROS 2 graph of its own and records what the node publishes."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+from mcap.reader import make_reader
+
+from harness import api
+from harness.errors import SrrError
+
+if os.environ.get("SRR_REQUIRE_ROS2") == "1":
+    import rclpy  # noqa: F401  (an ImportError here is a collection error, never a skip)
+pytest.importorskip("rclpy", reason="needs the ros2 extra: pip install -e '.[dev,ros2]'")
+
+pytestmark = [pytest.mark.ros2, pytest.mark.slow]
+
+ROOT = Path(__file__).resolve().parents[2]
+DOCK = ROOT / "scenarios" / "dock_worker_crossing.yaml"
+NODE = Path(__file__).with_name("ext_safety_node.py")
+MUTED = "/safety/is_muted"
+
+
+def _cmd(*args: str) -> list[str]:
+    return [sys.executable, str(NODE), *args]
+
+
+@pytest.fixture(scope="session")
+def nightly(tmp_path_factory: pytest.TempPathFactory) -> Any:
+    """Last night's run: 5 s of the dock with the external safety monitor, blessed."""
+    tmp = tmp_path_factory.mktemp("nightly")
+    sc = api.load(DOCK, duration=5.0, overrides=[
+        "robots.forklift.spawn.position=[14.5, 0.0, 0.0]",
+        "routes.dock_approach.waypoints=[[14.5, 0.0], [18.0, 0.0]]",
+        "systems_under_test.safety_monitor.enabled=false",
+        "ros2.enabled=true",
+        "ros2.outputs=[{topic: /safety/is_muted, type: std_msgs/msg/Bool, rate_hz: 5},"
+        " {topic: /safety/alarm, type: std_msgs/msg/Bool, rate_hz: 5}]",
+        f"ros2.external=[{{name: safety, cmd: {json.dumps(_cmd())}}}]",
+    ])
+    return api.run_scenario(sc, source=str(DOCK), out=tmp / "run",
+                            baselines=tmp / "baselines", update_baseline=True)
+
+
+def _topic(run_dir: Path, topic: str) -> list[tuple[int, bytes]]:
+    (path,) = (run_dir / "bag").glob("*.mcap")
+    with path.open("rb") as f:
+        return [(m.log_time, bytes(m.data))
+                for _s, _c, m in make_reader(f).iter_messages(topics=[topic])]
+
+
+def _digests(res: Any) -> dict[str, str]:
+    return {t: v["sha256"] for t, v in res.summary["topics"].items()}
+
+
+def test_replay_into_the_same_node_reproduces_the_recording(nightly: Any,
+                                                            tmp_path: Path) -> None:
+    assert nightly.verdict == "PASS", nightly.summary["reasons"]
+    recorded = _topic(nightly.run_dir, MUTED)
+    assert any(raw[4] == 1 for _, raw in recorded)  # the mute engaged in the recording
+    a = api.replay(nightly.run_dir, out=tmp_path / "a")
+    b = api.replay(nightly.run_dir, out=tmp_path / "b")
+    # the node's outputs come from the node, in lockstep: the recorded ones exactly
+    assert _topic(a.run_dir, MUTED) == recorded
+    assert a.summary["replay_of"]["mode"] == "ros2-lockstep"
+    assert MUTED in a.summary["replay_of"]["withheld"]
+    assert a.verdict == "PASS", a.summary["reasons"]
+    # two replays: the same bytes on every topic, and the recording's
+    assert _digests(a) == _digests(b) == _digests(nightly)
+    procs = json.loads((a.run_dir / "ros2" / "processes.json").read_text(encoding="utf-8"))
+    assert procs[0]["name"] == "safety" and procs[0]["stopped_with"] == "SIGINT"
+
+
+def test_a_slower_node_is_regressed_on_the_lag_metrics(nightly: Any, tmp_path: Path) -> None:
+    slow = " ".join(_cmd("--mute-after", "4"))  # mutes 3 tracks messages (0.6 s) later
+    res = api.replay(nightly.run_dir, out=tmp_path / "slow",
+                     externals=[f"safety={slow}"])
+    assert res.verdict == "REGRESSED", res.summary["reasons"]
+    assert any("safety.mute_lag" in r for r in res.summary["reasons"]), res.summary["reasons"]
+    assert _topic(res.run_dir, MUTED) != _topic(nightly.run_dir, MUTED)
+    assert "--mute-after" in res.summary["replay_of"]["overrides"][-1]
+    procs = json.loads((res.run_dir / "ros2" / "processes.json").read_text(encoding="utf-8"))
+    assert "--mute-after" in procs[0]["cmd"]
+
+
+def test_a_node_that_exits_mid_replay_makes_it_invalid(nightly: Any, tmp_path: Path) -> None:
+    dies = " ".join(_cmd("--exit-after", "2.0"))
+    res = api.replay(nightly.run_dir, out=tmp_path / "dies", externals=[f"safety={dies}"])
+    assert res.verdict == "INVALID" and res.exit_code == 3
+    gate = next(h for h in res.summary["health"] if h["name"] == "ros2_lockstep")
+    assert "external process safety exited with code 7" in gate["detail"]
+    assert res.summary["ticks"] < 5 * 60
+
+
+def test_an_unknown_external_name_is_one_clear_error(nightly: Any, tmp_path: Path) -> None:
+    with pytest.raises(SrrError, match=r"--ros2-external: saftey: no external process named "
+                                       r"'saftey' .*\(names: safety\)"):
+        api.replay(nightly.run_dir, out=tmp_path / "x", externals=["saftey=python n.py"])
+    assert not (tmp_path / "x").exists()
