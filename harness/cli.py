@@ -99,7 +99,8 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument("--sut", dest="suts", action="append", default=[],
                     metavar="NAME=module:Class", help="replace a system under test's plug-in")
     rp.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                    help="override a field of the systems under test or the scoring")
+                    help="override a field of the systems under test, the scoring or the ros2 "
+                    "block")
     rp.add_argument("--out", type=Path, default=None,
                     help="run directory (default reports/<scenario>/<run id>-replay)")
     rp.add_argument("--baselines", type=Path, default=None,

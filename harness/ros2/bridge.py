@@ -48,7 +48,7 @@ from harness.serde.messages import deserialize
 from harness.sut.base import SutContext, SystemUnderTest
 from harness.sut.errors import PluginError
 
-__all__ = ["Ros2Bridge", "message_class"]
+__all__ = ["Ros2Bridge", "message_class", "qos_profile"]
 
 _READY_POLL_S = 0.05
 _SETTLE_S = 0.5  # the ROS 2 graph unchanged this long (wall clock) before the first tick
@@ -98,7 +98,8 @@ class _Output:
         return self.latest_stamp_ns >= now_ns
 
 
-def _qos_profile(qos: Qos) -> Any:
+def qos_profile(qos: Qos) -> Any:
+    """The rclpy QoSProfile of a bus (or recorded) QoS: keep-last ``depth``."""
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
     return QoSProfile(  # type: ignore[no-untyped-call]
@@ -177,7 +178,7 @@ class Ros2Bridge(SystemUnderTest):
             base = Qos(durability=over.durability or base.durability,
                        reliability=over.reliability or base.reliability,
                        depth=over.depth or base.depth)
-        return _qos_profile(base)
+        return qos_profile(base)
 
     def _output_rule(self, i: int, out: Ros2OutputSpec) -> tuple[Any, bool]:
         """The output's message class and whether it is stamped; a clear error when it has

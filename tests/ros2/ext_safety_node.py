@@ -7,11 +7,13 @@ Its outputs depend on its inputs only, not on the order topics arrive in: a trac
 is paired with the odometry of the same stamp (the tracks wait until it is there), as
 message_filters' exact-time synchroniser would.
 
-    python ext_safety_node.py [--mute-after N] [--exit-after SEC] --ros-args -p use_sim_time:=true
+    python ext_safety_node.py [--mute-after N] [--exit-after SEC] [--work-ms MS] \
+        --ros-args -p use_sim_time:=true
 
 ``--mute-after N``: a slower reaction — mute only once the condition has held for N
 consecutive tracks messages. ``--exit-after SEC``: the process dies at the first odometry
-message stamped at or after SEC (a node that crashes mid-run).
+message stamped at or after SEC (a node that crashes mid-run). ``--work-ms MS``: each answer
+takes MS more milliseconds of wall-clock time (a heavier stack; the outputs are the same).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import time
 
 import rclpy
 from nav_msgs.msg import Odometry
@@ -38,8 +41,10 @@ def inside(x: float, y: float, poly: tuple[tuple[float, float], ...]) -> bool:
 
 
 class Monitor(Node):
-    def __init__(self, mute_after: int = 1, exit_after: float | None = None) -> None:
+    def __init__(self, mute_after: int = 1, exit_after: float | None = None,
+                 work_s: float = 0.0) -> None:
         super().__init__("ext_safety_monitor")
+        self.work_s = work_s
         self.mute_after = mute_after
         self.exit_after = exit_after
         self.held = 0  # consecutive tracks messages with the mute condition true
@@ -77,15 +82,23 @@ class Monitor(Node):
 
     def flush(self) -> None:
         """Answer every tracks message whose odometry (and the odom origin) is there, in
-        order."""
-        while self.waiting and self.origin is not None and self.waiting[0][0] in self.odom:
-            stamp, tracks = self.waiting.pop(0)
+        order; one whose odometry was lost (a later one came instead) is never answered."""
+        while self.waiting and self.origin is not None:
+            stamp, tracks = self.waiting[0]
+            if stamp not in self.odom:
+                if not self.odom or max(self.odom) < stamp:
+                    return  # its odometry is still to come
+                self.waiting.pop(0)  # lost: skipped, as an exact-time synchroniser does
+                continue
+            self.waiting.pop(0)
             self.answer(self.odom[stamp], tracks)
             self.odom = {t: xy for t, xy in self.odom.items() if t >= stamp}
 
     def answer(self, odom: tuple[float, float], tracks: MarkerArray) -> None:
         assert self.origin is not None
-        x0, y0, yaw = self.origin
+        if self.work_s:
+            time.sleep(self.work_s)
+        x0, _y0, yaw = self.origin
         x = x0 + math.cos(yaw) * odom[0] - math.sin(yaw) * odom[1]
         people = [(m.pose.position.x, m.pose.position.y) for m in tracks.markers
                   if m.action == 0 and m.ns == "person"]
@@ -100,8 +113,9 @@ def main() -> None:
     args = rclpy.utilities.remove_ros_args(sys.argv)
     after = int(args[args.index("--mute-after") + 1]) if "--mute-after" in args else 1
     dies = float(args[args.index("--exit-after") + 1]) if "--exit-after" in args else None
+    work = float(args[args.index("--work-ms") + 1]) / 1e3 if "--work-ms" in args else 0.0
     rclpy.init()
-    node = Monitor(after, dies)
+    node = Monitor(after, dies, work)
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):

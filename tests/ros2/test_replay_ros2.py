@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import sys
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +20,9 @@ import pytest
 from mcap.reader import make_reader
 
 from harness import api
-from harness.errors import SrrError
+from harness.cli import main
+from harness.summary import replay_note
+from tests.live.foxglove_client import LiveClient
 
 if os.environ.get("SRR_REQUIRE_ROS2") == "1":
     import rclpy  # noqa: F401  (an ImportError here is a collection error, never a skip)
@@ -75,6 +79,7 @@ def test_replay_into_the_same_node_reproduces_the_recording(nightly: Any,
     assert _topic(a.run_dir, MUTED) == recorded
     assert a.summary["replay_of"]["mode"] == "ros2-lockstep"
     assert MUTED in a.summary["replay_of"]["withheld"]
+    assert "replay into external ROS 2 nodes in lockstep of" in str(replay_note(a.summary))
     assert a.verdict == "PASS", a.summary["reasons"]
     # two replays: the same bytes on every topic, and the recording's
     assert _digests(a) == _digests(b) == _digests(nightly)
@@ -103,8 +108,34 @@ def test_a_node_that_exits_mid_replay_makes_it_invalid(nightly: Any, tmp_path: P
     assert res.summary["ticks"] < 5 * 60
 
 
-def test_an_unknown_external_name_is_one_clear_error(nightly: Any, tmp_path: Path) -> None:
-    with pytest.raises(SrrError, match=r"--ros2-external: saftey: no external process named "
-                                       r"'saftey' .*\(names: safety\)"):
-        api.replay(nightly.run_dir, out=tmp_path / "x", externals=["saftey=python n.py"])
-    assert not (tmp_path / "x").exists()
+def test_an_unknown_external_name_is_one_clear_line(nightly: Any, tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "x"
+    code = main(["replay", str(nightly.run_dir), "--ros2-external", "saftey=python n.py",
+                 "--out", str(out), "-q"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert "--ros2-external: saftey: no external process named 'saftey'" in err
+    assert "(names: safety)" in err
+    assert not out.exists()
+
+
+def test_a_ros2_replay_is_served_live(nightly: Any, tmp_path: Path) -> None:
+    """--foxglove on a replay: the played-back topics and the node's new outputs, live, the
+    bytes the replay records."""
+    watched = ["/clock", "/odom", "/tf_static", MUTED]
+    clients: list[LiveClient] = []
+
+    def notice(line: str) -> None:
+        found = re.match(r"live view on ws://127\.0\.0\.1:(\d+) ", line)
+        if found is not None:
+            clients.append(LiveClient(int(found.group(1)), watched, confirm=True).start())
+            clients[0].confirmed.wait(60)
+
+    res = api.replay(nightly.run_dir, out=tmp_path / "live", notice=notice,
+                     live=api.LiveConfig(port=0, wait_s=60.0))
+    (client,) = clients
+    got = client.join()
+    for topic in watched:
+        assert got.messages[topic] == _topic(res.run_dir, topic), topic
+    assert got.messages[MUTED] == _topic(nightly.run_dir, MUTED)
