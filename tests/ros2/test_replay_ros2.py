@@ -11,8 +11,8 @@ from __future__ import annotations
 import json
 import os
 import re
+import shlex
 import sys
-import threading
 from pathlib import Path
 from typing import Any
 
@@ -73,8 +73,22 @@ def test_replay_into_the_same_node_reproduces_the_recording(nightly: Any,
     assert nightly.verdict == "PASS", nightly.summary["reasons"]
     recorded = _topic(nightly.run_dir, MUTED)
     assert any(raw[4] == 1 for _, raw in recorded)  # the mute engaged in the recording
-    a = api.replay(nightly.run_dir, out=tmp_path / "a")
-    b = api.replay(nightly.run_dir, out=tmp_path / "b")
+    # the recorded ros2 block, its node made slower (+30 ms of wall clock per answer): the
+    # replay waits for it, so it misses nothing and answers as it did
+    heavy = shlex.join(_cmd("--work-ms", "30"))
+    a = api.replay(nightly.run_dir, out=tmp_path / "a", externals=[f"safety={heavy}"])
+    # again, watched live (--foxglove): the played-back topics and the node's new outputs
+    watched = ["/clock", "/odom", "/tf_static", MUTED]
+    clients: list[LiveClient] = []
+
+    def notice(line: str) -> None:
+        found = re.match(r"live view on ws://127\.0\.0\.1:(\d+) ", line)
+        if found is not None:
+            clients.append(LiveClient(int(found.group(1)), watched, confirm=True).start())
+            clients[0].confirmed.wait(60)
+
+    b = api.replay(nightly.run_dir, out=tmp_path / "b", ros2=True, notice=notice,
+                   live=api.LiveConfig(port=0, wait_s=60.0))
     # the node's outputs come from the node, in lockstep: the recorded ones exactly
     assert _topic(a.run_dir, MUTED) == recorded
     assert a.summary["replay_of"]["mode"] == "ros2-lockstep"
@@ -85,10 +99,14 @@ def test_replay_into_the_same_node_reproduces_the_recording(nightly: Any,
     assert _digests(a) == _digests(b) == _digests(nightly)
     procs = json.loads((a.run_dir / "ros2" / "processes.json").read_text(encoding="utf-8"))
     assert procs[0]["name"] == "safety" and procs[0]["stopped_with"] == "SIGINT"
+    (client,) = clients
+    got = client.join()
+    for topic in watched:  # served live: what the replay recorded
+        assert got.messages[topic] == _topic(b.run_dir, topic), topic
 
 
 def test_a_slower_node_is_regressed_on_the_lag_metrics(nightly: Any, tmp_path: Path) -> None:
-    slow = " ".join(_cmd("--mute-after", "4"))  # mutes 3 tracks messages (0.6 s) later
+    slow = shlex.join(_cmd("--mute-after", "4"))  # mutes 3 tracks messages (0.6 s) later
     res = api.replay(nightly.run_dir, out=tmp_path / "slow",
                      externals=[f"safety={slow}"])
     assert res.verdict == "REGRESSED", res.summary["reasons"]
@@ -100,7 +118,7 @@ def test_a_slower_node_is_regressed_on_the_lag_metrics(nightly: Any, tmp_path: P
 
 
 def test_a_node_that_exits_mid_replay_makes_it_invalid(nightly: Any, tmp_path: Path) -> None:
-    dies = " ".join(_cmd("--exit-after", "2.0"))
+    dies = shlex.join(_cmd("--exit-after", "2.0"))
     res = api.replay(nightly.run_dir, out=tmp_path / "dies", externals=[f"safety={dies}"])
     assert res.verdict == "INVALID" and res.exit_code == 3
     gate = next(h for h in res.summary["health"] if h["name"] == "ros2_lockstep")
@@ -119,23 +137,3 @@ def test_an_unknown_external_name_is_one_clear_line(nightly: Any, tmp_path: Path
     assert "(names: safety)" in err
     assert not out.exists()
 
-
-def test_a_ros2_replay_is_served_live(nightly: Any, tmp_path: Path) -> None:
-    """--foxglove on a replay: the played-back topics and the node's new outputs, live, the
-    bytes the replay records."""
-    watched = ["/clock", "/odom", "/tf_static", MUTED]
-    clients: list[LiveClient] = []
-
-    def notice(line: str) -> None:
-        found = re.match(r"live view on ws://127\.0\.0\.1:(\d+) ", line)
-        if found is not None:
-            clients.append(LiveClient(int(found.group(1)), watched, confirm=True).start())
-            clients[0].confirmed.wait(60)
-
-    res = api.replay(nightly.run_dir, out=tmp_path / "live", notice=notice,
-                     live=api.LiveConfig(port=0, wait_s=60.0))
-    (client,) = clients
-    got = client.join()
-    for topic in watched:
-        assert got.messages[topic] == _topic(res.run_dir, topic), topic
-    assert got.messages[MUTED] == _topic(nightly.run_dir, MUTED)
