@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import shlex
+import shutil
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -152,6 +153,9 @@ def _external_override(scenario: Scenario, text: str, src: Path) -> str:
             from None
     if not argv:
         raise ScenarioError("--ros2-external", name, "the command is empty")
+    if shutil.which(argv[0]) is None:
+        raise ScenarioError("--ros2-external", name, f"{argv[0]!r} is not an executable file "
+                            "or on PATH")
     return f"ros2.external.{names.index(name)}.cmd={json.dumps(argv)}"
 
 
