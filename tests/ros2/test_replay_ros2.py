@@ -33,6 +33,9 @@ pytestmark = [pytest.mark.ros2, pytest.mark.slow]
 ROOT = Path(__file__).resolve().parents[2]
 DOCK = ROOT / "scenarios" / "dock_worker_crossing.yaml"
 NODE = Path(__file__).with_name("ext_safety_node.py")
+TAP = Path(__file__).with_name("tap_node.py")
+TAPPED = {"/clock": "rosgraph_msgs/msg/Clock", "/odom": "nav_msgs/msg/Odometry",
+          "/tf_static": "tf2_msgs/msg/TFMessage"}
 MUTED = "/safety/is_muted"
 
 
@@ -75,8 +78,22 @@ def test_replay_into_the_same_node_reproduces_the_recording(nightly: Any,
     assert any(raw[4] == 1 for _, raw in recorded)  # the mute engaged in the recording
     # the recorded ros2 block, its node made slower (+30 ms of wall clock per answer): the
     # replay waits for it, so it misses nothing and answers as it did
+    # replay the nightly with a raw tap node beside it: what the graph carried
     heavy = shlex.join(_cmd("--work-ms", "30"))
-    a = api.replay(nightly.run_dir, out=tmp_path / "a", externals=[f"safety={heavy}"])
+    tap = [sys.executable, str(TAP), str(tmp_path / "tap.json"),
+           *(f"{t}={ty}" for t, ty in TAPPED.items())]
+    both = (f"ros2.external=[{{name: safety, cmd: {json.dumps(_cmd())}}}, "
+            f"{{name: tap, cmd: {json.dumps(tap)}, ready_topic: /tap/ready}}]")
+    a = api.replay(nightly.run_dir, out=tmp_path / "a", overrides=[both],
+                   externals=[f"safety={heavy}"])
+    seen = json.loads((tmp_path / "tap.json").read_text(encoding="utf-8"))
+    for topic in TAPPED:  # the recorded bytes, every message, in order
+        assert seen["messages"][topic] == [raw.hex() for _, raw in
+                                           _topic(nightly.run_dir, topic)], topic
+    # with the recorded QoS: /tf_static latched (the tap joined late, as a subscriber would)
+    assert seen["offered"]["/tf_static"] == [{"durability": "TRANSIENT_LOCAL",
+                                              "reliability": "RELIABLE"}]
+    assert seen["offered"]["/clock"][0]["durability"] == "VOLATILE"
     # again, watched live (--foxglove): the played-back topics and the node's new outputs
     watched = ["/clock", "/odom", "/tf_static", MUTED]
     clients: list[LiveClient] = []
