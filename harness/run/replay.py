@@ -198,6 +198,13 @@ def _replay_wiring(rep: Replay, playback: Playback, withheld: set[str]) -> list[
     produced = {e.topic: e.msgtype for _, _, ctx in rep.suts for e in ctx.endpoints
                 if e.kind == "pub"}
     warnings = []
+    first: dict[str, str] = {}  # topic → the system under test that publishes it first
+    for name, _, ctx in rep.suts:
+        for topic in dict.fromkeys(e.topic for e in ctx.endpoints if e.kind == "pub"):
+            if topic in first:  # as a run's wiring check says it
+                warnings.append(f"{ctx.field}: {name} publishes {topic}, which {first[topic]} "
+                                "publishes too")
+            first.setdefault(topic, name)
     for name, _, ctx in rep.suts:
         for e in ctx.endpoints:
             rec = playback.topics.get(e.topic)

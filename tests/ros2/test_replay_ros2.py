@@ -136,7 +136,11 @@ def test_a_slower_node_is_regressed_on_the_lag_metrics(nightly: Any, tmp_path: P
 
 def test_a_node_that_exits_mid_replay_makes_it_invalid(nightly: Any, tmp_path: Path) -> None:
     dies = shlex.join(_cmd("--exit-after", "2.0"))
-    res = api.replay(nightly.run_dir, out=tmp_path / "dies", externals=[f"safety={dies}"])
+    # with the built-in monitor switched back on too: two publishers of /safety/is_muted
+    res = api.replay(nightly.run_dir, out=tmp_path / "dies", externals=[f"safety={dies}"],
+                     overrides=["systems_under_test.safety_monitor.enabled=true"])
+    assert any(w.endswith("ros2_bridge publishes /safety/is_muted, which safety_monitor "
+                          "publishes too") for w in res.summary["warnings"])
     assert res.verdict == "INVALID" and res.exit_code == 3
     gate = next(h for h in res.summary["health"] if h["name"] == "ros2_lockstep")
     assert "external process safety exited with code 7" in gate["detail"]
