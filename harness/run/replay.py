@@ -84,10 +84,9 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     baselines = baselines_dir(source, baselines if baselines is not None
                               else Path(judged) if judged else None, scenario)
     playback = Playback(src / "bag")
-    if playback.output.ros == 1 and (scenario.ros2.enabled or live is not None):
-        raise SrrError(f"{src}: {'--ros2' if scenario.ros2.enabled else '--foxglove'}: the "
-                       f"recording is ROS 1 ({playback.output.because}); its bytes cannot go "
-                       "out as ROS 2 messages")
+    if playback.output.ros == 1 and live is not None:  # (ros2.enabled: the scenario says)
+        raise SrrError(f"{src}: --foxglove: the live view serves ROS 2 messages, and "
+                       f"{playback.output.because}")
     out_dir = Path(out) if out is not None else default_run_dir(scenario, suffix="-replay")
     prepare(out_dir)  # before the external processes write their logs into it
     withheld = _recorded_outputs(summary.sut_endpoints, recorded, source)
