@@ -92,21 +92,7 @@ def _parser() -> argparse.ArgumentParser:
                      "size plus this, stop the run below it (recording.min_free_mb)")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     _summary_md_options(run)
-    fox = run.add_argument_group("live view", "serve the run over the Foxglove WebSocket "
-                                 "protocol while it goes (needs the live extra)")
-    fox.add_argument("--foxglove", action="store_true",
-                     help="serve the run live: Foxglove → Open connection → Foxglove WebSocket "
-                     "→ ws://localhost:8765")
-    fox.add_argument("--foxglove-port", type=int, default=None, metavar="PORT",
-                     help=f"port to listen on (default {DEFAULT_PORT}; 0: any free port)")
-    fox.add_argument("--foxglove-host", default=None, metavar="HOST",
-                     help="address to listen on (default 127.0.0.1, this machine only; "
-                     "0.0.0.0 exposes the run to the network)")
-    fox.add_argument("--foxglove-wait", type=float, default=None, metavar="SEC",
-                     help="hold the first tick until a client subscribes, at most SEC seconds")
-    fox.add_argument("--rate", type=float, default=None, metavar="FACTOR",
-                     help="run at most FACTOR × real time (1: real time), to watch it; the "
-                     "recording is the same")
+    _add_live_args(run)
 
     rp = sub.add_parser("replay", help="play a recorded run back into its systems under test "
                         "(or replacements), open loop, and score it")
@@ -114,12 +100,20 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument("--sut", dest="suts", action="append", default=[],
                     metavar="NAME=module:Class", help="replace a system under test's plug-in")
     rp.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                    help="override a field of the systems under test or the scoring")
+                    help="override a field of the systems under test, the scoring or the ros2 "
+                    "block")
     rp.add_argument("--out", type=Path, default=None,
                     help="run directory (default reports/<scenario>/<run id>-replay)")
     rp.add_argument("--baselines", type=Path, default=None,
                     help="baselines folder (default: the project's baselines/)")
+    rp.add_argument("--ros2", action="store_true", help="play the recording into a live "
+                    "ROS 2 graph and take ros2.outputs from the external nodes of ros2.external "
+                    "in lockstep (= --set ros2.enabled=true)")
+    rp.add_argument("--ros2-external", dest="externals", action="append", default=[],
+                    metavar="NAME='CMD ...'", help="run this command for the external process "
+                    "NAME of ros2.external (a new build of your node)")
     rp.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    _add_live_args(rp)
 
     val = sub.add_parser("validate", help="check a scenario file without running it")
     val.add_argument("scenario", type=Path)
@@ -244,9 +238,29 @@ def _progress(quiet: bool) -> Any:
                     console=_stderr(), transient=True)
 
 
+def _add_live_args(cmd: argparse.ArgumentParser) -> None:
+    """``--foxglove`` and its options (``srr run``, ``srr replay``)."""
+    fox = cmd.add_argument_group("live view", "serve the run over the Foxglove WebSocket "
+                                 "protocol while it goes (needs the live extra)")
+    fox.add_argument("--foxglove", action="store_true",
+                     help="serve the run live: Foxglove → Open connection → Foxglove WebSocket "
+                     "→ ws://localhost:8765")
+    fox.add_argument("--foxglove-port", type=int, default=None, metavar="PORT",
+                     help=f"port to listen on (default {DEFAULT_PORT}; 0: any free port)")
+    fox.add_argument("--foxglove-host", default=None, metavar="HOST",
+                     help="address to listen on (default 127.0.0.1, this machine only; "
+                     "0.0.0.0 exposes the run to the network)")
+    fox.add_argument("--foxglove-wait", type=float, default=None, metavar="SEC",
+                     help="hold the first tick until a client subscribes, at most SEC seconds")
+    fox.add_argument("--rate", type=float, default=None, metavar="FACTOR",
+                     help="run at most FACTOR × real time (1: real time), to watch it; the "
+                     "recording is the same")
+
+
 def _cmd_replay(args: argparse.Namespace) -> int:
     from harness import api
 
+    live = _live_config(args)
     bar = _progress(args.quiet)
     task: Any = None
 
@@ -261,7 +275,10 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         try:
             res = api.replay(args.run_dir, suts=args.suts, overrides=args.overrides,
                              out=args.out, progress=tick, baselines=args.baselines,
-                             started=_started(bar))
+                             started=_started(bar), ros2=args.ros2,
+                             externals=args.externals, live=live,
+                             notice=lambda text: _stderr().print(f"srr replay: {text}",
+                                                                 markup=False))
         finally:
             if bar is not None:
                 bar.stop()
@@ -292,7 +309,7 @@ def _live_config(args: argparse.Namespace) -> LiveConfig | None:
         if given:
             raise SrrError(f"{given[0]}: only with --foxglove (the live view)")
         return None
-    if args.repeat != 1:
+    if getattr(args, "repeat", 1) != 1:
         raise SrrError("--foxglove: watch one run, not a --repeat series")
     return LiveConfig(host=args.foxglove_host if args.foxglove_host is not None
                       else LiveConfig.host,

@@ -27,7 +27,7 @@ from harness.sut.base import SutContext, load_suts
 from harness.sut.participant import Participant
 from harness.wiring import Plan, plan_wiring
 
-__all__ = ["Closeable", "EvalContext", "Joined", "Simulation"]
+__all__ = ["Closeable", "EvalContext", "Joined", "Simulation", "join"]
 
 
 class Closeable(Protocol):
@@ -63,6 +63,16 @@ class Joined:
     params: Mapping[str, Any] = field(default_factory=dict)
 
 
+def join(joined: Sequence[Joined], scenario: Scenario, bus: Bus
+         ) -> list[tuple[str, Participant, SutContext]]:
+    """``joined`` as systems under test on ``bus``: (name, participant, context), in order
+    (a simulation's and an open-loop replay's)."""
+    return [(j.name, j.participant,
+             SutContext(name=j.name, params=j.params, scenario=scenario, seed=scenario.seed,
+                        field=j.where, bus=bus))
+            for j in joined]
+
+
 class Simulation:
     """A built scenario, ready to tick. Build it, :meth:`start`, :meth:`run`, :meth:`close`.
     ``joined`` take part as systems under test after the scenario's own, in order."""
@@ -85,10 +95,7 @@ class Simulation:
         self.custom_graphs = build.custom_graphs  # graph path → graphs[i] (harness.output)
         self.suts: list[tuple[str, Participant, SutContext]] = load_suts(
             scenario, self.bus, source)
-        self.suts += [(j.name, j.participant,
-                       SutContext(name=j.name, params=j.params, scenario=scenario,
-                                  seed=scenario.seed, field=j.where, bus=self.bus))
-                      for j in joined]
+        self.suts += join(joined, scenario, self.bus)
         self._started = False
 
     def plan(self) -> Plan:

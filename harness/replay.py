@@ -23,7 +23,7 @@ them may publish other bytes than in the recorded run.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,6 +31,7 @@ from typing import Any
 from harness import yamlio
 from harness.bus import Bus, Qos
 from harness.camera_topics import CompressedStream, compressed_streams, recorded_cameras
+from harness.engine import Joined, join
 from harness.errors import reason
 from harness.graph.nodes.camera import depth_image_message, rgb_image_message
 from harness.output import ROS2_OUTPUT, OutputKind
@@ -223,10 +224,13 @@ def _decoder(file: Path, now_ns: Callable[[], int], ros1: bool = False
 class Replay:
     """The recorded run of ``playback`` played into ``scenario``'s systems under test.
 
-    ``withheld``: recorded topics not played back (what systems under test publish)."""
+    ``withheld``: recorded topics not played back (what systems under test publish).
+    ``joined`` step after the scenario's systems under test, as in a simulation (the ROS 2
+    bridge, which stands for external nodes: the played-back messages of a tick go out on
+    the ROS 2 graph as they are published, and the tick waits for the nodes' outputs)."""
 
     def __init__(self, scenario: Scenario, playback: Playback, withheld: set[str],
-                 source: str = "<scenario>") -> None:
+                 source: str = "<scenario>", joined: Sequence[Joined] = ()) -> None:
         self.scenario = scenario
         self.playback = playback
         self.withheld = withheld
@@ -235,6 +239,7 @@ class Replay:
         self.bus = Bus(lambda: self.time_ns)
         self.suts: list[tuple[str, Participant, SutContext]] = load_suts(
             scenario, self.bus, source)
+        self.suts += join(joined, scenario, self.bus)
         self._groups: Iterator[tuple[int, list[tuple[str, str, bytes]]]] = iter(())
         self._decode = _decoder(playback.file, lambda: self.time_ns,
                                 ros1=playback.output.ros == 1)

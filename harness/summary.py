@@ -93,7 +93,8 @@ def replay_note(summary: Mapping[str, Any]) -> str | None:
     changes = [f"--set {o}" for o in overrides] + [f"--sut {k}={v}" for k, v in replaced.items()]
     what = (f"changed: {', '.join(changes)}" if changes else
             "nothing changed: the recorded systems under test and settings")
-    return f"open-loop replay of {r.get('run_dir', '?')} ({what})"
+    into = " into external ROS 2 nodes in lockstep" if r.get("mode") == "ros2-lockstep" else ""
+    return f"open-loop replay{into} of {r.get('run_dir', '?')} ({what})"
 
 
 def fail(path: Path, field: str, message: str) -> SrrError:

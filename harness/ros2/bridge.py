@@ -48,7 +48,7 @@ from harness.serde.messages import deserialize
 from harness.sut.base import SutContext, SystemUnderTest
 from harness.sut.errors import PluginError
 
-__all__ = ["Ros2Bridge", "message_class"]
+__all__ = ["Ros2Bridge", "message_class", "qos_profile"]
 
 _READY_POLL_S = 0.05
 _SETTLE_S = 0.5  # the ROS 2 graph unchanged this long (wall clock) before the first tick
@@ -98,11 +98,17 @@ class _Output:
         return self.latest_stamp_ns >= now_ns
 
 
-def _qos_profile(qos: Qos) -> Any:
+def qos_profile(qos: Qos, *, strict: bool = False) -> Any:
+    """The rclpy QoSProfile of a bus (or recorded) QoS: keep-last ``depth``. ``strict``: a
+    reliable, volatile topic keeps every message until each subscriber acknowledged it
+    (keep-all; history is no part of QoS matching, so the same subscribers match): a burst
+    longer than ``depth`` can never overwrite a message a slow subscriber has not received."""
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+    keep_all = strict and qos.reliability == "reliable" and qos.durability == "volatile"
     return QoSProfile(  # type: ignore[no-untyped-call]
-        history=HistoryPolicy.KEEP_LAST, depth=max(qos.depth, 1),
+        history=HistoryPolicy.KEEP_ALL if keep_all else HistoryPolicy.KEEP_LAST,
+        depth=max(qos.depth, 1),
         reliability=(ReliabilityPolicy.RELIABLE if qos.reliability == "reliable"
                      else ReliabilityPolicy.BEST_EFFORT),
         durability=(DurabilityPolicy.TRANSIENT_LOCAL if qos.durability == "transient_local"
@@ -177,7 +183,7 @@ class Ros2Bridge(SystemUnderTest):
             base = Qos(durability=over.durability or base.durability,
                        reliability=over.reliability or base.reliability,
                        depth=over.depth or base.depth)
-        return _qos_profile(base)
+        return qos_profile(base, strict=True)
 
     def _output_rule(self, i: int, out: Ros2OutputSpec) -> tuple[Any, bool]:
         """The output's message class and whether it is stamped; a clear error when it has
@@ -342,6 +348,7 @@ class Ros2Bridge(SystemUnderTest):
                 break
 
     def shutdown(self) -> None:
+        self._flush()
         stop_processes(self.procs, self.run_dir / "ros2")
         with contextlib.suppress(Exception):
             self.executor.shutdown()
@@ -349,6 +356,22 @@ class Ros2Bridge(SystemUnderTest):
             self._rclpy.shutdown(context=self.rcl_context)
         if self.lease is not None:
             self.lease.release()
+
+    def _flush(self) -> None:
+        """Before the external processes are stopped: wait (at most ``ros2.timeout`` in all)
+        until every subscriber acknowledged every message published, so the last ticks'
+        messages, sent after the last output was awaited, reach the nodes too. Not when an
+        external process has exited (its subscriptions would be waited for in vain)."""
+        if not self._started or any(not p.alive() for p in self.procs):
+            return
+        from rclpy.duration import Duration
+
+        deadline = time.monotonic() + self.spec.timeout
+        for pub in self.pubs.values():
+            if pub is not None:
+                left = max(0.0, deadline - time.monotonic())
+                with contextlib.suppress(Exception):  # a node gone: nothing to wait for
+                    pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9)))
 
     @staticmethod
     def _tf2_msgs() -> list[str]:

@@ -1,9 +1,19 @@
 """Open-loop replay of a recorded run (``srr replay``): its bag played back into its systems
 under test, or replacements, and the new run recorded, scored and judged like a run of the
-recorded scenario (:mod:`harness.replay` plays it; :mod:`harness.run.record` records it)."""
+recorded scenario (:mod:`harness.replay` plays it; :mod:`harness.run.record` records it).
+
+With ``ros2.enabled`` (``srr replay --ros2``, or a recording of ``srr run --ros2``) the ROS 2
+bridge of a run (:func:`~harness.run.simulate.ros2_bridge`) joins the replay: the recorded
+bytes go out on the run's own ROS 2 graph tick by tick, the external processes of
+``ros2.external`` (``--ros2-external NAME=CMD`` swaps one's command) are started, and each
+tick waits, in lockstep, for the outputs they are due to publish, which are recorded in
+place of the recorded ones."""
 
 from __future__ import annotations
 
+import json
+import shlex
+import shutil
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -11,30 +21,43 @@ from typing import Any
 from harness import runlock
 from harness.bus import Bus
 from harness.diskspace import check_free_space, disk_free
-from harness.errors import ScenarioError
+from harness.errors import ScenarioError, SrrError
+from harness.live.config import LiveConfig
+from harness.live.view import LiveView
 from harness.regression import comparable_config, config_differences
 from harness.replay import Playback, Replay
 from harness.report.graphs import read_graphs
 from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir
+from harness.run.participants import LiveViewParticipant
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
+from harness.run.simulate import Notice, ros2_bridge
 from harness.run.summary import RunSummary
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
 from harness.scoring import check_scoring
 from harness.sut.base import load_suts
+from harness.sut.participant import Participant
 
 __all__ = ["replay"]
 
 
 def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence[str] = (),
            out: Path | None = None, progress: Progress | None = None,
-           baselines: Path | None = None, started: Started | None = None) -> RunResult:
+           baselines: Path | None = None, started: Started | None = None,
+           ros2: bool = False, externals: Sequence[str] = (), live: LiveConfig | None = None,
+           notice: Notice | None = None) -> RunResult:
     """Open-loop replay of a recorded run (``srr replay``): its bag played back, in
     publication order, into its systems under test — or into replacements (``suts``:
     ``NAME=module:Class``) and changed parameters (``overrides``: ``--set`` on the systems
-    under test and the scoring). What the systems under test published is produced again;
-    everything else is the recording's bytes. The new run directory is scored and judged
-    like a run of the recorded scenario (:mod:`harness.replay`)."""
+    under test, the scoring and the ``ros2`` block). What the systems under test published
+    is produced again; everything else is the recording's bytes. The new run directory is
+    scored and judged like a run of the recorded scenario (:mod:`harness.replay`).
+
+    ``ros2`` (= ``--set ros2.enabled=true``): the replay goes out on a live ROS 2 graph and
+    the external nodes of ``ros2.external`` produce ``ros2.outputs`` in lockstep;
+    ``externals`` (``NAME=CMD``, a shell-quoted command line) swaps the command of the
+    external process ``NAME``. ``live`` serves the replay over the Foxglove WebSocket
+    protocol (``--foxglove``; its ``rate`` paces it)."""
     src = Path(run_dir)
     runlock.refuse_if_live(src)
     summary = RunSummary.read(src)
@@ -49,6 +72,10 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
             raise ScenarioError("--sut", name, f"no system under test named {name.strip()!r} "
                                 f"in {src / 'scenario.yaml'} (names: {names})")
         pairs.append((f"systems_under_test.{name.strip()}.plugin", plugin.strip()))
+    ros2_changes = (["ros2.enabled=true"] if ros2 else []) + [
+        _external_override(load_scenario(src / "scenario.yaml", pairs), text, src)
+        for text in externals]
+    pairs += [parse_override(o) for o in ros2_changes]
     scenario = load_scenario(src / "scenario.yaml", pairs)
     _check_replay_scene(recorded, scenario)
     source = str(summary.scenario_file or src / "scenario.yaml")
@@ -57,25 +84,41 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     baselines = baselines_dir(source, baselines if baselines is not None
                               else Path(judged) if judged else None, scenario)
     playback = Playback(src / "bag")
+    if playback.output.ros == 1 and live is not None:  # (ros2.enabled: the scenario says)
+        raise SrrError(f"{src}: --foxglove: the live view serves ROS 2 messages, and "
+                       f"{playback.output.because}")
+    out_dir = Path(out) if out is not None else default_run_dir(scenario, suffix="-replay")
+    prepare(out_dir)  # before the external processes write their logs into it
     withheld = _recorded_outputs(summary.sut_endpoints, recorded, source)
-    rep = Replay(scenario, playback, withheld, source)
+    rep = Replay(scenario, playback, withheld, source,
+                 joined=ros2_bridge(scenario, out_dir, source))
+    participants: list[Participant] = []
     try:
         rep.start()
         withheld |= {e.topic for _, _, ctx in rep.suts for e in ctx.endpoints
                      if e.kind == "pub"}
         warnings = _replay_wiring(rep, playback, withheld)
+        check_free_space(scenario, out_dir, disk_free)
+        if live is not None:  # every topic the replay will publish, advertised up front
+            topics = {t: r.msgtype for t, r in playback.topics.items() if t not in withheld}
+            topics |= {e.topic: e.msgtype for _, _, ctx in rep.suts for e in ctx.endpoints
+                       if e.kind == "pub"}
+            participants.append(LiveViewParticipant(
+                LiveView.start(live, topics=topics, notice=notice), rep.bus))
     except BaseException:
         rep.close()
+        for p in participants:
+            p.shutdown()
         raise
-    out_dir = Path(out) if out is not None else default_run_dir(scenario, suffix="-replay")
-    prepare(out_dir)
-    check_free_space(scenario, out_dir, disk_free)
     command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
-                        *(f"--set {o}" for o in overrides), f"--out {out_dir}"])
+                        *(f"--set {o}" for o in overrides), *(["--ros2"] if ros2 else []),
+                        *(f"--ros2-external {shlex.quote(t)}" for t in externals),
+                        f"--out {out_dir}"])
     replay_of = {
-        "run_dir": str(src.resolve()), "digest": summary.digest, "mode": "open-loop",
+        "run_dir": str(src.resolve()), "digest": summary.digest,
+        "mode": "ros2-lockstep" if scenario.ros2.enabled else "open-loop",
         "replaced": {t.partition("=")[0].strip(): t.partition("=")[2].strip() for t in suts},
-        "overrides": list(overrides), "withheld": sorted(withheld)}
+        "overrides": [*overrides, *ros2_changes], "withheld": sorted(withheld)}
     try:  # the recorded scene's graphs; without them the report rebuilds them
         graphs = read_graphs(src)
     except (OSError, ValueError):
@@ -87,7 +130,32 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
                 output=playback.output, graphs=graphs)
     return record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.ticks or scenario.n_ticks), progress=progress,
-                   baselines=baselines, started=started)
+                   baselines=baselines, started=started, participants=participants)
+
+
+def _external_override(scenario: Scenario, text: str, src: Path) -> str:
+    """``--ros2-external NAME=CMD`` as the ``--set`` it stands for:
+    ``ros2.external.NAME.cmd=[...]``, CMD split like a shell command line."""
+    name, sep, cmd = text.partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise ScenarioError("--ros2-external", text, "expected NAME='command and arguments'")
+    names = [p.name or f"external_{i}" for i, p in enumerate(scenario.ros2.external)]
+    if name not in names:
+        raise ScenarioError("--ros2-external", name, f"no external process named {name!r} in "
+                            f"the ros2 block of {src / 'scenario.yaml'} (names: "
+                            f"{', '.join(names) or 'none'})")
+    try:
+        argv = shlex.split(cmd)
+    except ValueError as err:
+        raise ScenarioError("--ros2-external", name, f"cannot split the command: {err}") \
+            from None
+    if not argv:
+        raise ScenarioError("--ros2-external", name, "the command is empty")
+    if shutil.which(argv[0]) is None:
+        raise ScenarioError("--ros2-external", name, f"{argv[0]!r} is not an executable file "
+                            "or on PATH")
+    return f"ros2.external.{names.index(name)}.cmd={json.dumps(argv)}"
 
 
 def _check_replay_scene(recorded: Scenario, scenario: Scenario) -> None:
@@ -129,6 +197,13 @@ def _replay_wiring(rep: Replay, playback: Playback, withheld: set[str]) -> list[
     produced = {e.topic: e.msgtype for _, _, ctx in rep.suts for e in ctx.endpoints
                 if e.kind == "pub"}
     warnings = []
+    first: dict[str, str] = {}  # topic → the system under test that publishes it first
+    for name, _, ctx in rep.suts:
+        for topic in dict.fromkeys(e.topic for e in ctx.endpoints if e.kind == "pub"):
+            if topic in first:  # as a run's wiring check says it
+                warnings.append(f"{ctx.field}: {name} publishes {topic}, which {first[topic]} "
+                                "publishes too")
+            first.setdefault(topic, name)
     for name, _, ctx in rep.suts:
         for e in ctx.endpoints:
             rec = playback.topics.get(e.topic)

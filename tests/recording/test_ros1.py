@@ -295,6 +295,9 @@ def test_output_kind_and_inspect(srr: Callable[..., Done], clocks: Path, tmp_pat
         done = srr("replay", str(out), "--set", "output.ros=2", "--out", str(tmp_path / "r"))
         assert done.returncode == 2 and "--set: output: a replay records what the " \
             "recording is" in done.stderr and not (tmp_path / "r").exists()
+        done = srr("replay", str(out), "--foxglove", "--out", str(tmp_path / "r"))
+        assert done.returncode == 2 and "--foxglove: the live view serves ROS 2 messages, " \
+            "and the recording" in done.stderr and not (tmp_path / "r").exists()
 
 
 def test_a_foreign_bag_with_tf_tfmessage(tmp_path: Path) -> None:
