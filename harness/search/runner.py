@@ -306,7 +306,11 @@ def _outputs(plan: SearchPlan, out_dir: Path, study: Any, records: Sequence[Tria
         code, verdict = 0, "HOLDS"
     else:
         code, verdict = 3, "INVALID"
-    cex = _write_counterexamples(plan, out_dir, violated[:cfg.counterexamples])
+    distinct: list[TrialRecord] = []  # worst first, one per set of parameters
+    for r in violated:
+        if all(r.params != d.params for d in distinct):
+            distinct.append(r)
+    cex = _write_counterexamples(plan, out_dir, distinct[:cfg.counterexamples])
     best = min(valid, key=lambda r: (obj.margin(r.value or 0.0), r.number), default=None)
     summary: dict[str, Any] = {
         "format": FORMAT, "name": plan.name, "scenario": plan.scenario.name,

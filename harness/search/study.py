@@ -119,15 +119,17 @@ def ask_batch(study: Any, space: Sequence[Dimension], sampler: str, seed: int,
 
 
 def importances(study: Any, seed: int) -> dict[str, float]:
-    """Each parameter's importance for the objective (fANOVA over the complete trials);
-    empty when there are too few trials to say."""
+    """Each parameter's importance for the objective (optuna's PED-ANOVA over the complete
+    trials: NumPy and SciPy only, where fANOVA needs scikit-learn); empty when there are too
+    few trials to say."""
     optuna = _optuna()
     complete = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
     if len(complete) < 4 or len({t.value for t in complete}) < 2:
         return {}
+    del seed  # PED-ANOVA is deterministic
     try:
-        ev = optuna.importance.FanovaImportanceEvaluator(seed=seed)
+        ev = optuna.importance.PedAnovaImportanceEvaluator()
         return {str(k): float(v) for k, v in
                 optuna.importance.get_param_importances(study, evaluator=ev).items()}
-    except (RuntimeError, ValueError):
+    except (RuntimeError, ValueError, ImportError, ZeroDivisionError):
         return {}
