@@ -34,7 +34,7 @@ from harness.run.simulate import validate
 from harness.scenario import Scenario, load_scenario, parse_override
 from harness.search.objective import Objective, check_scored, missing_metric
 from harness.search.space import Dimension
-from harness.search.study import ask_batch, finished_trials, importances, open_study
+from harness.search.study import ATTR, ask_batch, finished_trials, importances, open_study, status
 from harness.suite.events import Executor, Listener
 from harness.suite.plan import RunSpec, safe_file_name
 from harness.suite.results import RunOutcome
@@ -217,7 +217,7 @@ def _record(plan: SearchPlan, number: int, params: dict[str, Scalar],
 
 
 def _from_trial(t: Any) -> TrialRecord:
-    a = t.user_attrs
+    a = t.user_attrs.get(ATTR) or {}
     params = {k: _plain(v) for k, v in t.params.items()}
     return TrialRecord(t.number, params, str(a.get("status", "invalid")),
                        value=a.get("value"), margin=a.get("margin"), verdict=a.get("verdict"),
@@ -228,9 +228,8 @@ def _from_trial(t: Any) -> TrialRecord:
 def _tell(study: Any, trial: Any, rec: TrialRecord) -> None:
     from optuna.trial import TrialState
 
-    for k, v in rec.to_json().items():
-        if k not in ("number", "id", "params"):
-            trial.set_user_attr(k, v)
+    trial.set_user_attr(ATTR, {k: v for k, v in rec.to_json().items()
+                               if k not in ("number", "id", "params")})
     if rec.status in ("violated", "holds"):
         study.tell(trial, rec.value)
     else:
@@ -363,13 +362,12 @@ def run_search(plan: SearchPlan, executor: Executor, *, out: Path | None = None,
     stop: str | None = None
 
     def records() -> list[TrialRecord]:
-        return [_from_trial(t) for t in study.get_trials(deepcopy=False)
-                if t.user_attrs.get("status")]
+        return [_from_trial(t) for t in study.get_trials(deepcopy=False) if status(t)]
 
     with _session(executor):
         while True:
             done = finished_trials(study)
-            found = any(t.user_attrs.get("status") == "violated" for t in done)
+            found = any(status(t) == "violated" for t in done)
             if len(done) >= cfg.budget or (cfg.stop_at_first and found):
                 break
             n = min(max(1, executor.jobs), cfg.budget - len(done))
