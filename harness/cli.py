@@ -710,7 +710,8 @@ def _cmd_search(args: argparse.Namespace) -> int:
         _stderr().print(f"srr search: warning: {w}", markup=False)
     c = res.summary["counts"]
     _stdout().print(f"search {res.summary['name']}: {c['trials']} trials ({res.ran} now), "
-                    f"{c['violated']} violated, {c['invalid']} invalid", markup=False)
+                    f"{c['violated']} violated, {c['invalid']} invalid"
+                    + (f", {c['killed']} killed" if c.get("killed") else ""), markup=False)
     for path in res.counterexamples:
         _stdout().print(f"counterexample {path}", markup=False)
     add = res.addition

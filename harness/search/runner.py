@@ -319,7 +319,8 @@ def _outputs(plan: SearchPlan, out_dir: Path, study: Any, records: Sequence[Tria
         "stop_at_first": cfg.stop_at_first, **meta,
         "verdict": verdict, "exit_code": code,
         "counts": {"trials": len(records), "violated": len(violated), "valid": len(valid),
-                   "invalid": len(invalid)},
+                   "invalid": len(invalid),
+                   "killed": sum(r.status == "killed" for r in records)},
         "best": None if best is None else {"trial": best.number, "value": best.value},
         "first_violation": min((r.number for r in violated), default=None),
         "best_so_far": _best_so_far(records, obj),
@@ -377,8 +378,9 @@ def run_search(plan: SearchPlan, executor: Executor, *, out: Path | None = None,
             outcomes, interrupted = executor.run(specs, out_dir, listen or (lambda e: None))
             for t, p, o in zip(trials, params, outcomes, strict=True):
                 rec = _record(plan, t.number, p, o)
-                if interrupted and rec.status == "invalid" and o.verdict == "INTERRUPTED":
-                    rec = replace(rec, status="killed")
+                if interrupted and rec.status == "invalid":  # stopped by the interrupt
+                    rec = replace(rec, status="killed", reason="stopped: the search was "
+                                  f"interrupted ({rec.reason})")
                 _tell(study, t, rec)
                 ran += 1
                 if on_trial is not None:

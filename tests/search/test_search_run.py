@@ -99,7 +99,7 @@ def test_an_objective_that_holds_everywhere_exits_0(tmp_path: Path) -> None:
     assert code == 0
     s = _summary(out)
     assert s["verdict"] == "HOLDS" and s["counts"] == {"trials": 2, "violated": 0,
-                                                       "valid": 2, "invalid": 0}
+                                                       "valid": 2, "invalid": 0, "killed": 0}
     assert s["counterexamples"] == [] and not list((out / "counterexamples").glob("*"))
     assert 'id="no-counterexample"' in (out / "index.html").read_text()
 
