@@ -167,3 +167,19 @@ def test_a_metric_no_run_has_stops_the_search(tmp_path: Path,
     assert err.startswith("srr search: --objective safety.over_mutes: the runs' summary.json "
                           "has no such metric; did you mean safety.over_mute")
     assert _summary(out)["counts"]["trials"] == 1  # stopped after the first run
+
+
+@pytest.mark.ray
+def test_search_on_a_local_ray_cluster(tmp_path: Path) -> None:
+    """Two batches on one cluster (started once for the search, stopped at its end)."""
+    pytest.importorskip("ray")
+    out = tmp_path / "out"
+    code = main(["search", str(ROOT / "scenarios" / "forklift_warehouse.yaml"), "--space",
+                 "systems_under_test.route_follower.params.speed=0.5..2.5", "--objective",
+                 "control.cross_track_error.max", "--violated-above", "50", "--set",
+                 "duration=2", "--budget", "3", "--jobs", "2", "--executor", "ray",
+                 "--out", str(out), "-q"])
+    assert code == 0
+    s = _summary(out)
+    assert s["executor"] == "ray" and s["counts"]["valid"] == 3
+    assert all((out / t["report"]).is_file() for t in s["trials"])
