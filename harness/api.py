@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from harness import runlock
 from harness.diff import DiffResult, Tolerance
@@ -59,6 +59,9 @@ from harness.run.simulate import (
 from harness.scenario import Scenario
 from harness.suite.events import Listener
 from harness.suite.runner import SuitePlan, SuiteResult, plan_suite, run_suite
+
+if TYPE_CHECKING:  # srr search imports optuna lazily: only when it runs
+    from harness.search.runner import SearchResult
 
 __all__ = [
     "PROJECT_MARKERS",
@@ -165,7 +168,8 @@ def search(scenario_file: str | Path, *, space: Sequence[str], objective: str,
            timeout_s: float | None = None, name: str | None = None,
            counterexamples: int = 3, add_to_suite: Path | None = None,
            bless_reason: str | None = None, baselines: Path | None = None,
-           listen: Listener | None = None, on_trial: Any = None, fork: bool = False) -> Any:
+           listen: Listener | None = None, on_trial: Any = None,
+           fork: bool = False) -> SearchResult:
     """``srr search``: look for parameters in ``space`` (``PATH=RANGE`` strings) at which
     the metric ``objective`` crosses its threshold; runs go to ``executor`` as in
     :func:`suite`; the study is kept in ``out/study.db`` and resumed when the same call is

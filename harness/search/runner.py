@@ -149,12 +149,11 @@ def plan_search(cfg: SearchConfig) -> SearchPlan:
         raise SrrError(f"--timeout: must be > 0, got {cfg.timeout_s}")
     if not Path(cfg.scenario_file).is_file():
         raise SrrError(f"{cfg.scenario_file}: no such scenario file")
-    for i, text in enumerate(cfg.overrides):
+    for text in cfg.overrides:
         try:
             parse_override(text)
         except ScenarioError as err:
             raise SrrError(f"--set {text}: {err.message}") from None
-        del i
     sc = _load(cfg, (), "--set")
     for dim in cfg.space:
         for v in _corners(dim):
