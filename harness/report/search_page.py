@@ -155,6 +155,7 @@ def render_search_page(summary: Mapping[str, Any], *, root: Path | None = None) 
     importances = sorted(((str(k), float(v)) for k, v in imp.items() if _num(v) is not None),
                          key=lambda kv: -kv[1])
     counts = summary.get("counts") if isinstance(summary.get("counts"), Mapping) else {}
+    first = summary.get("first_violation")
     figure = Markup(objective_figure(trials, list(summary.get("best_so_far") or []),
                                      threshold, metric)) if trials else None
     meta = [f"scenario {summary.get('scenario')}",
@@ -168,7 +169,7 @@ def render_search_page(summary: Mapping[str, Any], *, root: Path | None = None) 
         verdict=_BANNER.get(verdict, "INVALID"), word=verdict,
         exit_code=summary.get("exit_code"), toc=toc, s=summary, metric=metric,
         violated=str(obj.get("violated", "below")), threshold=f"{threshold:g}",
-        counts=counts, meta=meta, figure=figure, rows=rows, cex=cex, importances=importances,
+        counts=counts, first_violation=first if isinstance(first, int) else None, meta=meta, figure=figure, rows=rows, cex=cex, importances=importances,
         space=[d for d in summary.get("space") or [] if isinstance(d, Mapping)],
         status_colors=STATUS_COLORS, srr_version=__version__)
 
