@@ -169,7 +169,8 @@ def render_search_page(summary: Mapping[str, Any], *, root: Path | None = None) 
         verdict=_BANNER.get(verdict, "INVALID"), word=verdict,
         exit_code=summary.get("exit_code"), toc=toc, s=summary, metric=metric,
         violated=str(obj.get("violated", "below")), threshold=f"{threshold:g}",
-        counts=counts, first_violation=first if isinstance(first, int) else None, meta=meta, figure=figure, rows=rows, cex=cex, importances=importances,
+        counts=counts, first_violation=first if isinstance(first, int) else None, meta=meta,
+        figure=figure, rows=rows, cex=cex, importances=importances,
         space=[d for d in summary.get("space") or [] if isinstance(d, Mapping)],
         status_colors=STATUS_COLORS, srr_version=__version__)
 

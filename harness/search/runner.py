@@ -365,16 +365,25 @@ def run_search(plan: SearchPlan, executor: Executor, *, out: Path | None = None,
         return [_from_trial(t) for t in study.get_trials(deepcopy=False) if status(t)]
 
     with _session(executor):
-        while True:
+        while not (interrupted or stop):
             done = finished_trials(study)
             found = any(status(t) == "violated" for t in done)
             if len(done) >= cfg.budget or (cfg.stop_at_first and found):
                 break
             n = min(max(1, executor.jobs), cfg.budget - len(done))
-            trials = ask_batch(study, cfg.space, cfg.sampler, cfg.seed, n)
-            params = [{k: _plain(v) for k, v in t.params.items()} for t in trials]
-            specs = [_spec(plan, t.number, p) for t, p in zip(trials, params, strict=True)]
-            outcomes, interrupted = executor.run(specs, out_dir, listen or (lambda e: None))
+            trials: list[Any] = []
+            try:
+                trials = ask_batch(study, cfg.space, cfg.sampler, cfg.seed, n)
+                params = [{k: _plain(v) for k, v in t.params.items()} for t in trials]
+                specs = [_spec(plan, t.number, p) for t, p in zip(trials, params, strict=True)]
+                outcomes, interrupted = executor.run(specs, out_dir,
+                                                     listen or (lambda e: None))
+            except KeyboardInterrupt:  # between runs (asking, planning): none of them ran
+                for t in trials:
+                    _tell(study, t, TrialRecord(t.number, {}, "killed",
+                                                reason="the search was interrupted"))
+                interrupted = True
+                break
             for t, p, o in zip(trials, params, outcomes, strict=True):
                 rec = _record(plan, t.number, p, o)
                 if interrupted and rec.status == "invalid":  # stopped by the interrupt
@@ -386,8 +395,6 @@ def run_search(plan: SearchPlan, executor: Executor, *, out: Path | None = None,
                     on_trial(rec)
                 if stop is None and rec.reason and rec.reason.startswith("--objective"):
                     stop = rec.reason
-            if interrupted or stop:
-                break
     meta = {"started_at": started, "wall_s": round(time.monotonic() - t0, 3),
             "executor": getattr(executor, "name", "?"), "jobs": executor.jobs,
             "interrupted": interrupted, "ran_now": ran}

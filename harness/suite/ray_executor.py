@@ -123,6 +123,11 @@ class RayExecutor:
         """One cluster connection over several :meth:`run` calls (a search's batches): a
         local cluster is started once, not per call."""
         connected_here = self._connect()
+        if not self.jobs:  # as many as the cluster has CPUs, known before the first batch
+            import ray
+
+            cpus = ray.cluster_resources().get("CPU", 1)  # type: ignore[no-untyped-call]
+            self.jobs = max(1, int(cpus))
         try:
             yield
         finally:
