@@ -166,15 +166,17 @@ def search(scenario_file: str | Path, *, space: Sequence[str], objective: str,
            budget: int = 20, stop_at_first: bool = False, executor: str = "local",
            jobs: int | None = None, address: str | None = None, out: Path | None = None,
            timeout_s: float | None = None, name: str | None = None,
-           counterexamples: int = 3, add_to_suite: Path | None = None,
+           counterexamples: int = 3, prune: bool = False, add_to_suite: Path | None = None,
            bless_reason: str | None = None, baselines: Path | None = None,
            listen: Listener | None = None, on_trial: Any = None,
            fork: bool = False) -> SearchResult:
     """``srr search``: look for parameters in ``space`` (``PATH=RANGE`` strings) at which
     the metric ``objective`` crosses its threshold; runs go to ``executor`` as in
     :func:`suite`; the study is kept in ``out/study.db`` and resumed when the same call is
-    made again. Returns a :class:`harness.search.runner.SearchResult` (with ``addition``,
-    a :class:`harness.search.runner.SuiteAddition`, when ``add_to_suite``). Bad input
+    made again. ``prune``: delete the recording (``bag/``) of every trial that does not
+    violate the objective (its summary and report stay). Returns a
+    :class:`harness.search.runner.SearchResult` (with ``addition``, a
+    :class:`harness.search.runner.SuiteAddition`, when ``add_to_suite``). Bad input
     raises :class:`SrrError` before anything runs."""
     from harness.search.counterexamples import check_suite
     from harness.search.objective import parse_objective
@@ -194,7 +196,7 @@ def search(scenario_file: str | Path, *, space: Sequence[str], objective: str,
         objective=parse_objective(objective, below=violated_below, above=violated_above),
         overrides=tuple(overrides), sampler=sampler, seed=seed, budget=budget,
         stop_at_first=stop_at_first, timeout_s=timeout_s, name=name,
-        counterexamples=counterexamples)
+        counterexamples=counterexamples, prune=prune)
     plan = plan_search(cfg)
     ex = _executor(executor, jobs, address, baselines, 0.5, fork)
     result = run_search(plan, ex, out=out, listen=listen, on_trial=on_trial)

@@ -672,6 +672,9 @@ def _search_parser(sub: Any) -> None:
                     help="wall-clock limit per run; a run past it is stopped and INVALID")
     se.add_argument("--counterexamples", type=int, default=3, metavar="N",
                     help="write the N worst violating trials as scenario files (default 3)")
+    se.add_argument("--prune", action="store_true",
+                    help="delete the recording (bag/) of every trial that does not violate the "
+                    "objective; its summary.json and report.html stay")
     se.add_argument("--add-to-suite", type=Path, default=None, metavar="SUITE",
                     help="append the counterexamples to this suite file")
     se.add_argument("--bless", action="store_true",
@@ -703,7 +706,7 @@ def _cmd_search(args: argparse.Namespace) -> int:
             overrides=args.overrides, sampler=args.sampler, seed=args.seed,
             budget=args.budget, stop_at_first=args.stop_at_first, executor=args.executor,
             jobs=args.jobs, address=args.address, out=args.out, timeout_s=args.timeout,
-            name=args.name, counterexamples=args.counterexamples,
+            name=args.name, counterexamples=args.counterexamples, prune=args.prune,
             add_to_suite=args.add_to_suite, bless_reason=args.reason if args.bless else None,
             baselines=args.baselines, on_trial=on_trial, fork=True)
     for w in res.warnings:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import shutil
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
@@ -59,6 +60,7 @@ class SearchConfig:
     timeout_s: float | None = None
     name: str | None = None
     counterexamples: int = 3
+    prune: bool = False  # delete the bag/ of every trial that does not violate the objective
 
 
 @dataclass(frozen=True)
@@ -390,6 +392,8 @@ def run_search(plan: SearchPlan, executor: Executor, *, out: Path | None = None,
                     rec = replace(rec, status="killed", reason="stopped: the search was "
                                   f"interrupted ({rec.reason})")
                 _tell(study, t, rec)
+                if cfg.prune and rec.status != "violated" and rec.run_dir:
+                    shutil.rmtree(out_dir / rec.run_dir / "bag", ignore_errors=True)
                 ran += 1
                 if on_trial is not None:
                     on_trial(rec)

@@ -95,13 +95,16 @@ def test_an_objective_that_holds_everywhere_exits_0(tmp_path: Path) -> None:
     out = tmp_path / "out"
     code = main(["search", str(CROSSING), *NARROW, *OBJECTIVE, "--set", "duration=26",
                  "--budget", "2", "--jobs", "2", "--sampler", "random", "--out", str(out),
-                 "-q"])
+                 "--prune", "-q"])
     assert code == 0
     s = _summary(out)
     assert s["verdict"] == "HOLDS" and s["counts"] == {"trials": 2, "violated": 0,
                                                        "valid": 2, "invalid": 0, "killed": 0}
     assert s["counterexamples"] == [] and not list((out / "counterexamples").glob("*"))
     assert 'id="no-counterexample"' in (out / "index.html").read_text()
+    for t in s["trials"]:  # --prune: the recordings of passing trials go, the rest stays
+        assert not (out / t["run_dir"] / "bag").exists()
+        assert (out / t["run_dir"] / "summary.json").is_file() and (out / t["report"]).is_file()
 
 
 def _trials(db: Path) -> list[tuple[int, str]]:
