@@ -56,13 +56,15 @@ def test_planted_defect_found_and_added_to_a_suite(tmp_path: Path) -> None:
                      "  - path: scenarios/crossing.yaml   # the crossing\n")
     out = tmp_path / "out"
     code = main(["search", str(scenario), *NARROW, *OBJECTIVE, "--set", "duration=26",
-                 "--budget", "2", "--jobs", "2", "--seed", "3", "--out", str(out),
+                 "--budget", "6", "--stop-at-first", "--jobs", "2", "--seed", "3",
+                 "--out", str(out),
                  "--counterexamples", "1", "--add-to-suite", str(suite), "--bless",
                  "--reason", "found by search", "-q"])
     assert code == 1
     s = _summary(out)
     assert s["verdict"] == "VIOLATED" and s["counts"]["violated"] >= 1
     assert s["first_violation"] == 0
+    assert s["counts"]["trials"] == 2  # --stop-at-first: after the first batch (--jobs 2)
     [cex] = s["counterexamples"]
     worst = min((t for t in s["trials"] if t["status"] == "violated"), key=lambda t: t["margin"])
     assert cex["trial"] == worst["number"] and cex["value"] > 1.5
