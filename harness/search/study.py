@@ -8,7 +8,8 @@ it does not count), and new trials take the next numbers. The settings that defi
 command that differs in any of them is refused instead of mixing two searches.
 
 Seeding: trials are asked in batches of ``--jobs``, and the sampler of each batch is made
-afresh with a seed derived from ``--seed`` and the batch's first trial number. So a batch's
+afresh with a seed derived from ``--seed`` and the batch's first trial number (QMC keeps
+``--seed``: its points are one scrambled Sobol sequence indexed by the trial count). So a batch's
 parameters depend only on the seed, that number and the trials finished before it — the same
 whether the search ran in one go or was killed and resumed between batches. A search
 killed in the middle of a batch resumes with a new batch (its killed trials are not rerun with
@@ -151,7 +152,10 @@ def ask_batch(study: Any, space: Sequence[Dimension], sampler: str, seed: int,
               n: int) -> list[Any]:
     """``n`` new trials, from a sampler seeded by ``seed`` and the first new trial number."""
     first = len(study.get_trials(deepcopy=False))
-    study.sampler = make_sampler(sampler, (seed * 1_000_003 + first) % 2**32)
+    # QMC keeps its seed: one scrambled Sobol sequence, indexed by the study's trial count,
+    # so the batches together stay a low-discrepancy set (resuming continues the sequence)
+    study.sampler = make_sampler(sampler, seed if sampler == "qmc" else
+                                 (seed * 1_000_003 + first) % 2**32)
     dists = distributions(space)
     return [study.ask(dists) for _ in range(n)]
 
