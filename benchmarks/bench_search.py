@@ -88,8 +88,8 @@ def grid(budget: int, jobs: int, out: Path) -> dict[str, Any]:
             "points": [r["params"] for r in runs if r["metrics"].get(METRIC, 0) > ABOVE]}
 
 
-def driver_overhead(n: int, batch: int, db: Path) -> dict[str, float]:
-    """The search process's own cost per trial, without runs: ask (TPE) and tell on the
+def driver_overhead(n: int, batch: int, db: Path, sampler: str) -> dict[str, float]:
+    """The search process's own cost per trial, without runs: ask and tell on the
     SQLite study, in batches of ``batch``, a synthetic objective; seconds per trial over the
     first and the last 100 trials (TPE's cost grows with the history)."""
     from harness.search.objective import parse_objective
@@ -101,7 +101,7 @@ def driver_overhead(n: int, batch: int, db: Path) -> dict[str, float]:
     per: list[float] = []
     while len(per) < n:
         t0 = time.perf_counter()
-        trials = ask_batch(study, space, "tpe", 0, batch)
+        trials = ask_batch(study, space, sampler, 0, batch)
         for t in trials:
             v = float(t.params[space[0].path]) * float(t.params[space[1].path])
             t.set_user_attr(ATTR, {"status": "holds", "value": v})
@@ -131,15 +131,17 @@ def main() -> None:
     ap.add_argument("--samplers", default="tpe,random")
     ap.add_argument("--ray-budget", type=int, default=8, help="0: no Ray pass")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--driver-sampler", default="tpe")
     ap.add_argument("--driver-trials", type=int, default=0,
                     help="only time the search process's cost per trial over N trials")
     args = ap.parse_args()
     if args.driver_trials:
         with tempfile.TemporaryDirectory(prefix="srr-bench-search-") as tmp:
-            d = driver_overhead(args.driver_trials, 16, Path(tmp) / "study.db")
-        print(f"driver: TPE ask + tell on SQLite, batches of 16: {d['first100_s']*1e3:.0f} ms "
-              f"per trial over the first 100, {d['last100_s']*1e3:.0f} ms over the last 100 "
-              f"of {d['trials']:.0f}")
+            d = driver_overhead(args.driver_trials, 16, Path(tmp) / "study.db",
+                                args.driver_sampler)
+        print(f"driver: {args.driver_sampler} ask + tell on SQLite, batches of 16: "
+              f"{d['first100_s']*1e3:.0f} ms per trial over the first 100, "
+              f"{d['last100_s']*1e3:.0f} ms over the last 100 of {d['trials']:.0f}")
         return
     print(f"{platform.node()}: {os.cpu_count()} CPUs, Python {platform.python_version()}, "
           f"budget {args.budget}, seeds {args.seeds}, local × {args.jobs}", flush=True)
