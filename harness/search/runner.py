@@ -352,6 +352,8 @@ def run_search(plan: SearchPlan, executor: Executor, *, out: Path | None = None,
     cfg = plan.config
     out_dir = Path(out) if out is not None else default_search_dir(plan.name)
     db = out_dir / "study.db"
+    if out_dir.exists() and not out_dir.is_dir():
+        raise SrrError(f"--out {out_dir}: is a file, not a folder")
     if out_dir.exists() and not db.is_file() and any(out_dir.iterdir()):
         raise SrrError(f"--out {out_dir}: folder exists, is not empty and holds no search "
                        "(study.db) to resume")

@@ -4,6 +4,7 @@ errors for bad input (nothing runs: these load the scenario only)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -116,3 +117,19 @@ def test_add_to_suite_must_be_a_suite_file(tmp_path: Path,
                    "safety.over_mute", "--violated-above", "1", "--add-to-suite", CROSSING)
     assert main(argv) == 2
     assert "not a suite file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda out: out.write_text("x"), "is a file, not a folder"),
+    (lambda out: (out.mkdir(), (out / "keep.txt").write_text("x")),
+     "holds no search (study.db) to resume"),
+])
+def test_out_that_is_not_a_search_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                             make: Any, words: str) -> None:
+    out = tmp_path / "out"
+    make(out)
+    argv = ["search", CROSSING, "--out", str(out), "--space", "workers.0.speed=0.5..2",
+            "--objective", "safety.over_mute", "--violated-above", "1"]
+    assert main(argv) == 2
+    assert words in capsys.readouterr().err
+    assert not out.is_dir() or sorted(p.name for p in out.iterdir()) == ["keep.txt"]
