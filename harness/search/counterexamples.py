@@ -21,7 +21,7 @@ from harness.atomic import write_text_atomic
 from harness.errors import SrrError
 from harness.suite.spec import is_suite_file
 
-__all__ = ["Added", "append_to_suite", "place_beside"]
+__all__ = ["Added", "append_to_suite", "check_suite", "place_beside"]
 
 
 @dataclass(frozen=True)
@@ -98,6 +98,3 @@ def append_to_suite(suite: Path, files: Sequence[tuple[str, Path]]) -> list[Adde
     write_text_atomic(suite, buf.getvalue())
     return out
 
-
-def suite_entry_names(summary: Mapping[str, Any]) -> list[str]:
-    return [str(c["name"]) for c in summary.get("counterexamples") or []]

@@ -30,6 +30,7 @@ from harness.atomic import write_json_atomic
 from harness.errors import ScenarioError, SrrError
 from harness.report.junit import Case, write_junit
 from harness.report.search_page import write_search_page
+from harness.run.baselines import baselines_dir
 from harness.run.facts import scenario_text
 from harness.run.simulate import validate
 from harness.scenario import Scenario, load_scenario, parse_override
@@ -268,6 +269,8 @@ def _write_counterexamples(plan: SearchPlan, out_dir: Path,
         name = f"{plan.name}_{r.id}"
         point = Point(tuple((d.path, r.params[d.path]) for d in plan.config.space))
         sc = _load(plan.config, point.overrides(), f"trial {r.id}")
+        if sc.baselines is not None:  # relative to the file that set it: made absolute
+            sc = replace(sc, baselines=str(baselines_dir(plan.config.scenario_file, None, sc)))
         sc = replace(sc, name=name, baseline=None, sweep={}, description=(
             f"Found by srr search {plan.name} (trial {r.id}): {obj.metric} = {r.value:g} "
             f"violates {obj.describe()}. Parameters: {point.label}. {sc.description}"

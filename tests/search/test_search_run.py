@@ -49,7 +49,8 @@ def test_planted_defect_found_and_added_to_a_suite(tmp_path: Path) -> None:
     (project / "pyproject.toml").write_text("[project]\nname = 'p'\n")
     scenario = project / "scenarios" / "crossing.yaml"
     scene = ROOT / "scenarios" / "dock" / "scene.yaml"
-    text = PLANTED.read_text().replace("[../dock/scene.yaml]", f"[{scene}]")
+    text = PLANTED.read_text().replace("[../dock/scene.yaml]", f"[{scene}]").replace(
+        "baseline: dock_worker_crossing", "baselines: ../baselines")  # relative to this file
     scenario.write_text(text)
     suite = project / "suite.yaml"
     suite.write_text("# the nightly suite\nsuite: nightly   # its name\nscenarios:\n"
@@ -73,6 +74,7 @@ def test_planted_defect_found_and_added_to_a_suite(tmp_path: Path) -> None:
     assert sc.workers[0].speed == pytest.approx(cex["params"]["workers.0.speed"])
     assert sc.workers[0].start_delay == pytest.approx(cex["params"]["workers.0.start_delay"])
     assert sc.duration == 26 and sc.name == cex["name"]
+    assert sc.baselines == str((project / "baselines").resolve())  # wherever the file goes
     # the suite keeps its comments and gains the entry; the entry has its own baseline
     suite_text = suite.read_text()
     assert "# the nightly suite" in suite_text and "# the crossing" in suite_text
