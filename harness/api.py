@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from harness import runlock
 from harness.diff import DiffResult, Tolerance
@@ -62,6 +62,9 @@ from harness.scenario import Scenario
 from harness.suite.events import Listener
 from harness.suite.runner import SuitePlan, SuiteResult, plan_suite, run_suite
 
+if TYPE_CHECKING:  # srr search imports optuna lazily: only when it runs
+    from harness.search.runner import SearchResult
+
 __all__ = [
     "PROJECT_MARKERS",
     "ROS2_BRIDGE",
@@ -98,6 +101,7 @@ __all__ = [
     "run_repeat",
     "run_scenario",
     "scene_config",
+    "search",
     "start_streams",
     "suite",
     "validate",
@@ -156,6 +160,62 @@ def run_planned_suite(plan: SuitePlan, *, executor: str = "local", jobs: int | N
                       gpu_share: float = 0.5, bless_reason: str | None = None,
                       listen: Listener | None = None, fork: bool = False) -> SuiteResult:
     """:func:`suite` for a plan already checked (:func:`harness.suite.runner.plan_suite`)."""
+    ex = _executor(executor, jobs, address, baselines, gpu_share, fork)
+    return run_suite(plan, ex, out=out, history=history, listen=listen,
+                     bless_reason=bless_reason, baselines=baselines)
+
+
+def search(scenario_file: str | Path, *, space: Sequence[str], objective: str,
+           violated_below: float | None = None, violated_above: float | None = None,
+           overrides: Sequence[str] = (), sampler: str = "tpe", seed: int = 0,
+           budget: int = 20, stop_at_first: bool = False, executor: str = "local",
+           jobs: int | None = None, address: str | None = None, out: Path | None = None,
+           timeout_s: float | None = None, name: str | None = None,
+           counterexamples: int = 3, prune: bool = False, add_to_suite: Path | None = None,
+           bless_reason: str | None = None, baselines: Path | None = None,
+           listen: Listener | None = None, on_trial: Any = None,
+           fork: bool = False) -> SearchResult:
+    """``srr search``: look for parameters in ``space`` (``PATH=RANGE`` strings) at which
+    the metric ``objective`` crosses its threshold; runs go to ``executor`` as in
+    :func:`suite`; the study is kept in ``out/study.db`` and resumed when the same call is
+    made again. ``prune``: delete the recording (``bag/``) of every trial that does not
+    violate the objective (its summary and report stay). Returns a
+    :class:`harness.search.runner.SearchResult` (with ``addition``, a
+    :class:`harness.search.runner.SuiteAddition`, when ``add_to_suite``). Bad input
+    raises :class:`SrrError` before anything runs."""
+    from harness.search.counterexamples import check_suite
+    from harness.search.objective import parse_objective
+    from harness.search.runner import SearchConfig, plan_search, run_search
+    from harness.search.runner import add_to_suite as _add
+    from harness.search.space import parse_space
+    from harness.search.study import SAMPLERS
+
+    if sampler not in SAMPLERS:
+        raise SrrError(f"--sampler {sampler}: expected one of {', '.join(SAMPLERS)}")
+    if bless_reason is not None and add_to_suite is None:
+        raise SrrError("--bless: only with --add-to-suite SUITE")
+    if add_to_suite is not None:
+        check_suite(Path(add_to_suite))
+    cfg = SearchConfig(
+        scenario_file=str(scenario_file), space=parse_space(space),
+        objective=parse_objective(objective, below=violated_below, above=violated_above),
+        overrides=tuple(overrides), sampler=sampler, seed=seed, budget=budget,
+        stop_at_first=stop_at_first, timeout_s=timeout_s, name=name,
+        counterexamples=counterexamples, prune=prune)
+    plan = plan_search(cfg)
+    ex = _executor(executor, jobs, address, baselines, 0.5, fork)
+    result = run_search(plan, ex, out=out, listen=listen, on_trial=on_trial)
+    addition = None
+    if add_to_suite is not None and result.exit_code == 1:
+        addition = _add(result, plan, ex, Path(add_to_suite), bless_reason=bless_reason,
+                        baselines=baselines)
+    import dataclasses
+
+    return dataclasses.replace(result, addition=addition)
+
+
+def _executor(executor: str, jobs: int | None, address: str | None, baselines: Path | None,
+              gpu_share: float, fork: bool) -> Any:
     import os
 
     from harness.suite.local import LocalExecutor
@@ -167,11 +227,9 @@ def run_planned_suite(plan: SuitePlan, *, executor: str = "local", jobs: int | N
         raise SrrError(f"--executor: expected local or ray, got {executor!r}")
     if address is not None and executor != "ray":
         raise SrrError("--address: only with --executor ray")
-    ex: Any = (LocalExecutor(jobs or os.cpu_count() or 1, baselines=baselines, fork=fork)
-               if executor == "local" else
-               RayExecutor(address=address, jobs=jobs, baselines=baselines, gpu_share=gpu_share))
-    return run_suite(plan, ex, out=out, history=history, listen=listen,
-                     bless_reason=bless_reason, baselines=baselines)
+    return (LocalExecutor(jobs or os.cpu_count() or 1, baselines=baselines, fork=fork)
+            if executor == "local" else
+            RayExecutor(address=address, jobs=jobs, baselines=baselines, gpu_share=gpu_share))
 
 
 def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:

@@ -169,6 +169,8 @@ def _parser() -> argparse.ArgumentParser:
     su.add_argument("--quiet", "-q", action="store_true", help="no live lines")
     _summary_md_options(su)
 
+    _search_parser(sub)
+
     dif = sub.add_parser("diff", help="compare two runs: recorded topics, first divergence, "
                          "metrics side by side")
     dif.add_argument("run_a", type=Path, help="baseline run directory")
@@ -708,10 +710,103 @@ def _cmd_suite(args: argparse.Namespace) -> int:
     return int(res.exit_code)
 
 
+def _search_parser(sub: Any) -> None:
+    se = sub.add_parser("search", help="search scenario parameters for a run that violates "
+                        "an objective (falsification); counterexamples become scenarios")
+    se.add_argument("scenario", type=Path, help="the scenario file to search around")
+    se.add_argument("--space", action="append", default=[], metavar="PATH=RANGE",
+                    help="a --set path and its range: LO..HI, LO..HI:log, LO..HI:STEP, "
+                    "[A, B, ...] (repeatable)")
+    se.add_argument("--objective", required=True, metavar="METRIC",
+                    help="a metric of the run's summary.json, e.g. safety.under_mute")
+    se.add_argument("--violated-below", type=float, default=None, metavar="VALUE",
+                    help="a run violates the objective when the metric is below VALUE "
+                    "(default 0 for spec.NAME.robustness)")
+    se.add_argument("--violated-above", type=float, default=None, metavar="VALUE",
+                    help="a run violates the objective when the metric is above VALUE")
+    se.add_argument("--budget", type=int, default=20, help="trials in all (default 20)")
+    se.add_argument("--sampler", default="tpe", help="tpe (default), random, qmc or cmaes")
+    se.add_argument("--seed", type=int, default=0, help="the sampler's seed (default 0)")
+    se.add_argument("--stop-at-first", action="store_true",
+                    help="stop after the batch that found the first violation")
+    se.add_argument("--set", dest="overrides", action="append", default=[],
+                    metavar="KEY=VALUE", help="a fixed scenario override (repeatable)")
+    se.add_argument("--name", default=None, help="the search's name (default: the scenario's)")
+    se.add_argument("--out", type=Path, default=None,
+                    help="output folder (default reports/search/<name>); re-running the same "
+                    "command resumes the search kept there")
+    se.add_argument("--jobs", "-j", type=int, default=None,
+                    help="trials at once (local: default one per CPU; ray: the cluster's CPUs)")
+    se.add_argument("--executor", choices=("local", "ray"), default="local")
+    se.add_argument("--address", default=None, help="an existing Ray cluster")
+    se.add_argument("--timeout", type=float, default=None, metavar="SEC",
+                    help="wall-clock limit per run; a run past it is stopped and INVALID")
+    se.add_argument("--counterexamples", type=int, default=3, metavar="N",
+                    help="write the N worst violating trials as scenario files (default 3)")
+    se.add_argument("--prune", action="store_true",
+                    help="delete the recording (bag/) of every trial that does not violate the "
+                    "objective; its summary.json and report.html stay")
+    se.add_argument("--add-to-suite", type=Path, default=None, metavar="SUITE",
+                    help="append the counterexamples to this suite file")
+    se.add_argument("--bless", action="store_true",
+                    help="run each added counterexample once and make it its baseline")
+    se.add_argument("--reason", default=None, help="why (with --bless)")
+    se.add_argument("--baselines", type=Path, default=None,
+                    help="baselines folder (default: the project's baselines/)")
+    se.add_argument("--quiet", "-q", action="store_true", help="no line per trial")
+
+
+def _cmd_search(args: argparse.Namespace) -> int:
+    from harness import api
+
+    if args.bless and not args.reason:
+        raise SrrError("--bless: say why with --reason TEXT")
+    quiet = args.quiet
+
+    def on_trial(rec: Any) -> None:
+        if not quiet:
+            value = "—" if rec.value is None else f"{rec.value:g}"
+            _stdout().print(f"{rec.id} {rec.status:<8} {args.objective} = {value}  "
+                            + ", ".join(f"{k}={v}" for k, v in rec.params.items()),
+                            markup=False)
+
+    with sigterm_as_interrupt():
+        res = api.search(
+            args.scenario, space=args.space, objective=args.objective,
+            violated_below=args.violated_below, violated_above=args.violated_above,
+            overrides=args.overrides, sampler=args.sampler, seed=args.seed,
+            budget=args.budget, stop_at_first=args.stop_at_first, executor=args.executor,
+            jobs=args.jobs, address=args.address, out=args.out, timeout_s=args.timeout,
+            name=args.name, counterexamples=args.counterexamples, prune=args.prune,
+            add_to_suite=args.add_to_suite, bless_reason=args.reason if args.bless else None,
+            baselines=args.baselines, on_trial=on_trial, fork=True)
+    for w in res.warnings:
+        _stderr().print(f"srr search: warning: {w}", markup=False)
+    c = res.summary["counts"]
+    _stdout().print(f"search {res.summary['name']}: {c['trials']} trials ({res.ran} now), "
+                    f"{c['violated']} violated, {c['invalid']} invalid"
+                    + (f", {c['killed']} killed" if c.get("killed") else ""), markup=False)
+    for path in res.counterexamples:
+        _stdout().print(f"counterexample {path}", markup=False)
+    add = res.addition
+    if add is not None:
+        for n in add.added:
+            _stdout().print(f"added {n} to {add.suite}", markup=False)
+        for n in add.not_reproduced:
+            _stderr().print(f"srr search: warning: {n} did not violate the objective again "
+                            "when re-run; not added", markup=False)
+        for path in add.blessed:
+            _stdout().print(f"blessed {path}", markup=False)
+    _stdout().print(f"verdict: {res.verdict}", markup=False)
+    _stdout().print(f"{res.out_dir / 'index.html'}", markup=False)
+    return int(res.exit_code)
+
+
 COMMANDS = {"run": _cmd_run, "suite": _cmd_suite, "replay": _cmd_replay, "validate": _cmd_validate,
             "graph": _cmd_graph, "inspect": _cmd_inspect, "baseline": _cmd_baseline,
             "report": _cmd_report, "recover": _cmd_recover, "diff": _cmd_diff,
-            "ros2": _cmd_ros2, "schema": _cmd_schema, "export": _cmd_export}
+            "ros2": _cmd_ros2, "schema": _cmd_schema, "export": _cmd_export,
+            "search": _cmd_search}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -18,8 +18,16 @@ from harness.scenario import Scenario, scenario_to_mapping
 from harness.sut.base import SutContext
 from harness.sut.participant import plugin_of
 
-__all__ = ["combined_digest", "default_run_dir", "reproduce_command", "sut_endpoints",
-           "topic_table", "versions", "write_scenario"]
+__all__ = [
+    "combined_digest",
+    "default_run_dir",
+    "reproduce_command",
+    "scenario_text",
+    "sut_endpoints",
+    "topic_table",
+    "versions",
+    "write_scenario",
+]
 
 
 def versions() -> dict[str, str]:
@@ -81,8 +89,12 @@ def reproduce_command(source: str, scenario: Scenario, run_dir: Path) -> str:
             f"--out {run_dir}")
 
 
+def scenario_text(scenario: Scenario) -> str:
+    """The resolved scenario (includes expanded, defaults filled, overrides applied) as YAML
+    that srr reads back the same (a run's ``scenario.yaml``, a search's counterexamples)."""
+    return yamlio.dump(scenario_to_mapping(scenario), sort_keys=False)
+
+
 def write_scenario(run_dir: Path, scenario: Scenario) -> None:
-    """The run directory's ``scenario.yaml``: the resolved scenario (includes expanded,
-    defaults filled, overrides applied), written so that srr reads it back the same."""
-    (Path(run_dir) / "scenario.yaml").write_text(
-        yamlio.dump(scenario_to_mapping(scenario), sort_keys=False), encoding="utf-8")
+    """The run directory's ``scenario.yaml`` (:func:`scenario_text`)."""
+    (Path(run_dir) / "scenario.yaml").write_text(scenario_text(scenario), encoding="utf-8")

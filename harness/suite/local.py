@@ -73,6 +73,10 @@ def _fork_worker(job: dict[str, object], log: IO[bytes]) -> _Forked:
         os.dup2(null, 0)
         os.dup2(log.fileno(), 1)
         os.dup2(log.fileno(), 2)
+        # the parent's sys.stdout/sys.stderr may be objects of its own (pytest's capture, an
+        # IDE's console) that do not write to fds 1 and 2: the child's go to the log
+        sys.stdout = open(1, "w", encoding="utf-8", errors="replace", closefd=False)  # noqa: SIM115
+        sys.stderr = open(2, "w", encoding="utf-8", errors="replace", closefd=False)  # noqa: SIM115
         signal.signal(signal.SIGINT, signal.default_int_handler)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
         if faulthandler.is_enabled():  # its dump goes to this run's log, not the suite's

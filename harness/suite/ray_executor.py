@@ -24,7 +24,7 @@ import os
 import tarfile
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -117,6 +117,24 @@ class RayExecutor:
                  include_dashboard=False, log_to_driver=False, logging_level=logging.ERROR,
                  runtime_env={"env_vars": {"PYTHONPATH": path}})
         return True
+
+    @contextlib.contextmanager
+    def session(self) -> Iterator[None]:
+        """One cluster connection over several :meth:`run` calls (a search's batches): a
+        local cluster is started once, not per call."""
+        connected_here = self._connect()
+        if not self.jobs:  # as many as the cluster has CPUs, known before the first batch
+            import ray
+
+            cpus = ray.cluster_resources().get("CPU", 1)  # type: ignore[no-untyped-call]
+            self.jobs = max(1, int(cpus))
+        try:
+            yield
+        finally:
+            if connected_here:
+                import ray
+
+                ray.shutdown()
 
     def run(self, specs: Sequence[RunSpec], out_root: Path,
             listen: Listener) -> tuple[list[RunOutcome], bool]:

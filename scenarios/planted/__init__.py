@@ -1,0 +1,1 @@
+"""Plug-ins with defects planted on purpose, to show that ``srr search`` finds them."""
