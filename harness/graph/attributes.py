@@ -10,7 +10,6 @@ tuples; ``target`` is a tuple of absolute prim path strings; ``bundle`` / ``any`
 
 from __future__ import annotations
 
-import functools
 import math
 import numbers
 import re
@@ -234,9 +233,31 @@ def _conversion(type_name: str) -> Callable[..., Any]:
 
 
 def _make_converter(type_name: str) -> Converter:
+    """The one-argument converter of ``type_name``. A fixed-size tuple's checks its stored
+    form (a tuple of that many floats, given back as is: what most per-tick writes carry)
+    before calling the general conversion; every converter passes ``type_name``
+    positionally (a keyword ``functools.partial`` builds a dict per call)."""
     if type_name in _OPAQUE:
         return _identity
-    return functools.partial(_conversion(type_name), type_name=type_name)
+    conversion = _conversion(type_name)
+    if type_name in _FIXED_TUPLES:
+        size = _FIXED_TUPLES[type_name]
+
+        def fixed_tuple(value: Any) -> Any:
+            if type(value) is tuple and len(value) == size:
+                for v in value:
+                    if type(v) is not float:
+                        break
+                else:
+                    return value
+            return conversion(value, type_name)
+
+        return fixed_tuple
+
+    def convert(value: Any) -> Any:
+        return conversion(value, type_name)
+
+    return convert
 
 
 _CONVERTERS: dict[str, Converter] = {name: _make_converter(name) for name in ATTRIBUTE_TYPES}
