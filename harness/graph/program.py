@@ -457,6 +457,17 @@ def _output_reader(node: CompiledNode, full: str, attr: Attr, src: CompiledNode,
 
         return read, property(get_stored)
 
+    if pull is not None and same_type:  # a data source of the input's type: pulled, as is
+        compute_source = pull
+
+        def get_pulled(_inputs: object) -> Any:
+            evaluation = runtime.evaluation
+            if evaluation is not None and src_runtime.pulled is not evaluation:
+                compute_source(evaluation)
+            return store[src_full]
+
+        return read, property(get_pulled)
+
     def get(_inputs: object) -> Any:
         return read(runtime.evaluation)
 
