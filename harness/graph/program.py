@@ -295,7 +295,12 @@ class Program:
 
     def run(self, ctx: Any) -> None:
         """One tick: every event node fires, in creation order."""
-        evaluation = Evaluation(ctx)
+        self.run_in(Evaluation(ctx))
+
+    def run_in(self, evaluation: Evaluation) -> None:
+        """One tick within ``evaluation``, which several programs may share (a stage's tick:
+        each data node belongs to one graph, so it is still computed at most once per run of
+        its graph)."""
         for fire in self._events:
             fire(evaluation)
 
