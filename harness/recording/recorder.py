@@ -308,7 +308,8 @@ class Recorder:
         if len(batch) >= self._batch_limit or self._batch_bytes >= self._batch_bytes_limit:
             self._hand_over()
 
-    #: The recorder is the bus's tap: calling it writes.
+    #: The recorder is the bus's tap: calling it is :meth:`write` itself (no second call per
+    #: message). A subclass that overrides ``write`` sets ``__call__ = write`` again.
     __call__ = write
 
     def _first_of(self, env: Envelope) -> _TopicState | None:
