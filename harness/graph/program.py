@@ -520,10 +520,10 @@ def _output_setter(runtime: NodeRuntime, outputs: Mapping[str, OutputSlot]) -> O
     slots = {name: (slot.full, slot.stored_as, slot) for name, slot in outputs.items()}
 
     def set_output(_outputs: object, name: str, value: Any) -> None:
-        entry = slots.get(name)
-        if entry is None:
-            raise db.unknown_output(name)
-        full, stored_as, slot = entry
+        try:  # a subscript, not .get(): this runs for every write, and a miss is an error
+            full, stored_as, slot = slots[name]
+        except KeyError:
+            raise db.unknown_output(name) from None
         if type(value) is stored_as:
             store[full] = value
         elif slot.is_execution:
