@@ -46,6 +46,7 @@ __all__ = [
     "time_msg",
     "transform_stamped",
     "twist",
+    "twist_packer",
 ]
 
 TYPESTORE: Typestore = get_typestore(Stores.ROS2_JAZZY)
@@ -291,6 +292,13 @@ def tf_packer(frames: Sequence[tuple[str, str]]) -> Packer:
                      *(f"transform.{p}" for p in (*_TRANSLATION, *_ROTATION)))
     )
     return Packer(TYPESTORE, "tf2_msgs/msg/TFMessage", template, variables)
+
+
+def twist_packer() -> Packer:
+    """``geometry_msgs/Twist`` from its linear and then angular velocity (x, y, z each), as
+    :func:`twist` builds it."""
+    return Packer(TYPESTORE, "geometry_msgs/msg/Twist", twist((0.0,) * 3, (0.0,) * 3),
+                  tuple(f"{part}.{c}" for part in ("linear", "angular") for c in "xyz"))
 
 
 def odometry_packer(odom_frame: str, child_frame: str) -> Packer:

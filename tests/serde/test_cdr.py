@@ -27,6 +27,8 @@ from harness.serde.messages import (
     split_ns,
     tf_message_of,
     tf_packer,
+    twist,
+    twist_packer,
 )
 from tests.conftest import SCENARIOS
 
@@ -202,6 +204,9 @@ def test_packers_give_the_bytes_of_the_messages_they_stand_for(seed: int) -> Non
         raw = odometry_packer(odom_frame, child).pack(sec, nanosec, *pos, *ori, *lin, *ang)
         assert raw == rosbags(odometry(ns, odom_frame, child, pos, ori, lin, ang),
                               "nav_msgs/msg/Odometry")
+
+        assert twist_packer().pack(*lin, *ang) == rosbags(twist(lin, ang),
+                                                          "geometry_msgs/msg/Twist")
 
 
 def test_a_packer_refuses_what_it_does_not_lay_out() -> None:
