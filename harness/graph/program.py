@@ -64,7 +64,8 @@ __all__ = [
 
 
 class Evaluation:
-    """One :meth:`Program.run`: its context, and by its identity which data nodes it has
+    """One tick of a program (:meth:`Program.run`), or of a stage's programs together
+    (:meth:`Program.run_in`): its context, and by its identity which data nodes it has
     computed already (:attr:`NodeRuntime.pulled`)."""
 
     __slots__ = ("ctx",)
