@@ -10,7 +10,6 @@ tuples; ``target`` is a tuple of absolute prim path strings; ``bundle`` / ``any`
 
 from __future__ import annotations
 
-import functools
 import math
 import numbers
 import re
@@ -233,10 +232,52 @@ def _conversion(type_name: str) -> Callable[..., Any]:
     raise ValueError(f"unknown attribute type {type_name!r}")
 
 
+# The Python type an element of these arrays already has in its stored form (their element
+# conversions give such a value back unchanged).
+_PLAIN_ELEMENTS: dict[str, type] = {"double": float, "float": float, "token": str, "string": str}
+
+
 def _make_converter(type_name: str) -> Converter:
+    """The one-argument converter of ``type_name``. Fixed-size tuples and arrays of floats or
+    text check for values already in their stored form first (a tuple of that many floats; a
+    list or tuple of plain floats or strings, which becomes a tuple of the same elements):
+    what most per-tick writes carry, handled without the general conversion. Every converter
+    passes ``type_name`` positionally (a keyword ``functools.partial`` builds a dict per
+    call)."""
     if type_name in _OPAQUE:
         return _identity
-    return functools.partial(_conversion(type_name), type_name=type_name)
+    conversion = _conversion(type_name)
+    plain = _PLAIN_ELEMENTS.get(_ARRAYS.get(type_name, ""))
+    if plain is not None:
+
+        def plain_array(value: Any) -> Any:
+            if type(value) is tuple or type(value) is list:
+                for v in value:
+                    if type(v) is not plain:
+                        break
+                else:
+                    return tuple(value)
+            return conversion(value, type_name)
+
+        return plain_array
+    if type_name in _FIXED_TUPLES:
+        size = _FIXED_TUPLES[type_name]
+
+        def fixed_tuple(value: Any) -> Any:
+            if type(value) is tuple and len(value) == size:
+                for v in value:
+                    if type(v) is not float:
+                        break
+                else:
+                    return value
+            return conversion(value, type_name)
+
+        return fixed_tuple
+
+    def convert(value: Any) -> Any:
+        return conversion(value, type_name)
+
+    return convert
 
 
 _CONVERTERS: dict[str, Converter] = {name: _make_converter(name) for name in ATTRIBUTE_TYPES}

@@ -28,7 +28,7 @@ from harness.graph.attributes import (
 )
 from harness.graph.errors import GraphError
 from harness.graph.node import NodeType
-from harness.graph.program import NodeRuntime, Program, compile_program
+from harness.graph.program import Evaluation, NodeRuntime, Program, compile_program
 from harness.graph.registry import DEFAULT_REGISTRY, Registry
 
 __all__ = [
@@ -672,8 +672,9 @@ class GraphStage:
         programs = self._programs
         if programs is None:
             programs = self._programs = tuple(graph.program() for graph in self._graphs.values())
+        evaluation = Evaluation(ctx)  # one for the stage's tick (see Program.run_in)
         for program in programs:
-            program.run(ctx)
+            program.run_in(evaluation)
 
     def _forget_programs(self) -> None:
         """A graph of the stage was edited: the next tick takes the programs anew."""

@@ -64,7 +64,8 @@ __all__ = [
 
 
 class Evaluation:
-    """One :meth:`Program.run`: its context, and by its identity which data nodes it has
+    """One tick of a program (:meth:`Program.run`), or of a stage's programs together
+    (:meth:`Program.run_in`): its context, and by its identity which data nodes it has
     computed already (:attr:`NodeRuntime.pulled`)."""
 
     __slots__ = ("ctx",)
@@ -295,7 +296,12 @@ class Program:
 
     def run(self, ctx: Any) -> None:
         """One tick: every event node fires, in creation order."""
-        evaluation = Evaluation(ctx)
+        self.run_in(Evaluation(ctx))
+
+    def run_in(self, evaluation: Evaluation) -> None:
+        """One tick within ``evaluation``, which several programs may share (a stage's tick:
+        each data node belongs to one graph, so it is still computed at most once per run of
+        its graph)."""
         for fire in self._events:
             fire(evaluation)
 
@@ -457,6 +463,17 @@ def _output_reader(node: CompiledNode, full: str, attr: Attr, src: CompiledNode,
 
         return read, property(get_stored)
 
+    if pull is not None and same_type:  # a data source of the input's type: pulled, as is
+        compute_source = pull
+
+        def get_pulled(_inputs: object) -> Any:
+            evaluation = runtime.evaluation
+            if evaluation is not None and src_runtime.pulled is not evaluation:
+                compute_source(evaluation)
+            return store[src_full]
+
+        return read, property(get_pulled)
+
     def get(_inputs: object) -> Any:
         return read(runtime.evaluation)
 
@@ -504,10 +521,10 @@ def _output_setter(runtime: NodeRuntime, outputs: Mapping[str, OutputSlot]) -> O
     slots = {name: (slot.full, slot.stored_as, slot) for name, slot in outputs.items()}
 
     def set_output(_outputs: object, name: str, value: Any) -> None:
-        entry = slots.get(name)
-        if entry is None:
-            raise db.unknown_output(name)
-        full, stored_as, slot = entry
+        try:  # a subscript, not .get(): this runs for every write, and a miss is an error
+            full, stored_as, slot = slots[name]
+        except KeyError:
+            raise db.unknown_output(name) from None
         if type(value) is stored_as:
             store[full] = value
         elif slot.is_execution:

@@ -95,6 +95,7 @@ class McapBagWriter:
                  profile: str = "ros2") -> None:
         self.path = Path(path)
         self.policy = policy
+        self._max_span_ns, self._max_bytes = policy.max_span_ns, policy.max_bytes
         # Unbuffered: each closed chunk goes to the operating system in one writev, its large
         # payloads as they were handed over (see .mcap_writer).
         self._file: IO[bytes] = self.path.open("xb", buffering=0)
@@ -105,9 +106,6 @@ class McapBagWriter:
                          library=f"srr-{__version__}; mcap-python-{version('mcap')}")
         self._schemas: dict[tuple[str, bytes], int] = {}
         self.topics: list[TopicMeta] = []
-        self.counts: list[int] = []
-        self.start_ns: int | None = None
-        self.end_ns: int | None = None
         self.chunks = 0
         self._chunk_bytes = 0
         self._chunk_start: int | None = None
@@ -129,26 +127,41 @@ class McapBagWriter:
         cid = self._mcap.register_channel(topic.name, topic.serialization_format, sid, meta)
         self._chunk_bytes += 64 + len(topic.name) + len(topic.qos)
         self.topics.append(topic)
-        self.counts.append(0)
         assert cid == len(self.topics)
         return cid
+
+    @property
+    def counts(self) -> list[int]:
+        """Messages written per topic, in the order of :attr:`topics`."""
+        per_channel = self._mcap.message_counts()
+        return [per_channel.get(cid, 0) for cid in range(1, len(self.topics) + 1)]
+
+    @property
+    def start_ns(self) -> int | None:
+        """The smallest log time written (None: no message yet)."""
+        span = self._mcap.message_span()
+        return None if span is None else span[0]
+
+    @property
+    def end_ns(self) -> int | None:
+        """The largest log time written (None: no message yet)."""
+        span = self._mcap.message_span()
+        return None if span is None else span[1]
 
     def write(self, channel: int, log_time: int, data: Payload) -> None:
         """Add one message; closes the chunk first if it would span too much log time, and
         after if it has grown past the size bound. Large buffers in ``data`` are written as
         they are when the chunk closes: they must not change after this call."""
         start = self._chunk_start
-        if start is not None and log_time - start >= self.policy.max_span_ns:
+        if start is not None and log_time - start >= self._max_span_ns:
             self.close_chunk()
             start = None
         if start is None:
             self._chunk_start = log_time
         self._mcap.add_message(channel, log_time, data, log_time)
-        self.counts[channel - 1] += 1
-        self.start_ns = log_time if self.start_ns is None else min(self.start_ns, log_time)
-        self.end_ns = log_time if self.end_ns is None else max(self.end_ns, log_time)
-        self._chunk_bytes += MESSAGE_OVERHEAD + payload_size(data)
-        if self._chunk_bytes >= self.policy.max_bytes:
+        self._chunk_bytes += MESSAGE_OVERHEAD + (payload_size(data) if isinstance(data, tuple)
+                                                 else len(data))
+        if self._chunk_bytes >= self._max_bytes:
             self.close_chunk()
 
     def close_chunk(self) -> None:

@@ -44,7 +44,6 @@ from mcap.records import (
     Footer,
     Header,
     McapRecord,
-    MessageIndex,
     Metadata,
     MetadataIndex,
     Schema,
@@ -68,10 +67,19 @@ Payload = bytes | memoryview | tuple[Piece, ...]
 # A Message record's head: opcode, record length, channel id, sequence, log and publish time.
 _MESSAGE_HEAD = struct.Struct("<BQHIQQ")
 _MESSAGE_FIELDS = 2 + 4 + 8 + 8
+_MESSAGE = int(Opcode.MESSAGE)
 # A Chunk record up to its compression name: opcode, record length, message start and end
 # time, uncompressed size and CRC.
 _CHUNK_HEAD = struct.Struct("<BQQQQI")
 _IOV_MAX = min(1024, os.sysconf("SC_IOV_MAX")) if hasattr(os, "sysconf") else 16
+
+
+def _message_index(channel_id: int, records: list[int]) -> bytes:
+    """A MessageIndex record of ``records``, flat (log time, offset) pairs, packed at once
+    (the library's ``MessageIndex.write`` makes two calls per entry)."""
+    n = len(records)
+    return struct.pack(f"<BQHI{n}Q", Opcode.MESSAGE_INDEX, 2 + 4 + 8 * n, channel_id, 8 * n,
+                       *records)
 
 
 def payload_size(data: Payload) -> int:
@@ -140,7 +148,7 @@ class McapWriter:
         self._channels: list[Channel] = []
         self._chunk_indexes: list[ChunkIndex] = []
         self._metadata_indexes: list[MetadataIndex] = []
-        # statistics
+        # statistics of the closed chunks (a chunk's are folded in when it closes)
         self._message_count = 0
         self._message_start = 0
         self._message_end = 0
@@ -152,7 +160,8 @@ class McapWriter:
         self._chunk_messages = 0
         self._chunk_start = 0
         self._chunk_end = 0
-        self._indexes: dict[int, list[tuple[int, int]]] = {}
+        # per channel, its messages' (log time, offset in the chunk) pairs, flat
+        self._indexes: dict[int, list[int]] = {}
 
     # -- the file ----------------------------------------------------------------------------
 
@@ -179,34 +188,48 @@ class McapWriter:
     def add_message(self, channel_id: int, log_time: int, data: Payload,
                     publish_time: int) -> None:
         """Append one message (sequence 0) to the chunk being filled. Large buffers in
-        ``data`` are kept, not copied: they must not change afterwards."""
-        if self._message_count == 0 or log_time < self._message_start:
-            self._message_start = log_time
-        if log_time > self._message_end:
-            self._message_end = log_time
-        counts = self._channel_counts
-        counts[channel_id] = counts.get(channel_id, 0) + 1
-        self._message_count += 1
+        ``data`` are kept, not copied: they must not change afterwards.
 
-        if self._chunk_messages == 0 or log_time < self._chunk_start:
+        This is the per-message path, so it does only the chunk's bookkeeping (its time span,
+        its index entry); the file's statistics are summed from each chunk when it closes."""
+        if self._chunk_messages == 0:
+            self._chunk_start = self._chunk_end = log_time
+        elif log_time < self._chunk_start:
             self._chunk_start = log_time
-        if log_time > self._chunk_end:
+        elif log_time > self._chunk_end:
             self._chunk_end = log_time
-        chunk = self._chunk
-        index = self._indexes.get(channel_id)
-        if index is None:
-            index = self._indexes[channel_id] = []
-        index.append((log_time, len(chunk)))
         self._chunk_messages += 1
         if isinstance(data, tuple):
-            chunk += _MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIELDS + payload_size(data),
-                                        channel_id, 0, log_time, publish_time)
+            offset = self._chunk.append(_MESSAGE_HEAD.pack(
+                _MESSAGE, _MESSAGE_FIELDS + payload_size(data), channel_id, 0, log_time,
+                publish_time))
             for piece in data:
-                chunk.keep(piece)
+                self._chunk.keep(piece)
         else:
-            chunk += _MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIELDS + len(data),
-                                        channel_id, 0, log_time, publish_time)
-            chunk.keep(data)
+            offset = self._chunk.append(_MESSAGE_HEAD.pack(
+                _MESSAGE, _MESSAGE_FIELDS + len(data), channel_id, 0, log_time,
+                publish_time), data)
+        index = self._indexes.get(channel_id)
+        if index is None:
+            self._indexes[channel_id] = [log_time, offset]
+        else:
+            index += (log_time, offset)
+
+    def message_counts(self) -> dict[int, int]:
+        """Messages added so far per channel id (in the order of each channel's first)."""
+        counts = dict(self._channel_counts)
+        for channel_id, index in self._indexes.items():
+            counts[channel_id] = counts.get(channel_id, 0) + len(index) // 2
+        return counts
+
+    def message_span(self) -> tuple[int, int] | None:
+        """The smallest and largest log time of the messages added so far (None: none)."""
+        spans = [(self._message_start, self._message_end)] if self._message_count else []
+        if self._chunk_messages:
+            spans.append((self._chunk_start, self._chunk_end))
+        if not spans:
+            return None
+        return min(a for a, _ in spans), max(b for _, b in spans)
 
     def flush(self) -> None:
         """Close the chunk being filled (if it holds a message) and flush the stream."""
@@ -298,10 +321,18 @@ class McapWriter:
         indexes_offset = self._pos
         for channel_id, records in self._indexes.items():
             index.message_index_offsets[channel_id] = indexes_offset + self._records.count
-            MessageIndex(channel_id=channel_id, records=records).write(self._records)
+            self._records.write(_message_index(channel_id, records))
         index.message_index_length = self._records.count
         self._flush()
         self._chunk_indexes.append(index)
+        if self._message_count == 0 or self._chunk_start < self._message_start:
+            self._message_start = self._chunk_start
+        if self._chunk_end > self._message_end:
+            self._message_end = self._chunk_end
+        self._message_count += self._chunk_messages
+        counts = self._channel_counts
+        for channel_id, records in self._indexes.items():
+            counts[channel_id] = counts.get(channel_id, 0) + len(records) // 2
         self._chunk = Pieces()
         self._chunk_messages = 0
         self._chunk_start = self._chunk_end = 0

@@ -67,6 +67,11 @@ HASH_LANE_MIN_BYTES = 64 * 1024
 # the H100's 16-core host, 4 of each gave 100-105 sets/s against 111-126 with 2).
 _POOL_THREADS = 2
 _HASH_LANES = max(1, min(2, os.cpu_count() or 1))
+# A digested message's head: log time, payload length.
+_DIGEST_HEAD = struct.Struct("<qI")
+# Payloads smaller than this are digested joined to their head (copying them is cheaper than
+# a second ``update`` call).
+_JOIN_BELOW = 4096
 
 
 @dataclass(frozen=True)
@@ -85,13 +90,18 @@ class TopicStats:
 
 def digest_update(h: Any, stamp_ns: int, data: Payload) -> None:
     """Feed one message into a topic's digest: ``(log time, length, payload)`` (a payload in
-    pieces digests as the pieces joined)."""
+    pieces digests as the pieces joined). A small payload goes in one ``update`` with its
+    head (the digest of the bytes fed is the same however they are split)."""
     if isinstance(data, tuple):
-        h.update(struct.pack("<qI", stamp_ns, payload_size(data)))
+        h.update(_DIGEST_HEAD.pack(stamp_ns, payload_size(data)))
         for piece in data:
             h.update(piece)
         return
-    h.update(struct.pack("<qI", stamp_ns, len(data)))
+    size = len(data)
+    if size < _JOIN_BELOW:
+        h.update(_DIGEST_HEAD.pack(stamp_ns, size) + data)
+        return
+    h.update(_DIGEST_HEAD.pack(stamp_ns, size))
     h.update(data)
 
 
@@ -200,6 +210,9 @@ class Recorder:
     #: Deferred messages are built and serialized on the pool (the typestore's CDR of the bus
     #: type); False in a format that converts messages (ROS 1), which builds them inline.
     _defer_ok = True
+    #: A message that comes with bytes in this encoding (``Envelope.encoding``) is recorded as
+    #: those bytes; any other is serialized (:meth:`_serialize`).
+    _recorded_encoding = "cdr"
 
     def __init__(self, bag_dir: Path, *, queue_size: int = 256,
                  chunks: ChunkPolicy | None = None,
@@ -260,14 +273,48 @@ class Recorder:
         self._thread = threading.Thread(target=self._drain, name="srr-recorder", daemon=True)
         self._thread.start()
 
-    def __call__(self, env: Envelope) -> None:
-        self.write(env)
-
     def write(self, env: Envelope) -> None:
+        """Record one message (the bus calls the recorder with each, as a tap).
+
+        The usual message comes with bytes in the recorded encoding (packed by its
+        publisher): its topic's state is looked up and the bytes appended to the batch being
+        filled, nothing else. Everything else (a new topic, an unrecorded one, a message to
+        serialize or to build on the pool) takes the longer path."""
         if self._writer is None:
             raise RuntimeError("recorder is not open")
         if self._error is not None:
             raise self._error
+        st = self._state.get(env.topic)
+        if st is None:
+            st = self._first_of(env)
+            if st is None:
+                return
+        raw = env.raw
+        if raw is not None and env.encoding == self._recorded_encoding:
+            data = raw
+        else:
+            # env.msg only when no bytes came with it: reading it builds a packed message
+            msg = env.msg if raw is None else None
+            if type(msg) is Deferred and self._defer_ok and not self._forward:
+                self._defer(st, env, msg)
+                return
+            data = self._serialize(env)
+        self._inline_bytes += len(data)
+        for tap in self._forward:
+            tap(env, data)
+        batch = self._batch
+        batch.append((st, env.stamp_ns, data))
+        self._batch_bytes += len(data)
+        if len(batch) >= self._batch_limit or self._batch_bytes >= self._batch_bytes_limit:
+            self._hand_over()
+
+    #: The recorder is the bus's tap: calling it is :meth:`write` itself (no second call per
+    #: message). A subclass that overrides ``write`` sets ``__call__ = write`` again.
+    __call__ = write
+
+    def _first_of(self, env: Envelope) -> _TopicState | None:
+        """The state of ``env``'s topic, made on its first message; None for a topic that is
+        not recorded (the message is counted, and handed to the serialized taps)."""
         if env.topic in self.unrecorded:
             _, n = self._skipped.get(env.topic, (env.msgtype, 0))
             self._skipped[env.topic] = (env.msgtype, n + 1)
@@ -275,29 +322,18 @@ class Recorder:
                 data = cdr_bytes(env)
                 for tap in self._forward:
                     tap(env, data)
-            return
-        st = self._state.get(env.topic)
-        if st is None:
-            st = self._state[env.topic] = _TopicState(env.topic, self._recorded_type(
-                env.msgtype), self._qos_of(env.topic))
-        # env.msg only when no bytes came with it: reading it builds a packed message's object
-        msg = env.msg if env.raw is None else None
-        if type(msg) is Deferred and self._defer_ok and not self._forward:
-            if self._pool is None:
-                self._pool = ThreadPoolExecutor(_POOL_THREADS, thread_name_prefix="srr-cdr")
-            self._batch.append((st, env.stamp_ns,
-                                self._pool.submit(_serialize_deferred, msg, env.msgtype)))
-            if len(self._batch) >= self._deferred_limit:
-                self._hand_over()
-            return
-        data = self._serialize(env)
-        self._inline_bytes += len(data)
-        for tap in self._forward:
-            tap(env, data)
-        self._batch.append((st, env.stamp_ns, data))
-        self._batch_bytes += len(data)
-        if (len(self._batch) >= self._batch_limit
-                or self._batch_bytes >= self._batch_bytes_limit):
+            return None
+        st = self._state[env.topic] = _TopicState(env.topic, self._recorded_type(env.msgtype),
+                                                  self._qos_of(env.topic))
+        return st
+
+    def _defer(self, st: _TopicState, env: Envelope, msg: Deferred) -> None:
+        """Queue a deferred message, built and serialized on the pool (see the class doc)."""
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(_POOL_THREADS, thread_name_prefix="srr-cdr")
+        self._batch.append((st, env.stamp_ns,
+                            self._pool.submit(_serialize_deferred, msg, env.msgtype)))
+        if len(self._batch) >= self._deferred_limit:
             self._hand_over()
 
     def _hand_over(self) -> None:
@@ -326,6 +362,7 @@ class Recorder:
     def _drain(self) -> None:
         writer = self._writer
         assert writer is not None
+        write = writer.write
         while (batch := self._queue.get()) is not None:
             for st, stamp, payload in batch:
                 if self._error is not None:
@@ -342,7 +379,7 @@ class Recorder:
                     if st.channel is None:
                         st.channel = self._add_topic(writer, st.topic, st.msgtype, st.qos)
                         st.lane = self._lane(size)
-                    writer.write(st.channel, stamp, data)
+                    write(st.channel, stamp, data)
                 except Exception as err:  # handed to the caller's thread as one clear error
                     self._fail(st.topic, err)
                     break

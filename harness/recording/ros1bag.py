@@ -106,6 +106,7 @@ class Ros1Recorder(Recorder):
     ``bag`` or ``mcap``."""
 
     _defer_ok = False  # a deferred image is built here and converted, like any message
+    _recorded_encoding = "ros1"  # a replayed ROS 1 recording's bytes are recorded as they are
 
     def __init__(self, bag_dir: Path, fmt: Ros1Format, *, queue_size: int = 256,
                  chunks: ChunkPolicy | None = None, unrecorded: Collection[str] = ()) -> None:

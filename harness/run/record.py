@@ -225,17 +225,18 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
             p.attach(recorder)  # serves them
         for _ in range(n_ticks):
             loop.step()
-            now_ns = (loop.ticks() - 1) * 1_000_000_000 // hz  # the tick just run
+            ticks = loop.ticks()
+            now_ns = (ticks - 1) * 1_000_000_000 // hz  # the tick just run
             for p in everyone:
                 p.after_tick(now_ns)
             if progress is not None:
-                progress(loop.ticks(), n_ticks)
-            if loop.ticks() % hz == 0:  # flat resident memory however long the run
+                progress(ticks, n_ticks)
+            if ticks % hz == 0:  # flat resident memory however long the run
                 release_free_memory()
-            low = guard.poll(loop.ticks(), recorder.bytes_serialized)
+            low = guard.poll(ticks, recorder.bytes_serialized)
             if low is not None:
                 return _Ended(stopped=f"{low}: the run was stopped after "
-                                      f"{loop.ticks() / hz:g} s of simulated time")
+                                      f"{ticks / hz:g} s of simulated time")
     except KeyboardInterrupt:
         return _Ended(interrupted=True)
     except RunStopped as err:  # at a tick boundary: what was recorded stays, INVALID

@@ -12,6 +12,7 @@ whoever reads it.
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
@@ -20,11 +21,12 @@ import numpy.typing as npt
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-from harness.serde.cdr import Packer, Serializer
+from harness.serde.cdr import CDR_HEADER, Packer, Serializer
 from harness.serde.pieces import Piece
 
 __all__ = [
     "TYPESTORE",
+    "OdometryPose",
     "Pose",
     "clock",
     "clock_packer",
@@ -34,6 +36,7 @@ __all__ = [
     "msg_type",
     "odometry",
     "odometry_packer",
+    "odometry_pose",
     "quaternion_xyzw",
     "serialize",
     "split_ns",
@@ -43,6 +46,7 @@ __all__ = [
     "time_msg",
     "transform_stamped",
     "twist",
+    "twist_packer",
 ]
 
 TYPESTORE: Typestore = get_typestore(Stores.ROS2_JAZZY)
@@ -230,6 +234,38 @@ def odometry(ns: int, odom_frame: str, child_frame: str, position: Sequence[floa
     )
 
 
+_U32 = struct.Struct("<I")
+_POSE = struct.Struct("<7d")
+#: What :func:`odometry_pose` reads: the header's frame id, position (x, y, z), orientation
+#: (x, y, z, w).
+OdometryPose = tuple[str, tuple[float, float, float], tuple[float, float, float, float]]
+
+
+def odometry_pose(raw: bytes) -> OdometryPose | None:
+    """The frame id, position and orientation of a ``nav_msgs/Odometry`` in (little-endian)
+    CDR, read at their offsets instead of deserializing the whole message (a subscriber that
+    only needs the pose, 20 times a second). The values are the message's own: each double is
+    unpacked as it was packed. None when ``raw`` is not little-endian CDR (read the message
+    object instead).
+
+    The layout, offsets counted from the end of the 4-byte encapsulation header: the stamp (two
+    32-bit integers), ``header.frame_id`` and ``child_frame_id`` (each a 32-bit length that
+    counts a trailing NUL, then the bytes; the second aligned to 4), then the pose's seven
+    doubles aligned to 8."""
+    if raw[:4] != CDR_HEADER:
+        return None
+    at = 4 + 8
+    (size,) = _U32.unpack_from(raw, at)
+    frame_id = raw[at + 4:at + 3 + size].decode()
+    at += 4 + size
+    at += -(at - 4) % 4
+    (size,) = _U32.unpack_from(raw, at)
+    at += 4 + size
+    at += -(at - 4) % 8
+    x, y, z, qx, qy, qz, qw = _POSE.unpack_from(raw, at)
+    return frame_id, (x, y, z), (qx, qy, qz, qw)
+
+
 # -- packers: the same messages, from values ------------------------------------------------
 
 _STAMP = ("stamp.sec", "stamp.nanosec")
@@ -256,6 +292,13 @@ def tf_packer(frames: Sequence[tuple[str, str]]) -> Packer:
                      *(f"transform.{p}" for p in (*_TRANSLATION, *_ROTATION)))
     )
     return Packer(TYPESTORE, "tf2_msgs/msg/TFMessage", template, variables)
+
+
+def twist_packer() -> Packer:
+    """``geometry_msgs/Twist`` from its linear and then angular velocity (x, y, z each), as
+    :func:`twist` builds it."""
+    return Packer(TYPESTORE, "geometry_msgs/msg/Twist", twist((0.0,) * 3, (0.0,) * 3),
+                  tuple(f"{part}.{c}" for part in ("linear", "angular") for c in "xyz"))
 
 
 def odometry_packer(odom_frame: str, child_frame: str) -> Packer:

@@ -39,6 +39,18 @@ class Pieces:
         self._tail += data
         return self
 
+    def append(self, head: bytes, data: Piece = b"") -> int:
+        """Append ``head`` (copied) and then ``data`` (as :meth:`keep` does); returns the
+        offset at which ``head`` starts. One call for a record's head and small payload."""
+        tail = self._tail
+        offset = self._size + len(tail)
+        tail += head
+        if len(data) < LARGE:
+            tail += data
+        else:
+            self.keep(data)
+        return offset
+
     def keep(self, data: Piece) -> None:
         """Append ``data``: kept as it is when it is :data:`LARGE` or more, else copied."""
         if len(data) < LARGE:

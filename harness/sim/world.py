@@ -63,6 +63,8 @@ from harness.sim.world_file import LoadedWorld, add_world_file, load_world_file
 
 __all__ = ["ImuReading", "JointRef", "RobotInfo", "World"]
 
+_XBODY = mujoco.mjtObj.mjOBJ_XBODY
+
 _INTEGRATORS = {
     "euler": mujoco.mjtIntegrator.mjINT_EULER,
     "rk4": mujoco.mjtIntegrator.mjINT_RK4,
@@ -446,9 +448,9 @@ class World:
         ref = self.prim_ref(path)
         res = np.zeros(6)
         # mjOBJ_BODY means the body's inertial frame to mj_objectVelocity; XBODY is its origin.
-        objtype = mujoco.mjtObj.mjOBJ_XBODY if ref.kind is PrimKind.BODY else ref.kind.objtype
+        objtype = _XBODY if ref.kind is PrimKind.BODY else ref.kind.objtype
         mujoco.mj_objectVelocity(self._model, self._data, objtype, ref.id, res, 0)
-        return res[3:].copy(), res[:3].copy()
+        return res[3:], res[:3]  # two halves of an array made here: no copies needed
 
     def prim_body_id(self, path: str) -> int:
         """The MuJoCo body ``path`` belongs to (the body itself for body prims)."""

@@ -17,6 +17,7 @@ from harness.geometry import (
     xyzw_to_wxyz,
     yaw_from_quat_wxyz,
 )
+from harness.serde.messages import OdometryPose, odometry_pose
 from harness.sut.base import SutContext
 
 __all__ = ["OdomPose"]
@@ -78,19 +79,34 @@ class OdomPose:
 
     def pose(self) -> tuple[float, float, float] | None:
         """Robot pose in the world frame, or None until odom and its static chain are known."""
-        odom = self.odom
-        if odom is None:
+        read = self._odom_pose()
+        if read is None:
             return None
-        chain = self.world_from(self.odom_frame or odom.header.frame_id)
+        frame_id, (px, py, pz), (qx, qy, qz, qw) = read
+        chain = self.world_from(self.odom_frame or frame_id)
         if chain is None:
             return None
-        p, q = odom.pose.pose.position, odom.pose.pose.orientation
         # Python floats: the arithmetic of quat_wxyz_rotate / quat_wxyz_mul on arrays, term for
         # term (see harness.geometry), without building arrays.
         t0, q0 = chain
         tx, ty, _ = t0.tolist()
         q0f = q0.tolist()
-        rx, ry, _ = quat_wxyz_rotate_floats(q0f, (p.x, p.y, p.z))
-        q_odom = (float(q.w), float(q.x), float(q.y), float(q.z))
+        rx, ry, _ = quat_wxyz_rotate_floats(q0f, (px, py, pz))
+        q_odom = (float(qw), float(qx), float(qy), float(qz))
         yaw = yaw_from_quat_wxyz(quat_wxyz_mul_floats(q0f, q_odom))
         return tx + rx, ty + ry, yaw
+
+    def _odom_pose(self) -> OdometryPose | None:
+        """The latest odometry's frame id, position and orientation (x, y, z, w), or None
+        before the first: read from its CDR bytes when it came with them (the graphs'
+        publisher packs it; no message object is built), else from the message."""
+        env = self._odom
+        if env is None:
+            return None
+        if env.raw is not None and env.encoding == "cdr":
+            read = odometry_pose(env.raw)
+            if read is not None:
+                return read
+        odom = resolved(env.msg)
+        p, q = odom.pose.pose.position, odom.pose.pose.orientation
+        return odom.header.frame_id, (p.x, p.y, p.z), (q.x, q.y, q.z, q.w)

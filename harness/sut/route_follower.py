@@ -18,13 +18,14 @@ import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from harness.scenario.schema import num
-from harness.serde.messages import twist
+from harness.serde.messages import twist, twist_packer
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
 from harness.sut.errors import PluginError
 from harness.sut.pose import OdomPose
@@ -141,6 +142,7 @@ class RouteFollower(SystemUnderTest):
         if self.p.alarm_topic:
             ctx.subscribe(self.p.alarm_topic, "std_msgs/msg/Bool", self._on_alarm)
         self.pub = ctx.publisher(self.p.cmd_vel_topic, "geometry_msgs/msg/Twist")
+        self._twist = twist_packer()
 
     def _on_alarm(self, msg: Any) -> None:
         self.alarm = bool(msg.data)
@@ -181,4 +183,7 @@ class RouteFollower(SystemUnderTest):
         while self.next_ns <= now_ns:
             self.next_ns += self.period_ns
         v, w = self.command()
-        self.pub.publish(twist((v, 0.0, 0.0), (0.0, 0.0, w)))
+        linear, angular = (v, 0.0, 0.0), (0.0, 0.0, w)
+        # packed from the values (the Twist object is built only if a subscriber reads it)
+        self.pub.publish_serialized(self._twist.pack(*linear, *angular),
+                                    partial(twist, linear, angular))

@@ -22,10 +22,13 @@ from harness.serde.messages import (
     msg_type,
     odometry,
     odometry_packer,
+    odometry_pose,
     serialize,
     split_ns,
     tf_message_of,
     tf_packer,
+    twist,
+    twist_packer,
 )
 from tests.conftest import SCENARIOS
 
@@ -202,6 +205,9 @@ def test_packers_give_the_bytes_of_the_messages_they_stand_for(seed: int) -> Non
         assert raw == rosbags(odometry(ns, odom_frame, child, pos, ori, lin, ang),
                               "nav_msgs/msg/Odometry")
 
+        assert twist_packer().pack(*lin, *ang) == rosbags(twist(lin, ang),
+                                                          "geometry_msgs/msg/Twist")
+
 
 def test_a_packer_refuses_what_it_does_not_lay_out() -> None:
     with pytest.raises(ValueError, match="no number field"):
@@ -209,3 +215,36 @@ def test_a_packer_refuses_what_it_does_not_lay_out() -> None:
                                            ("clock.frame_id",))
     with pytest.raises(ValueError, match="2 values expected"):
         clock_packer().pack(1)
+
+
+@pytest.mark.parametrize("frames", [("odom", "base_link"), ("", ""), ("o", "b"),
+                                    ("forklift_b/odom", "forklift_b/base_link"),
+                                    ("ödom", "bäse"), ("abc", "abcdefg"), ("abcd", "")])
+def test_odometry_pose_reads_the_messages_own_values(frames: tuple[str, str]) -> None:
+    """The frame id, position and orientation read from an Odometry's CDR bytes are the
+    message's, bit for bit, whatever the frame ids' lengths do to the alignment; from
+    rosbags' bytes and from the publisher's packer alike."""
+    rng = random.Random(len(frames[0]) * 31 + len(frames[1]))
+    for _ in range(50):
+        values = [rng.choice([rng.uniform(-1e3, 1e3), -0.0, 1e-310, float("inf")])
+                  for _ in range(13)]
+        pos, ori, lin, ang = values[:3], values[3:7], values[7:10], values[10:]
+        ns = rng.randint(0, 10**12)
+        msg = odometry(ns, *frames, pos, ori, lin, ang)
+        packed = odometry_packer(*frames).pack(*split_ns(ns), *pos, *ori, *lin, *ang)
+        for raw in (rosbags(msg, "nav_msgs/msg/Odometry"), packed):
+            got = odometry_pose(raw)
+            assert got is not None
+            frame_id, position, orientation = got
+            p, q = msg.pose.pose.position, msg.pose.pose.orientation
+            assert frame_id == msg.header.frame_id
+            assert [v.hex() for v in position] == [v.hex() for v in (p.x, p.y, p.z)]
+            assert [v.hex() for v in orientation] == [v.hex() for v in (q.x, q.y, q.z, q.w)]
+
+
+def test_odometry_pose_of_other_bytes_is_none() -> None:
+    """Bytes that are not little-endian CDR (big-endian CDR, a ROS 1 message) are not read."""
+    raw = rosbags(odometry(1, "odom", "base", (1.0, 2.0, 3.0), (0.0, 0.0, 0.0, 1.0),
+                           (0.0,) * 3, (0.0,) * 3), "nav_msgs/msg/Odometry")
+    assert odometry_pose(b"\x00\x00\x00\x00" + raw[4:]) is None
+    assert odometry_pose(b"") is None

@@ -42,12 +42,10 @@ _TICK_OUTPUTS = (
 )
 
 
-def _time_ns(ctx: Any) -> int:
-    return int(ctx.time_ns)
-
-
 class _TickSource(NodeType):
-    """Shared output logic of the tick event nodes."""
+    """The tick event nodes: each firing writes ``time`` (sim seconds), ``frame`` (the tick
+    index) and ``deltaSeconds`` (since this node last fired, 0 the first time). Fires on every
+    evaluation unless a subclass's :meth:`compute` says otherwise."""
 
     kind = "event"
     outputs = _TICK_OUTPUTS
@@ -55,14 +53,15 @@ class _TickSource(NodeType):
     def __init__(self) -> None:
         self._last_fire_ns: int | None = None
 
-    def _emit(self, db: Database, ctx: Any) -> None:
-        now = _time_ns(ctx)
+    def compute(self, db: Database, ctx: Any) -> bool:
+        now = int(ctx.time_ns)
         last = self._last_fire_ns
         out = db.outputs
         out.time = now / 1e9
         out.frame = float(ctx.tick)
         out.deltaSeconds = 0.0 if last is None else (now - last) / 1e9
         self._last_fire_ns = now
+        return True
 
     def reset(self) -> None:
         self._last_fire_ns = None
@@ -72,10 +71,6 @@ class _TickSource(NodeType):
 class OnPlaybackTick(_TickSource):
     """Fires every evaluation. ``time`` is sim seconds, ``frame`` the tick index,
     ``deltaSeconds`` the time since this node last fired (0 on the first tick)."""
-
-    def compute(self, db: Database, ctx: Any) -> bool:
-        self._emit(db, ctx)
-        return True
 
 
 @register("srr.OnTick", aliases=("omni.graph.action.OnTick",))
@@ -96,8 +91,7 @@ class OnTick(_TickSource):
         self._count += 1
         if count % (int(db.inputs.framePeriod) + 1) != 0:
             return False
-        self._emit(db, ctx)
-        return True
+        return super().compute(db, ctx)
 
     def reset(self) -> None:
         super().reset()
@@ -119,7 +113,7 @@ class ReadSimulationTime(NodeType):
     outputs = (Attr("simulationTime", "double"),)
 
     def compute(self, db: Database, ctx: Any) -> bool:
-        db.outputs.simulationTime = _time_ns(ctx) / 1e9
+        db.outputs.simulationTime = int(ctx.time_ns) / 1e9
         return True
 
 

@@ -75,19 +75,19 @@ class ComputeOdometry(NodeType):
         self._front: QuatTuple = tuple(front.tolist())
         self._origin: tuple[list[float], QuatTuple] | None = None
 
-    def base_pose(self, world: Any) -> tuple[list[float], QuatTuple]:
-        """World position and (w, x, y, z) orientation of the base frame, as Python floats."""
-        pos, quat = world.prim_pose(self._prim)
-        return pos.tolist(), quat_wxyz_mul_floats(quat.tolist(), self._front)
-
     def compute(self, db: Any, ctx: Any) -> bool:
-        # Python floats throughout (see harness.geometry): the same values as numpy's.
-        pos, quat = self.base_pose(ctx.world)
+        # Python floats throughout (see harness.geometry): the same values as numpy's. The
+        # base frame's world pose: the chassis's, turned so that robotFront points along +X.
+        world = ctx.world
+        pos_a, quat_a = world.prim_pose(self._prim)
+        pos: list[float] = pos_a.tolist()
+        quat = quat_wxyz_mul_floats(quat_a.tolist(), self._front)
         if self._origin is None:
             self._origin = (pos, quat)
         p0, q0 = self._origin
         inv0 = quat_wxyz_conj_floats(q0)
-        lin_w, ang_w = (v.tolist() for v in ctx.world.prim_velocity(self._prim))
+        lin_a, ang_a = world.prim_velocity(self._prim)
+        lin_w, ang_w = lin_a.tolist(), ang_a.tolist()
         inv = quat_wxyz_conj_floats(quat)
         db.outputs.position = quat_wxyz_rotate_floats(
             inv0, (pos[0] - p0[0], pos[1] - p0[1], pos[2] - p0[2]))
