@@ -91,6 +91,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="free disk space to keep: refuse to start below the estimated bag "
                      "size plus this, stop the run below it (recording.min_free_mb)")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    run.add_argument("--no-video", dest="video", action="store_false",
+                     help="leave the camera videos and clips out of report.html (the recording "
+                     "is the same; `srr report RUN_DIR` adds them later)")
     _summary_md_options(run)
     _add_live_args(run)
 
@@ -367,7 +370,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                                        update_reason=args.reason, live=live,
                                        notice=lambda text: _stderr().print(
                                            f"srr run: {text}", markup=False),
-                                       started=_started(bar))
+                                       started=_started(bar), video=args.video)
         finally:
             if bar is not None:
                 bar.stop()

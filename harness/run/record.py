@@ -119,7 +119,7 @@ def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_tick
            progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
            update_reason: str = "", free_space: FreeSpace = disk_free,
            participants: Sequence[Participant] = (),
-           started: Started | None = None) -> RunResult:
+           started: Started | None = None, video: bool = True) -> RunResult:
     """:func:`write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
     created and locked first (a live owner is refused), and released, its lock file
     removed, however the run ends (``kill -9`` releases the lock too). ``participants``
@@ -137,7 +137,7 @@ def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_tick
         return write_run(scenario, loop, source=source, run_dir=run_dir, n_ticks=n_ticks,
                          progress=progress, baselines=baselines,
                          update_baseline=update_baseline, update_reason=update_reason,
-                         free_space=free_space, participants=participants)
+                         free_space=free_space, participants=participants, video=video)
 
 
 @dataclass(frozen=True)
@@ -153,13 +153,14 @@ class _Ended:
 def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_ticks: int,
               progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
               update_reason: str = "", free_space: FreeSpace = disk_free,
-              participants: Sequence[Participant] = ()) -> RunResult:
+              participants: Sequence[Participant] = (), video: bool = True) -> RunResult:
     """Record ``loop`` into ``run_dir``, score it and write the run directory. Until
     ``summary.json`` is written the directory holds ``incomplete.json``
     (:mod:`harness.runmarker`), so a killed run never looks done. ``participants`` (the
     run's own, started: the live view gets every message the recorder serializes and, after
     each tick, the simulation time; it may hold the first tick for a client and pace the
-    loop) are attached and told of each tick after the systems under test."""
+    loop) are attached and told of each tick after the systems under test. ``video=False``:
+    the report without camera videos (``srr run --no-video``)."""
     command = loop.command
     recorder = _open_recorder(scenario, loop, run_dir, source=source, command=command)
     ended = _tick_loop(scenario, loop, recorder, run_dir, n_ticks=n_ticks, progress=progress,
@@ -186,7 +187,7 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     if ended.interrupted:
         summary = dataclasses.replace(summary, verdict="INTERRUPTED", exit_code=130,
                                       reasons=("interrupted before the end of the scenario",))
-    data = _write_outputs(scenario, summary, run_dir, frames)
+    data = _write_outputs(scenario, summary, run_dir, frames, video=video)
     return RunResult(run_dir, summary.verdict, summary.exit_code, data, summary)
 
 
@@ -308,7 +309,7 @@ def _update_baseline(scenario: Scenario, summary: RunSummary, bdir: Path, run_di
 
 
 def _write_outputs(scenario: Scenario, summary: RunSummary, run_dir: Path,
-                   frames: Frames) -> dict[str, Any]:
+                   frames: Frames, *, video: bool = True) -> dict[str, Any]:
     """``junit.xml``, then ``summary.json`` (the run is complete from here on: the marker
     goes), then ``report.html``, last: a report that fails to render never costs the run its
     summary. Returns the summary as written."""
@@ -318,7 +319,7 @@ def _write_outputs(scenario: Scenario, summary: RunSummary, run_dir: Path,
     runmarker.clear(run_dir)
     try:
         write_report(run_dir, summary=data, scenario=scenario, frames=frames,
-                     rebuild_graphs=rebuild_graphs)
+                     rebuild_graphs=rebuild_graphs, video=video)
     except SrrError:
         raise
     except Exception as err:

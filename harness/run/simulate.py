@@ -57,7 +57,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
                  update_baseline: bool = False, update_reason: str = "updated with "
                  "--update-baseline", free_space: FreeSpace = disk_free,
                  live: LiveConfig | None = None, notice: Notice | None = None,
-                 started: Started | None = None) -> RunResult:
+                 started: Started | None = None, video: bool = True) -> RunResult:
     """Build, run and record ``scenario``; write the run directory and return its verdict.
 
     ``free_space`` measures the free bytes on a path's filesystem (``shutil.disk_usage`` by
@@ -69,7 +69,8 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     (:mod:`harness.live.view`): the server starts once the scene is built and wired (a port
     in use is refused then, before anything is written) and stops when the run ends, however
     it ends. It changes nothing that is recorded. ``notice`` receives its one-line messages
-    for the user; ``started`` the run directory, once it is created and owned."""
+    for the user; ``started`` the run directory, once it is created and owned. ``video=False``
+    leaves the camera videos out of the report (``srr run --no-video``)."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
     baselines = baselines_dir(source, baselines, scenario)  # a bad folder stops it here
     if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
@@ -118,7 +119,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     return record(scenario, loop, source=source, run_dir=run_dir, n_ticks=scenario.n_ticks,
                   progress=progress, baselines=baselines, update_baseline=update_baseline,
                   update_reason=update_reason, free_space=free_space,
-                  participants=participants, started=started)
+                  participants=participants, started=started, video=video)
 
 
 def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>",

@@ -249,3 +249,24 @@ def test_a_run_without_cameras_has_no_video_section(tmp_path: Path) -> None:
     tracks = json.loads(html.split('<script type="application/json" id="srr-tracks">', 1)[1]
                         .split("</script>", 1)[0])
     assert any(t["kind"] == "robot" for t in tracks)
+
+
+def test_srr_run_no_video_leaves_the_videos_out(tmp_path: Path) -> None:
+    """`srr run --no-video`: the camera run's report has no videos or clips, its recording is
+    the one the same run with videos makes, and `srr report` adds the videos later."""
+    path = ROOT / "scenarios" / "dock_worker_crossing.yaml"
+    runs = {}
+    for name, extra in (("with", []), ("without", ["--no-video"])):
+        code = main(["run", str(path), "--duration", "1", "--out", str(tmp_path / name), "-q",
+                     *extra])
+        assert code in (0, 1)
+        runs[name] = tmp_path / name
+    assert (runs["with"] / "video").is_dir()
+    assert not (runs["without"] / "video").exists()
+    html = (runs["without"] / "report.html").read_text(encoding="utf-8")
+    assert "<video" not in html and 'id="clips"' not in html
+    assert _tree(runs["without"] / "bag").keys() == _tree(runs["with"] / "bag").keys()
+    digest = [json.loads((r / "summary.json").read_text())["digest"] for r in runs.values()]
+    assert digest[0] == digest[1]
+    assert main(["report", str(runs["without"])]) == 0
+    assert (runs["without"] / "video").is_dir()
