@@ -44,6 +44,7 @@ from __future__ import annotations
 import functools
 import math
 import os
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -64,6 +65,7 @@ __all__ = [
     "Renderer",
     "apply_render_settings",
     "depth_from_buffer",
+    "gl_context_seconds",
     "is_software_renderer",
     "points_from_depth",
     "rendered_in_this_process",
@@ -126,12 +128,19 @@ class CameraFrame:
 
 
 _CONTEXTS_MADE = False  # set once this process creates an OpenGL context
+_CONTEXT_S = 0.0  # wall seconds this process spent creating OpenGL contexts
 
 
 def rendered_in_this_process() -> bool:
     """Whether this process has created an OpenGL context (its driver's threads and state then
     live here: a process forked from it must not render)."""
     return _CONTEXTS_MADE
+
+
+def gl_context_seconds() -> float:
+    """Wall seconds this process has spent creating OpenGL contexts (every renderer's, on
+    whichever thread); 0 when it never rendered."""
+    return _CONTEXT_S
 
 
 def is_software_renderer(gl_renderer: str) -> bool:
@@ -350,11 +359,13 @@ class Renderer:
                     "cannot render: MuJoCo uses GLFW (MUJOCO_GL unset or 'glfw') and there is "
                     "no display; set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa "
                     "before starting")
-            global _CONTEXTS_MADE
+            global _CONTEXTS_MADE, _CONTEXT_S
             _CONTEXTS_MADE = True
+            t0 = time.monotonic()
             try:
                 self._gl = mujoco.GLContext(max(1, vis.offwidth), max(1, vis.offheight))
                 self._gl.make_current()
+                _CONTEXT_S += time.monotonic() - t0
             except Exception as err:  # backend-specific (ImportError, RuntimeError, ...)
                 raise SimulationError(
                     f"cannot create an OpenGL context for rendering ({type(err).__name__}: "

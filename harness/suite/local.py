@@ -20,6 +20,7 @@ finished one. Worker output goes to ``OUT/logs/<run id>.log``.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import faulthandler
 import json
 import os
@@ -38,9 +39,10 @@ from harness.sim.render import rendered_in_this_process
 from harness.suite.events import Event, Listener, log_path, not_started
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, crash_reason, outcome_of
+from harness.suite.timeline import clock_path, take_clock
 from harness.suite.worker import peak_rss_mb
 
-__all__ = ["LocalExecutor", "fork_safe"]
+__all__ = ["LocalExecutor", "fork_safe", "preload"]
 
 
 def fork_safe() -> bool:
@@ -48,6 +50,21 @@ def fork_safe() -> bool:
     no OpenGL context made here."""
     return (sys.platform == "linux" and threading.active_count() == 1
             and not rendered_in_this_process())
+
+
+def preload(specs: Sequence[RunSpec]) -> None:
+    """Before the first fork: what every forked run would otherwise load for itself, done once
+    here — PyOpenGL's ``GL`` module, which a run that renders imports to read the renderer's
+    name (a third of a second; loading it makes no OpenGL context), and the compiled page
+    templates of the run's ``report.html``. Nothing here changes what a run records."""
+    from harness.report.templates import environment
+
+    if any(s.renders for s in specs):
+        with contextlib.suppress(Exception):  # a run without it reports this itself
+            import OpenGL.GL  # noqa: F401
+    env = environment()
+    for name in env.list_templates(extensions=["html"]):
+        env.get_template(name)
 
 
 class _Forked:
@@ -101,6 +118,7 @@ class _Running:
     kill_at: float | None = None  # set once SIGTERM was sent
     timed_out: bool = False
     peak_rss_mb: float | None = None
+    reaped: float | None = None  # time.monotonic() when it was found ended
 
 
 def _last_line(path: Path) -> str | None:
@@ -125,9 +143,10 @@ class LocalExecutor:
         self.fork = fork
 
     def _start(self, spec: RunSpec, out_root: Path) -> _Running:
-        job = {**spec.job(), "out_root": str(out_root),
-               "baselines": None if self.baselines is None else str(self.baselines)}
         log_file = log_path(out_root, spec)
+        job = {**spec.job(), "out_root": str(out_root),
+               "baselines": None if self.baselines is None else str(self.baselines),
+               "clock_file": str(clock_path(log_file))}
         log_file.parent.mkdir(parents=True, exist_ok=True)
         log = log_file.open("wb")
         if self.fork and fork_safe():
@@ -157,13 +176,14 @@ class LocalExecutor:
         r.log.close()
         code = r.proc.returncode
         assert code is not None  # reaped
-        wall = time.monotonic() - r.t0
+        reaped = r.reaped if r.reaped is not None else time.monotonic()
         log = log_path(out_root, r.spec)
         crash = crash_reason(code) if code < 0 and not r.timed_out else None
         error = _last_line(log) if code == 2 else None
-        return outcome_of(r.spec, out_root, exit_code=code, error=error, wall_s=wall,
-                          timed_out=r.timed_out, crash=crash, log=log,
-                          peak_rss_mb=r.peak_rss_mb)
+        outcome = outcome_of(r.spec, out_root, exit_code=code, error=error,
+                             wall_s=reaped - r.t0, timed_out=r.timed_out, crash=crash, log=log,
+                             peak_rss_mb=r.peak_rss_mb)
+        return dataclasses.replace(outcome, clock=take_clock(clock_path(log), r.t0, reaped))
 
     @staticmethod
     def _poll(r: _Running) -> bool:
@@ -172,6 +192,7 @@ class LocalExecutor:
             pid, status, usage = os.wait4(r.proc.pid, os.WNOHANG)
             if pid == 0:
                 return False
+            r.reaped = time.monotonic()
             r.proc.returncode = os.waitstatus_to_exitcode(status)
             r.peak_rss_mb = peak_rss_mb(usage)
         return True
@@ -179,6 +200,8 @@ class LocalExecutor:
     def run(self, specs: Sequence[RunSpec], out_root: Path,
             listen: Listener) -> tuple[list[RunOutcome], bool]:
         pending = deque(specs)
+        if self.fork and fork_safe():
+            preload(specs)
         running: list[_Running] = []
         done: dict[str, RunOutcome] = {}
         interrupted = False
