@@ -69,6 +69,7 @@ __all__ = [
     "is_software_renderer",
     "points_from_depth",
     "rendered_in_this_process",
+    "warm_gl",
 ]
 
 MAX_GEOMS = 10_000
@@ -141,6 +142,26 @@ def gl_context_seconds() -> float:
     """Wall seconds this process has spent creating OpenGL contexts (every renderer's, on
     whichever thread); 0 when it never rendered."""
     return _CONTEXT_S
+
+
+def warm_gl() -> float:
+    """Make and free one OpenGL context now, so that the backend's one-time set-up (EGL: the
+    display on the device, the driver's state) is done before a run needs it; its seconds.
+    For a process that will render anyway (a suite's worker started ahead of its run): it
+    then counts as one that rendered. Errors are left to the run, which reports them."""
+    backend = str(getattr(mujoco.GLContext, "__module__", "")).rsplit(".", 1)[-1]
+    if backend not in ("egl", "osmesa"):  # GLFW may need a display: left to the run
+        return 0.0
+    global _CONTEXTS_MADE
+    _CONTEXTS_MADE = True
+    t0 = time.monotonic()
+    try:
+        gl = mujoco.GLContext(1, 1)
+        gl.make_current()
+        gl.free()
+    except Exception:  # the run makes its own context and says what failed
+        pass
+    return time.monotonic() - t0
 
 
 def is_software_renderer(gl_renderer: str) -> bool:

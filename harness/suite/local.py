@@ -75,9 +75,15 @@ class _Forked:
         self.returncode: int | None = None
 
 
-def _fork_worker(job: dict[str, object], log: IO[bytes]) -> _Forked:
+def _fork_worker(job: dict[str, object], log: IO[bytes], *, gate: int | None = None,
+                 close: Sequence[int] = (), warm: bool = False) -> _Forked:
     """Fork a child that runs ``job`` as ``python -m harness.suite.worker`` would (its own
-    session, stdin from /dev/null, stdout and stderr to ``log``) and exits with its code."""
+    session, stdin from /dev/null, stdout and stderr to ``log``) and exits with its code.
+
+    ``gate``: the read end of a pipe; the child is started ahead of its run: it gets ready
+    (``warm``: makes and frees one OpenGL context, :func:`harness.sim.render.warm_gl`), then
+    waits for a byte on ``gate`` before it begins the run (none: it exits, status 130, having
+    run nothing). ``close``: descriptors the child must not keep (other children's gates)."""
     sys.stdout.flush()
     sys.stderr.flush()
     pid = os.fork()
@@ -85,6 +91,9 @@ def _fork_worker(job: dict[str, object], log: IO[bytes]) -> _Forked:
         return _Forked(pid)
     code = 70  # EX_SOFTWARE: the worker itself failed
     try:
+        for fd in close:
+            with contextlib.suppress(OSError):
+                os.close(fd)
         os.setsid()
         null = os.open(os.devnull, os.O_RDONLY)
         os.dup2(null, 0)
@@ -97,7 +106,12 @@ def _fork_worker(job: dict[str, object], log: IO[bytes]) -> _Forked:
         sys.path.insert(0, os.getcwd())  # plug-ins import from here, like `srr run`
         from harness.suite.worker import main
 
-        code = main([json.dumps(job)])
+        if gate is not None and warm:
+            from harness.sim.render import warm_gl
+
+            job = {**job, "warm_gl_s": warm_gl()}
+        # at a gate, no byte (the suite stopped before this run began): nothing was run
+        code = main([json.dumps(job)]) if gate is None or os.read(gate, 1) else 130
     except BaseException:  # reported in the run's log, then the child exits
         import traceback
 
@@ -119,6 +133,7 @@ class _Running:
     timed_out: bool = False
     peak_rss_mb: float | None = None
     reaped: float | None = None  # time.monotonic() when it was found ended
+    gate: int | None = None  # started ahead: the write end of its gate, until it may run
 
 
 def _last_line(path: Path) -> str | None:
@@ -134,23 +149,39 @@ class LocalExecutor:
     name = "local"
 
     def __init__(self, jobs: int, *, baselines: Path | None = None, grace_s: float = 10.0,
-                 poll_s: float = 0.05, fork: bool = False) -> None:
+                 poll_s: float = 0.05, fork: bool = False, ahead: int | None = None) -> None:
         self.jobs = max(1, jobs)
         self.baselines = baselines
         self.grace_s = grace_s
         self.poll_s = poll_s
         #: Fork each worker from this process when that is safe (:func:`fork_safe`).
         self.fork = fork
+        #: Forked workers started ahead of a free slot, each ready (imports done, an OpenGL
+        #: context made and freed if its run renders) and waiting for the slot.
+        self.ahead = ahead if ahead is not None else int(os.environ.get("SRR_SUITE_AHEAD", "2"))
+        self._gates: set[int] = set()
 
-    def _start(self, spec: RunSpec, out_root: Path) -> _Running:
+    def _start(self, spec: RunSpec, out_root: Path, *, ahead: bool = False) -> _Running:
+        """Start ``spec``'s worker; ``ahead``: forked, made ready, held at its gate until
+        :meth:`_go` (fork mode only)."""
         log_file = log_path(out_root, spec)
         job = {**spec.job(), "out_root": str(out_root),
                "baselines": None if self.baselines is None else str(self.baselines),
                "clock_file": str(clock_path(log_file))}
         log_file.parent.mkdir(parents=True, exist_ok=True)
         log = log_file.open("wb")
+        if ahead:
+            read, write = os.pipe()
+            self._gates.add(write)
+            try:
+                proc: subprocess.Popen[bytes] | _Forked = _fork_worker(
+                    job, log, gate=read, close=sorted(self._gates), warm=spec.renders)
+            finally:
+                os.close(read)
+            return _Running(spec, proc, log, time.monotonic(), gate=write)
         if self.fork and fork_safe():
-            return _Running(spec, _fork_worker(job, log), log, time.monotonic())
+            return _Running(spec, _fork_worker(job, log, close=sorted(self._gates)), log,
+                            time.monotonic())
         env = dict(os.environ)
         # the worker imports plug-ins ("module:Class") from here, like `srr run` does
         env["PYTHONPATH"] = os.pathsep.join(p for p in (os.getcwd(), env.get("PYTHONPATH"))
@@ -159,6 +190,40 @@ class LocalExecutor:
                                 stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
                                 env=env, start_new_session=True)
         return _Running(spec, proc, log, time.monotonic())
+
+    def _go(self, r: _Running) -> _Running:
+        """Let a worker started ahead begin its run: its timings and timeout count from here."""
+        assert r.gate is not None
+        with contextlib.suppress(OSError):  # it ended while it waited: reaped as it is
+            os.write(r.gate, b"g")
+        self._close_gate(r)
+        r.t0 = time.monotonic()
+        return r
+
+    def _close_gate(self, r: _Running) -> None:
+        if r.gate is not None:
+            self._gates.discard(r.gate)
+            os.close(r.gate)
+            r.gate = None
+
+    def _ahead(self, pending: Sequence[RunSpec]) -> int:
+        """How many workers to start ahead of a free slot."""
+        if not (self.fork and pending and fork_safe()):
+            return 0
+        return self.ahead
+
+    def _unstart(self, r: _Running, out_root: Path) -> None:
+        """A worker started ahead that never ran: stop it, leave nothing of it."""
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(r.proc.pid, signal.SIGKILL)
+        self._close_gate(r)
+        with contextlib.suppress(ChildProcessError):
+            os.waitpid(r.proc.pid, 0)
+        r.log.close()
+        log = log_path(out_root, r.spec)
+        for path in (log, clock_path(log)):
+            with contextlib.suppress(OSError):
+                path.unlink()
 
     @staticmethod
     def _signal(r: _Running, sig: signal.Signals) -> None:
@@ -203,14 +268,18 @@ class LocalExecutor:
         if self.fork and fork_safe():
             preload(specs)
         running: list[_Running] = []
+        waiting: deque[_Running] = deque()  # started ahead, at their gates
         done: dict[str, RunOutcome] = {}
         interrupted = False
         try:
-            while pending or running:
-                while pending and len(running) < self.jobs:
-                    r = self._start(pending.popleft(), out_root)
+            while pending or waiting or running:
+                while (pending or waiting) and len(running) < self.jobs:
+                    r = (self._go(waiting.popleft()) if waiting else
+                         self._start(pending.popleft(), out_root))
                     running.append(r)
                     listen(Event("start", r.spec, where=f"pid {r.proc.pid}"))
+                while pending and len(waiting) < self._ahead(pending):
+                    waiting.append(self._start(pending.popleft(), out_root, ahead=True))
                 now = time.monotonic()
                 for r in list(running):
                     if self._reap(r, running, out_root, done, listen):
@@ -222,6 +291,8 @@ class LocalExecutor:
                 time.sleep(self.poll_s)
         except KeyboardInterrupt:
             interrupted = True
+            while waiting:
+                self._unstart(waiting.popleft(), out_root)
             self._drain(running, out_root, done, listen)
         for spec in specs:
             if spec.id not in done:

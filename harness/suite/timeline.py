@@ -88,7 +88,8 @@ def run_timings(clock: Mapping[str, float] | None, t0: float) -> dict[str, Any] 
              if a in clock and b in clock}
     return {"started_s": round(clock["submitted"] - t0, 3),
             "finished_s": round(clock["reaped"] - t0, 3), "steps": steps,
-            "gl_context_s": round(clock.get("gl_context_s", 0.0), 3)}
+            "gl_context_s": round(clock.get("gl_context_s", 0.0), 3),
+            "warm_gl_s": round(clock.get("warm_gl_s", 0.0), 3)}
 
 
 def suite_timeline(timings: Sequence[Mapping[str, Any] | None], *, jobs: int,

@@ -77,7 +77,8 @@ def main(argv: list[str]) -> int:
     os.environ.setdefault("MUJOCO_GL", "egl")
     result = run_job(job, job["out_root"], job.get("baselines"))
     if job.get("clock_file"):  # for the suite's timeline
-        write_json_atomic(Path(job["clock_file"]), result["clock"])
+        write_json_atomic(Path(job["clock_file"]),
+                          {**result["clock"], "warm_gl_s": float(job.get("warm_gl_s", 0.0))})
     if result["error"]:
         sys.stderr.write(result["error"] + "\n")
     sys.stderr.flush()
