@@ -130,6 +130,7 @@ class CameraFrame:
 
 _CONTEXTS_MADE = False  # set once this process creates an OpenGL context
 _CONTEXT_S = 0.0  # wall seconds this process spent creating OpenGL contexts
+_SPARE: Any = None  # a context warm_gl made, for the first renderer
 
 
 def rendered_in_this_process() -> bool:
@@ -145,23 +146,33 @@ def gl_context_seconds() -> float:
 
 
 def warm_gl() -> float:
-    """Make and free one OpenGL context now, so that the backend's one-time set-up (EGL: the
-    display on the device, the driver's state) is done before a run needs it; its seconds.
+    """Make this process's first OpenGL context now, before a renderer needs it (EGL only:
+    the display's and the driver's one-time set-up, then the context, made current once and
+    released), and keep it for the first :class:`Renderer` that starts here; its seconds.
     For a process that will render anyway (a suite's worker started ahead of its run): it
-    then counts as one that rendered. Errors are left to the run, which reports them."""
+    then counts as one that rendered. Errors are left to the run, which makes its own
+    context and reports them."""
+    global _CONTEXTS_MADE, _SPARE
     backend = str(getattr(mujoco.GLContext, "__module__", "")).rsplit(".", 1)[-1]
-    if backend not in ("egl", "osmesa"):  # GLFW may need a display: left to the run
+    if backend != "egl" or _SPARE is not None:  # EGL's context has no size: any renderer's
         return 0.0
-    global _CONTEXTS_MADE
     _CONTEXTS_MADE = True
     t0 = time.monotonic()
     try:
         gl = mujoco.GLContext(1, 1)
-        gl.make_current()
-        gl.free()
+        with gl.as_current():  # current on no thread afterwards: a render thread may take it
+            pass
+        _SPARE = gl
     except Exception:  # the run makes its own context and says what failed
         pass
     return time.monotonic() - t0
+
+
+def _new_context(width: int, height: int) -> Any:
+    """The context :func:`warm_gl` made (once), else a new one."""
+    global _SPARE
+    gl, _SPARE = _SPARE, None
+    return gl if gl is not None else mujoco.GLContext(width, height)
 
 
 def is_software_renderer(gl_renderer: str) -> bool:
@@ -384,7 +395,7 @@ class Renderer:
             _CONTEXTS_MADE = True
             t0 = time.monotonic()
             try:
-                self._gl = mujoco.GLContext(max(1, vis.offwidth), max(1, vis.offheight))
+                self._gl = _new_context(max(1, vis.offwidth), max(1, vis.offheight))
                 self._gl.make_current()
                 _CONTEXT_S += time.monotonic() - t0
             except Exception as err:  # backend-specific (ImportError, RuntimeError, ...)

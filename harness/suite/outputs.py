@@ -90,10 +90,10 @@ def write_junit_suite(path: Path, name: str, groups: Sequence[GroupResult]) -> N
 
 
 def write_outputs(out_dir: Path, summary: Mapping[str, Any],
-                  groups: Sequence[GroupResult]) -> None:
+                  groups: Sequence[GroupResult]) -> dict[str, Any]:
     """``junit.xml`` and ``index.html`` first, ``summary.json`` last: a folder with a
     ``summary.json`` is a finished suite. The time the first two took goes into the summary's
-    ``timeline`` (``pages_s``) when it has one."""
+    ``timeline`` (``pages_s``) when it has one. Returns the summary as written."""
     from harness.report.suite_page import write_suite_page
 
     t0 = time.monotonic()
@@ -103,3 +103,4 @@ def write_outputs(out_dir: Path, summary: Mapping[str, Any],
     if isinstance(data.get("timeline"), Mapping):
         data["timeline"] = {**data["timeline"], "pages_s": round(time.monotonic() - t0, 3)}
     write_json_atomic(out_dir / "summary.json", data)
+    return data

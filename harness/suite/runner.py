@@ -140,6 +140,6 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
                                                        overrides=spec.overrides))
                 blessed.append(bless(out_dir / g.runs[0].run_dir, bless_reason,
                                          baselines=here))
-    write_outputs(out_dir, summary, ranked)
+    summary = write_outputs(out_dir, summary, ranked)
     return SuiteResult(out_dir, verdict, code, summary, tuple(ranked), tuple(blessed))
 
