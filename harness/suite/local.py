@@ -8,7 +8,11 @@ the 2-core CI machine, a sixth of the bundled suite's CPU time); the child runs
 suite's process is as clean as a fresh one — no other Python thread (a live progress display),
 no OpenGL context ever made here (its driver's threads and locks would not survive the fork) —
 else, and by default, each run is a fresh ``python -m harness.suite.worker``. Either way a run
-never sees another run's state.
+never sees another run's state. Before its first fork the suite's process also loads what every
+run would load for itself (:func:`preload`), and, on CPUs the workers leave idle (``ahead``),
+forks the next runs' workers ahead of a free slot: each gets ready — a run that renders makes
+its OpenGL context, the one its renderer then uses — and waits for its slot; the run, its
+timings and its timeout begin when the slot frees.
 
 A process per run isolates what one run can break: a segfault, an out-of-memory kill or
 a hang costs that run (INVALID, with the signal or the timeout as the reason), never the
@@ -156,9 +160,11 @@ class LocalExecutor:
         self.poll_s = poll_s
         #: Fork each worker from this process when that is safe (:func:`fork_safe`).
         self.fork = fork
-        #: Forked workers started ahead of a free slot, each ready (imports done, an OpenGL
-        #: context made and freed if its run renders) and waiting for the slot.
-        self.ahead = ahead if ahead is not None else int(os.environ.get("SRR_SUITE_AHEAD", "2"))
+        #: Forked workers started ahead of a free slot, each ready (imports done, its first
+        #: OpenGL context made if its run renders) and waiting for the slot. Default: on the
+        #: CPUs the workers leave idle, at most 2 (none with a worker per CPU).
+        self.ahead = (ahead if ahead is not None else
+                      max(0, min(2, (os.cpu_count() or 1) - self.jobs)))
         self._gates: set[int] = set()
 
     def _start(self, spec: RunSpec, out_root: Path, *, ahead: bool = False) -> _Running:
