@@ -8,11 +8,11 @@ the 2-core CI machine, a sixth of the bundled suite's CPU time); the child runs
 suite's process is as clean as a fresh one — no other Python thread (a live progress display),
 no OpenGL context ever made here (its driver's threads and locks would not survive the fork) —
 else, and by default, each run is a fresh ``python -m harness.suite.worker``. Either way a run
-never sees another run's state. Before its first fork the suite's process also loads what every
-run would load for itself (:func:`preload`), and, on CPUs the workers leave idle (``ahead``),
-forks the next runs' workers ahead of a free slot: each gets ready — a run that renders makes
-its OpenGL context, the one its renderer then uses — and waits for its slot; the run, its
-timings and its timeout begin when the slot frees.
+never sees another run's state. Once the first workers are forked the suite's process also
+loads what every later run would load for itself (:func:`preload`), and, on CPUs the workers
+leave idle (``ahead``), forks the next runs' workers ahead of a free slot: each gets ready — a
+run that renders makes its OpenGL context, the one its renderer then uses — and waits for its
+slot; the run, its timings and its timeout begin when the slot frees.
 
 A process per run isolates what one run can break: a segfault, an out-of-memory kill or
 a hang costs that run (INVALID, with the signal or the timeout as the reason), never the
@@ -57,7 +57,7 @@ def fork_safe() -> bool:
 
 
 def preload(specs: Sequence[RunSpec]) -> None:
-    """Before the first fork: what every forked run would otherwise load for itself, done once
+    """Before the later forks: what every forked run would otherwise load for itself, done once
     here — PyOpenGL's ``GL`` module, which a run that renders imports to read the renderer's
     name (a third of a second; loading it makes no OpenGL context), and the compiled page
     templates of the run's ``report.html``. Nothing here changes what a run records."""
@@ -271,8 +271,7 @@ class LocalExecutor:
     def run(self, specs: Sequence[RunSpec], out_root: Path,
             listen: Listener) -> tuple[list[RunOutcome], bool]:
         pending = deque(specs)
-        if self.fork and fork_safe():
-            preload(specs)
+        preloaded = False  # after the first workers are forked: they need not wait for it
         running: list[_Running] = []
         waiting: deque[_Running] = deque()  # started ahead, at their gates
         done: dict[str, RunOutcome] = {}
@@ -284,6 +283,9 @@ class LocalExecutor:
                          self._start(pending.popleft(), out_root))
                     running.append(r)
                     listen(Event("start", r.spec, where=f"pid {r.proc.pid}"))
+                if pending and not preloaded and self.fork and fork_safe():
+                    preload(pending)
+                    preloaded = True
                 while pending and len(waiting) < self._ahead(pending):
                     waiting.append(self._start(pending.popleft(), out_root, ahead=True))
                 now = time.monotonic()
