@@ -176,6 +176,7 @@ class LocalExecutor:
                "clock_file": str(clock_path(log_file))}
         log_file.parent.mkdir(parents=True, exist_ok=True)
         log = log_file.open("wb")
+        t0 = time.monotonic()  # before the worker exists: its own instants come after it
         if ahead:
             read, write = os.pipe()
             self._gates.add(write)
@@ -184,10 +185,9 @@ class LocalExecutor:
                     job, log, gate=read, close=sorted(self._gates), warm=spec.renders)
             finally:
                 os.close(read)
-            return _Running(spec, proc, log, time.monotonic(), gate=write)
+            return _Running(spec, proc, log, t0, gate=write)
         if self.fork and fork_safe():
-            return _Running(spec, _fork_worker(job, log, close=sorted(self._gates)), log,
-                            time.monotonic())
+            return _Running(spec, _fork_worker(job, log, close=sorted(self._gates)), log, t0)
         env = dict(os.environ)
         # the worker imports plug-ins ("module:Class") from here, like `srr run` does
         env["PYTHONPATH"] = os.pathsep.join(p for p in (os.getcwd(), env.get("PYTHONPATH"))
@@ -195,15 +195,15 @@ class LocalExecutor:
         proc = subprocess.Popen([sys.executable, "-m", "harness.suite.worker", json.dumps(job)],
                                 stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
                                 env=env, start_new_session=True)
-        return _Running(spec, proc, log, time.monotonic())
+        return _Running(spec, proc, log, t0)
 
     def _go(self, r: _Running) -> _Running:
         """Let a worker started ahead begin its run: its timings and timeout count from here."""
         assert r.gate is not None
+        r.t0 = time.monotonic()  # before the go: the worker's own instants come after it
         with contextlib.suppress(OSError):  # it ended while it waited: reaped as it is
             os.write(r.gate, b"g")
         self._close_gate(r)
-        r.t0 = time.monotonic()
         return r
 
     def _close_gate(self, r: _Running) -> None:
