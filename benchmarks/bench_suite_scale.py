@@ -107,7 +107,14 @@ def main() -> None:
     ap.add_argument("--keep", type=Path, help="copy each pass's summary.json into this folder")
     args = ap.parse_args()
     if args.show:
-        show(json.loads(args.show.read_text(encoding="utf-8")))
+        try:
+            summary = json.loads(args.show.read_text(encoding="utf-8"))
+            if not isinstance(summary, dict) or not isinstance(summary.get("runs"), list):
+                raise ValueError("not a suite's summary.json (no runs)")
+        except (OSError, ValueError) as err:
+            print(f"--show {args.show}: {err}", file=sys.stderr)
+            raise SystemExit(2) from None
+        show(summary)
         return
     trees = [("other", args.other.resolve()), ("this", ROOT)] if args.other else [("this", ROOT)]
     configs = [tuple(int(x) for x in c.split(":")) for c in args.configs.split(",")]
