@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Issue 13's camera figures in one command, for the GPU machine (run from anywhere):
 #
-#   MUJOCO_GL=egl benchmarks/gpu_rig.sh [all|cameras|memory]      (default: all, ~7 min on an H100)
+#   MUJOCO_GL=egl benchmarks/gpu_rig.sh [all|cameras|memory|suite]  (default: all, ~7 min on an H100)
 #
 # cameras: 4 x 640x480 rgb + depth at 30 Hz, best of 2: shadows off for 60 s simulated (so that
 #          the whole run's fixed costs, ~1 s, weigh little in its RTF), then shadows on (1024²
@@ -12,6 +12,9 @@
 # memory:  peak resident memory of a whole 4-camera srr run of 60 s and of 600 s simulated
 #          (640x480 rgb + depth at 2 Hz: the 30 Hz bag of 600 s would be 155 GB), and their
 #          ratio (target <= 1.10).
+# suite:   the nightly suite on 1 worker (23 runs) and on 16 (--repeat 6: 59 runs): runs/s, time
+#          outside the runs, utilization, summed steps, efficiency (target >= 0.8), and
+#          OpenGL context creation, 1 / 4 / 16 processes at once (~2 min; not part of "all").
 # Under a 10-minute limit per command run "cameras" and "memory" separately. Disk: at most
 # ~16 GB at a time (each run's bag is deleted once measured). Figures also go to $OUT (default:
 # ./gpu_rig_out) as JSON. PYTHON selects the interpreter (default: python).
@@ -32,6 +35,11 @@ if [[ "$what" == all || "$what" == cameras ]]; then
   "$PY" benchmarks/bench_cameras.py --cameras 4 --width 640 --height 480 --fps 30 \
       --duration 20 --outputs rgb,depth --repeats 2 --configs on,on4096 --skip-bare \
       --json "$OUT/cameras_shadows.json"
+fi
+if [[ "$what" == suite ]]; then
+  echo "== suite: 1 and 16 workers"
+  "$PY" benchmarks/bench_gl_contexts.py --procs 1,4,16
+  "$PY" benchmarks/bench_suite_scale.py --configs 1:2,16:6 --json "$OUT/suite.json"
 fi
 if [[ "$what" == all || "$what" == memory ]]; then
   echo "== memory: peak resident memory, 60 s against 600 s"

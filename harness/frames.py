@@ -683,7 +683,8 @@ def _tf_part(cols: dict[str, np.ndarray], log_ns: np.ndarray) -> dict[str, Any]:
 
 def _tf_frame(topics: list[tuple[str, list[dict[str, Any]]]]) -> pd.DataFrame:
     """The ``tf`` table (``_TF_COLS``) from each transform-tree topic's batches, in topic
-    order; built column by column, so at most one column is held twice."""
+    order; built column by column, so at most one column is held twice (never the whole
+    table: it grows with the run)."""
     parts = [(topic, part) for topic, batches in topics for part in batches]
     if not parts:
         return _empty(_TF_COLS)
@@ -709,7 +710,9 @@ def _tf_frame(topics: list[tuple[str, list[dict[str, Any]]]]) -> pd.DataFrame:
                                         sort_categories=True)
         else:
             out[k] = np.concatenate([part.pop(k) for _, part in parts])
-    return pd.DataFrame(out)
+    # copy=False: the columns become the table as they are; the default would stack the
+    # float columns into one new block, holding the whole table twice while it is built
+    return pd.DataFrame(out, copy=False)
 
 
 #: Messages of one topic decoded at a time by :func:`load_frames`.

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -210,17 +211,21 @@ def tf_tree_gate(tf: pd.DataFrame) -> list[HealthResult]:
     return out
 
 
-def _codes(column: pd.Series) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.object_]]:
+Codes = npt.NDArray[np.signedinteger[Any]]
+
+
+def _codes(column: pd.Series) -> tuple[Codes, npt.NDArray[np.object_]]:
     """A column as integer codes into its sorted distinct values (a categorical's own
-    categories and order, or the values' sorted order)."""
+    categories and order, in its own code type: one byte a row for a few hundred frames,
+    or the values' sorted order)."""
     if isinstance(column.dtype, pd.CategoricalDtype):
-        return (column.cat.codes.to_numpy(np.int64),
+        return (column.cat.codes.to_numpy(),
                 np.asarray(column.cat.categories, dtype=object))
     values, codes = np.unique(column.to_numpy(object).astype(str), return_inverse=True)
     return codes.astype(np.int64), values.astype(object)
 
 
-def _tf_edges(cols: Mapping[str, tuple[npt.NDArray[np.int64], npt.NDArray[np.object_]]],
+def _tf_edges(cols: Mapping[str, tuple[Codes, npt.NDArray[np.object_]]],
               static: npt.NDArray[np.bool_], rows: npt.NDArray[np.intp]) -> set[Edge]:
     """The distinct (parent, child, static, topic) of ``rows``, as edges."""
     key = np.zeros(len(rows), dtype=np.int64)
@@ -238,7 +243,7 @@ def _tf_edges(cols: Mapping[str, tuple[npt.NDArray[np.int64], npt.NDArray[np.obj
     return edges
 
 
-def _repeated_stamps(child: tuple[npt.NDArray[np.int64], npt.NDArray[np.object_]],
+def _repeated_stamps(child: tuple[Codes, npt.NDArray[np.object_]],
                      t_ns: npt.NDArray[np.int64], rows: npt.NDArray[np.intp]) -> list[str]:
     """Per child frame (in category order) published more than once with one stamp in
     ``rows``: how often at its first such stamp, at how many stamps, and the first."""

@@ -44,6 +44,7 @@ from __future__ import annotations
 import functools
 import math
 import os
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -64,9 +65,11 @@ __all__ = [
     "Renderer",
     "apply_render_settings",
     "depth_from_buffer",
+    "gl_context_seconds",
     "is_software_renderer",
     "points_from_depth",
     "rendered_in_this_process",
+    "warm_gl",
 ]
 
 MAX_GEOMS = 10_000
@@ -126,12 +129,50 @@ class CameraFrame:
 
 
 _CONTEXTS_MADE = False  # set once this process creates an OpenGL context
+_CONTEXT_S = 0.0  # wall seconds this process spent creating OpenGL contexts
+_SPARE: Any = None  # a context warm_gl made, for the first renderer
 
 
 def rendered_in_this_process() -> bool:
     """Whether this process has created an OpenGL context (its driver's threads and state then
     live here: a process forked from it must not render)."""
     return _CONTEXTS_MADE
+
+
+def gl_context_seconds() -> float:
+    """Wall seconds this process has spent creating OpenGL contexts (every renderer's, on
+    whichever thread); 0 when it never rendered."""
+    return _CONTEXT_S
+
+
+def warm_gl() -> float:
+    """Make this process's first OpenGL context now, before a renderer needs it (EGL only:
+    the display's and the driver's one-time set-up, then the context, made current once and
+    released), and keep it for the first :class:`Renderer` that starts here; its seconds.
+    For a process that will render anyway (a suite's worker started ahead of its run): it
+    then counts as one that rendered. Errors are left to the run, which makes its own
+    context and reports them."""
+    global _CONTEXTS_MADE, _SPARE
+    backend = str(getattr(mujoco.GLContext, "__module__", "")).rsplit(".", 1)[-1]
+    if backend != "egl" or _SPARE is not None:  # EGL's context has no size: any renderer's
+        return 0.0
+    _CONTEXTS_MADE = True
+    t0 = time.monotonic()
+    try:
+        gl = mujoco.GLContext(1, 1)
+        with gl.as_current():  # current on no thread afterwards: a render thread may take it
+            pass
+        _SPARE = gl
+    except Exception:  # the run makes its own context and says what failed
+        pass
+    return time.monotonic() - t0
+
+
+def _new_context(width: int, height: int) -> Any:
+    """The context :func:`warm_gl` made (once), else a new one."""
+    global _SPARE
+    gl, _SPARE = _SPARE, None
+    return gl if gl is not None else mujoco.GLContext(width, height)
 
 
 def is_software_renderer(gl_renderer: str) -> bool:
@@ -350,11 +391,13 @@ class Renderer:
                     "cannot render: MuJoCo uses GLFW (MUJOCO_GL unset or 'glfw') and there is "
                     "no display; set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa "
                     "before starting")
-            global _CONTEXTS_MADE
+            global _CONTEXTS_MADE, _CONTEXT_S
             _CONTEXTS_MADE = True
+            t0 = time.monotonic()
             try:
-                self._gl = mujoco.GLContext(max(1, vis.offwidth), max(1, vis.offheight))
+                self._gl = _new_context(max(1, vis.offwidth), max(1, vis.offheight))
                 self._gl.make_current()
+                _CONTEXT_S += time.monotonic() - t0
             except Exception as err:  # backend-specific (ImportError, RuntimeError, ...)
                 raise SimulationError(
                     f"cannot create an OpenGL context for rendering ({type(err).__name__}: "

@@ -9,6 +9,7 @@ are errors, runs not started are skipped) and ``index.html`` (the suite page).
 
 from __future__ import annotations
 
+import time
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -89,11 +90,17 @@ def write_junit_suite(path: Path, name: str, groups: Sequence[GroupResult]) -> N
 
 
 def write_outputs(out_dir: Path, summary: Mapping[str, Any],
-                  groups: Sequence[GroupResult]) -> None:
+                  groups: Sequence[GroupResult]) -> dict[str, Any]:
     """``junit.xml`` and ``index.html`` first, ``summary.json`` last: a folder with a
-    ``summary.json`` is a finished suite."""
+    ``summary.json`` is a finished suite. The time the first two took goes into the summary's
+    ``timeline`` (``pages_s``) when it has one. Returns the summary as written."""
     from harness.report.suite_page import write_suite_page
 
+    t0 = time.monotonic()
     write_junit_suite(out_dir / "junit.xml", str(summary["name"]), groups)
     write_suite_page(out_dir, summary)
-    write_json_atomic(out_dir / "summary.json", dict(summary))
+    data = dict(summary)
+    if isinstance(data.get("timeline"), Mapping):
+        data["timeline"] = {**data["timeline"], "pages_s": round(time.monotonic() - t0, 3)}
+    write_json_atomic(out_dir / "summary.json", data)
+    return data

@@ -18,6 +18,7 @@ installed on every node. Runs on the driver's node write to the output folder di
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import logging
 import os
@@ -165,7 +166,8 @@ class RayExecutor:
         return _InFlight(spec, ref, time.monotonic())
 
     def _finish(self, ray: Any, f: _InFlight, out_root: Path) -> RunOutcome:
-        wall = time.monotonic() - f.t0
+        reaped = time.monotonic()
+        wall = reaped - f.t0
         crash = error = None
         code = 3
         rss = None
@@ -191,8 +193,10 @@ class RayExecutor:
                 cause = getattr(err, "cause", None)
                 error = f"{kind}: {cause if cause is not None else first}"
                 code = 2
-        return outcome_of(f.spec, out_root, exit_code=code, error=error, wall_s=wall,
-                          timed_out=f.timed_out, crash=crash, peak_rss_mb=rss)
+        outcome = outcome_of(f.spec, out_root, exit_code=code, error=error, wall_s=wall,
+                             timed_out=f.timed_out, crash=crash, peak_rss_mb=rss)
+        # the task's own instants are another process's (maybe another machine's) clock
+        return dataclasses.replace(outcome, clock={"submitted": f.t0, "reaped": reaped})
 
     def _cancel(self, ray: Any, f: _InFlight, now: float) -> None:
         if f.cancelled_at is None:

@@ -61,6 +61,9 @@ class RunOutcome:
     metrics: tuple[Mapping[str, Any], ...] = ()  # summary["metrics"] (trusted runs only)
     comparison: tuple[Mapping[str, Any], ...] = ()
     peak_rss_mb: float | None = None  # the worker process's peak resident memory
+    #: When it was submitted and reaped, and the worker's :data:`harness.suite.worker.PHASES`
+    #: (``time.monotonic`` instants of this machine; :mod:`harness.suite.timeline`)
+    clock: Mapping[str, float] | None = None
 
     def to_json(self) -> dict[str, Any]:
         return {

@@ -21,6 +21,7 @@ from harness.suite.plan import RunSpec, plan_runs
 from harness.suite.results import GROUP_ORDER, GroupResult, group_runs, suite_exit_code
 from harness.suite.spec import SuiteSpec, load_suite
 from harness.suite.sweep import expand
+from harness.suite.timeline import run_timings, suite_timeline
 
 __all__ = ["SuitePlan", "SuiteResult", "default_suite_dir", "plan_suite", "run_suite"]
 
@@ -30,6 +31,7 @@ class SuitePlan:
     spec: SuiteSpec
     runs: tuple[RunSpec, ...]
     warnings: tuple[str, ...]
+    checked_s: float = 0.0  # wall seconds spent planning and checking
 
 
 @dataclass(frozen=True)
@@ -57,6 +59,7 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
     """Everything ``srr validate`` checks, for every entry (its first sweep point: the world,
     graphs, systems under test and wiring are built once), and every point's scenario loaded,
     before anything runs."""
+    t0 = time.monotonic()
     spec = load_suite(paths, repeat=repeat, timeout_s=timeout_s)
     runs = plan_runs(spec)  # every point loads: a bad sweep path names where it was declared
     warnings: list[str] = []
@@ -65,7 +68,7 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
         pairs = [parse_override(o) for o in entry.overrides + first.overrides()]
         sc = load_scenario(entry.scenario_file, pairs)
         warnings += [f"{entry.name}: {w}" for w in validate(sc, entry.scenario_file)]
-    return SuitePlan(spec, runs, tuple(warnings))
+    return SuitePlan(spec, runs, tuple(warnings), time.monotonic() - t0)
 
 
 def _sweeps(groups: Sequence[GroupResult]) -> list[dict[str, Any]]:
@@ -104,6 +107,8 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
     by_id = {o.spec.id: o for o in done}
     outcomes = [by_id[s.id] for s in plan.runs]
     wall = time.monotonic() - t0
+    timings = [run_timings(o.clock, t0) for o in outcomes]
+    t_judge = time.monotonic()
     groups = group_runs(outcomes, out_dir)
     ranked = sorted(groups, key=lambda g: GROUP_ORDER.index(g.verdict))
     code = suite_exit_code(groups, interrupted)
@@ -115,11 +120,14 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
         "address": getattr(executor, "address", None), "verdict": verdict, "exit_code": code,
         "interrupted": interrupted, "counts": counts, "warnings": list(plan.warnings),
         "groups": [g.to_json() for g in ranked],
-        "runs": [o.to_json() for o in outcomes],
+        "runs": [{**o.to_json(), "timings": t} for o, t in zip(outcomes, timings, strict=True)],
         "sweeps": _sweeps(groups), "history": None,
+        "timeline": suite_timeline(timings, jobs=executor.jobs, checked_s=plan.checked_s,
+                                   wall_s=wall),
     }
     if history is not None:
         summary["history"] = load_history([Path(history)], summary)
+    summary["timeline"]["judged_s"] = round(time.monotonic() - t_judge, 3)
     blessed: list[Path] = []
     if bless_reason is not None and not interrupted:
         for g in groups:
@@ -132,6 +140,6 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
                                                        overrides=spec.overrides))
                 blessed.append(bless(out_dir / g.runs[0].run_dir, bless_reason,
                                          baselines=here))
-    write_outputs(out_dir, summary, ranked)
+    summary = write_outputs(out_dir, summary, ranked)
     return SuiteResult(out_dir, verdict, code, summary, tuple(ranked), tuple(blessed))
 

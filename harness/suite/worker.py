@@ -20,10 +20,13 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from harness.atomic import write_json_atomic
 from harness.errors import SrrError
 from harness.interrupt import sigterm_as_interrupt
 from harness.run.loading import load
 from harness.run.simulate import run_scenario
+from harness.sim.render import gl_context_seconds
+from harness.suite.timeline import RunClock
 
 __all__ = ["peak_rss_mb", "run_job"]
 
@@ -32,21 +35,32 @@ def run_job(job: Mapping[str, Any], out_root: str | Path,
             baselines: str | None = None) -> dict[str, Any]:
     """Run ``job`` here, writing ``out_root / job["run_dir"]``.
 
-    Returns ``{"exit_code": int, "error": str | None, "peak_rss_mb": float}``; ``error`` is
-    the one-line reason when the run could not be started or finished (an
-    :class:`~harness.errors.SrrError`); ``peak_rss_mb`` this process's peak resident memory."""
+    Returns ``{"exit_code": int, "error": str | None, "peak_rss_mb": float, "clock":
+    {phase: instant, "gl_context_s": seconds}}``; ``error`` is the one-line reason when the
+    run could not be started or finished (an :class:`~harness.errors.SrrError`);
+    ``peak_rss_mb`` this process's peak resident memory; ``clock`` when the run reached each
+    of :data:`harness.suite.timeline.PHASES` and the seconds spent making OpenGL contexts."""
+    clock = RunClock()
     run_dir = Path(out_root) / str(job["run_dir"])
+
+    def ended(code: int, error: str | None) -> dict[str, Any]:
+        return {"exit_code": code, "error": error, "peak_rss_mb": peak_rss_mb(),
+                "clock": clock.to_json(gl_context_seconds())}
+
     try:
         with sigterm_as_interrupt():
             scenario = load(job["scenario_file"], overrides=list(job["overrides"]))
+            clock.mark("loaded")
             res = run_scenario(scenario, source=str(job["scenario_file"]), out=run_dir,
-                                   baselines=Path(baselines) if baselines else None)
+                               baselines=Path(baselines) if baselines else None,
+                               progress=clock.progress,
+                               started=lambda _dir: clock.mark("built"))
+            clock.mark("done")
     except SrrError as err:
-        return {"exit_code": err.exit_code, "error": str(err), "peak_rss_mb": peak_rss_mb()}
+        return ended(err.exit_code, str(err))
     except KeyboardInterrupt:
-        return {"exit_code": 130, "error": "interrupted before the run directory was written",
-                "peak_rss_mb": peak_rss_mb()}
-    return {"exit_code": res.exit_code, "error": None, "peak_rss_mb": peak_rss_mb()}
+        return ended(130, "interrupted before the run directory was written")
+    return ended(res.exit_code, None)
 
 
 def peak_rss_mb(usage: resource.struct_rusage | None = None) -> float:
@@ -62,6 +76,9 @@ def main(argv: list[str]) -> int:
     job = json.loads(argv[0])
     os.environ.setdefault("MUJOCO_GL", "egl")
     result = run_job(job, job["out_root"], job.get("baselines"))
+    if job.get("clock_file"):  # for the suite's timeline
+        write_json_atomic(Path(job["clock_file"]),
+                          {**result["clock"], "warm_gl_s": float(job.get("warm_gl_s", 0.0))})
     if result["error"]:
         sys.stderr.write(result["error"] + "\n")
     sys.stderr.flush()

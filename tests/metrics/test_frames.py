@@ -178,6 +178,33 @@ def test_synthetic_bag_tables(synth: tuple[Path, int]) -> None:
     assert len(f.muted) == 60 and f.muted["value"].dtype == bool
 
 
+def test_the_tf_table_holds_its_columns_once_while_it_is_built() -> None:
+    """The transform tree is the largest table a run's scoring reads (every body, every tick):
+    it grows with the run's length, so building it must not hold the whole table twice (the
+    decoded batches are released column by column as the table takes them)."""
+    import tracemalloc
+
+    from harness.frames import _POSE, _tf_frame
+
+    def part(n: int) -> dict[str, Any]:
+        rng = np.random.default_rng(n)
+        return {"t_ns": np.arange(n, dtype=np.int64), "log_ns": np.arange(n, dtype=np.int64),
+                "parent": pd.Categorical(np.full(n, "world", dtype=object)),
+                "child": pd.Categorical(np.array(["a", "b"] * (n // 2), dtype=object)),
+                **{k: rng.random(n) for k in _POSE}}
+
+    topics = [("/tf", [part(50_000), part(50_000)]), ("/tf_static", [part(2)])]
+    tracemalloc.start()
+    try:
+        table = _tf_frame(topics)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    size = table.memory_usage(deep=True).sum()
+    assert len(table) == 100_002 and size > 7 * 100_002 * 8
+    assert peak < 1.25 * size, (peak, size)
+
+
 def write_bag(path: Path, msgs: list[tuple[str, str, int, Any]]) -> None:
     w = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)
     w.open()

@@ -167,3 +167,31 @@ def test_tf_gate_checks_each_namespace_tree_apart() -> None:
     gates = tf_tree_gate(_tf_rows(rows))
     assert [(g.name, g.ok) for g in gates] == [("tf_tree", True), ("tf_tree:/r2", True)]
     assert tf_tree_gate(_tf_rows([])) == []
+
+
+def test_tf_tree_gate_memory_stays_below_the_table_it_checks() -> None:
+    """A long run's ``/tf`` table has hundreds of thousands of rows and grows with the run:
+    checking it works on the frames' one-byte category codes, never on a copy of the table's
+    size (with 64-bit codes it took 1.14 × the table; peak memory grew with run length)."""
+    import tracemalloc
+
+    n = 200_000
+    stamps = np.repeat(np.arange(n // 4, dtype=np.int64) * 10_000_000, 4)
+    tf = pd.DataFrame({
+        "t_ns": stamps, "log_ns": stamps,
+        "topic": pd.Categorical(np.full(n, "/tf", dtype=object)),
+        "tree": pd.Categorical(np.full(n, "/", dtype=object)),
+        "static": np.zeros(n, bool),
+        "parent": pd.Categorical(np.where(np.arange(n) % 4 == 0, "odom", "base_link")
+                                 .astype(object)),
+        "child": pd.Categorical(np.tile(np.array(["base_link", "lidar", "camera", "wheel"],
+                                                 dtype=object), n // 4)),
+        **{k: np.zeros(n) for k in ("x", "y", "z", "qx", "qy", "qz")}, "qw": np.ones(n)})
+    tracemalloc.start()
+    try:
+        (gate,) = tf_tree_gate(tf)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert gate.ok and gate.detail.startswith("5 frames, one parent each"), gate
+    assert peak < 0.8 * tf.memory_usage(deep=True).sum()

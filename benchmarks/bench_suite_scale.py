@@ -1,0 +1,165 @@
+"""How a suite scales with local workers, and where the wall time goes.
+
+Runs ``srr suite SUITE --jobs N --repeat R -q`` as a user would (a fresh process, this tree
+first on ``PYTHONPATH``; ``--other DIR`` also runs another checkout, e.g. an older commit
+unpacked with ``git archive COMMIT | tar -x -C DIR``, alternating with this one) for each
+``--configs`` entry ``JOBS:REPEAT``, and prints per pass: runs, the command's wall time, runs/s,
+the wall time outside the runs (start-up, planning and checking, the wait for the first run,
+judging and pages; from the suite's ``timeline`` where the tree writes one, else the command's
+wall time less the runs' walls over the workers), the workers' utilization, the runs' summed
+steps (from ``timings``) and the verdict (every pass must end PASS). Then, per tree, the
+efficiency of the largest worker count N against 1 worker: runs/s at N ÷ (N × runs/s at 1).
+
+    MUJOCO_GL=egl python benchmarks/bench_suite_scale.py --configs 1:2,16:6 [--other DIR]
+    python benchmarks/bench_suite_scale.py --show OUT/summary.json     # one suite's timeline
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+ORDER = ("start", "load", "build", "first_tick", "loop", "finish", "exit")
+
+
+def one_pass(tree: Path, suite: str, jobs: int, repeat: int, out: Path) -> dict[str, Any]:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        p for p in (str(tree), os.environ.get("PYTHONPATH")) if p),
+        "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    t0 = time.monotonic()
+    proc = subprocess.run([sys.executable, "-m", "harness.cli", "suite", suite, "--jobs",
+                           str(jobs), "--repeat", str(repeat), "--out", str(out), "-q"],
+                          cwd=tree, env=env, capture_output=True, text=True, check=False)
+    wall = time.monotonic() - t0
+    if not (out / "summary.json").is_file():
+        raise SystemExit(f"{tree}: the suite wrote no summary:\n{proc.stderr[-2000:]}")
+    s = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    runs = s["runs"]
+    busy = sum(r["wall_s"] for r in runs)
+    tl = s.get("timeline") or {}
+    span = (tl["last_finish_s"] - tl["first_start_s"]) if "last_finish_s" in tl else None
+    return {"runs": len(runs), "wall": wall, "busy": busy, "verdict": s["verdict"],
+            "outside": wall - span if span is not None else wall - busy / jobs,
+            "checked": tl.get("checked_s"), "first": tl.get("first_start_s"),
+            "after": (s["wall_s"] - tl["last_finish_s"]) if span is not None else None,
+            "util": busy / (jobs * (span if span else wall)), "steps": tl.get("steps_s"),
+            "summary": s}
+
+
+def show(summary: dict[str, Any], width: int = 100) -> None:
+    """Each worker slot's runs along the suite's time, one character a step."""
+    runs = [r for r in summary["runs"] if r.get("timings")]
+    if not runs:
+        print("no timings in this summary")
+        return
+    end = max(r["timings"]["finished_s"] for r in runs)
+    scale = width / end if end > 0 else 1.0
+    letters = {"start": "s", "load": "l", "build": "b", "first_tick": "g", "loop": "=",
+               "finish": "f", "exit": "x"}
+    slots: list[list[str]] = []
+    free: list[float] = []
+    for r in sorted(runs, key=lambda r: r["timings"]["started_s"]):
+        t = r["timings"]
+        k = next((i for i, f in enumerate(free) if f <= t["started_s"] + 1e-6), None)
+        if k is None:
+            slots.append([" "] * (width + 1))
+            free.append(0.0)
+            k = len(slots) - 1
+        free[k] = t["finished_s"]
+        at = t["started_s"]
+        for step in letters:
+            secs = t["steps"].get(step)
+            if secs is None:
+                continue
+            a, b = round(at * scale), round((at + secs) * scale)
+            for c in range(a, max(a + 1, b)):
+                slots[k][min(c, width)] = letters.get(step, "?")
+            at += secs
+    tl = summary.get("timeline", {})
+    print(f"{summary['name']}: {len(summary['runs'])} runs on {summary['jobs']} workers, "
+          f"{summary['wall_s']:.1f} s from the first submission (checking before: "
+          f"{tl.get('checked_s', 0):.1f} s), one column = {end / width:.2f} s")
+    print("  s start  l load  b build  g first tick  = ticks  f score+report  x exit")
+    for i, row in enumerate(slots):
+        print(f"{i:3d} |{''.join(row).rstrip()}")
+    steps = tl.get("steps_s") or {}
+    print("summed steps (s): " + "  ".join(f"{k} {steps[k]:.1f}" for k in letters if k in steps)
+          + f"  gl_context {tl.get('gl_context_s', 0):.1f}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--suite", default="scenarios/suites/nightly.yaml")
+    ap.add_argument("--configs", default="1:2,16:6", help="JOBS:REPEAT,...")
+    ap.add_argument("--other", type=Path, help="another checkout to run alternately")
+    ap.add_argument("--json", type=Path, help="write every pass's figures here")
+    ap.add_argument("--timeline", action="store_true", help="draw each pass's timeline")
+    ap.add_argument("--show", type=Path, help="only draw this summary.json's timeline")
+    ap.add_argument("--keep", type=Path, help="copy each pass's summary.json into this folder")
+    args = ap.parse_args()
+    if args.show:
+        try:
+            summary = json.loads(args.show.read_text(encoding="utf-8"))
+            if not isinstance(summary, dict) or not isinstance(summary.get("runs"), list):
+                raise ValueError("not a suite's summary.json (no runs)")
+        except (OSError, ValueError) as err:
+            print(f"--show {args.show}: {err}", file=sys.stderr)
+            raise SystemExit(2) from None
+        show(summary)
+        return
+    trees = [("other", args.other.resolve()), ("this", ROOT)] if args.other else [("this", ROOT)]
+    configs = [tuple(int(x) for x in c.split(":")) for c in args.configs.split(",")]
+    print(f"machine: {os.cpu_count()} CPUs; suite {args.suite}")
+    results: dict[str, dict[int, dict[str, Any]]] = {name: {} for name, _ in trees}
+    with tempfile.TemporaryDirectory() as tmp:
+        for jobs, repeat in configs:
+            for name, tree in trees:
+                r = one_pass(tree, args.suite, jobs, repeat, Path(tmp) / f"{name}_{jobs}")
+                results[name][jobs] = r
+                if args.keep:
+                    args.keep.mkdir(parents=True, exist_ok=True)
+                    (args.keep / f"summary_{name}_{jobs}.json").write_text(
+                        json.dumps(r["summary"]), encoding="utf-8")
+                steps = r["steps"] or {}
+                print(f"{name:5s} ×{jobs:<2d} {r['runs']:3d} runs  wall {r['wall']:6.1f} s  "
+                      f"{r['runs'] / r['wall']:5.2f} runs/s  outside runs {r['outside']:5.1f} s"
+                      + (f" (checked {r['checked']:.1f}, first start {r['first']:.2f}, after "
+                         f"{r['after']:.1f})" if r["checked"] is not None else "")
+                      + f"  util {r['util']:.2f}  run walls {r['busy']:6.1f} s  "
+                      f"{r['verdict']}", flush=True)
+                if steps:
+                    print("        steps (s): " + "  ".join(f"{k} {steps[k]:.1f}" for k in ORDER
+                                                          if k in steps))
+                cams = [r2["wall_s"] for r2 in r["summary"]["runs"]
+                        if r2["scenario"] == "dock_worker_crossing"]
+                if cams:
+                    print(f"        dock_worker_crossing median wall "
+                          f"{statistics.median(cams):.2f} s")
+                if args.timeline:
+                    show(r["summary"])
+                if r["verdict"] != "PASS":
+                    raise SystemExit(f"{name} ×{jobs}: the suite did not pass")
+    for name, by_jobs in results.items():
+        if 1 in by_jobs and len(by_jobs) > 1:
+            n = max(by_jobs)
+            one = by_jobs[1]["runs"] / by_jobs[1]["wall"]
+            many = by_jobs[n]["runs"] / by_jobs[n]["wall"]
+            print(f"{name}: efficiency at {n} workers = {many / (n * one):.2f} "
+                  f"({many:.2f} runs/s against {n} × {one:.3f})")
+    if args.json:
+        args.json.write_text(json.dumps({k: {j: {kk: vv for kk, vv in v.items()
+                                                 if kk != "summary"} for j, v in d.items()}
+                                         for k, d in results.items()}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
