@@ -153,14 +153,14 @@ class RunInfo:
 
     def describe_replay(self, label: str, other: RunInfo, other_label: str) -> str | None:
         """``B is an open-loop replay of A (RUN; changed: …)`` when this run replays
-        ``other``, ``B is an open-loop replay of RUN (changed: …)`` when it replays another
-        run, None when it is no replay."""
+        ``other`` (``… replay into external ROS 2 nodes in lockstep of A …`` for
+        ``srr replay --ros2``), ``B is an open-loop replay of RUN (changed: …)`` when it
+        replays another run, None when it is no replay."""
         if self.replay is None:
             return None
-        of = f"open-loop replay of {other.path.resolve()} "
-        if self.replay.startswith(of):
-            return (f"{label} is an open-loop replay of {other_label} ({other.path.resolve()}; "
-                    f"{self.replay[len(of) + 1:]}")
+        kind, of, rest = self.replay.partition(f" of {other.path.resolve()} (")
+        if of and kind.startswith("open-loop replay"):
+            return f"{label} is an {kind} of {other_label} ({other.path.resolve()}; {rest}"
         return f"{label} is an {self.replay}"
 
 

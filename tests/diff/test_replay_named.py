@@ -39,3 +39,21 @@ def test_a_replay_and_its_diff_say_what_was_replayed_and_changed(
     assert f"A is an open-loop replay of B ({a}; {changed})" in capsys.readouterr().out
     main(["diff", str(a), str(a)])
     assert "open-loop replay" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("into", ["", " into external ROS 2 nodes in lockstep"])
+def test_srr_diff_names_the_run_a_replay_plays_back(tmp_path: Path, into: str) -> None:
+    """`srr diff A B` with B a replay of A (open loop, or into ROS 2 nodes in lockstep) says
+    "B is a … replay … of A"; a replay of a third run names that run's path."""
+    from harness.diff.result import RunInfo
+
+    def info(path: Path, replay: str | None) -> RunInfo:
+        return RunInfo(path, "dock", 7, "PASS", 3.0, "d", replay)
+
+    a = tmp_path / "a"
+    b = info(tmp_path / "b", f"open-loop replay{into} of {a.resolve()} (changed: --set x=1)")
+    assert b.describe_replay("B", info(a, None), "A") == (
+        f"B is an open-loop replay{into} of A ({a.resolve()}; changed: --set x=1)")
+    third = info(tmp_path / "c", None)
+    assert b.describe_replay("B", third, "A") == (
+        f"B is an open-loop replay{into} of {a.resolve()} (changed: --set x=1)")
