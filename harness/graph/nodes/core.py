@@ -123,7 +123,9 @@ class ReadSimulationTime(NodeType):
     outputs = (Attr("simulationTime", "double"),)
 
     def compute(self, db: Database, ctx: Any) -> bool:
-        db.outputs.simulationTime = int(ctx.time_ns) / 1e9
+        stored = db.stored  # a float, the stored form of double (see _TickSource)
+        assert stored is not None
+        stored["outputs:simulationTime"] = int(ctx.time_ns) / 1e9
         return True
 
 
