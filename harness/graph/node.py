@@ -186,7 +186,7 @@ class Database:
     output (``db.outputs.execOut = True``) selects which execution outputs fire.
     """
 
-    __slots__ = ("_connected", "_plain", "_port", "inputs", "outputs")
+    __slots__ = ("_connected", "_plain", "_port", "inputs", "outputs", "stored")
 
     def __init__(self, port: NodePort) -> None:
         self._port = port
@@ -194,18 +194,26 @@ class Database:
         self._plain = (_plain_inputs(port), _plain_outputs(port))
         self.inputs: Any = self._plain[0]()
         self.outputs: Any = self._plain[1]()
+        #: The node's output values by full name (``"outputs:time"``), once specialized;
+        #: None before. A fast path for a node writing, every tick, values already in their
+        #: stored form (a ``float`` for ``double``): one dict store instead of the checks of
+        #: ``db.outputs.<name> = value``. Anything else goes through ``db.outputs``.
+        self.stored: dict[str, Any] | None = None
 
     def specialize(self, inputs: Mapping[str, Any], set_output: OutputSetter,
-                   connected: frozenset[str] = frozenset()) -> None:
+                   connected: frozenset[str] = frozenset(),
+                   stored: dict[str, Any] | None = None) -> None:
         """Resolve ``db.inputs`` / ``db.outputs`` for a planned node: ``inputs`` maps input
         names to their value (unconnected) or a ``property`` (connected); ``set_output``
         becomes ``db.outputs.__setattr__``. The same objects change class, so a reference to
         ``db.inputs`` kept across an edit sees it once the graph's program is compiled anew.
         Names starting with ``__`` are never served (Python protocol probes keep the ordinary
         look-up). ``connected``: the connected inputs' names, which :meth:`is_connected` then
-        answers at once."""
+        answers at once. ``stored``: the dict the node's outputs are kept in, served as
+        :attr:`stored`."""
         plain_in, plain_out = self._plain
         self._connected = connected
+        self.stored = stored
         members = {k: v for k, v in inputs.items() if k[:2] != "__"}
         _set_class(self.inputs, type("PlannedInputs", (plain_in,), {"__slots__": (), **members}))
         _set_class(self.outputs, type("PlannedOutputs", (plain_out,), {

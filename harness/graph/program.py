@@ -384,7 +384,8 @@ def _bind(node: CompiledNode, entry_of: Callable[[CompiledNode, str, Attr], _Res
         if name[:2] != "__":
             readable[name], members[name] = entry_of(node, full, attr)
     runtime.bindings = Bindings(readable, outputs, connected)
-    runtime.db.specialize(members, _output_setter(runtime, outputs), connected)
+    runtime.db.specialize(members, _output_setter(runtime, outputs), connected,
+                          runtime.outputs)
 
 
 def _output_slot(full: str, attr: Attr) -> OutputSlot:

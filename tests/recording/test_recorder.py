@@ -8,14 +8,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mcap.reader import make_reader
 
 from harness.bus import Bus, Deferred
+from harness.bus.bus import TRANSIENT_LOCAL, Qos
 from harness.cli import main
 from harness.errors import SimulationError
 from harness.recording import Recorder
 from harness.recording.errors import BagError
-from harness.recording.recorder import digest_update
-from harness.serde.messages import clock, serialize
+from harness.recording.recorder import digest_update, topic_meta
+from harness.serde.messages import clock, serialize, tf_message_of
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
 
@@ -41,6 +43,35 @@ def test_counts_and_digests_follow_publication_order(tmp_path: Path) -> None:
         now[0] = i * 1000
         bus2.publish("/clock", "rosgraph_msgs/msg/Clock", clock(now[0]))
     assert again.close()["/clock"].sha256 == stats["/clock"].sha256
+
+
+def test_each_channel_is_described_as_topic_meta_describes_its_topic(tmp_path: Path) -> None:
+    # Topics sharing a type and a QoS, and one sharing the type with another QoS: the
+    # recorder makes each part of a description once, the channels must not show it.
+    bus = Bus(lambda: 0)
+    topics = {"/a": Qos(), "/b": Qos(), "/c": TRANSIENT_LOCAL, "/clock": Qos()}
+    rec = Recorder(tmp_path / "bag")
+    rec.open(topics.__getitem__)
+    bus.add_tap(rec)
+    for topic, qos in topics.items():
+        msgtype = "rosgraph_msgs/msg/Clock" if topic == "/clock" else "tf2_msgs/msg/TFMessage"
+        bus.advertise(topic, msgtype, qos).publish(
+            clock(0) if topic == "/clock" else tf_message_of(0, []))
+    rec.close()
+    with (tmp_path / "bag" / "bag.mcap").open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    described = {}
+    for channel in summary.channels.values():
+        schema = summary.schemas[channel.schema_id]
+        described[channel.topic] = (schema.name, schema.data.decode(), channel.metadata)
+    for topic, qos in topics.items():
+        name, definition, metadata = described[topic]
+        meta = topic_meta(topic, name, qos)
+        assert definition == meta.schema.decode()
+        assert metadata == {"offered_qos_profiles": meta.qos, "topic_type_hash": meta.type_hash}
+    assert "transient_local" in described["/c"][2]["offered_qos_profiles"]
+    assert described["/a"][2] == described["/b"][2] != described["/clock"][2]
 
 
 @pytest.mark.slow

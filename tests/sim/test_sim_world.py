@@ -69,6 +69,19 @@ def test_physics_block_sets_timestep_integrator_and_iterations() -> None:
         world.step(-1)
 
 
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_a_non_finite_qpos_entry_is_a_divergence_and_a_huge_finite_one_is_not(
+        bad: float) -> None:
+    world = World.build(scenario(forklift()))
+    qpos = world.data.qpos
+    world.step(0)  # the check runs with no step too
+    qpos[-1] = 1e150  # finite, far beyond any sane joint: its square stays finite
+    world.step(0)
+    qpos[-1] = bad
+    with pytest.raises(SimulationError, match="diverged"):
+        world.step(0)
+
+
 def test_prims_of_warehouse_and_robots_are_registered() -> None:
     world = World.build(scenario(forklift(), tb3(spawn=Pose(position=(0.0, -3.0, 0.0)))))
     prims = world.prims()

@@ -45,7 +45,12 @@ _TICK_OUTPUTS = (
 class _TickSource(NodeType):
     """The tick event nodes: each firing writes ``time`` (sim seconds), ``frame`` (the tick
     index) and ``deltaSeconds`` (since this node last fired, 0 the first time). Fires on every
-    evaluation unless a subclass's :meth:`compute` says otherwise."""
+    evaluation unless a subclass's :meth:`compute` says otherwise.
+
+    The three values are floats, the stored form of ``double``, so a planned node writes
+    them straight into its output values (``db.stored``): every graph has a tick node, and
+    ``db.outputs.<name> = value`` would check and convert three times a tick what needs
+    neither."""
 
     kind = "event"
     outputs = _TICK_OUTPUTS
@@ -56,11 +61,16 @@ class _TickSource(NodeType):
     def compute(self, db: Database, ctx: Any) -> bool:
         now = int(ctx.time_ns)
         last = self._last_fire_ns
-        out = db.outputs
-        out.time = now / 1e9
-        out.frame = float(ctx.tick)
-        out.deltaSeconds = 0.0 if last is None else (now - last) / 1e9
+        delta = 0.0 if last is None else (now - last) / 1e9
         self._last_fire_ns = now
+        stored = db.stored
+        if stored is None:  # not planned yet: the checked writes
+            out = db.outputs
+            out.time, out.frame, out.deltaSeconds = now / 1e9, float(ctx.tick), delta
+            return True
+        stored["outputs:time"] = now / 1e9
+        stored["outputs:frame"] = float(ctx.tick)
+        stored["outputs:deltaSeconds"] = delta
         return True
 
     def reset(self) -> None:
@@ -113,7 +123,9 @@ class ReadSimulationTime(NodeType):
     outputs = (Attr("simulationTime", "double"),)
 
     def compute(self, db: Database, ctx: Any) -> bool:
-        db.outputs.simulationTime = int(ctx.time_ns) / 1e9
+        stored = db.stored  # a float, the stored form of double (see _TickSource)
+        assert stored is not None
+        stored["outputs:simulationTime"] = int(ctx.time_ns) / 1e9
         return True
 
 

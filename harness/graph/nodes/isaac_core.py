@@ -89,13 +89,16 @@ class ComputeOdometry(NodeType):
         lin_a, ang_a = world.prim_velocity(self._prim)
         lin_w, ang_w = lin_a.tolist(), ang_a.tolist()
         inv = quat_wxyz_conj_floats(quat)
-        db.outputs.position = quat_wxyz_rotate_floats(
-            inv0, (pos[0] - p0[0], pos[1] - p0[1], pos[2] - p0[2]))
         w, x, y, z = quat_wxyz_mul_floats(inv0, quat)
-        db.outputs.orientation = (x, y, z, w)
-        db.outputs.linearVelocity = quat_wxyz_rotate_floats(inv, lin_w)
-        db.outputs.angularVelocity = quat_wxyz_rotate_floats(inv, ang_w)
-        db.outputs.globalLinearVelocity = tuple(lin_w)
+        # Tuples of Python floats, the stored form of double[3] and quatd[4]: written
+        # straight into the output values (db.stored), without db.outputs' checks.
+        stored = db.stored
+        stored["outputs:position"] = quat_wxyz_rotate_floats(
+            inv0, (pos[0] - p0[0], pos[1] - p0[1], pos[2] - p0[2]))
+        stored["outputs:orientation"] = (x, y, z, w)
+        stored["outputs:linearVelocity"] = quat_wxyz_rotate_floats(inv, lin_w)
+        stored["outputs:angularVelocity"] = quat_wxyz_rotate_floats(inv, ang_w)
+        stored["outputs:globalLinearVelocity"] = tuple(lin_w)
         return True
 
     def reset(self) -> None:

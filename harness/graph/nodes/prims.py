@@ -51,8 +51,9 @@ class ReadPrimPose(NodeType):
     def compute(self, db: Any, ctx: Any) -> bool:
         pos, quat = ctx.world.prim_pose(self._prim)
         w, x, y, z = quat_wxyz_mul_floats(quat.tolist(), self._front)
-        db.outputs.translation = tuple(pos.tolist())
-        db.outputs.rotation = (x, y, z, w)
+        stored = db.stored  # tuples of floats, already in their stored form
+        stored["outputs:translation"] = tuple(pos.tolist())
+        stored["outputs:rotation"] = (x, y, z, w)
         return True
 
 
