@@ -165,9 +165,17 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     recorder = _open_recorder(scenario, loop, run_dir, source=source, command=command)
     ended = _tick_loop(scenario, loop, recorder, run_dir, n_ticks=n_ticks, progress=progress,
                        free_space=free_space, participants=participants)
-    runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
     try:  # until summary.json exists the directory is half-written: an error removes it
-        scores, frames, topics, sim_s = _score(scenario, loop, recorder, run_dir, source)
+        # The recorder's queue written out and the bag closed before the phase says the loop
+        # is over: a run killed while finalizing has its whole recording on disk.
+        stats = recorder.close()
+    except BaseException:
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise
+    runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
+    try:
+        scores, frames, topics, sim_s = _score(scenario, loop, recorder, stats, run_dir,
+                                               source)
     except BaseException:
         shutil.rmtree(run_dir, ignore_errors=True)
         raise
@@ -253,11 +261,11 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
     return _Ended()
 
 
-def _score(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path,
+def _score(scenario: Scenario, loop: Loop, recorder: Any, stats: Any, run_dir: Path,
            source: str) -> tuple[Scores, Frames, dict[str, TopicRow], float]:
-    """Close the recorder and score what it recorded: the scores, the frames read from the
-    bag (for the report), the topic table and the simulated seconds."""
-    stats = recorder.close()
+    """Score what the (closed) recorder recorded, ``stats`` its per-topic statistics: the
+    scores, the frames read from the bag (for the report), the topic table and the simulated
+    seconds."""
     release_free_memory()  # the loop's buffers, before scoring reads the bag
     published = {t: n for t, n in loop.bus.published_counts().items()
                  if t not in recorder.unrecorded}
