@@ -7,15 +7,7 @@ from pathlib import Path
 import pytest
 
 from harness.cli import main
-
-GOOD = """\
-format_version: 1
-name: t
-duration: 2
-robots:
-  - name: forklift
-    model: forklift
-"""
+from tests.scenario.minimal import GOOD
 
 
 def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str]:

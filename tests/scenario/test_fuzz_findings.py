@@ -12,15 +12,7 @@ from harness.cli import main
 from harness.errors import ScenarioError
 from harness.suite.spec import load_suite
 from tests.conftest import SCENARIOS
-
-GOOD = """\
-format_version: 1
-name: t
-duration: 2
-robots:
-  - name: forklift
-    model: forklift
-"""
+from tests.scenario.minimal import GOOD
 
 
 def _refused(capsys: pytest.CaptureFixture[str], path: Path) -> str:

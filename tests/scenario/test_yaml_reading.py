@@ -10,15 +10,7 @@ import pytest
 from harness.cli import main
 from harness.suite.spec import load_suite
 from tests.conftest import SCENARIOS
-
-GOOD = """\
-format_version: 1
-name: t
-duration: 2
-robots:
-  - name: forklift
-    model: forklift
-"""
+from tests.scenario.minimal import GOOD
 
 
 def _cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
