@@ -5,8 +5,8 @@ so a directory that holds it is a run that did not finish (it is still going, or
 killed). It says how far the run got (``phase``: ``recording`` during the tick loop and
 until the bag is closed, ``finalizing`` from the closed bag, every message written, until
 the summary is written), which process writes the run (``pid`` and ``host``; whether it is
-alive is its lock's to say, :mod:`harness.runlock`), the scenario file and the command that reproduces the run;
-``srr recover`` reads it. It holds no wall-clock time.
+alive is its lock's to say, :mod:`harness.runlock`), the scenario file and the command that
+reproduces the run; ``srr recover`` reads it. It holds no wall-clock time.
 """
 
 from __future__ import annotations

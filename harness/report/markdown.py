@@ -11,12 +11,22 @@ from __future__ import annotations
 from collections.abc import Sequence
 from urllib.parse import quote
 
-__all__ = ["COMMENT_LIMIT", "STEP_SUMMARY_LIMIT", "cap", "cell", "code", "join_link", "link",
-           "num", "table"]
+__all__ = ["COMMENT_LIMIT", "STEP_SUMMARY_LIMIT", "VERDICT_MARK", "cap", "cell", "code",
+           "join_link", "link", "num", "table", "verdict_mark"]
 
 #: GitHub's limits: a job's step summary (bytes) and a pull-request comment (characters).
 STEP_SUMMARY_LIMIT = 1024 * 1024
 COMMENT_LIMIT = 65536
+
+#: A verdict's mark in a headline or a table row (anything else: ❌).
+VERDICT_MARK = {"PASS": "✅", "RECORDED": "✅", "INVALID": "💥", "FLAKY": "🎲",
+                "INTERRUPTED": "⏹️"}
+
+
+def verdict_mark(verdict: str) -> str:
+    """The mark of a run's or a suite's verdict (:data:`VERDICT_MARK`)."""
+    return VERDICT_MARK.get(verdict, "❌")
+
 
 _ESCAPES = str.maketrans({"|": "\\|", "`": "\\`", "<": "&lt;", ">": "&gt;", "*": "\\*",
                           "_": "\\_", "[": "\\[", "]": "\\]", "\\": "\\\\"})

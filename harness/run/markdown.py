@@ -12,12 +12,20 @@ from pathlib import Path
 from typing import Any
 
 from harness.atomic import write_text_atomic
-from harness.report.markdown import COMMENT_LIMIT, cap, cell, code, link, num, table
+from harness.report.markdown import (
+    COMMENT_LIMIT,
+    cap,
+    cell,
+    code,
+    link,
+    num,
+    table,
+    verdict_mark,
+)
 from harness.run.summary import RunSummary
 
 __all__ = ["default_link_base", "run_markdown", "write_markdown"]
 
-_OK = ("PASS", "RECORDED")
 
 
 def default_link_base(target: Path, md_file: Path) -> str:
@@ -41,9 +49,8 @@ def run_markdown(summary: RunSummary, *, link_base: str = "",
     """The summary of one run as Markdown of at most ``limit`` bytes; the report link is
     ``report.html`` under ``link_base`` (the run directory as the reader reaches it)."""
     s = summary
-    mark = "✅" if s.verdict in _OK else "💥" if s.verdict == "INVALID" else "❌"
-    lines = [f"## {mark} srr run {code(s.scenario, in_table=False)}: **{s.verdict}** "
-             f"(exit code {s.exit_code})", "",
+    lines = [f"## {verdict_mark(s.verdict)} srr run {code(s.scenario, in_table=False)}: "
+             f"**{s.verdict}** (exit code {s.exit_code})", "",
              f"seed {s.seed}, {s.simulated_s:.1f} s simulated, {len(s.topics)} topics, "
              f"digest {code(s.digest[:16])} · {link('report', link_base, 'report.html')} · "
              f"{link('summary.json', link_base, 'summary.json')}", ""]

@@ -17,21 +17,23 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from harness.atomic import write_text_atomic
-from harness.report.markdown import COMMENT_LIMIT, cap, cell, code, link, num, table
+from harness.report.markdown import (
+    COMMENT_LIMIT,
+    cap,
+    cell,
+    code,
+    link,
+    num,
+    table,
+    verdict_mark,
+)
 from harness.run.markdown import default_link_base
 from harness.suite.results import GROUP_ORDER, GroupResult, RunOutcome
 
 if TYPE_CHECKING:
     from harness.suite.runner import SuiteResult
 
-__all__ = ["VERDICT_MARK", "suite_markdown", "write_markdown"]
-
-VERDICT_MARK = {"PASS": "✅", "RECORDED": "✅", "INVALID": "💥", "FLAKY": "🎲",
-                "INTERRUPTED": "⏹️"}
-
-
-def _mark(verdict: str) -> str:
-    return VERDICT_MARK.get(verdict, "❌")
+__all__ = ["suite_markdown", "write_markdown"]
 
 
 def _reports(runs: Sequence[RunOutcome], base: str) -> str:
@@ -46,7 +48,8 @@ def _headline(result: SuiteResult) -> list[str]:
     counts = [(v, sum(g.verdict == v for g in groups)) for v in GROUP_ORDER]
     by = " · ".join(f"{n} {v}" for v, n in counts if n) or "no groups"
     runs = sum(len(g.runs) for g in groups)
-    return [f"## {_mark(result.verdict)} srr suite {code(s.get('name', '?'), in_table=False)}: "
+    name = code(s.get("name", "?"), in_table=False)
+    return [f"## {verdict_mark(result.verdict)} srr suite {name}: "
             f"**{result.verdict}** (exit code {result.exit_code})", "",
             f"**{len(groups)} group(s), {runs} run(s)** in {float(s.get('wall_s', 0.0)):.1f} s "
             f"on {cell(s.get('executor', '?'))} × {cell(s.get('jobs', '?'))}: {by}", ""]
@@ -56,7 +59,7 @@ def _not_passing(groups: Sequence[GroupResult], base: str) -> list[str]:
     bad = [g for g in groups if g.exit_code != 0]
     if not bad:
         return []
-    rows = [[f"{_mark(g.verdict)} {g.verdict}", code(g.id), str(len(g.runs)),
+    rows = [[f"{verdict_mark(g.verdict)} {g.verdict}", code(g.id), str(len(g.runs)),
              cell(g.reasons[0]) if g.reasons else "—", _reports(g.runs, base)] for g in bad]
     return ["### Groups that did not pass", "",
             *table(["verdict", "group", "repeats", "first reason", "reports"], rows), ""]
@@ -127,7 +130,7 @@ def _passing(groups: Sequence[GroupResult], base: str) -> list[str]:
     good = [g for g in groups if g.exit_code == 0]
     if not good:
         return []
-    rows = [[f"{_mark(g.verdict)} {g.verdict}", code(g.id), str(len(g.runs)),
+    rows = [[f"{verdict_mark(g.verdict)} {g.verdict}", code(g.id), str(len(g.runs)),
              _reports(g.runs, base)] for g in good]
     return ["<details><summary>" f"{len(good)} group(s) passed" "</summary>", "",
             *table(["verdict", "group", "repeats", "reports"], rows), "", "</details>", ""]
