@@ -10,6 +10,7 @@ from __future__ import annotations
 import ctypes
 import os
 import signal
+import sys
 import time
 from pathlib import Path
 
@@ -81,8 +82,17 @@ class Staller(RouteFollower):
 
 
 class PidDependent(RouteFollower):
-    """Drives at a speed that depends on its process id: flaky across processes."""
+    """Drives at a speed that depends on its process id and on how many runs that process has
+    set up before (counted where a run's plug-in modules do not reach: an attribute of
+    ``sys``, as a C library's global would): flaky across processes, and across the runs of
+    one suite's host."""
+
+    def setup(self, ctx: SutContext) -> None:
+        super().setup(ctx)
+        self.seq = getattr(sys, "_srr_test_setups", 0)
+        sys._srr_test_setups = self.seq + 1  # type: ignore[attr-defined]
 
     def step(self, now_ns: int) -> None:
-        self.p = type(self.p)(**{**self.p.__dict__, "speed": 1.0 + (os.getpid() % 9973) / 1e4})
+        speed = 1.0 + (os.getpid() % 997) / 1e4 + (self.seq % 10) / 1e1
+        self.p = type(self.p)(**{**self.p.__dict__, "speed": speed})
         super().step(now_ns)

@@ -1,0 +1,342 @@
+"""A host: a long-lived process, forked from the suite's, that runs the suite's runs one after
+another in itself (Linux only; :mod:`harness.suite.local` decides when).
+
+The executor writes a job (one JSON line: :meth:`RunSpec.job` with ``out_root``,
+``baselines``, ``clock_file`` and ``log``) to the host's job pipe; the host sends the run's
+stdout and stderr to the job's ``log`` (``dup2`` onto fds 1 and 2), runs it
+(:func:`harness.suite.worker.serve`: its clock beside the log) and answers one JSON line on its
+result pipe: ``{"exit_code", "peak_rss_mb", "peak_rss_note", "leaving"}``. It stops on end of
+file, and of
+itself (after answering) once it has run ``max_runs`` runs, after a run that did not end with
+0 or 1 (interrupted, failed, could not start), or when a run left a thread running: the
+executor then forks a fresh one. A host that dies without answering (a segfault, the
+out-of-memory killer, SIGKILL after a timeout) costs the run it had.
+
+What a run could leave to the next one in the same process is put back before the next job
+(:class:`_Baseline`): signal handlers, the interpreter's switch interval, ``os.environ``,
+the working directory, ``sys.path``, the warnings filters, ``sys.stdout``/``sys.stderr``, the
+global ``random`` and NumPy RNG states, and the plug-in modules the run imported (dropped, so
+the next run imports them afresh, as a fresh process would). The OpenGL context is kept on
+purpose (:func:`harness.sim.render.keep_gl_contexts`): made once per host, in parallel with the
+other hosts while the suite starts. A run's recording does not depend on which of these it got
+(tests compare the bytes with a fresh process's).
+
+Peak memory per run: before each run the host resets its peak resident set (``5`` to
+``/proc/self/clear_refs``) and reads ``VmHWM`` from ``/proc/self/status`` after it. Where the
+kernel refuses the reset (some sandboxes) the run's ``peak_rss_mb`` is None with
+``peak_rss_note`` saying why, never the host's lifetime peak.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+import json
+import os
+import random
+import signal
+import sys
+import sysconfig
+import threading
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+__all__ = ["MAX_RUNS", "Host", "fork_host"]
+
+#: Runs a host does before it is replaced by a fresh one. What one run can leave behind that
+#: :class:`_Baseline` cannot put back (a fragmented heap, caches of compiled expressions,
+#: driver memory) is bounded to this many runs, while a slot's runs in a nightly suite
+#: (59 runs on 16 workers: about 4 a slot) mostly share one host and one OpenGL context.
+MAX_RUNS = 8
+
+_HARNESS = str(Path(__file__).resolve().parents[1])
+_LIBRARIES = tuple({str(Path(p).resolve()) for p in
+                    (sysconfig.get_paths()[k] for k in ("stdlib", "platstdlib", "purelib",
+                                                        "platlib"))})
+
+
+@dataclass
+class Host:
+    """The executor's side of a host: its process id and the two pipes."""
+
+    pid: int
+    jobs: int  # write end
+    results: int  # read end
+    runs: int = 0  # jobs sent
+    _buffer: bytes = b""
+    returncode: int | None = None
+    _eof: bool = field(default=False, repr=False)
+
+    def send(self, job: Mapping[str, Any]) -> bool:
+        """Give the host its next run; False when it is gone (the run is then not started)."""
+        line = json.dumps(dict(job)).encode() + b"\n"
+        try:
+            os.write(self.jobs, line)  # far below the pipe's buffer: never blocks
+        except OSError:
+            return False
+        self.runs += 1
+        return True
+
+    def answer(self) -> dict[str, Any] | None:
+        """The answer to its run, once it has come (never blocks)."""
+        while b"\n" not in self._buffer and not self._eof:
+            try:
+                chunk = os.read(self.results, 65536)
+            except BlockingIOError:
+                break
+            if not chunk:
+                self._eof = True
+                break
+            self._buffer += chunk
+        if b"\n" not in self._buffer:
+            return None
+        line, self._buffer = self._buffer.split(b"\n", 1)
+        try:
+            answer = json.loads(line)
+        except ValueError:
+            return None
+        return answer if isinstance(answer, dict) else None
+
+    def ended(self) -> bool:
+        """Whether the process has ended (reaped here; :attr:`returncode` then set)."""
+        if self.returncode is None:
+            try:
+                pid, status = os.waitpid(self.pid, os.WNOHANG)
+            except ChildProcessError:
+                self.returncode = -signal.SIGKILL
+                return True
+            if pid == 0:
+                return False
+            self.returncode = os.waitstatus_to_exitcode(status)
+        return True
+
+    def signal(self, sig: signal.Signals) -> None:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.pid, sig)
+
+    def close(self) -> None:
+        """Tell it to stop (end of file on its job pipe) and let go of the pipes."""
+        for fd in (self.jobs, self.results):
+            with contextlib.suppress(OSError):
+                os.close(fd)
+        self.jobs = self.results = -1
+
+    def stop(self) -> None:
+        """Stop it now (it has no run, or its run is given up) and reap it."""
+        self.close()
+        self.signal(signal.SIGKILL)
+        if self.returncode is None:
+            with contextlib.suppress(ChildProcessError):
+                _, status = os.waitpid(self.pid, 0)
+                self.returncode = os.waitstatus_to_exitcode(status)
+
+    def fds(self) -> tuple[int, ...]:
+        return tuple(fd for fd in (self.jobs, self.results) if fd >= 0)
+
+
+def fork_host(*, warm: bool, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
+    """Fork a host. ``warm``: it makes its OpenGL context and loads what rendering runs load
+    before its first job; ``close``: descriptors it must not keep (the other hosts' pipes,
+    else they would not see end of file)."""
+    jobs_r, jobs_w = os.pipe()
+    results_r, results_w = os.pipe()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:  # the host
+        code = 70  # EX_SOFTWARE: the host itself failed
+        try:
+            for fd in (*close, jobs_w, results_r):
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+            code = _serve(jobs_r, results_w, warm=warm, max_runs=max_runs)
+        except BaseException:
+            import traceback
+
+            with contextlib.suppress(Exception):
+                traceback.print_exc()
+        finally:
+            with contextlib.suppress(Exception):
+                sys.stdout.flush()
+                sys.stderr.flush()
+            os._exit(code)
+    os.close(jobs_r)
+    os.close(results_w)
+    os.set_blocking(results_r, False)
+    return Host(pid, jobs_w, results_r)
+
+
+def _serve(jobs_r: int, results_w: int, *, warm: bool, max_runs: int) -> int:
+    """The host's life: set up, then one run per job line until end of file or a reason to
+    be replaced. Its exit status: 0."""
+    from harness.sim.render import keep_gl_contexts, warm_gl
+    from harness.suite.worker import serve
+
+    os.setsid()  # the suite signals it (and what it started) as a group; no terminal's Ctrl-C
+    null = os.open(os.devnull, os.O_RDWR)
+    for fd in (0, 1, 2):  # between runs, nothing is written anywhere
+        os.dup2(null, fd)
+    # the parent's sys.stdout/sys.stderr may be objects of its own (pytest's capture, an
+    # IDE's console) that do not write to fds 1 and 2: the host's follow each run's log
+    sys.stdout = open(1, "w", encoding="utf-8", errors="replace", closefd=False)  # noqa: SIM115
+    sys.stderr = open(2, "w", encoding="utf-8", errors="replace", closefd=False)  # noqa: SIM115
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # between runs: stop; in a run: finalize
+    import faulthandler
+
+    if faulthandler.is_enabled():  # its dump goes to the current run's log (fd 2)
+        faulthandler.enable(file=sys.stderr)
+    sys.path.insert(0, os.getcwd())  # plug-ins import from here, like `srr run`
+    keep_gl_contexts()
+    warm_s = 0.0
+    if warm:
+        warm_s = warm_gl()
+        _preload()
+    baseline = _Baseline.take()
+    runs = 0
+    with os.fdopen(jobs_r, "rb") as jobs:
+        for line in jobs:
+            job = json.loads(line)
+            log = os.open(job["log"], os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+            os.dup2(log, 1)
+            os.dup2(log, 2)
+            os.close(log)
+            note = _reset_peak()
+            code = serve({**job, "warm_gl_s": warm_s})
+            warm_s = 0.0
+            peak = _peak_mb() if note is None else None
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(null, 1)
+            os.dup2(null, 2)
+            runs += 1
+            left = baseline.restore()
+            leaving = code not in (0, 1) or bool(left) or runs >= max_runs
+            answer = {"exit_code": code, "peak_rss_mb": peak, "peak_rss_note": note,
+                      "leaving": leaving}
+            os.write(results_w, json.dumps(answer).encode() + b"\n")
+            if leaving:
+                break
+            gc.collect()  # what the run left, freed while the suite judges it
+    return 0
+
+
+def _preload() -> None:
+    """What every rendering run would otherwise load for itself, once per host: PyOpenGL's
+    ``GL`` module (the renderer's name; a third of a second, no context made) and the
+    compiled page templates of the run's ``report.html``."""
+    from harness.report.templates import environment
+
+    with contextlib.suppress(Exception):  # a run without it reports this itself
+        import OpenGL.GL  # noqa: F401
+    env = environment()
+    for name in env.list_templates(extensions=["html"]):
+        env.get_template(name)
+
+
+_CLEAR_REFS = Path("/proc/self/clear_refs")
+_STATUS = Path("/proc/self/status")
+
+
+def _reset_peak() -> str | None:
+    """Reset this process's peak resident set to its current one; why not, if it failed."""
+    try:
+        _CLEAR_REFS.write_text("5")
+    except OSError as err:
+        return (f"not measured: resetting the host's peak memory before the run failed "
+                f"({_CLEAR_REFS}: {err.strerror or err})")
+    return None
+
+
+def _peak_mb() -> float | None:
+    """``VmHWM`` of this process, MiB."""
+    with contextlib.suppress(OSError, ValueError):
+        for line in _STATUS.read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return round(int(line.split()[1]) / 1024.0, 1)
+    return None
+
+
+@dataclass
+class _Baseline:
+    """What a fresh process would start a run with, put back after each run."""
+
+    handlers: dict[int, Any]
+    switch: float
+    environ: dict[str, str]
+    cwd: str
+    path: list[str]
+    filters: list[Any]
+    streams: tuple[Any, Any]
+    random_state: Any
+    numpy_state: Any
+    modules: frozenset[str]
+    registry: Any
+
+    @classmethod
+    def take(cls) -> _Baseline:
+        """The process as it is now, less the plug-in modules it has imported (the suite's
+        checks set every entry's plug-ins up) and the graph node types they registered: each
+        run imports its own, as in a fresh process."""
+        import numpy as np
+
+        from harness.graph.registry import DEFAULT_REGISTRY
+
+        dropped = {n for n, m in list(sys.modules.items()) if _is_plugin(m)}
+        for name in dropped:
+            del sys.modules[name]
+        types, names = DEFAULT_REGISTRY.snapshot()
+        types = {k: v for k, v in types.items() if v.__module__ not in dropped}
+        DEFAULT_REGISTRY.restore((types, {k: v for k, v in names.items() if v in types}))
+
+        handlers = {}
+        for sig in signal.valid_signals():
+            with contextlib.suppress(OSError, ValueError):
+                handlers[int(sig)] = signal.getsignal(sig)
+        return cls(handlers, sys.getswitchinterval(), dict(os.environ), os.getcwd(),
+                   list(sys.path), list(warnings.filters), (sys.stdout, sys.stderr),
+                   random.getstate(), np.random.get_state(), frozenset(sys.modules),
+                   DEFAULT_REGISTRY.snapshot())
+
+    def restore(self) -> list[str]:
+        """Put it all back; the names of threads the run left running (the host must then
+        go: they may still touch what the next run uses)."""
+        import numpy as np
+
+        from harness.graph.registry import DEFAULT_REGISTRY
+
+        for sig, handler in self.handlers.items():
+            if handler is not None and signal.getsignal(sig) is not handler:
+                with contextlib.suppress(OSError, ValueError, TypeError):
+                    signal.signal(sig, handler)
+        sys.setswitchinterval(self.switch)
+        if dict(os.environ) != self.environ:
+            os.environ.clear()
+            os.environ.update(self.environ)
+        with contextlib.suppress(OSError):
+            os.chdir(self.cwd)
+        sys.path[:] = self.path
+        warnings.filters[:] = self.filters  # type: ignore[index]
+        sys.stdout, sys.stderr = self.streams
+        random.setstate(self.random_state)
+        np.random.set_state(self.numpy_state)
+        for name in [n for n in sys.modules if n not in self.modules]:
+            if _is_plugin(sys.modules.get(name)):
+                del sys.modules[name]
+        DEFAULT_REGISTRY.restore(self.registry)
+        return [t.name for t in threading.enumerate() if t is not threading.main_thread()]
+
+
+def _is_plugin(module: Any) -> bool:
+    """A module of the user's Python source (a plug-in, a test's helper): not srr's, not the
+    standard library's or an installed package's, not compiled (which cannot be imported
+    twice)."""
+    origin = getattr(module, "__file__", None)
+    if not isinstance(origin, str) or not origin.endswith(".py"):
+        return False
+    path = str(Path(origin).resolve())
+    return not (path.startswith(_HARNESS + os.sep)
+                or any(path.startswith(lib + os.sep) for lib in _LIBRARIES))
