@@ -84,7 +84,8 @@ def run_timings(clock: Mapping[str, float] | None, t0: float) -> dict[str, Any] 
     "gl_contexts"}``: seconds from ``t0`` (the suite's start), the :data:`STEPS` whose both
     ends are known, the seconds the run spent making OpenGL contexts, those its process spent
     making one before its first run, and how many contexts its process had made by its end
-    (a host that reuses its context: 1 over all its runs)."""
+    (a host that reuses its context: 1 over all its runs), and its process id (the runs of
+    one host share it)."""
     if not clock or "submitted" not in clock or "reaped" not in clock:
         return None
     steps = {name: round(clock[b] - clock[a], 3) for name, a, b in STEPS
@@ -93,7 +94,8 @@ def run_timings(clock: Mapping[str, float] | None, t0: float) -> dict[str, Any] 
             "finished_s": round(clock["reaped"] - t0, 3), "steps": steps,
             "gl_context_s": round(clock.get("gl_context_s", 0.0), 3),
             "warm_gl_s": round(clock.get("warm_gl_s", 0.0), 3),
-            "gl_contexts": int(clock.get("gl_contexts", 0))}
+            "gl_contexts": int(clock.get("gl_contexts", 0)),
+            "pid": int(clock["pid"]) if "pid" in clock else None}
 
 
 def suite_timeline(timings: Sequence[Mapping[str, Any] | None], *, jobs: int,

@@ -75,13 +75,13 @@ def peak_rss_mb(usage: resource.struct_rusage | None = None) -> float:
 def serve(job: Mapping[str, Any]) -> int:
     """Run ``job`` (:meth:`RunSpec.job` with ``out_root``, ``baselines``, ``clock_file`` and
     ``warm_gl_s``) here, leave its clock in ``clock_file`` (with ``gl_contexts``: the OpenGL
-    contexts this process has made so far) and its error, if any, as the last line on
+    contexts this process has made so far, and ``pid``) and its error, if any, as the last line on
     stderr; its exit code."""
     result = run_job(job, job["out_root"], job.get("baselines"))
     if job.get("clock_file"):  # for the suite's timeline
         write_json_atomic(Path(job["clock_file"]),
                           {**result["clock"], "warm_gl_s": float(job.get("warm_gl_s", 0.0)),
-                           "gl_contexts": gl_contexts_made()})
+                           "gl_contexts": gl_contexts_made(), "pid": os.getpid()})
     if result["error"]:
         sys.stderr.write(result["error"] + "\n")
     sys.stderr.flush()
