@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from harness.suite.timeline import STEPS, run_timings, suite_timeline
 
+
 def test_run_timings_are_the_steps_between_known_instants() -> None:
     clock = {"submitted": 10.0, "ready": 10.5, "loaded": 11.0, "built": 12.0,
              "first_tick": 12.5, "ticks": 20.0, "done": 21.0, "reaped": 21.25,
