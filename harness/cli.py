@@ -675,7 +675,19 @@ def _cmd_diff(args: argparse.Namespace) -> int:
 
 
 def _cmd_suite(args: argparse.Namespace) -> int:
+    from harness.suite.host import start_early, stop_early
 
+    if args.executor == "local":  # its hosts get ready while this process plans
+        import os
+
+        start_early(args.jobs if args.jobs is not None else os.cpu_count() or 1)
+    try:
+        return _suite(args)
+    finally:
+        stop_early()
+
+
+def _suite(args: argparse.Namespace) -> int:
     from harness import api
     from harness.suite.progress import SuiteProgress, groups_table
 

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["MAX_RUNS", "Host", "fork_host"]
+__all__ = ["MAX_RUNS", "Host", "fork_host", "start_early", "stop_early", "take_early"]
 
 #: Runs a host does before it is replaced by a fresh one. What one run can leave behind that
 #: :class:`_Baseline` cannot put back (a fragmented heap, caches of compiled expressions,
@@ -79,6 +79,11 @@ class Host:
             return False
         self.runs += 1
         return True
+
+    def warm(self) -> None:
+        """Have it make its OpenGL context now, before its first run (the runs render)."""
+        with contextlib.suppress(OSError):  # gone: found when it is given a run
+            os.write(self.jobs, b'{"warm": true}\n')
 
     def answer(self) -> dict[str, Any] | None:
         """The answer to its run, once it has come (never blocks)."""
@@ -137,10 +142,47 @@ class Host:
         return tuple(fd for fd in (self.jobs, self.results) if fd >= 0)
 
 
-def fork_host(*, warm: bool, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
-    """Fork a host. ``warm``: it makes its OpenGL context and loads what rendering runs load
-    before its first job; ``close``: descriptors it must not keep (the other hosts' pipes,
-    else they would not see end of file)."""
+_EARLY: list[Host] = []  # started by start_early, not yet taken
+
+
+def fork_safe_here() -> bool:
+    """Whether a host may be forked from this process now: Linux, no other Python thread, no
+    OpenGL context made here (its driver's threads and locks would not survive the fork).
+    Imports nothing heavy (MuJoCo is not loaded for it)."""
+    render = sys.modules.get("harness.sim.render")
+    return (sys.platform == "linux" and threading.active_count() == 1
+            and not (render is not None and render.rendered_in_this_process()))
+
+
+def start_early(n: int, *, max_runs: int = MAX_RUNS) -> None:
+    """Fork ``n`` hosts now, where that is safe, for the suite this process is about to plan:
+    each imports what runs need (``srr`` with MuJoCo, NumPy, pandas, SciPy) and loads the
+    report's page templates while this process still imports and checks the suite; the local
+    executor then takes them (:func:`take_early`). Called by ``srr suite`` before anything
+    heavy is imported."""
+    while len(_EARLY) < n and fork_safe_here():
+        _EARLY.append(fork_host(max_runs=max_runs,
+                                close=[fd for h in _EARLY for fd in h.fds()]))
+
+
+def take_early() -> list[Host]:
+    """The hosts :func:`start_early` made (they are the caller's from now on)."""
+    hosts = list(_EARLY)
+    _EARLY.clear()
+    return hosts
+
+
+def stop_early() -> None:
+    """Stop the hosts :func:`start_early` made that no executor took (a suite that did not
+    run: bad input, another executor)."""
+    for host in take_early():
+        host.stop()
+
+
+def fork_host(*, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
+    """Fork a host; ``close``: descriptors it must not keep (the other hosts' pipes, else
+    they would not see end of file). It imports what runs need, then waits for its jobs
+    (:meth:`Host.warm` first, if the runs render)."""
     jobs_r, jobs_w = os.pipe()
     results_r, results_w = os.pipe()
     sys.stdout.flush()
@@ -152,7 +194,7 @@ def fork_host(*, warm: bool, max_runs: int = MAX_RUNS, close: Sequence[int] = ()
             for fd in (*close, jobs_w, results_r):
                 with contextlib.suppress(OSError):
                     os.close(fd)
-            code = _serve(jobs_r, results_w, warm=warm, max_runs=max_runs)
+            code = _serve(jobs_r, results_w, max_runs=max_runs)
         except BaseException:
             import traceback
 
@@ -169,12 +211,9 @@ def fork_host(*, warm: bool, max_runs: int = MAX_RUNS, close: Sequence[int] = ()
     return Host(pid, jobs_w, results_r)
 
 
-def _serve(jobs_r: int, results_w: int, *, warm: bool, max_runs: int) -> int:
+def _serve(jobs_r: int, results_w: int, *, max_runs: int) -> int:
     """The host's life: set up, then one run per job line until end of file or a reason to
     be replaced. Its exit status: 0."""
-    from harness.sim.render import keep_gl_contexts, warm_gl
-    from harness.suite.worker import serve
-
     os.setsid()  # the suite signals it (and what it started) as a group; no terminal's Ctrl-C
     null = os.open(os.devnull, os.O_RDWR)
     for fd in (0, 1, 2):  # between runs, nothing is written anywhere
@@ -190,16 +229,25 @@ def _serve(jobs_r: int, results_w: int, *, warm: bool, max_runs: int) -> int:
     if faulthandler.is_enabled():  # its dump goes to the current run's log (fd 2)
         faulthandler.enable(file=sys.stderr)
     sys.path.insert(0, os.getcwd())  # plug-ins import from here, like `srr run`
+    from harness.report.templates import environment
+    from harness.sim.render import keep_gl_contexts, warm_gl
+    from harness.suite.worker import serve
+
+    env = environment()  # every run writes a report.html
+    for name in env.list_templates(extensions=["html"]):
+        env.get_template(name)
     keep_gl_contexts()
     warm_s = 0.0
-    if warm:
-        warm_s = warm_gl()
-        _preload()
     baseline = _Baseline.take()
     runs = 0
     with os.fdopen(jobs_r, "rb") as jobs:
         for line in jobs:
             job = json.loads(line)
+            if job.get("warm"):  # what rendering runs need, before the first
+                warm_s = warm_gl()
+                with contextlib.suppress(Exception):  # a run without it reports this itself
+                    import OpenGL.GL  # noqa: F401 - the renderer's name; no context made
+                continue
             log = os.open(job["log"], os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
             os.dup2(log, 1)
             os.dup2(log, 2)
@@ -222,19 +270,6 @@ def _serve(jobs_r: int, results_w: int, *, warm: bool, max_runs: int) -> int:
                 break
             gc.collect()  # what the run left, freed while the suite judges it
     return 0
-
-
-def _preload() -> None:
-    """What every rendering run would otherwise load for itself, once per host: PyOpenGL's
-    ``GL`` module (the renderer's name; a third of a second, no context made) and the
-    compiled page templates of the run's ``report.html``."""
-    from harness.report.templates import environment
-
-    with contextlib.suppress(Exception):  # a run without it reports this itself
-        import OpenGL.GL  # noqa: F401
-    env = environment()
-    for name in env.list_templates(extensions=["html"]):
-        env.get_template(name)
 
 
 _CLEAR_REFS = Path("/proc/self/clear_refs")

@@ -41,7 +41,7 @@ from typing import Any
 
 from harness.sim.render import rendered_in_this_process
 from harness.suite.events import Event, Listener, log_path, not_started
-from harness.suite.host import MAX_RUNS, Host, fork_host
+from harness.suite.host import MAX_RUNS, Host, fork_host, take_early
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, crash_reason, outcome_of
 from harness.suite.timeline import clock_path, take_clock
@@ -138,14 +138,31 @@ class LocalExecutor:
         self.max_host_runs = max(1, max_host_runs)
         self._idle: list[Host] = []  # hosts waiting for a run
         self._leaving: list[Host] = []  # hosts told to stop, not yet reaped
-        self._warm = False
+        self._warm = False  # the runs render: a new host makes its OpenGL context first
 
     def _hosts(self, running: Sequence[_Running]) -> list[Host]:
         return [*self._idle, *self._leaving, *(r.host for r in running if r.host is not None)]
 
     def _fork_host(self, running: Sequence[_Running]) -> Host:
         close = [fd for h in self._hosts(running) for fd in h.fds()]
-        return fork_host(warm=self._warm, max_runs=self.max_host_runs, close=close)
+        host = fork_host(max_runs=self.max_host_runs, close=close)
+        if self._warm:
+            host.warm()
+        return host
+
+    def _start_hosts(self, runs: int) -> None:
+        """Every slot's host at once, so that they get ready in parallel: those ``srr
+        suite`` started early (:func:`harness.suite.host.start_early`), then new ones."""
+        want = min(self.jobs, runs) if self.fork else 0
+        for host in take_early():
+            if len(self._idle) < want:
+                self._idle.append(host)
+                if self._warm:
+                    host.warm()
+            else:
+                host.stop()
+        while len(self._idle) < want and fork_safe():
+            self._idle.append(self._fork_host(()))
 
     def _job(self, spec: RunSpec, out_root: Path) -> dict[str, object]:
         log_file = log_path(out_root, spec)
@@ -263,10 +280,8 @@ class LocalExecutor:
         self._warm = any(s.renders for s in specs)
         with stop.installed():
             try:
-                if self.fork and fork_safe():  # every slot's host at once: they warm up in
-                    while len(self._idle) < min(self.jobs, len(specs)):  # parallel
-                        self._idle.append(self._fork_host(running))
-                        stop.check()
+                self._start_hosts(len(specs))
+                stop.check()
                 while pending or running:
                     stop.check()  # here, between steps: never inside a fork (see the class)
                     while pending and len(running) < self.jobs:
