@@ -156,12 +156,14 @@ def fork_safe_here() -> bool:
 
 def start_early(n: int, *, max_runs: int = MAX_RUNS) -> None:
     """Fork ``n`` hosts now, where that is safe, for the suite this process is about to plan:
-    each imports what runs need (``srr`` with MuJoCo, NumPy, pandas, SciPy) and loads the
-    report's page templates while this process still imports and checks the suite; the local
-    executor then takes them (:func:`take_early`). Called by ``srr suite`` before anything
-    heavy is imported."""
+    each makes its OpenGL context (EGL; whether the runs will render is not known yet, and 16
+    contexts made at once take 1.5 s on a GPU host, the time the suite's own imports take),
+    imports what runs need (``srr`` with MuJoCo, NumPy, pandas, SciPy) and loads the report's
+    page templates while this process still imports and checks the suite; the local executor
+    then takes them (:func:`take_early`). Called by ``srr suite`` before anything heavy is
+    imported."""
     while len(_EARLY) < n and fork_safe_here():
-        _EARLY.append(fork_host(max_runs=max_runs,
+        _EARLY.append(fork_host(max_runs=max_runs, warm=True,
                                 close=[fd for h in _EARLY for fd in h.fds()]))
 
 
@@ -179,10 +181,12 @@ def stop_early() -> None:
         host.stop()
 
 
-def fork_host(*, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
+def fork_host(*, max_runs: int = MAX_RUNS, warm: bool = False,
+              close: Sequence[int] = ()) -> Host:
     """Fork a host; ``close``: descriptors it must not keep (the other hosts' pipes, else
-    they would not see end of file). It imports what runs need, then waits for its jobs
-    (:meth:`Host.warm` first, if the runs render)."""
+    they would not see end of file). It imports what runs need (``warm``: after making its
+    OpenGL context), then waits for its jobs (:meth:`Host.warm` first, if the runs
+    render)."""
     jobs_r, jobs_w = os.pipe()
     results_r, results_w = os.pipe()
     sys.stdout.flush()
@@ -194,7 +198,7 @@ def fork_host(*, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
             for fd in (*close, jobs_w, results_r):
                 with contextlib.suppress(OSError):
                     os.close(fd)
-            code = _serve(jobs_r, results_w, max_runs=max_runs)
+            code = _serve(jobs_r, results_w, max_runs=max_runs, warm=warm)
         except BaseException:
             import traceback
 
@@ -211,7 +215,7 @@ def fork_host(*, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
     return Host(pid, jobs_w, results_r)
 
 
-def _serve(jobs_r: int, results_w: int, *, max_runs: int) -> int:
+def _serve(jobs_r: int, results_w: int, *, max_runs: int, warm: bool) -> int:
     """The host's life: set up, then one run per job line until end of file or a reason to
     be replaced. Its exit status: 0."""
     os.setsid()  # the suite signals it (and what it started) as a group; no terminal's Ctrl-C
@@ -229,22 +233,23 @@ def _serve(jobs_r: int, results_w: int, *, max_runs: int) -> int:
     if faulthandler.is_enabled():  # its dump goes to the current run's log (fd 2)
         faulthandler.enable(file=sys.stderr)
     sys.path.insert(0, os.getcwd())  # plug-ins import from here, like `srr run`
-    from harness.report.templates import environment
     from harness.sim.render import keep_gl_contexts, warm_gl
+
+    keep_gl_contexts()
+    warm_s = warm_gl() if warm else 0.0  # while the suite's process imports and checks
+    from harness.report.templates import environment
     from harness.suite.worker import serve
 
     env = environment()  # every run writes a report.html
     for name in env.list_templates(extensions=["html"]):
         env.get_template(name)
-    keep_gl_contexts()
-    warm_s = 0.0
     baseline = _Baseline.take()
     runs = 0
     with os.fdopen(jobs_r, "rb") as jobs:
         for line in jobs:
             job = json.loads(line)
             if job.get("warm"):  # what rendering runs need, before the first
-                warm_s = warm_gl()
+                warm_s += warm_gl()  # none made if it has one
                 with contextlib.suppress(Exception):  # a run without it reports this itself
                     import OpenGL.GL  # noqa: F401 - the renderer's name; no context made
                 continue
