@@ -370,13 +370,18 @@ class _Baseline:
         return [t.name for t in threading.enumerate() if t is not threading.main_thread()]
 
 
-def _is_plugin(module: Any) -> bool:
-    """A module of the user's Python source (a plug-in, a test's helper): not srr's, not the
-    standard library's or an installed package's, not compiled (which cannot be imported
-    twice)."""
+def _is_plugin(module: Any, here: str | None = None) -> bool:
+    """A module of the project's own Python source, where plug-ins import from (the current
+    directory ``here``): not srr's, not an installed package's (a virtual environment or a
+    ``site-packages`` in the project included), not compiled (which cannot be imported twice).
+    Packages installed elsewhere (``PYTHONPATH``, a ``--target`` folder) are never dropped:
+    MuJoCo, PyOpenGL and their kin keep process-wide state that a second import breaks."""
     origin = getattr(module, "__file__", None)
     if not isinstance(origin, str) or not origin.endswith(".py"):
         return False
     path = str(Path(origin).resolve())
-    return not (path.startswith(_HARNESS + os.sep)
-                or any(path.startswith(lib + os.sep) for lib in _LIBRARIES))
+    project = str(Path(here if here is not None else os.getcwd()).resolve())
+    return (path.startswith(project + os.sep) and not path.startswith(_HARNESS + os.sep)
+            and not any(path.startswith(lib + os.sep) for lib in _LIBRARIES)
+            and not any(part in ("site-packages", "dist-packages")
+                        for part in Path(path).parts))

@@ -197,3 +197,34 @@ scenarios:
     assert sorted(p.name for p in (out / "logs").iterdir()) == ["slow_1.log"]
     with pytest.raises(ProcessLookupError):  # the host went with the suite's process
         os.killpg(slow["timings"]["pid"], 0)
+
+
+def test_only_the_projects_own_modules_are_dropped_between_runs(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """What a host re-imports for each run: modules under the project folder (the current
+    directory, where plug-ins import from), never a package installed elsewhere (a
+    ``PYTHONPATH`` or ``pip --target`` folder, as on a machine given wheels), nor one in a
+    ``site-packages`` inside the project, nor srr's own."""
+    import importlib.util
+
+    import harness.suite.results
+    from harness.suite.host import _is_plugin
+
+    def module_at(path: Path) -> Any:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("STATE = 0\n", encoding="utf-8")
+        spec = importlib.util.spec_from_file_location(path.stem, path)
+        assert spec is not None and spec.loader is not None
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+
+    project, elsewhere = tmp_path / "project", tmp_path / "target"
+    plugin = module_at(project / "plugins" / "mine.py")
+    installed = module_at(elsewhere / "somelib" / "core.py")
+    vendored = module_at(project / ".venv" / "lib" / "site-packages" / "lib.py")
+    assert _is_plugin(plugin, str(project))
+    assert not _is_plugin(installed, str(project))
+    assert not _is_plugin(vendored, str(project))
+    assert not _is_plugin(harness.suite.results, str(ROOT))
+    assert not _is_plugin(json, str(project))
