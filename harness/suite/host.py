@@ -155,13 +155,14 @@ def fork_safe_here() -> bool:
 
 
 def start_early(n: int, *, max_runs: int = MAX_RUNS) -> None:
-    """Fork ``n`` hosts now, where that is safe, for the suite this process is about to plan:
-    each makes its OpenGL context (EGL; whether the runs will render is not known yet, and 16
-    contexts made at once take 1.5 s on a GPU host, the time the suite's own imports take),
-    imports what runs need (``srr`` with MuJoCo, NumPy, pandas, SciPy) and loads the report's
-    page templates while this process still imports and checks the suite; the local executor
-    then takes them (:func:`take_early`). Called by ``srr suite`` before anything heavy is
-    imported."""
+    """Fork ``n`` hosts now, where that is safe, for the suite this process is about to check
+    and run: each makes its OpenGL context (EGL; whether the runs will render is not known
+    yet, and 16 contexts made at once take 1.5 s on a GPU host) while this process checks the
+    suite; the local executor then takes them (:func:`take_early`). ``srr suite`` calls it
+    once it has imported srr (with MuJoCo, NumPy, pandas, SciPy): the hosts share those
+    imports copy-on-write. Forking them before the imports, each importing for itself,
+    measured slower on a 16-CPU GPU host: 16 processes importing at once slowed the suite's
+    own imports, and the first run began 1.8 s later."""
     while len(_EARLY) < n and fork_safe_here():
         _EARLY.append(fork_host(max_runs=max_runs, warm=True,
                                 close=[fd for h in _EARLY for fd in h.fds()]))
