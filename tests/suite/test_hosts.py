@@ -228,3 +228,14 @@ def test_only_the_projects_own_modules_are_dropped_between_runs(
     assert not _is_plugin(vendored, str(project))
     assert not _is_plugin(harness.suite.results, str(ROOT))
     assert not _is_plugin(json, str(project))
+
+
+def test_srr_suite_imports_no_scipy_stats_before_its_runs() -> None:
+    """What ``srr suite`` imports before its hosts are forked and the suite is checked (the
+    serial start-up): SciPy's statistics, a quarter of it, are loaded only when the groups
+    are judged."""
+    code = ("import sys, harness.cli, harness.api, harness.suite.runner, harness.suite.local; "
+            "print('scipy.stats' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)}, check=True, timeout=120)
+    assert out.stdout.strip() == "False", out.stderr
