@@ -1,24 +1,29 @@
-"""Runs in parallel worker processes on this machine: one process per run, at most ``jobs`` at
-a time.
+"""Runs in parallel worker processes on this machine, at most ``jobs`` at a time.
 
-With ``fork=True`` (what ``srr suite`` asks for) each run's process is forked from the suite's,
-which has already imported srr, MuJoCo, NumPy, pandas and SciPy (1.4 s of start-up a run on
-the 2-core CI machine, a sixth of the bundled suite's CPU time); the child runs
-:func:`harness.suite.worker.main` and exits. That is done only on Linux and only while the
-suite's process is as clean as a fresh one — no other Python thread (a live progress display),
-no OpenGL context ever made here (its driver's threads and locks would not survive the fork) —
-else, and by default, each run is a fresh ``python -m harness.suite.worker``. Either way a run
-never sees another run's state. Once the first workers are forked the suite's process also
-loads what every later run would load for itself (:func:`preload`), and, on CPUs the workers
-leave idle (``ahead``), forks the next runs' workers ahead of a free slot: each gets ready — a
-run that renders makes its OpenGL context, the one its renderer then uses — and waits for its
-slot; the run, its timings and its timeout begin when the slot frees.
+With ``fork=True`` (what ``srr suite`` asks for) the runs go to *hosts*
+(:mod:`harness.suite.host`): one long-lived process per slot, forked from the suite's (which
+has imported srr, MuJoCo, NumPy and pandas: nothing to import again), that runs its runs one
+after another and keeps its OpenGL context between them — made once per host, while the
+suite is still being checked (``srr suite`` forks its hosts early:
+:func:`harness.suite.host.start_early`), instead of once per run (0.3 s alone, 1.4 s each when
+16 processes make one at once on a GPU host). A host is replaced by a fresh one after
+:data:`harness.suite.host.MAX_RUNS` runs, after a run that ended otherwise than 0 or 1 (failed,
+interrupted, could not start) or left a thread running, and when it dies. Forking is done only
+on Linux and only while the suite's process is as clean as a fresh one — no other Python
+thread (a live progress display), no OpenGL context ever made here (its driver's threads and
+locks would not survive the fork); else, and by default, each run is a fresh ``python -m
+harness.suite.worker``. Either way a run records the same bytes: a host puts back what a run
+could leave to the next (see :mod:`harness.suite.host`), and tests compare a host's
+third run with a fresh process's.
 
-A process per run isolates what one run can break: a segfault, an out-of-memory kill or
-a hang costs that run (INVALID, with the signal or the timeout as the reason), never the
-suite. A run past its timeout gets SIGTERM (it finalizes its bag and summary), then SIGKILL
-after ``grace_s``. Ctrl-C (or SIGTERM to the suite) stops the runs the same way and keeps every
-finished one. Worker output goes to ``OUT/logs/<run id>.log``.
+What one run breaks costs that run only: a segfault, an out-of-memory kill or ``os._exit`` in
+a host (INVALID, with the signal or the exit status as the reason; the slot gets a fresh host),
+a hang (its timeout). A run past its timeout gets SIGTERM (it finalizes its bag and summary),
+then SIGKILL after ``grace_s``; in a host, the host goes with it. Ctrl-C (or SIGTERM to the
+suite) stops the runs the same way and keeps every finished one. Each run's output goes to
+``OUT/logs/<run id>.log`` (a host points its stdout and stderr at it for the run); each run's
+``peak_rss_mb`` is its own (a host resets its peak before each run, see
+:mod:`harness.suite.host`).
 """
 
 from __future__ import annotations
