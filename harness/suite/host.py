@@ -192,6 +192,7 @@ def fork_host(*, max_runs: int = MAX_RUNS, warm: bool = False,
     results_r, results_w = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
+    suite = os.getpid()
     pid = os.fork()
     if pid == 0:  # the host
         code = 70  # EX_SOFTWARE: the host itself failed
@@ -199,7 +200,7 @@ def fork_host(*, max_runs: int = MAX_RUNS, warm: bool = False,
             for fd in (*close, jobs_w, results_r):
                 with contextlib.suppress(OSError):
                     os.close(fd)
-            code = _serve(jobs_r, results_w, max_runs=max_runs, warm=warm)
+            code = _serve(jobs_r, results_w, max_runs=max_runs, warm=warm, suite=suite)
         except BaseException:
             import traceback
 
@@ -216,10 +217,11 @@ def fork_host(*, max_runs: int = MAX_RUNS, warm: bool = False,
     return Host(pid, jobs_w, results_r)
 
 
-def _serve(jobs_r: int, results_w: int, *, max_runs: int, warm: bool) -> int:
+def _serve(jobs_r: int, results_w: int, *, max_runs: int, warm: bool, suite: int) -> int:
     """The host's life: set up, then one run per job line until end of file or a reason to
     be replaced. Its exit status: 0."""
     os.setsid()  # the suite signals it (and what it started) as a group; no terminal's Ctrl-C
+    _stop_with_parent(suite)
     null = os.open(os.devnull, os.O_RDWR)
     for fd in (0, 1, 2):  # between runs, nothing is written anywhere
         os.dup2(null, fd)
@@ -276,6 +278,34 @@ def _serve(jobs_r: int, results_w: int, *, max_runs: int, warm: bool) -> int:
                 break
             gc.collect()  # what the run left, freed while the suite judges it
     return 0
+
+
+def _stop_with_parent(suite: int) -> None:
+    """SIGTERM to this host, once, when the suite's process ends, however (``kill -9``
+    included): a run in progress finalizes its bag and summary, as at its timeout, and the host
+    ends instead of running on alone. Linux ``PR_SET_PDEATHSIG``, with SIGHUP relayed as one
+    SIGTERM: the kernel sends the parent-death signal again each time the host passes to
+    another dying thread of the suite's process (its native thread pools), and a second
+    SIGTERM would cut the run's finalizing short. Nothing where ``prctl`` is missing."""
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        prctl = libc.prctl
+    except (OSError, AttributeError):
+        return
+    relayed: list[bool] = []
+
+    def orphaned(signum: int, frame: Any) -> None:
+        if not relayed:
+            relayed.append(True)
+            prctl(1, 0, 0, 0, 0)  # no more parent-death signals
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    signal.signal(signal.SIGHUP, orphaned)
+    prctl(1, int(signal.SIGHUP), 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+    if os.getppid() != suite:  # the suite ended before the request took effect
+        orphaned(signal.SIGHUP, None)
 
 
 _CLEAR_REFS = Path("/proc/self/clear_refs")

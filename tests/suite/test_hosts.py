@@ -239,3 +239,50 @@ def test_srr_suite_imports_no_scipy_stats_before_its_runs() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env={**os.environ, "PYTHONPATH": str(ROOT)}, check=True, timeout=120)
     assert out.stdout.strip() == "False", out.stderr
+
+
+def test_a_host_stops_and_finalizes_its_run_when_the_suite_is_killed(tmp_path: Path) -> None:
+    """``kill -9`` of the suite's process while its host runs a run stuck mid-way (it never
+    ends on its own): the host gets SIGTERM, the run finalizes its bag and summary
+    (interrupted), and the host ends instead of running on alone."""
+    stalled = tmp_path / "stalled"
+    text = f"""
+scenarios:
+  - path: {FORKLIFT}
+    name: slow
+    set: {{duration: 3, {PLUGIN}: "tests.suite.plugins:Staller"}}
+"""
+    proc = _suite(tmp_path, text, env={STALLED_FILE: str(stalled)})
+    while not stalled.exists():  # the run is stuck mid-way, in its host
+        assert proc.poll() is None, proc.communicate()[0]
+        time.sleep(0.05)
+    children = [int(p.name) for p in Path("/proc").iterdir() if p.name.isdigit()
+                and _ppid(p) == proc.pid]
+    assert len(children) == 1, children
+    host = children[0]
+    proc.kill()
+    proc.communicate(timeout=60)
+    deadline = time.monotonic() + 120  # a guard only: it ends once its run has finalized
+    while _alive(host):
+        assert time.monotonic() < deadline, "the host ran on after the suite was killed"
+        time.sleep(0.05)
+    summary = json.loads((tmp_path / "out" / "runs" / "slow" / "nominal" / "r1" /
+                          "summary.json").read_text(encoding="utf-8"))
+    assert summary["interrupted"] and summary["topics"]["/clock"]["count"] > 0
+
+
+def _ppid(proc_dir: Path) -> int | None:
+    try:
+        stat = (proc_dir / "stat").read_text()
+    except OSError:
+        return None
+    return int(stat.rsplit(")", 1)[1].split()[1])
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` still runs (a zombie left for its new parent to reap does not)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"
