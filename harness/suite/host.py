@@ -44,7 +44,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["MAX_RUNS", "Host", "fork_host", "start_early", "stop_early", "take_early"]
+__all__ = ["MAX_RUNS", "Host", "fork_host", "fork_safe_here", "start_early", "stop_early",
+           "take_early"]
 
 #: Runs a host does before it is replaced by a fresh one. What one run can leave behind that
 #: :class:`_Baseline` cannot put back (a fragmented heap, caches of compiled expressions,

@@ -20,7 +20,8 @@ What one run breaks costs that run only: a segfault, an out-of-memory kill or ``
 a host (INVALID, with the signal or the exit status as the reason; the slot gets a fresh host),
 a hang (its timeout). A run past its timeout gets SIGTERM (it finalizes its bag and summary),
 then SIGKILL after ``grace_s``; in a host, the host goes with it. Ctrl-C (or SIGTERM to the
-suite) stops the runs the same way and keeps every finished one. Each run's output goes to
+suite) stops the runs the same way and keeps every finished one; if the suite's process is
+killed outright, its hosts get SIGTERM (their runs finalize) and end. Each run's output goes to
 ``OUT/logs/<run id>.log`` (a host points its stdout and stderr at it for the run); each run's
 ``peak_rss_mb`` is its own (a host resets its peak before each run, see
 :mod:`harness.suite.host`).
@@ -44,9 +45,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from harness.sim.render import rendered_in_this_process
 from harness.suite.events import Event, Listener, log_path, not_started
-from harness.suite.host import MAX_RUNS, Host, fork_host, take_early
+from harness.suite.host import MAX_RUNS, Host, fork_host, fork_safe_here, take_early
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, crash_reason, outcome_of
 from harness.suite.timeline import clock_path, take_clock
@@ -57,9 +57,8 @@ __all__ = ["LocalExecutor", "fork_safe"]
 
 def fork_safe() -> bool:
     """Whether a worker may be forked from this process: Linux, no other Python thread, and
-    no OpenGL context made here."""
-    return (sys.platform == "linux" and threading.active_count() == 1
-            and not rendered_in_this_process())
+    no OpenGL context made here (:func:`harness.suite.host.fork_safe_here`)."""
+    return fork_safe_here()
 
 
 class _StopRequests:
