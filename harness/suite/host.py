@@ -13,7 +13,8 @@ executor then forks a fresh one. A host that dies without answering (a segfault,
 out-of-memory killer, SIGKILL after a timeout) costs the run it had.
 
 What a run could leave to the next one in the same process is put back before the next job
-(:class:`_Baseline`): signal handlers, the interpreter's switch interval, ``os.environ``,
+(:class:`_Baseline`): signal handlers, MuJoCo's global callbacks (``mjcb_control`` ...),
+NumPy's error handling, the umask, the interpreter's switch interval, ``os.environ``,
 the working directory, ``sys.path``, the warnings filters, ``sys.stdout``/``sys.stderr``, the
 global ``random`` and NumPy RNG states, and the plug-in modules the run imported (dropped, so
 the next run imports them afresh, as a fresh process would). The OpenGL context is kept on
@@ -347,6 +348,9 @@ class _Baseline:
     numpy_state: Any
     modules: frozenset[str]
     registry: Any
+    mujoco_callbacks: dict[str, Any]
+    numpy_errors: Any  # np.geterr()
+    umask: int
 
     @classmethod
     def take(cls) -> _Baseline:
@@ -368,10 +372,12 @@ class _Baseline:
         for sig in signal.valid_signals():
             with contextlib.suppress(OSError, ValueError):
                 handlers[int(sig)] = signal.getsignal(sig)
+        umask = os.umask(0o022)
+        os.umask(umask)
         return cls(handlers, sys.getswitchinterval(), dict(os.environ), os.getcwd(),
                    list(sys.path), list(warnings.filters), (sys.stdout, sys.stderr),
                    random.getstate(), np.random.get_state(), frozenset(sys.modules),
-                   DEFAULT_REGISTRY.snapshot())
+                   DEFAULT_REGISTRY.snapshot(), _mujoco_callbacks(), np.geterr(), umask)
 
     def restore(self) -> list[str]:
         """Put it all back; the names of threads the run left running (the host must then
@@ -399,7 +405,23 @@ class _Baseline:
             if _is_plugin(sys.modules.get(name)):
                 del sys.modules[name]
         DEFAULT_REGISTRY.restore(self.registry)
+        import mujoco
+
+        for name, callback in self.mujoco_callbacks.items():  # MuJoCo's are process-wide
+            if getattr(mujoco, f"get_{name}")() is not callback:
+                getattr(mujoco, f"set_{name}")(callback)
+        np.seterr(**self.numpy_errors)
+        os.umask(self.umask)
         return [t.name for t in threading.enumerate() if t is not threading.main_thread()]
+
+
+def _mujoco_callbacks() -> dict[str, Any]:
+    """MuJoCo's global callbacks (``mjcb_control`` and the others), which a plug-in may set:
+    they act on every model of the process."""
+    import mujoco
+
+    return {name[4:]: getattr(mujoco, name)() for name in dir(mujoco)
+            if name.startswith("get_mjcb_")}
 
 
 def _is_plugin(module: Any, here: str | None = None) -> bool:

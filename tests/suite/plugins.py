@@ -148,3 +148,18 @@ class Hog(RouteFollower):
     def shutdown(self) -> None:
         self.block = bytearray()
         super().shutdown()
+
+
+class SetsMujocoCallback(RouteFollower):
+    """Sets MuJoCo's process-wide control callback (every actuator pushed by 0.5) in a worker
+    and never clears it: what a later run in the same process must not inherit."""
+
+    def setup(self, ctx: SutContext) -> None:
+        super().setup(ctx)
+        if in_a_worker():
+            import mujoco
+
+            def push(model: object, data: object) -> None:
+                data.ctrl[:] += 0.5  # type: ignore[attr-defined]
+
+            mujoco.set_mjcb_control(push)

@@ -165,6 +165,29 @@ scenarios:
     assert not s["groups"][0]["flaky"]
 
 
+def test_a_mujoco_callback_set_by_a_run_does_not_reach_the_next(tmp_path: Path) -> None:
+    """A plug-in sets MuJoCo's process-wide control callback and leaves it set; the next run
+    in the same host records what a fresh process records."""
+    from harness.suite.local import LocalExecutor
+    from harness.suite.runner import plan_suite, run_suite
+
+    text = f"""
+scenarios:
+  - {{path: {FORKLIFT}, name: sets,
+     set: {{duration: 2, {PLUGIN}: "tests.suite.plugins:SetsMujocoCallback"}}}}
+  - {{path: {FORKLIFT}, name: plain, set: {{duration: 1}}}}
+"""
+    runs = _finished(tmp_path, text)
+    sets, plain = runs["sets#1"], runs["plain#1"]
+    assert sets["timings"]["pid"] == plain["timings"]["pid"]  # one host, the setter first
+    (tmp_path / "alone.yaml").write_text(
+        f"scenarios:\n  - {{path: {FORKLIFT}, name: plain, set: {{duration: 1}}}}\n")
+    fresh = tmp_path / "fresh"
+    run_suite(plan_suite([tmp_path / "alone.yaml"]), LocalExecutor(1, fork=False), out=fresh)
+    (alone,) = _runs(fresh).values()
+    assert plain["digest"] == alone["digest"] is not None
+
+
 def test_an_interrupted_suite_starts_nothing_more(tmp_path: Path) -> None:
     """Ctrl-C while the only slot's run is stuck: it is stopped and finalized, the next run
     is reported as not started and leaves nothing (no run directory, no log), and no host is
