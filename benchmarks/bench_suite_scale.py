@@ -7,8 +7,10 @@ unpacked with ``git archive COMMIT | tar -x -C DIR``, alternating with this one)
 the wall time outside the runs (start-up, planning and checking, the wait for the first run,
 judging and pages; from the suite's ``timeline`` where the tree writes one, else the command's
 wall time less the runs' walls over the workers), the workers' utilization, the runs' summed
-steps (from ``timings``) and the verdict (every pass must end PASS). Then, per tree, the
-efficiency of the largest worker count N against 1 worker: runs/s at N ÷ (N × runs/s at 1).
+steps (from ``timings``), when the first run began after the command was launched, and the
+verdict (every pass must end PASS). Then, per tree, the efficiency of every entry with N > 1
+workers against the 1-worker entry: runs/s at N ÷ (N × runs/s at 1); several entries may share
+N (``1:2,16:6,16:12``: the same 16 workers on 59 and on 118 runs).
 
     MUJOCO_GL=egl python benchmarks/bench_suite_scale.py --configs 1:2,16:6 [--other DIR]
     python benchmarks/bench_suite_scale.py --show OUT/summary.json     # one suite's timeline
@@ -31,15 +33,43 @@ ROOT = Path(__file__).resolve().parents[1]
 ORDER = ("start", "load", "build", "first_tick", "loop", "finish", "exit")
 
 
+#: ``srr suite`` as ``python -m harness.cli`` runs it, noting when the first run began (the
+#: earliest ``ready`` instant of the runs' clocks, read as the executor takes each clock; the
+#: clocks are ``time.monotonic``, one clock for every process of a Linux machine).
+CLI = """
+import os, sys
+import harness.suite.timeline as tl
+_take, first = tl.take_clock, []
+def take(path, submitted, reaped):
+    clock = _take(path, submitted, reaped)
+    first.append(clock.get("ready", reaped))
+    return clock
+tl.take_clock = take
+from harness.cli import main
+try:
+    code = main(sys.argv[1:])
+finally:
+    if first:
+        with open(os.environ["SRR_BENCH_FIRST"], "w") as f:
+            f.write(repr(min(first)))
+sys.exit(code)
+"""
+
+
 def one_pass(tree: Path, suite: str, jobs: int, repeat: int, out: Path) -> dict[str, Any]:
+    first_file = out.with_name(out.name + ".first")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         p for p in (str(tree), os.environ.get("PYTHONPATH")) if p),
-        "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+        "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), "SRR_BENCH_FIRST": str(first_file)}
     t0 = time.monotonic()
-    proc = subprocess.run([sys.executable, "-m", "harness.cli", "suite", suite, "--jobs",
+    proc = subprocess.run([sys.executable, "-c", CLI, "suite", suite, "--jobs",
                            str(jobs), "--repeat", str(repeat), "--out", str(out), "-q"],
                           cwd=tree, env=env, capture_output=True, text=True, check=False)
     wall = time.monotonic() - t0
+    try:
+        to_first: float | None = float(first_file.read_text()) - t0
+    except (OSError, ValueError):
+        to_first = None
     if not (out / "summary.json").is_file():
         raise SystemExit(f"{tree}: the suite wrote no summary:\n{proc.stderr[-2000:]}")
     s = json.loads((out / "summary.json").read_text(encoding="utf-8"))
@@ -52,7 +82,7 @@ def one_pass(tree: Path, suite: str, jobs: int, repeat: int, out: Path) -> dict[
             "checked": tl.get("checked_s"), "first": tl.get("first_start_s"),
             "after": (s["wall_s"] - tl["last_finish_s"]) if span is not None else None,
             "util": busy / (jobs * (span if span else wall)), "steps": tl.get("steps_s"),
-            "summary": s}
+            "to_first": to_first, "summary": s}
 
 
 def show(summary: dict[str, Any], width: int = 100) -> None:
@@ -119,21 +149,24 @@ def main() -> None:
     trees = [("other", args.other.resolve()), ("this", ROOT)] if args.other else [("this", ROOT)]
     configs = [tuple(int(x) for x in c.split(":")) for c in args.configs.split(",")]
     print(f"machine: {os.cpu_count()} CPUs; suite {args.suite}")
-    results: dict[str, dict[int, dict[str, Any]]] = {name: {} for name, _ in trees}
+    results: dict[str, dict[tuple[int, int], dict[str, Any]]] = {name: {} for name, _ in trees}
     with tempfile.TemporaryDirectory() as tmp:
         for jobs, repeat in configs:
             for name, tree in trees:
-                r = one_pass(tree, args.suite, jobs, repeat, Path(tmp) / f"{name}_{jobs}")
-                results[name][jobs] = r
+                r = one_pass(tree, args.suite, jobs, repeat,
+                             Path(tmp) / f"{name}_{jobs}_{repeat}")
+                results[name][(jobs, repeat)] = r
                 if args.keep:
                     args.keep.mkdir(parents=True, exist_ok=True)
-                    (args.keep / f"summary_{name}_{jobs}.json").write_text(
+                    (args.keep / f"summary_{name}_{jobs}_{repeat}.json").write_text(
                         json.dumps(r["summary"]), encoding="utf-8")
                 steps = r["steps"] or {}
                 print(f"{name:5s} ×{jobs:<2d} {r['runs']:3d} runs  wall {r['wall']:6.1f} s  "
                       f"{r['runs'] / r['wall']:5.2f} runs/s  outside runs {r['outside']:5.1f} s"
                       + (f" (checked {r['checked']:.1f}, first start {r['first']:.2f}, after "
                          f"{r['after']:.1f})" if r["checked"] is not None else "")
+                      + (f"  first run began {r['to_first']:.2f} s after the launch"
+                         if r["to_first"] is not None else "")
                       + f"  util {r['util']:.2f}  run walls {r['busy']:6.1f} s  "
                       f"{r['verdict']}", flush=True)
                 if steps:
@@ -148,16 +181,20 @@ def main() -> None:
                     show(r["summary"])
                 if r["verdict"] != "PASS":
                     raise SystemExit(f"{name} ×{jobs}: the suite did not pass")
-    for name, by_jobs in results.items():
-        if 1 in by_jobs and len(by_jobs) > 1:
-            n = max(by_jobs)
-            one = by_jobs[1]["runs"] / by_jobs[1]["wall"]
-            many = by_jobs[n]["runs"] / by_jobs[n]["wall"]
-            print(f"{name}: efficiency at {n} workers = {many / (n * one):.2f} "
-                  f"({many:.2f} runs/s against {n} × {one:.3f})")
+    for name, by_config in results.items():
+        ones = [r for (jobs, _), r in by_config.items() if jobs == 1]
+        if not ones:
+            continue
+        one = ones[0]["runs"] / ones[0]["wall"]
+        for (n, repeat), r in by_config.items():
+            if n > 1:
+                many = r["runs"] / r["wall"]
+                print(f"{name}: efficiency at {n} workers, {r['runs']} runs (repeat {repeat}) "
+                      f"= {many / (n * one):.2f} ({many:.2f} runs/s against {n} × {one:.3f})")
     if args.json:
-        args.json.write_text(json.dumps({k: {j: {kk: vv for kk, vv in v.items()
-                                                 if kk != "summary"} for j, v in d.items()}
+        args.json.write_text(json.dumps({k: {f"{j}:{rep}": {kk: vv for kk, vv in v.items()
+                                                           if kk != "summary"}
+                                             for (j, rep), v in d.items()}
                                          for k, d in results.items()}, indent=1))
 
 

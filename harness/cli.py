@@ -675,9 +675,23 @@ def _cmd_diff(args: argparse.Namespace) -> int:
 
 
 def _cmd_suite(args: argparse.Namespace) -> int:
+    from harness.suite.host import stop_early
 
+    try:
+        return _suite(args)
+    finally:
+        stop_early()
+
+
+def _suite(args: argparse.Namespace) -> int:
     from harness import api
+    from harness.suite.host import start_early
     from harness.suite.progress import SuiteProgress, groups_table
+
+    if args.executor == "local":  # its hosts make their OpenGL contexts while this one plans
+        import os
+
+        start_early(args.jobs if args.jobs is not None else os.cpu_count() or 1)
 
     if args.update_baselines and not args.reason:
         raise SrrError("--update-baselines: say why with --reason TEXT")

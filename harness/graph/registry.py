@@ -64,6 +64,15 @@ class Registry:
         self._types: dict[str, type[NodeType]] = {}
         self._canonical: dict[str, str] = {}
 
+    def snapshot(self) -> tuple[dict[str, type[NodeType]], dict[str, str]]:
+        """This registry's own names, to :meth:`restore` later (a process that runs one
+        scenario after another forgets the types a run's plug-ins registered)."""
+        return dict(self._types), dict(self._canonical)
+
+    def restore(self, snapshot: tuple[dict[str, type[NodeType]], dict[str, str]]) -> None:
+        """Back to a :meth:`snapshot`: names registered since are forgotten."""
+        self._types, self._canonical = dict(snapshot[0]), dict(snapshot[1])
+
     @property
     def parent(self) -> Registry | None:
         """The registry consulted for names this one does not know."""

@@ -36,7 +36,9 @@ exactly that size and *without multisampling* (the model's ``offwidth``, ``offhe
 would antialias the colour, but the depth read back from a multisampled buffer is one sample's,
 taken off the pixel centre (0.35 px on Mesa's llvmpipe), which shifts every back-projected point;
 a depth camera wants the depth at the pixel centre, and one pass serves both images. Call
-:meth:`Renderer.close` to free the contexts.
+:meth:`Renderer.close` to free the contexts. In a process that runs renders one after another
+(:func:`keep_gl_contexts`, EGL) the GL context outlives its renderer, released, for the next
+one; its ``MjrContext`` does not.
 """
 
 from __future__ import annotations
@@ -66,7 +68,9 @@ __all__ = [
     "apply_render_settings",
     "depth_from_buffer",
     "gl_context_seconds",
+    "gl_contexts_made",
     "is_software_renderer",
+    "keep_gl_contexts",
     "points_from_depth",
     "rendered_in_this_process",
     "warm_gl",
@@ -128,15 +132,16 @@ class CameraFrame:
     intrinsics: Intrinsics
 
 
-_CONTEXTS_MADE = False  # set once this process creates an OpenGL context
+_CONTEXTS_MADE = 0  # OpenGL contexts this process created
 _CONTEXT_S = 0.0  # wall seconds this process spent creating OpenGL contexts
-_SPARE: Any = None  # a context warm_gl made, for the first renderer
+_SPARE: list[Any] = []  # contexts released, current on no thread, for the next renderers
+_KEEP = False  # keep_gl_contexts() was called: a closing renderer's context goes to _SPARE
 
 
 def rendered_in_this_process() -> bool:
     """Whether this process has created an OpenGL context (its driver's threads and state then
     live here: a process forked from it must not render)."""
-    return _CONTEXTS_MADE
+    return _CONTEXTS_MADE > 0
 
 
 def gl_context_seconds() -> float:
@@ -145,34 +150,73 @@ def gl_context_seconds() -> float:
     return _CONTEXT_S
 
 
+def gl_contexts_made() -> int:
+    """How many OpenGL contexts this process has created (:func:`warm_gl`'s included)."""
+    return _CONTEXTS_MADE
+
+
+def _backend() -> str:
+    return str(getattr(mujoco.GLContext, "__module__", "")).rsplit(".", 1)[-1]
+
+
+def keep_gl_contexts() -> None:
+    """From now on, a :class:`Renderer` that closes in this process keeps its OpenGL context
+    for the next one instead of destroying it (EGL only: an EGL context released by one thread
+    can be made current on another, and it has no size; OSMesa's and GLFW's are sized and
+    bound to their buffer, so they are freed as before). For a process that runs renders one
+    after another (a suite's host): creating a context is the costly part, 0.3 s alone and
+    over a second each when 16 processes make one at once. The model's own GL resources
+    (``MjrContext``: textures, meshes, offscreen buffer) are still made and freed per
+    renderer, so nothing of one run's model reaches the next."""
+    global _KEEP
+    _KEEP = True
+
+
 def warm_gl() -> float:
-    """Make this process's first OpenGL context now, before a renderer needs it (EGL only:
-    the display's and the driver's one-time set-up, then the context, made current once and
-    released), and keep it for the first :class:`Renderer` that starts here; its seconds.
-    For a process that will render anyway (a suite's worker started ahead of its run): it
-    then counts as one that rendered. Errors are left to the run, which makes its own
-    context and reports them."""
-    global _CONTEXTS_MADE, _SPARE
-    backend = str(getattr(mujoco.GLContext, "__module__", "")).rsplit(".", 1)[-1]
-    if backend != "egl" or _SPARE is not None:  # EGL's context has no size: any renderer's
+    """Make an OpenGL context now, before a renderer needs it (EGL only: the display's and the
+    driver's one-time set-up, then the context, made current once and released), and keep it
+    for the next :class:`Renderer` that starts here; its seconds (0 when nothing was made).
+    For a process that will render anyway (a suite's host): it then counts as one that
+    rendered. Errors are left to the run, which makes its own context and reports them."""
+    global _CONTEXTS_MADE
+    if _backend() != "egl" or _SPARE:  # EGL's context has no size: any renderer's
         return 0.0
-    _CONTEXTS_MADE = True
     t0 = time.monotonic()
     try:
+        _CONTEXTS_MADE += 1
         gl = mujoco.GLContext(1, 1)
         with gl.as_current():  # current on no thread afterwards: a render thread may take it
             pass
-        _SPARE = gl
+        _SPARE.append(gl)
     except Exception:  # the run makes its own context and says what failed
         pass
     return time.monotonic() - t0
 
 
 def _new_context(width: int, height: int) -> Any:
-    """The context :func:`warm_gl` made (once), else a new one."""
-    global _SPARE
-    gl, _SPARE = _SPARE, None
-    return gl if gl is not None else mujoco.GLContext(width, height)
+    """A spare context (:func:`warm_gl`, a closed renderer's), else a new one."""
+    global _CONTEXTS_MADE
+    if _SPARE:
+        return _SPARE.pop()
+    _CONTEXTS_MADE += 1
+    return mujoco.GLContext(width, height)
+
+
+def _release(gl: Any) -> None:
+    """Make ``gl`` (current on this thread) current on none and keep it in :data:`_SPARE`;
+    free it instead unless :func:`keep_gl_contexts` was called and the backend is EGL."""
+    if not (_KEEP and _backend() == "egl"):
+        gl.free()
+        return
+    from mujoco import egl
+
+    released = egl.EGL.eglMakeCurrent(egl.EGL_DISPLAY, egl.EGL.EGL_NO_SURFACE,
+                                      egl.EGL.EGL_NO_SURFACE, egl.EGL.EGL_NO_CONTEXT)
+    if not released:  # it cannot be handed on safely: gone, like any other renderer's
+        gl.free()
+        return
+    egl.EGL.eglReleaseThread()
+    _SPARE.append(gl)
 
 
 def is_software_renderer(gl_renderer: str) -> bool:
@@ -391,8 +435,7 @@ class Renderer:
                     "cannot render: MuJoCo uses GLFW (MUJOCO_GL unset or 'glfw') and there is "
                     "no display; set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa "
                     "before starting")
-            global _CONTEXTS_MADE, _CONTEXT_S
-            _CONTEXTS_MADE = True
+            global _CONTEXT_S
             t0 = time.monotonic()
             try:
                 self._gl = _new_context(max(1, vis.offwidth), max(1, vis.offheight))
@@ -497,7 +540,7 @@ class Renderer:
             self._gl.make_current()
             for target in self._targets.values():
                 target.free()
-            self._gl.free()
+            _release(self._gl)
         self._targets.clear()
         self._bound = None
         self._gl = None

@@ -1,33 +1,39 @@
-"""Runs in parallel worker processes on this machine: one process per run, at most ``jobs`` at
-a time.
+"""Runs in parallel worker processes on this machine, at most ``jobs`` at a time.
 
-With ``fork=True`` (what ``srr suite`` asks for) each run's process is forked from the suite's,
-which has already imported srr, MuJoCo, NumPy, pandas and SciPy (1.4 s of start-up a run on
-the 2-core CI machine, a sixth of the bundled suite's CPU time); the child runs
-:func:`harness.suite.worker.main` and exits. That is done only on Linux and only while the
-suite's process is as clean as a fresh one — no other Python thread (a live progress display),
-no OpenGL context ever made here (its driver's threads and locks would not survive the fork) —
-else, and by default, each run is a fresh ``python -m harness.suite.worker``. Either way a run
-never sees another run's state. Once the first workers are forked the suite's process also
-loads what every later run would load for itself (:func:`preload`), and, on CPUs the workers
-leave idle (``ahead``), forks the next runs' workers ahead of a free slot: each gets ready — a
-run that renders makes its OpenGL context, the one its renderer then uses — and waits for its
-slot; the run, its timings and its timeout begin when the slot frees.
+With ``fork=True`` (what ``srr suite`` asks for) the runs go to *hosts*
+(:mod:`harness.suite.host`): one long-lived process per slot, forked from the suite's (which
+has imported srr, MuJoCo, NumPy and pandas: nothing to import again), that runs its runs one
+after another and keeps its OpenGL context between them — made once per host, while the
+suite is still being checked (``srr suite`` forks its hosts early:
+:func:`harness.suite.host.start_early`), instead of once per run (0.3 s alone, 1.4 s each when
+16 processes make one at once on a GPU host). A host is replaced by a fresh one after
+:data:`harness.suite.host.MAX_RUNS` runs, after a run that ended otherwise than 0 or 1 (failed,
+interrupted, could not start) or left a thread running, and when it dies. Forking is done only
+on Linux and only while the suite's process is as clean as a fresh one — no other Python
+thread (a live progress display), no OpenGL context ever made here (its driver's threads and
+locks would not survive the fork); else, and by default, each run is a fresh ``python -m
+harness.suite.worker``. Either way a run records the same bytes: a host puts back what a run
+could leave to the next (see :mod:`harness.suite.host`), and tests compare a host's
+third run with a fresh process's.
 
-A process per run isolates what one run can break: a segfault, an out-of-memory kill or
-a hang costs that run (INVALID, with the signal or the timeout as the reason), never the
-suite. A run past its timeout gets SIGTERM (it finalizes its bag and summary), then SIGKILL
-after ``grace_s``. Ctrl-C (or SIGTERM to the suite) stops the runs the same way and keeps every
-finished one. Worker output goes to ``OUT/logs/<run id>.log``.
+What one run breaks costs that run only: a segfault, an out-of-memory kill or ``os._exit`` in
+a host (INVALID, with the signal or the exit status as the reason; the slot gets a fresh host),
+a hang (its timeout). A run past its timeout gets SIGTERM (it finalizes its bag and summary),
+then SIGKILL after ``grace_s``; in a host, the host goes with it. Ctrl-C (or SIGTERM to the
+suite) stops the runs the same way and keeps every finished one; if the suite's process is
+killed outright, its hosts get SIGTERM (their runs finalize) and end. Each run's output goes to
+``OUT/logs/<run id>.log`` (a host points its stdout and stderr at it for the run); each run's
+``peak_rss_mb`` is its own (a host resets its peak before each run, see
+:mod:`harness.suite.host`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
-import faulthandler
 import json
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -37,38 +43,22 @@ from collections import deque
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
-from harness.sim.render import rendered_in_this_process
 from harness.suite.events import Event, Listener, log_path, not_started
+from harness.suite.host import MAX_RUNS, Host, fork_host, fork_safe_here, take_early
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, crash_reason, outcome_of
 from harness.suite.timeline import clock_path, take_clock
 from harness.suite.worker import peak_rss_mb
 
-__all__ = ["LocalExecutor", "fork_safe", "preload"]
+__all__ = ["LocalExecutor", "fork_safe"]
 
 
 def fork_safe() -> bool:
     """Whether a worker may be forked from this process: Linux, no other Python thread, and
-    no OpenGL context made here."""
-    return (sys.platform == "linux" and threading.active_count() == 1
-            and not rendered_in_this_process())
-
-
-def preload(specs: Sequence[RunSpec]) -> None:
-    """Before the later forks: what every forked run would otherwise load for itself, done once
-    here — PyOpenGL's ``GL`` module, which a run that renders imports to read the renderer's
-    name (a third of a second; loading it makes no OpenGL context), and the compiled page
-    templates of the run's ``report.html``. Nothing here changes what a run records."""
-    from harness.report.templates import environment
-
-    if any(s.renders for s in specs):
-        with contextlib.suppress(Exception):  # a run without it reports this itself
-            import OpenGL.GL  # noqa: F401
-    env = environment()
-    for name in env.list_templates(extensions=["html"]):
-        env.get_template(name)
+    no OpenGL context made here (:func:`harness.suite.host.fork_safe_here`)."""
+    return fork_safe_here()
 
 
 class _StopRequests:
@@ -106,77 +96,26 @@ class _StopRequests:
             raise KeyboardInterrupt
 
 
-class _Forked:
-    """A forked worker: what the executor reads of a ``Popen`` (``pid``, ``returncode``)."""
-
-    def __init__(self, pid: int) -> None:
-        self.pid = pid
-        self.returncode: int | None = None
-
-
-def _fork_worker(job: dict[str, object], log: IO[bytes], *, gate: int | None = None,
-                 close: Sequence[int] = (), warm: bool = False) -> _Forked:
-    """Fork a child that runs ``job`` as ``python -m harness.suite.worker`` would (its own
-    session, stdin from /dev/null, stdout and stderr to ``log``) and exits with its code.
-
-    ``gate``: the read end of a pipe; the child is started ahead of its run: it gets ready
-    (``warm``: makes and frees one OpenGL context, :func:`harness.sim.render.warm_gl`), then
-    waits for a byte on ``gate`` before it begins the run (none: it exits, status 130, having
-    run nothing). ``close``: descriptors the child must not keep (other children's gates)."""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    pid = os.fork()
-    if pid:
-        return _Forked(pid)
-    code = 70  # EX_SOFTWARE: the worker itself failed
-    try:
-        for fd in close:
-            with contextlib.suppress(OSError):
-                os.close(fd)
-        os.setsid()
-        null = os.open(os.devnull, os.O_RDONLY)
-        os.dup2(null, 0)
-        os.dup2(log.fileno(), 1)
-        os.dup2(log.fileno(), 2)
-        # the parent's sys.stdout/sys.stderr may be objects of its own (pytest's capture, an
-        # IDE's console) that do not write to fds 1 and 2: the child's go to the log
-        sys.stdout = open(1, "w", encoding="utf-8", errors="replace", closefd=False)  # noqa: SIM115
-        sys.stderr = open(2, "w", encoding="utf-8", errors="replace", closefd=False)  # noqa: SIM115
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)
-        if faulthandler.is_enabled():  # its dump goes to this run's log, not the suite's
-            faulthandler.enable(file=sys.stderr)
-        sys.path.insert(0, os.getcwd())  # plug-ins import from here, like `srr run`
-        from harness.suite.worker import main
-
-        if gate is not None and warm:
-            from harness.sim.render import warm_gl
-
-            job = {**job, "warm_gl_s": warm_gl()}
-        # at a gate, no byte (the suite stopped before this run began): nothing was run
-        code = main([json.dumps(job)]) if gate is None or os.read(gate, 1) else 130
-    except BaseException:  # reported in the run's log, then the child exits
-        import traceback
-
-        traceback.print_exc()
-    finally:
-        with contextlib.suppress(Exception):
-            sys.stdout.flush()
-            sys.stderr.flush()
-        os._exit(code)
-
-
 @dataclass
 class _Running:
     spec: RunSpec
-    proc: subprocess.Popen[bytes] | _Forked
-    log: IO[bytes]
-    t0: float
+    t0: float  # when it was submitted
+    host: Host | None = None  # the host running it, else ``proc``, a fresh process
+    proc: subprocess.Popen[bytes] | None = None
     kill_at: float | None = None  # set once SIGTERM was sent
     timed_out: bool = False
+    returncode: int | None = None
     peak_rss_mb: float | None = None
+    peak_rss_note: str | None = None
     reaped: float | None = None  # time.monotonic() when it was found ended
-    gate: int | None = None  # started ahead: the write end of its gate, until it may run
+    leaving: bool = True  # its host goes after this run
+
+    @property
+    def pid(self) -> int:
+        if self.host is not None:
+            return self.host.pid
+        assert self.proc is not None
+        return self.proc.pid
 
 
 def _last_line(path: Path) -> str | None:
@@ -192,88 +131,89 @@ class LocalExecutor:
     name = "local"
 
     def __init__(self, jobs: int, *, baselines: Path | None = None, grace_s: float = 10.0,
-                 poll_s: float = 0.05, fork: bool = False, ahead: int | None = None) -> None:
+                 poll_s: float = 0.05, fork: bool = False, max_host_runs: int = MAX_RUNS) -> None:
         self.jobs = max(1, jobs)
         self.baselines = baselines
         self.grace_s = grace_s
         self.poll_s = poll_s
-        #: Fork each worker from this process when that is safe (:func:`fork_safe`).
+        #: Run in hosts forked from this process when that is safe (:func:`fork_safe`).
         self.fork = fork
-        #: Forked workers started ahead of a free slot, each ready (imports done, its first
-        #: OpenGL context made if its run renders) and waiting for the slot. Default: on the
-        #: CPUs the workers leave idle, at most 2 (none with a worker per CPU).
-        self.ahead = (ahead if ahead is not None else
-                      max(0, min(2, (os.cpu_count() or 1) - self.jobs)))
-        self._gates: set[int] = set()
+        #: Runs a host does before a fresh one replaces it (:data:`harness.suite.host.MAX_RUNS`).
+        self.max_host_runs = max(1, max_host_runs)
+        self._idle: list[Host] = []  # hosts waiting for a run
+        self._leaving: list[Host] = []  # hosts told to stop, not yet reaped
+        self._warm = False  # the runs render: a new host makes its OpenGL context first
 
-    def _start(self, spec: RunSpec, out_root: Path, *, ahead: bool = False) -> _Running:
-        """Start ``spec``'s worker; ``ahead``: forked, made ready, held at its gate until
-        :meth:`_go` (fork mode only)."""
+    def _hosts(self, running: Sequence[_Running]) -> list[Host]:
+        return [*self._idle, *self._leaving, *(r.host for r in running if r.host is not None)]
+
+    def _fork_host(self, running: Sequence[_Running]) -> Host:
+        close = [fd for h in self._hosts(running) for fd in h.fds()]
+        host = fork_host(max_runs=self.max_host_runs, close=close)
+        if self._warm:
+            host.warm()
+        return host
+
+    def _start_hosts(self, runs: int) -> None:
+        """Every slot's host at once, so that they get ready in parallel: those ``srr
+        suite`` started early (:func:`harness.suite.host.start_early`), then new ones."""
+        want = min(self.jobs, runs) if self.fork else 0
+        for host in take_early():
+            if len(self._idle) < want:
+                self._idle.append(host)
+                if self._warm:
+                    host.warm()
+            else:
+                host.stop()
+        while len(self._idle) < want and fork_safe():
+            self._idle.append(self._fork_host(()))
+
+    def _job(self, spec: RunSpec, out_root: Path) -> dict[str, object]:
         log_file = log_path(out_root, spec)
-        job = {**spec.job(), "out_root": str(out_root),
-               "baselines": None if self.baselines is None else str(self.baselines),
-               "clock_file": str(clock_path(log_file))}
         log_file.parent.mkdir(parents=True, exist_ok=True)
-        log = log_file.open("wb")
-        t0 = time.monotonic()  # before the worker exists: its own instants come after it
-        if ahead:
-            read, write = os.pipe()
-            self._gates.add(write)
-            try:
-                proc: subprocess.Popen[bytes] | _Forked = _fork_worker(
-                    job, log, gate=read, close=sorted(self._gates), warm=spec.renders)
-            finally:
-                os.close(read)
-            return _Running(spec, proc, log, t0, gate=write)
-        if self.fork and fork_safe():
-            return _Running(spec, _fork_worker(job, log, close=sorted(self._gates)), log, t0)
+        log_file.write_bytes(b"")
+        return {**spec.job(), "out_root": str(out_root),
+                "baselines": None if self.baselines is None else str(self.baselines),
+                "clock_file": str(clock_path(log_file)), "log": str(log_file)}
+
+    def _start(self, spec: RunSpec, out_root: Path, running: Sequence[_Running]) -> _Running:
+        """Start ``spec`` on an idle host, a new host (fork mode, while :func:`fork_safe`), or
+        else in a fresh ``python -m harness.suite.worker``."""
+        job = self._job(spec, out_root)
+        while self.fork and (self._idle or fork_safe()):
+            host = self._idle.pop() if self._idle else self._fork_host(running)
+            t0 = time.monotonic()  # before the host reads it: its own instants come after
+            if host.send(job):
+                return _Running(spec, t0, host=host)
+            self._retire(host)  # gone while it waited: a fresh one
         env = dict(os.environ)
         # the worker imports plug-ins ("module:Class") from here, like `srr run` does
         env["PYTHONPATH"] = os.pathsep.join(p for p in (os.getcwd(), env.get("PYTHONPATH"))
                                             if p)
-        proc = subprocess.Popen([sys.executable, "-m", "harness.suite.worker", json.dumps(job)],
-                                stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
-                                env=env, start_new_session=True)
-        return _Running(spec, proc, log, t0)
+        with Path(str(job["log"])).open("wb") as log:
+            t0 = time.monotonic()
+            proc = subprocess.Popen(
+                [sys.executable, "-m", "harness.suite.worker", json.dumps(job)],
+                stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, env=env,
+                start_new_session=True)
+        return _Running(spec, t0, proc=proc)
 
-    def _go(self, r: _Running) -> _Running:
-        """Let a worker started ahead begin its run: its timings and timeout count from here."""
-        assert r.gate is not None
-        r.t0 = time.monotonic()  # before the go: the worker's own instants come after it
-        with contextlib.suppress(OSError):  # it ended while it waited: reaped as it is
-            os.write(r.gate, b"g")
-        self._close_gate(r)
-        return r
+    def _retire(self, host: Host) -> None:
+        """Let ``host`` go (end of file on its jobs); reaped by :meth:`_reap_leaving`."""
+        host.close()
+        self._leaving.append(host)
 
-    def _close_gate(self, r: _Running) -> None:
-        if r.gate is not None:
-            self._gates.discard(r.gate)
-            os.close(r.gate)
-            r.gate = None
-
-    def _ahead(self, pending: Sequence[RunSpec]) -> int:
-        """How many workers to start ahead of a free slot."""
-        if not (self.fork and pending and fork_safe()):
-            return 0
-        return self.ahead
-
-    def _unstart(self, r: _Running, out_root: Path) -> None:
-        """A worker started ahead that never ran: stop it, leave nothing of it."""
-        with contextlib.suppress(ProcessLookupError):
-            os.kill(r.proc.pid, signal.SIGKILL)
-        self._close_gate(r)
-        with contextlib.suppress(ChildProcessError):
-            os.waitpid(r.proc.pid, 0)
-        r.log.close()
-        log = log_path(out_root, r.spec)
-        for path in (log, clock_path(log)):
-            with contextlib.suppress(OSError):
-                path.unlink()
+    def _reap_leaving(self, *, wait: bool = False) -> None:
+        for host in list(self._leaving):
+            if wait:
+                host.stop()
+            if host.ended():
+                self._leaving.remove(host)
 
     @staticmethod
     def _signal(r: _Running, sig: signal.Signals) -> None:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(r.proc.pid, sig)
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(r.pid, sig)
 
     def _stop(self, r: _Running, now: float) -> None:
         if r.kill_at is None:
@@ -283,8 +223,7 @@ class LocalExecutor:
             self._signal(r, signal.SIGKILL)
 
     def _outcome(self, r: _Running, out_root: Path) -> RunOutcome:
-        r.log.close()
-        code = r.proc.returncode
+        code = r.returncode
         assert code is not None  # reaped
         reaped = r.reaped if r.reaped is not None else time.monotonic()
         log = log_path(out_root, r.spec)
@@ -293,43 +232,66 @@ class LocalExecutor:
         outcome = outcome_of(r.spec, out_root, exit_code=code, error=error,
                              wall_s=reaped - r.t0, timed_out=r.timed_out, crash=crash, log=log,
                              peak_rss_mb=r.peak_rss_mb)
-        return dataclasses.replace(outcome, clock=take_clock(clock_path(log), r.t0, reaped))
+        return dataclasses.replace(outcome, clock=take_clock(clock_path(log), r.t0, reaped),
+                                   peak_rss_note=r.peak_rss_note)
 
-    @staticmethod
-    def _poll(r: _Running) -> bool:
-        """Reap ``r`` if it ended (``os.wait4``: its exit status and its own peak memory)."""
-        if r.proc.returncode is None:
-            pid, status, usage = os.wait4(r.proc.pid, os.WNOHANG)
-            if pid == 0:
+    def _poll(self, r: _Running) -> bool:
+        """Whether ``r`` ended; if so, how (its exit code, its own peak memory)."""
+        if r.returncode is not None:
+            return True
+        if r.host is not None:
+            return self._poll_host(r, r.host)
+        assert r.proc is not None
+        pid, status, usage = os.wait4(r.proc.pid, os.WNOHANG)
+        if pid == 0:
+            return False
+        r.reaped = time.monotonic()
+        r.returncode = r.proc.returncode = os.waitstatus_to_exitcode(status)
+        r.peak_rss_mb = peak_rss_mb(usage)
+        return True
+
+    def _poll_host(self, r: _Running, host: Host) -> bool:
+        answer = host.answer()
+        if answer is None:
+            if not host.ended():
                 return False
-            r.reaped = time.monotonic()
-            r.proc.returncode = os.waitstatus_to_exitcode(status)
-            r.peak_rss_mb = peak_rss_mb(usage)
+            answer = host.answer()  # it may have answered just before it ended
+        r.reaped = time.monotonic()
+        if answer is None:  # it died in the run: a signal, or the host itself failed
+            assert host.returncode is not None
+            r.returncode = host.returncode if host.returncode != 0 else 70
+            self._retire(host)
+            return True
+        r.returncode = int(answer["exit_code"])
+        rss = answer.get("peak_rss_mb")
+        r.peak_rss_mb = float(rss) if isinstance(rss, (int, float)) else None
+        note = answer.get("peak_rss_note")
+        r.peak_rss_note = str(note) if note else None
+        r.leaving = bool(answer.get("leaving", True)) or r.kill_at is not None
+        if r.leaving or host.ended():
+            self._retire(host)
+        else:
+            self._idle.append(host)
         return True
 
     def run(self, specs: Sequence[RunSpec], out_root: Path,
             listen: Listener) -> tuple[list[RunOutcome], bool]:
         pending = deque(specs)
-        preloaded = False  # after the first workers are forked: they need not wait for it
         running: list[_Running] = []
-        waiting: deque[_Running] = deque()  # started ahead, at their gates
         done: dict[str, RunOutcome] = {}
         interrupted = False
         stop = _StopRequests()
+        self._warm = any(s.renders for s in specs)
         with stop.installed():
             try:
-                while pending or waiting or running:
+                self._start_hosts(len(specs))
+                stop.check()
+                while pending or running:
                     stop.check()  # here, between steps: never inside a fork (see the class)
-                    while (pending or waiting) and len(running) < self.jobs:
-                        r = (self._go(waiting.popleft()) if waiting else
-                             self._start(pending.popleft(), out_root))
+                    while pending and len(running) < self.jobs:
+                        r = self._start(pending.popleft(), out_root, running)
                         running.append(r)
-                        listen(Event("start", r.spec, where=f"pid {r.proc.pid}"))
-                    if pending and not preloaded and self.fork and fork_safe():
-                        preload(pending)
-                        preloaded = True
-                    while pending and len(waiting) < self._ahead(pending):
-                        waiting.append(self._start(pending.popleft(), out_root, ahead=True))
+                        listen(Event("start", r.spec, where=f"pid {r.pid}"))
                     now = time.monotonic()
                     for r in list(running):
                         if self._reap(r, running, out_root, done, listen):
@@ -338,16 +300,24 @@ class LocalExecutor:
                                 r.timed_out or now - r.t0 > r.spec.timeout_s):
                             r.timed_out = True
                             self._stop(r, now)
-                    time.sleep(self.poll_s)
+                    self._reap_leaving()
+                    self._wait(running)
             except KeyboardInterrupt:
                 interrupted = True
-                while waiting:
-                    self._unstart(waiting.popleft(), out_root)
                 self._drain(running, out_root, done, listen)
+            finally:
+                while self._idle:
+                    self._retire(self._idle.pop())
+                self._reap_leaving(wait=True)
         for spec in specs:
             if spec.id not in done:
                 done[spec.id] = not_started(spec)
         return [done[s.id] for s in specs], interrupted
+
+    def _wait(self, running: Sequence[_Running]) -> None:
+        """Until a host answers, or ``poll_s`` (fresh processes, timeouts, a host's death)."""
+        fds = [r.host.results for r in running if r.host is not None and r.host.results >= 0]
+        select.select(fds, [], [], self.poll_s)
 
     def _reap(self, r: _Running, running: list[_Running], out_root: Path,
               done: dict[str, RunOutcome], listen: Listener) -> bool:
@@ -365,6 +335,8 @@ class LocalExecutor:
         leave. A second Ctrl-C here is ignored: the point is to leave valid files."""
         previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
+            while self._idle:
+                self._retire(self._idle.pop())
             while running:
                 now = time.monotonic()
                 for r in list(running):

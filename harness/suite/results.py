@@ -61,6 +61,8 @@ class RunOutcome:
     metrics: tuple[Mapping[str, Any], ...] = ()  # summary["metrics"] (trusted runs only)
     comparison: tuple[Mapping[str, Any], ...] = ()
     peak_rss_mb: float | None = None  # the worker process's peak resident memory
+    #: Why ``peak_rss_mb`` is None for a run that ran (a host could not reset its peak)
+    peak_rss_note: str | None = None
     #: When it was submitted and reaped, and the worker's :data:`harness.suite.worker.PHASES`
     #: (``time.monotonic`` instants of this machine; :mod:`harness.suite.timeline`)
     clock: Mapping[str, float] | None = None
@@ -75,6 +77,7 @@ class RunOutcome:
             "run_dir": self.run_dir, "report": self.report, "log": self.log,
             "digest": self.digest, "timed_out": self.timed_out, "crash": self.crash,
             "metrics": {m["name"]: m.get("value") for m in self.metrics},
+            **({"peak_rss_note": self.peak_rss_note} if self.peak_rss_note else {}),
         }
 
 

@@ -7,8 +7,6 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from scipy import stats as _st
-
 __all__ = ["Stats", "describe"]
 
 
@@ -32,6 +30,10 @@ def describe(values: Sequence[float]) -> Stats | None:
     std = math.sqrt(math.fsum((x - mean) ** 2 for x in xs) / (n - 1)) if n > 1 else 0.0
     ci: tuple[float, float] | None = None
     if n > 1:
+        # here, not at the top: SciPy's stats take a quarter of srr's import time, and the
+        # suite needs them only once its runs are done (srr suite starts faster)
+        from scipy import stats as _st
+
         half = float(_st.t.ppf(0.975, n - 1)) * std / math.sqrt(n)
         ci = (mean - half, mean + half)
     return Stats(n, mean, std, min(xs), max(xs), ci)

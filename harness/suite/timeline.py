@@ -80,8 +80,12 @@ def take_clock(path: Path, submitted: float, reaped: float) -> dict[str, float]:
 
 
 def run_timings(clock: Mapping[str, float] | None, t0: float) -> dict[str, Any] | None:
-    """``{"started_s", "finished_s", "steps": {step: seconds}, "gl_context_s"}``: seconds
-    from ``t0`` (the suite's start) and the :data:`STEPS` whose both ends are known."""
+    """``{"started_s", "finished_s", "steps": {step: seconds}, "gl_context_s", "warm_gl_s",
+    "gl_contexts"}``: seconds from ``t0`` (the suite's start), the :data:`STEPS` whose both
+    ends are known, the seconds the run spent making OpenGL contexts, those its process spent
+    making one before its first run, and how many contexts its process had made by its end
+    (a host that reuses its context: 1 over all its runs), and its process id (the runs of
+    one host share it)."""
     if not clock or "submitted" not in clock or "reaped" not in clock:
         return None
     steps = {name: round(clock[b] - clock[a], 3) for name, a, b in STEPS
@@ -89,7 +93,9 @@ def run_timings(clock: Mapping[str, float] | None, t0: float) -> dict[str, Any] 
     return {"started_s": round(clock["submitted"] - t0, 3),
             "finished_s": round(clock["reaped"] - t0, 3), "steps": steps,
             "gl_context_s": round(clock.get("gl_context_s", 0.0), 3),
-            "warm_gl_s": round(clock.get("warm_gl_s", 0.0), 3)}
+            "warm_gl_s": round(clock.get("warm_gl_s", 0.0), 3),
+            "gl_contexts": int(clock.get("gl_contexts", 0)),
+            "pid": int(clock["pid"]) if "pid" in clock else None}
 
 
 def suite_timeline(timings: Sequence[Mapping[str, Any] | None], *, jobs: int,

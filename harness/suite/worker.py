@@ -1,9 +1,10 @@
 """One run of a suite, in whatever process an executor gives it.
 
 :func:`run_job` runs a job (:meth:`RunSpec.job`) in the calling process and says how it ended;
-the local executor starts ``python -m harness.suite.worker JOB_JSON`` per run (a fresh process,
-so a crash, a leak or a hung renderer costs that run only), Ray calls :func:`run_job` in a
-task. The run directory is the only output that matters: the suite reads its
+the local executor runs it with :func:`serve` in a host process it forked
+(:mod:`harness.suite.host`) or starts ``python -m harness.suite.worker JOB_JSON`` per run (a
+fresh process), so a crash, a leak or a hung renderer costs that run only; Ray calls
+:func:`run_job` in a task. The run directory is the only output that matters: the suite reads its
 ``summary.json`` afterwards (:mod:`harness.suite.results`).
 
 Exit status of the module: the run's exit code (0, 1, 3), 2 when the run could not start (the
@@ -25,10 +26,10 @@ from harness.errors import SrrError
 from harness.interrupt import sigterm_as_interrupt
 from harness.run.loading import load
 from harness.run.simulate import run_scenario
-from harness.sim.render import gl_context_seconds
+from harness.sim.render import gl_context_seconds, gl_contexts_made
 from harness.suite.timeline import RunClock
 
-__all__ = ["peak_rss_mb", "run_job"]
+__all__ = ["peak_rss_mb", "run_job", "serve"]
 
 
 def run_job(job: Mapping[str, Any], out_root: str | Path,
@@ -39,13 +40,15 @@ def run_job(job: Mapping[str, Any], out_root: str | Path,
     {phase: instant, "gl_context_s": seconds}}``; ``error`` is the one-line reason when the
     run could not be started or finished (an :class:`~harness.errors.SrrError`);
     ``peak_rss_mb`` this process's peak resident memory; ``clock`` when the run reached each
-    of :data:`harness.suite.timeline.PHASES` and the seconds spent making OpenGL contexts."""
+    of :data:`harness.suite.timeline.PHASES` and the seconds this run spent making OpenGL
+    contexts."""
     clock = RunClock()
+    gl_before = gl_context_seconds()  # a host's earlier runs made theirs
     run_dir = Path(out_root) / str(job["run_dir"])
 
     def ended(code: int, error: str | None) -> dict[str, Any]:
         return {"exit_code": code, "error": error, "peak_rss_mb": peak_rss_mb(),
-                "clock": clock.to_json(gl_context_seconds())}
+                "clock": clock.to_json(gl_context_seconds() - gl_before)}
 
     try:
         with sigterm_as_interrupt():
@@ -69,20 +72,28 @@ def peak_rss_mb(usage: resource.struct_rusage | None = None) -> float:
     return round(ru.ru_maxrss / 1024.0, 1)  # Linux reports KiB
 
 
-def main(argv: list[str]) -> int:
-    if len(argv) != 1:
-        sys.stderr.write("usage: python -m harness.suite.worker JOB_JSON\n")
-        return 2
-    job = json.loads(argv[0])
-    os.environ.setdefault("MUJOCO_GL", "egl")
+def serve(job: Mapping[str, Any]) -> int:
+    """Run ``job`` (:meth:`RunSpec.job` with ``out_root``, ``baselines``, ``clock_file`` and
+    ``warm_gl_s``) here, leave its clock in ``clock_file`` (with ``gl_contexts``: the OpenGL
+    contexts this process has made so far, and ``pid``) and its error, if any, as the last line on
+    stderr; its exit code."""
     result = run_job(job, job["out_root"], job.get("baselines"))
     if job.get("clock_file"):  # for the suite's timeline
         write_json_atomic(Path(job["clock_file"]),
-                          {**result["clock"], "warm_gl_s": float(job.get("warm_gl_s", 0.0))})
+                          {**result["clock"], "warm_gl_s": float(job.get("warm_gl_s", 0.0)),
+                           "gl_contexts": gl_contexts_made(), "pid": os.getpid()})
     if result["error"]:
         sys.stderr.write(result["error"] + "\n")
     sys.stderr.flush()
     return int(result["exit_code"])
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 1:
+        sys.stderr.write("usage: python -m harness.suite.worker JOB_JSON\n")
+        return 2
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    return serve(json.loads(argv[0]))
 
 
 if __name__ == "__main__":

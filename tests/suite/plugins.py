@@ -10,6 +10,7 @@ from __future__ import annotations
 import ctypes
 import os
 import signal
+import sys
 import time
 from pathlib import Path
 
@@ -81,8 +82,84 @@ class Staller(RouteFollower):
 
 
 class PidDependent(RouteFollower):
-    """Drives at a speed that depends on its process id: flaky across processes."""
+    """Drives at a speed that depends on its process id and on how many runs that process has
+    set up before (counted where a run's plug-in modules do not reach: an attribute of
+    ``sys``, as a C library's global would): flaky across processes, and across the runs of
+    one suite's host."""
+
+    def setup(self, ctx: SutContext) -> None:
+        super().setup(ctx)
+        self.seq = getattr(sys, "_srr_test_setups", 0)
+        sys._srr_test_setups = self.seq + 1  # type: ignore[attr-defined]
 
     def step(self, now_ns: int) -> None:
-        self.p = type(self.p)(**{**self.p.__dict__, "speed": 1.0 + (os.getpid() % 9973) / 1e4})
+        speed = 1.0 + (os.getpid() % 997) / 1e4 + (self.seq % 10) / 1e1
+        self.p = type(self.p)(**{**self.p.__dict__, "speed": speed})
         super().step(now_ns)
+
+
+#: Set up in this module (a fresh process: 0 before the first run's set-up).
+SETUPS = 0
+
+
+class ModuleCounter(RouteFollower):
+    """Drives at a speed that depends on how many times this module has seen a set-up: the
+    same in every run only if each run imports its plug-ins afresh (as a process per run
+    does), whatever ran before it in the same process."""
+
+    def setup(self, ctx: SutContext) -> None:
+        global SETUPS
+        super().setup(ctx)
+        SETUPS += 1
+        self.seen = SETUPS
+
+    def step(self, now_ns: int) -> None:
+        self.p = type(self.p)(**{**self.p.__dict__, "speed": 1.0 + self.seen / 10})
+        super().step(now_ns)
+
+
+class Exits(RouteFollower):
+    """Says so on stdout, then ends its process with ``os._exit(3)`` 1 s into the run (no
+    clean-up, no answer to anyone)."""
+
+    def step(self, now_ns: int) -> None:
+        if now_ns >= 1_000_000_000:
+            print(f"exits: leaving the process {os.getpid()}", flush=True)
+            os._exit(3)
+        super().step(now_ns)
+
+
+#: Resident memory :class:`Hog` holds through its run.
+HOG_MB = 300
+
+
+class Hog(RouteFollower):
+    """Holds :data:`HOG_MB` MiB of resident memory (every page written) from its set-up to its
+    shutdown, and says so on stdout and stderr."""
+
+    def setup(self, ctx: SutContext) -> None:
+        super().setup(ctx)
+        if in_a_worker():
+            self.block = bytearray(HOG_MB << 20)
+            self.block[::4096] = b"\x01" * len(range(0, HOG_MB << 20, 4096))
+            print("hog: holding memory", flush=True)
+            print("hog: on stderr too", file=sys.stderr, flush=True)
+
+    def shutdown(self) -> None:
+        self.block = bytearray()
+        super().shutdown()
+
+
+class SetsMujocoCallback(RouteFollower):
+    """Sets MuJoCo's process-wide control callback (every actuator pushed by 0.5) in a worker
+    and never clears it: what a later run in the same process must not inherit."""
+
+    def setup(self, ctx: SutContext) -> None:
+        super().setup(ctx)
+        if in_a_worker():
+            import mujoco
+
+            def push(model: object, data: object) -> None:
+                data.ctrl[:] += 0.5  # type: ignore[attr-defined]
+
+            mujoco.set_mjcb_control(push)

@@ -31,7 +31,7 @@ def ctrl_c_during_fork():  # runs inside os.fork, in the parent, after the child
         os.kill(os.getpid(), signal.SIGINT)
 os.register_at_fork(after_in_parent=ctrl_c_during_fork)
 plan = plan_suite([sys.argv[1]])
-result = run_suite(plan, LocalExecutor(1, fork=True, ahead=0), out=Path(sys.argv[2]))
+result = run_suite(plan, LocalExecutor(1, fork=True), out=Path(sys.argv[2]))
 print("exit", result.exit_code)
 """
 

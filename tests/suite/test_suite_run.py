@@ -141,7 +141,8 @@ def _check_misbehaving(res: Any, out: Path) -> None:
 def test_local_suite_survives_crash_timeout_and_catches_flaky(suite_file: Path,
                                                              tmp_path: Path) -> None:
     out = tmp_path / "out"
-    res = api.suite([suite_file], executor="local", jobs=2, out=out)
+    # in hosts (what `srr suite` does) when this process may fork, else fresh processes
+    res = api.suite([suite_file], executor="local", jobs=2, out=out, fork=True)
     _check_misbehaving(res, out)
     assert res.summary["executor"] == "local" and res.summary["jobs"] == 2
     logs = {r["id"]: r["log"] for r in res.summary["runs"]}
