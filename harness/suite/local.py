@@ -37,16 +37,21 @@ import select
 import signal
 import subprocess
 import sys
-import threading
 import time
 from collections import deque
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from harness.suite.events import Event, Listener, log_path, not_started
-from harness.suite.host import MAX_RUNS, Host, fork_host, fork_safe_here, take_early
+from harness.suite.host import (
+    MAX_RUNS,
+    Host,
+    StopRequests,
+    fork_host,
+    fork_safe_here,
+    take_early,
+)
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, crash_reason, outcome_of
 from harness.suite.timeline import clock_path, take_clock
@@ -59,41 +64,6 @@ def fork_safe() -> bool:
     """Whether a worker may be forked from this process: Linux, no other Python thread, and
     no OpenGL context made here (:func:`harness.suite.host.fork_safe_here`)."""
     return fork_safe_here()
-
-
-class _StopRequests:
-    """Ctrl-C and SIGTERM while the executor starts and watches workers, taken as a request
-    the loop acts on between its steps (:meth:`check` raises :class:`KeyboardInterrupt`).
-
-    Why not let the signal raise where it lands: CPython runs ``os.fork``'s at-fork hooks
-    (``logging``'s lock release among them) in Python, and drops an exception raised there
-    ("Exception ignored in ..."), so a Ctrl-C that arrived while a worker was forked was lost
-    and the suite ran on (seen as a hang about one time in four on a loaded machine)."""
-
-    def __init__(self) -> None:
-        self.requested = False
-
-    def _request(self, signum: int, frame: Any) -> None:
-        self.requested = True
-
-    @contextlib.contextmanager
-    def installed(self) -> Iterator[None]:
-        """Take SIGINT and SIGTERM as requests within the block (main thread only; elsewhere
-        the handlers stay as they are)."""
-        if threading.current_thread() is not threading.main_thread():
-            yield
-            return
-        previous = {sig: signal.signal(sig, self._request)
-                    for sig in (signal.SIGINT, signal.SIGTERM)}
-        try:
-            yield
-        finally:
-            for sig, handler in previous.items():
-                signal.signal(sig, handler)
-
-    def check(self) -> None:
-        if self.requested:
-            raise KeyboardInterrupt
 
 
 @dataclass
@@ -280,7 +250,7 @@ class LocalExecutor:
         running: list[_Running] = []
         done: dict[str, RunOutcome] = {}
         interrupted = False
-        stop = _StopRequests()
+        stop = StopRequests()
         self._warm = any(s.renders for s in specs)
         with stop.installed():
             try:

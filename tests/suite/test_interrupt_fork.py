@@ -61,3 +61,41 @@ scenarios:
     # run never started
     assert runs["second#1"]["reasons"] == ["not started: the suite was interrupted"]
     assert runs["second#1"]["run_dir"] is None
+
+
+EARLY = """
+import os, signal, sys
+from harness.suite import host
+
+sent = []
+def ctrl_c_during_fork():  # inside os.fork, in the parent, after the second host exists
+    sent.append(True)
+    if len(sent) == 2:
+        os.kill(os.getpid(), signal.SIGINT)
+os.register_at_fork(after_in_parent=ctrl_c_during_fork)
+try:
+    host.start_early(4)
+except KeyboardInterrupt:
+    print("interrupted", len(sent), len(host.take_early()))
+    # every host forked was stopped and reaped: no child is left
+    try:
+        os.waitpid(-1, os.WNOHANG)
+        print("a child is left")
+    except ChildProcessError:
+        print("no child left")
+else:
+    print("not interrupted", len(host.take_early()))
+"""
+
+
+@pytest.mark.slow
+def test_a_ctrl_c_while_srr_suite_forks_its_hosts_stops_it() -> None:
+    """``srr suite`` forks its hosts before it checks the suite; a Ctrl-C landing in one of
+    those forks stops it there (it was lost, and the suite ran on)."""
+    proc = subprocess.run([sys.executable, "-c", EARLY], cwd=ROOT, capture_output=True,
+                          text=True, timeout=120,
+                          env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin",
+                               "MUJOCO_GL": "egl"})
+    assert "Exception ignored" not in proc.stderr, proc.stderr
+    assert proc.stdout.split() == ["interrupted", "2", "0", "no", "child", "left"], \
+        proc.stdout + proc.stderr
