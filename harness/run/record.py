@@ -36,21 +36,19 @@ import shutil
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from harness import runlock, runmarker
 from harness.bus import Bus
 from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
 from harness.errors import RunStopped, SrrError
-from harness.frames import Frames
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.output import ROS2_OUTPUT, OutputKind
 from harness.recording.bagfile import ChunkPolicy
 from harness.regression import baseline_path, save_baseline
 from harness.report.graphs import RunGraphs, write_graphs
-from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.run.baselines import baseline_name, baselines_dir, scene_config
 from harness.run.errors import InvalidRunError
@@ -68,6 +66,9 @@ from harness.scenario import Scenario
 from harness.scoring import Scores, scenario_frames, score_frames
 from harness.sut.base import SutContext
 from harness.sut.participant import Participant
+
+if TYPE_CHECKING:
+    from harness.frames import Frames
 
 __all__ = ["Loop", "Progress", "RunResult", "Started", "prepare", "record"]
 
@@ -325,6 +326,10 @@ def _write_outputs(scenario: Scenario, summary: RunSummary, run_dir: Path,
     write_junit(run_dir / "junit.xml", scenario.name, junit_cases(data))
     summary.write(run_dir)
     runmarker.clear(run_dir)
+    # imported here: the report (Jinja2, its plots) is needed only once a run has been
+    # recorded, so a run starts its loop without it
+    from harness.report.html import write_report
+
     try:
         write_report(run_dir, summary=data, scenario=scenario, frames=frames,
                      rebuild_graphs=rebuild_graphs, video=video)
