@@ -41,7 +41,7 @@ from harness.run.baselines import (
 )
 from harness.run.facts import combined_digest, default_run_dir, reproduce_command, versions
 from harness.run.loading import load
-from harness.run.record import Progress, RunResult, Started
+from harness.run.record import Progress, RunResult, Started, import_after_the_loop
 from harness.run.simulate import (
     ROS2_BRIDGE,
     Notice,
@@ -89,6 +89,7 @@ __all__ = [
     "diff_runs",
     "export_rerun",
     "graph_text",
+    "import_after_the_loop",
     "json_schema",
     "load",
     "plan_suite",

@@ -131,6 +131,14 @@ def test_starting_a_run_or_a_suite_loads_nothing_it_needs_only_later(module: str
     assert found["loaded"] == []
 
 
+def test_a_suite_imports_what_its_runs_need_at_their_end_before_it_forks() -> None:
+    # srr suite calls it before forking its hosts, which then share these modules
+    code = ("import json, sys\nfrom harness import api\napi.import_after_the_loop()\n"
+            f"print(json.dumps({{'missing': sorted(m for m in {LATER!r} "
+            "if m not in sys.modules)}))\n")
+    assert _modules_after(code) == {"missing": ["harness.diff", "harness.diff.metrics"]}
+
+
 @pytest.mark.parametrize("package", (*LAZY_PACKAGES, "harness.api"))
 def test_lazy_exports_are_the_submodules_objects(package: str) -> None:
     mod = importlib.import_module(package)

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import importlib
 import shutil
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -70,7 +71,13 @@ from harness.sut.participant import Participant
 if TYPE_CHECKING:
     from harness.frames import Frames
 
-__all__ = ["Loop", "Progress", "RunResult", "Started", "prepare", "record"]
+__all__ = ["AFTER_THE_LOOP", "Loop", "Progress", "RunResult", "Started", "import_after_the_loop",
+           "prepare", "record"]
+
+#: What a run imports only once it has been recorded, where it is used: scoring's frames and
+#: metrics (pandas, SciPy), the report (Jinja2, its plots). A run starts its loop without them.
+AFTER_THE_LOOP = ("harness.frames", "harness.metrics.control", "harness.metrics.health",
+                  "harness.metrics.perception", "harness.metrics.safety", "harness.report.html")
 
 Progress = Callable[[int, int], None]
 Started = Callable[[Path], None]  # told the run directory once it is created and owned
@@ -260,6 +267,14 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
     finally:
         loop.close()
     return _Ended()
+
+
+def import_after_the_loop() -> None:
+    """Import :data:`AFTER_THE_LOOP` now: a process about to fork workers for many runs (``srr
+    suite``) shares them with every worker (copy-on-write), instead of each importing them at
+    its first run's end."""
+    for name in AFTER_THE_LOOP:
+        importlib.import_module(name)
 
 
 def _score(scenario: Scenario, loop: Loop, recorder: Any, stats: Any, run_dir: Path,
