@@ -27,11 +27,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from harness import runlock
-from harness.diff import DiffResult, Tolerance
-from harness.diff import diff_runs as _diff_runs
+from harness._lazy import lazy_exports
 from harness.engine import Simulation
 from harness.errors import SrrError
-from harness.export.rerun import RerunExport
 from harness.graph import stage_to_json, stage_to_mermaid
 from harness.live.config import LiveConfig
 from harness.run.baselines import (
@@ -43,10 +41,7 @@ from harness.run.baselines import (
 )
 from harness.run.facts import combined_digest, default_run_dir, reproduce_command, versions
 from harness.run.loading import load
-from harness.run.record import Progress, RunResult, Started
-from harness.run.recover import RecoverResult, recover
-from harness.run.replay import replay
-from harness.run.rerender import report
+from harness.run.record import Progress, RunResult, Started, import_after_the_loop
 from harness.run.simulate import (
     ROS2_BRIDGE,
     Notice,
@@ -63,6 +58,11 @@ from harness.suite.events import Listener
 from harness.suite.runner import SuitePlan, SuiteResult, plan_suite, run_suite
 
 if TYPE_CHECKING:  # srr search imports optuna lazily: only when it runs
+    from harness.diff import DiffResult, Tolerance
+    from harness.export.rerun import RerunExport
+    from harness.run.recover import RecoverResult, recover
+    from harness.run.replay import replay
+    from harness.run.rerender import report
     from harness.search.runner import SearchResult
 
 __all__ = [
@@ -89,6 +89,7 @@ __all__ = [
     "diff_runs",
     "export_rerun",
     "graph_text",
+    "import_after_the_loop",
     "json_schema",
     "load",
     "plan_suite",
@@ -109,6 +110,18 @@ __all__ = [
     "write_diff",
     "write_summary_md",
 ]
+
+# Commands that read a run back (recover, replay, re-render, export) import the bag readers,
+# pandas and the report: their names are imported on first use (harness._lazy), so that
+# `srr run` and `srr suite` start their runs without them.
+_WHERE = {
+    "RecoverResult": "harness.run.recover",
+    "RerunExport": "harness.export.rerun",
+    "recover": "harness.run.recover",
+    "replay": "harness.run.replay",
+    "report": "harness.run.rerender",
+}
+__getattr__, __dir__ = lazy_exports(__name__, _WHERE, globals())
 
 
 def build_graphs(scenario: Scenario, source: str = "<scenario>") -> Simulation:
@@ -131,6 +144,9 @@ def diff_runs(a: str | Path, b: str | Path, *,
     still being written (:mod:`harness.runlock`)."""
     for run in (a, b):
         runlock.refuse_if_live(run)
+    # imported here: only `srr diff` reads two runs back (pandas, the bag readers)
+    from harness.diff import diff_runs as _diff_runs
+
     return _diff_runs(a, b, tolerances=tolerances)
 
 

@@ -10,6 +10,7 @@ import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,23 +22,15 @@ from harness.camera_topics import (
     unrecorded_topics,
 )
 from harness.errors import ScenarioError
-from harness.frames import Frames, load_frames
-from harness.metrics import (
-    HealthResult,
-    MetricResult,
-    OutputSpec,
-    Tripwire,
-    control_metrics,
-    health_gates,
-    perception_metrics,
-    safety_metrics,
-)
-from harness.metrics.control import route_distance
 from harness.metrics.specs import as_bool, held, spec_metric, tick_grid
+from harness.metrics.types import HealthResult, MetricResult
 from harness.scenario import ControlScoring, RobotSpec, Scenario
 from harness.scenario.checks import spec_context
 from harness.scenario.specs import Formula, SignalRef, parse_formula
 from harness.sut.zones import points_in_polygon
+
+if TYPE_CHECKING:
+    from harness.frames import Frames
 
 __all__ = ["GT_SIGNALS", "ROBOT_RADIUS", "Scores", "check_scoring", "expected_rates",
            "odom_topic", "robot_radius", "scenario_frames", "score_frames", "score_run",
@@ -185,6 +178,17 @@ def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
                  recorded: Mapping[str, int] | None = None,
                  duration_s: float | None = None, source: str = "<scenario>") -> Scores:
     """Metrics and health gates for one run's frames."""
+    # imported here, as in scenario_frames and _signal: the metrics (pandas, SciPy) are needed
+    # once a run has been recorded, and check_scoring, used before a run starts, needs none
+    from harness.metrics import (
+        OutputSpec,
+        Tripwire,
+        control_metrics,
+        health_gates,
+        perception_metrics,
+        safety_metrics,
+    )
+
     check_scoring(sc, srr_gt=srr_gt, source=source)
     s = sc.scoring
     metrics: list[MetricResult] = []
@@ -227,6 +231,8 @@ def score_frames(sc: Scenario, frames: Frames, *, srr_gt: bool,
 def scenario_frames(sc: Scenario | None, bag_dir: Path) -> Frames:
     """The frames of a bag as ``sc``'s scoring reads them (its marker and muted topics; the
     defaults without a scenario)."""
+    from harness.frames import load_frames  # the bag readers and pandas (see score_frames)
+
     markers = None
     muted = "/safety/is_muted"
     if sc is not None:
@@ -302,6 +308,9 @@ def _gt_name(sc: Scenario, name: str) -> tuple[str, float]:
 def _signal(sc: Scenario, frames: Frames, ref: SignalRef, grid: np.ndarray
             ) -> tuple[np.ndarray, str]:
     """A signal's values on ``grid`` (NaN where undefined), or why it has none at all."""
+    from harness.metrics.control import route_distance  # see score_frames
+    from harness.metrics.safety import Tripwire
+
     def xy(name: str) -> tuple[np.ndarray, str]:
         gt_name, _ = _gt_name(sc, name)
         g = frames.gt(gt_name)

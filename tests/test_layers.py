@@ -112,7 +112,34 @@ def test_the_command_line_parses_without_loading_the_api(argv: list[str]) -> Non
     assert found["loaded"] == []
 
 
-@pytest.mark.parametrize("package", LAZY_PACKAGES)
+#: What a run needs only once it has been recorded (scoring, the report, reading a bag back),
+#: or only some commands need (``srr diff``, ``recover``, ``replay``, ``export``): the suite's
+#: process and a run's start-up import none of it (issue 26).
+LATER = ("pandas", "scipy.spatial", "scipy.optimize", "jinja2", "mcap.reader",
+         "harness.recording.bagread", "harness.frames", "harness.metrics.perception",
+         "harness.diff", "harness.diff.metrics", "harness.report.html")
+
+
+@pytest.mark.parametrize("module", ["harness.api", "harness.suite.runner",
+                                    "harness.run.simulate"])
+def test_starting_a_run_or_a_suite_loads_nothing_it_needs_only_later(module: str) -> None:
+    code = (f"import json, sys\nimport {module}\n"
+            f"print(json.dumps({{'loaded': sorted(m for m in {LATER!r} if m in sys.modules), "
+            "'mujoco': 'mujoco' in sys.modules}))\n")
+    found = _modules_after(code)
+    assert found["mujoco"] is True  # what the run needs before its loop is imported
+    assert found["loaded"] == []
+
+
+def test_a_suite_imports_what_its_runs_need_at_their_end_before_it_forks() -> None:
+    # srr suite calls it before forking its hosts, which then share these modules
+    code = ("import json, sys\nfrom harness import api\napi.import_after_the_loop()\n"
+            f"print(json.dumps({{'missing': sorted(m for m in {LATER!r} "
+            "if m not in sys.modules)}))\n")
+    assert _modules_after(code) == {"missing": ["harness.diff", "harness.diff.metrics"]}
+
+
+@pytest.mark.parametrize("package", (*LAZY_PACKAGES, "harness.api"))
 def test_lazy_exports_are_the_submodules_objects(package: str) -> None:
     mod = importlib.import_module(package)
     names = list(mod.__all__)

@@ -40,7 +40,7 @@ import numpy as np
 import pandas as pd
 
 from harness.frames import Frames
-from harness.metrics.types import MetricResult
+from harness.metrics.types import NEAR_AT, PASS_AT, MetricResult
 
 __all__ = [
     "NEAR_AT",
@@ -55,9 +55,6 @@ __all__ = [
 
 Point = tuple[float, float]
 
-#: match-rate bands (%): PASS at or above PASS_AT, NEAR at or above NEAR_AT, FAIL below
-PASS_AT = 95.0
-NEAR_AT = 80.0
 
 
 @dataclass(frozen=True)

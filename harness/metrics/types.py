@@ -5,7 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
-__all__ = ["Direction", "HealthResult", "MetricResult"]
+__all__ = ["NEAR_AT", "PASS_AT", "Direction", "HealthResult", "MetricResult"]
+
+#: match-rate bands (%): PASS at or above PASS_AT, NEAR at or above NEAR_AT, FAIL below
+#: (here, not in harness.metrics.safety, so that the verdict needs no pandas)
+PASS_AT = 95.0
+NEAR_AT = 80.0
 
 Direction = Literal["lower", "higher", "none"]
 

@@ -20,7 +20,6 @@ from pathlib import Path
 from mcap.writer import CompressionType, Writer
 
 from harness.errors import reason
-from harness.recording.bagread import mcap_records, open_recording, ros1_recording
 from harness.recording.errors import BagError
 from harness.serde.ros1 import ros2_type
 
@@ -58,6 +57,10 @@ def write_reference(bag_dir: Path, path: Path) -> ReferenceInfo:
     """Copy the kept topics of the run's bag (rosbag2 directory with one MCAP, or a ROS 1
     run's ``.bag`` or ``ros1`` MCAP) to ``path``, atomically (a temporary file renamed into
     place)."""
+    # imported here: the bag readers (rosbags, mcap's reader) are needed only when a run is
+    # blessed, not by every importer of the regression layer
+    from harness.recording.bagread import mcap_records, ros1_recording
+
     ros1 = ros1_recording(Path(bag_dir))
     if ros1 is not None and ros1.suffix == ".bag":
         return _reference_from_bag(ros1, path)
@@ -100,6 +103,8 @@ def write_reference(bag_dir: Path, path: Path) -> ReferenceInfo:
 def _reference_from_bag(bag: Path, path: Path) -> ReferenceInfo:
     """:func:`write_reference` of a ROS 1 ``.bag``: the kept connections as ``ros1msg``
     schemas and ``ros1`` channels (callerid, latching), messages byte for byte."""
+    from harness.recording.bagread import open_recording  # as in write_reference
+
     tmp = path.with_name(path.name + ".tmp")
     counts: dict[str, int] = {}
     what = f"cannot write the reference recording {path}"

@@ -20,8 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
-from harness.metrics.safety import NEAR_AT
-from harness.metrics.types import HealthResult, MetricResult
+from harness.metrics.types import NEAR_AT, HealthResult, MetricResult
 from harness.regression.compare import Comparison
 
 __all__ = ["GOAL_REACHED", "GOAL_REACHED_AT", "OK_VERDICTS", "Verdict", "absolute_failures",

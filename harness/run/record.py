@@ -32,25 +32,24 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import importlib
 import shutil
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from harness import runlock, runmarker
 from harness.bus import Bus
 from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
 from harness.errors import RunStopped, SrrError
-from harness.frames import Frames
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.output import ROS2_OUTPUT, OutputKind
 from harness.recording.bagfile import ChunkPolicy
 from harness.regression import baseline_path, save_baseline
 from harness.report.graphs import RunGraphs, write_graphs
-from harness.report.html import write_report
 from harness.report.junit import junit_cases, write_junit
 from harness.run.baselines import baseline_name, baselines_dir, scene_config
 from harness.run.errors import InvalidRunError
@@ -69,7 +68,16 @@ from harness.scoring import Scores, scenario_frames, score_frames
 from harness.sut.base import SutContext
 from harness.sut.participant import Participant
 
-__all__ = ["Loop", "Progress", "RunResult", "Started", "prepare", "record"]
+if TYPE_CHECKING:
+    from harness.frames import Frames
+
+__all__ = ["AFTER_THE_LOOP", "Loop", "Progress", "RunResult", "Started", "import_after_the_loop",
+           "prepare", "record"]
+
+#: What a run imports only once it has been recorded, where it is used: scoring's frames and
+#: metrics (pandas, SciPy), the report (Jinja2, its plots). A run starts its loop without them.
+AFTER_THE_LOOP = ("harness.frames", "harness.metrics.control", "harness.metrics.health",
+                  "harness.metrics.perception", "harness.metrics.safety", "harness.report.html")
 
 Progress = Callable[[int, int], None]
 Started = Callable[[Path], None]  # told the run directory once it is created and owned
@@ -261,6 +269,14 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
     return _Ended()
 
 
+def import_after_the_loop() -> None:
+    """Import :data:`AFTER_THE_LOOP` now: a process about to fork workers for many runs (``srr
+    suite``) shares them with every worker (copy-on-write), instead of each importing them at
+    its first run's end."""
+    for name in AFTER_THE_LOOP:
+        importlib.import_module(name)
+
+
 def _score(scenario: Scenario, loop: Loop, recorder: Any, stats: Any, run_dir: Path,
            source: str) -> tuple[Scores, Frames, dict[str, TopicRow], float]:
     """Score what the (closed) recorder recorded, ``stats`` its per-topic statistics: the
@@ -325,6 +341,10 @@ def _write_outputs(scenario: Scenario, summary: RunSummary, run_dir: Path,
     write_junit(run_dir / "junit.xml", scenario.name, junit_cases(data))
     summary.write(run_dir)
     runmarker.clear(run_dir)
+    # imported here: the report (Jinja2, its plots) is needed only once a run has been
+    # recorded, so a run starts its loop without it
+    from harness.report.html import write_report
+
     try:
         write_report(run_dir, summary=data, scenario=scenario, frames=frames,
                      rebuild_graphs=rebuild_graphs, video=video)

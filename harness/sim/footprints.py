@@ -25,7 +25,6 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from harness.geometry import FloatArray
 
@@ -103,6 +102,10 @@ def geom_points(model: mujoco.MjModel, data: mujoco.MjData, geom: int) -> FloatA
 
 def _outline(xy: FloatArray) -> FloatArray:
     """Convex hull of 2-D points, counter-clockwise; a degenerate set: its bounding box."""
+    # imported here: SciPy's spatial package takes long to import and only scenes with a
+    # world file (sim.world_file) draw footprints
+    from scipy.spatial import ConvexHull, QhullError
+
     try:
         hull = ConvexHull(xy)
         return np.asarray(xy[hull.vertices], dtype=np.float64)

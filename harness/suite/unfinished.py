@@ -24,8 +24,6 @@ from harness.metrics.types import HealthResult
 from harness.report.junit import junit_cases, write_junit
 from harness.run.facts import combined_digest, reproduce_command, versions, write_scenario
 from harness.run.loading import load
-from harness.run.recover import recover
-from harness.run.rerender import report
 from harness.run.summary import RunSummary
 from harness.suite.plan import RunSpec
 from harness.summary import SUMMARY_NAME
@@ -51,6 +49,10 @@ def _salvage(run_path: Path) -> str | None:
     Raises :class:`SrrError` when there was something that could not be recovered."""
     if runmarker.read(run_path) is None or not (run_path / "bag").is_dir():
         return None  # not even the recorder was made: nothing to recover
+    # imported here: the bag readers and the report, needed only for a run that was killed
+    from harness.run.recover import recover
+    from harness.run.rerender import report
+
     res = recover(run_path)
     with contextlib.suppress(SrrError):
         report(run_path)

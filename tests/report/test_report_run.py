@@ -16,10 +16,10 @@ import pytest
 from harness import api
 from harness.cli import main
 from harness.errors import SrrError
+from harness.report import html as report_html
 from harness.report import render_report
 from harness.report.data import load_run, metric_windows
 from harness.report.images import keyframes
-from harness.run import record
 
 pytestmark = pytest.mark.slow
 
@@ -179,7 +179,7 @@ def test_summary_is_kept_when_the_report_fails(tmp_path: Path,
     def broken(*args: object, **kwargs: object) -> None:
         raise RuntimeError("boom")
 
-    monkeypatch.setattr(record, "write_report", broken)
+    monkeypatch.setattr(report_html, "write_report", broken)  # the run imports it at its end
     sc = api.load(Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml",
                   duration=0.5)
     with pytest.raises(SrrError, match=r"report\.html.*boom"):
