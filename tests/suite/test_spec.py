@@ -153,3 +153,19 @@ def test_stats_known_values() -> None:
     one = describe([5.0])
     assert one is not None and one.std == 0.0 and one.ci95 is None
     assert describe([]) is None
+
+
+@pytest.mark.parametrize("n", [2, 3, 7, 30, 200])
+def test_stats_ci_is_scipy_students_t_interval(n: int) -> None:
+    """The 95 % interval is Student's t interval, bit for bit what scipy.stats gives (the
+    quantile comes from scipy.special, which imports in a sixth of the time)."""
+    from scipy import stats
+
+    xs = [float((i * 7919) % 101) / 10.0 for i in range(n)]
+    d = describe(xs)
+    assert d is not None and d.ci95 is not None
+    lo, hi = stats.t.interval(0.95, n - 1, loc=d.mean, scale=d.std / math.sqrt(n))
+    half = float(stats.t.ppf(0.975, n - 1)) * d.std / math.sqrt(n)
+    assert d.ci95 == (d.mean - half, d.mean + half)
+    assert math.isclose(d.ci95[0], lo, rel_tol=1e-12) and math.isclose(d.ci95[1], hi,
+                                                                      rel_tol=1e-12)
