@@ -270,6 +270,9 @@ class LocalExecutor:
                                 r.timed_out or now - r.t0 > r.spec.timeout_s):
                             r.timed_out = True
                             self._stop(r, now)
+                    if not pending:  # no run left to start: idle hosts end now, so their
+                        while self._idle:  # processes (and GL contexts) go beside the last runs
+                            self._retire(self._idle.pop())
                     self._reap_leaving()
                     self._wait(running)
             except KeyboardInterrupt:

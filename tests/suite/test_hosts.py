@@ -294,6 +294,40 @@ scenarios:
     assert summary["interrupted"] and summary["topics"]["/clock"]["count"] > 0
 
 
+def test_an_idle_host_ends_once_no_run_is_left_to_start(tmp_path: Path) -> None:
+    """Once every run has started, a host whose run is done ends at once (its process and
+    OpenGL context go beside the runs still going), not when the last run is done."""
+    stalled = tmp_path / "stalled"
+    text = f"""
+scenarios:
+  - path: {FORKLIFT}
+    name: slow
+    set: {{duration: 3, {PLUGIN}: "tests.suite.plugins:Staller"}}
+  - path: {FORKLIFT}
+    name: quick
+    set: {{duration: 1}}
+"""
+    proc = _suite(tmp_path, text, jobs=2, env={STALLED_FILE: str(stalled)})
+
+    def hosts() -> list[int]:
+        return [int(p.name) for p in Path("/proc").iterdir() if p.name.isdigit()
+                and _ppid(p) == proc.pid and _alive(int(p.name))]
+
+    quick = tmp_path / "out" / "runs" / "quick"
+    while not (stalled.exists() and any(quick.rglob("summary.json"))):
+        assert proc.poll() is None, proc.communicate()[0]
+        time.sleep(0.05)
+    deadline = time.monotonic() + 120  # a guard only: the quick run's host ends by itself
+    while len(hosts()) > 1:
+        assert time.monotonic() < deadline, f"idle hosts ran on: {hosts()}"
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    log = proc.communicate(timeout=300)[0]
+    runs = _runs(tmp_path / "out")
+    assert runs["quick#1"]["verdict"] not in ("INTERRUPTED", "INVALID"), log  # it finished
+    assert runs["slow#1"]["verdict"] == "INTERRUPTED", log
+
+
 def _ppid(proc_dir: Path) -> int | None:
     try:
         stat = (proc_dir / "stat").read_text()
