@@ -8,7 +8,8 @@ suite is still being checked (``srr suite`` forks its hosts early:
 :func:`harness.suite.host.start_early`), instead of once per run (0.3 s alone, 1.4 s each when
 16 processes make one at once on a GPU host). A host is replaced by a fresh one after
 :data:`harness.suite.host.MAX_RUNS` runs, after a run that ended otherwise than 0 or 1 (failed,
-interrupted, could not start) or left a thread running, and when it dies. Forking is done only
+interrupted, could not start) or left a thread running, and when it dies; once no run is left
+to start, an idle host ends at once, beside the last runs. Forking is done only
 on Linux and only while the suite's process is as clean as a fresh one — no other Python
 thread (a live progress display), no OpenGL context ever made here (its driver's threads and
 locks would not survive the fork); else, and by default, each run is a fresh ``python -m
