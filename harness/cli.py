@@ -691,7 +691,6 @@ def _suite(args: argparse.Namespace) -> int:
     if args.executor == "local":  # its hosts make their OpenGL contexts while this one plans
         import os
 
-        api.import_after_the_loop()  # what every run needs at its end: the hosts share it
         start_early(args.jobs if args.jobs is not None else os.cpu_count() or 1)
 
     if args.update_baselines and not args.reason:

@@ -230,6 +230,12 @@ def fork_host(*, max_runs: int = MAX_RUNS, warm: bool = False,
     they would not see end of file). It imports what runs need (``warm``: after making its
     OpenGL context), then waits for its jobs (:meth:`Host.warm` first, if the runs
     render)."""
+    # What every run imports at its end (scoring, report): imported here, before the fork,
+    # the hosts share it (copy-on-write) instead of each importing it at its first run's end
+    # (and a run's peak memory stays measured as in a host that has it).
+    from harness.run.record import import_after_the_loop
+
+    import_after_the_loop()
     jobs_r, jobs_w = os.pipe()
     results_r, results_w = os.pipe()
     sys.stdout.flush()

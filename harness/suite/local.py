@@ -174,6 +174,10 @@ class LocalExecutor:
         host.close()
         self._leaving.append(host)
 
+    def _retire_idle(self) -> None:
+        while self._idle:
+            self._retire(self._idle.pop())
+
     def _reap_leaving(self, *, wait: bool = False) -> None:
         for host in list(self._leaving):
             if wait:
@@ -272,16 +276,14 @@ class LocalExecutor:
                             r.timed_out = True
                             self._stop(r, now)
                     if not pending:  # no run left to start: idle hosts end now, so their
-                        while self._idle:  # processes (and GL contexts) go beside the last runs
-                            self._retire(self._idle.pop())
+                        self._retire_idle()  # processes (and GL contexts) go beside the last runs
                     self._reap_leaving()
                     self._wait(running)
             except KeyboardInterrupt:
                 interrupted = True
                 self._drain(running, out_root, done, listen)
             finally:
-                while self._idle:
-                    self._retire(self._idle.pop())
+                self._retire_idle()
                 self._reap_leaving(wait=True)
         for spec in specs:
             if spec.id not in done:
@@ -309,8 +311,7 @@ class LocalExecutor:
         leave. A second Ctrl-C here is ignored: the point is to leave valid files."""
         previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            while self._idle:
-                self._retire(self._idle.pop())
+            self._retire_idle()
             while running:
                 now = time.monotonic()
                 for r in list(running):

@@ -25,17 +25,11 @@ from harness.atomic import write_json_atomic
 from harness.errors import SrrError
 from harness.interrupt import sigterm_as_interrupt
 from harness.run.loading import load
-from harness.run.record import import_after_the_loop
 from harness.run.simulate import run_scenario
 from harness.sim.render import gl_context_seconds, gl_contexts_made
 from harness.suite.timeline import RunClock
 
 __all__ = ["peak_rss_mb", "run_job", "serve"]
-
-# Every run scores and writes its report once recorded (harness.run.record imports what that
-# needs where it is used): a process that runs suite runs imports it with this module, before
-# the local executor forks its workers from it, which then share it (copy-on-write).
-import_after_the_loop()
 
 
 def run_job(job: Mapping[str, Any], out_root: str | Path,
