@@ -192,21 +192,8 @@ def test_an_interrupted_suite_starts_nothing_more(tmp_path: Path) -> None:
     """Ctrl-C while the only slot's run is stuck: it is stopped and finalized, the next run
     is reported as not started and leaves nothing (no run directory, no log), and no host is
     left behind."""
-    stalled = tmp_path / "stalled"
-    text = f"""
-scenarios:
-  - path: {FORKLIFT}
-    name: slow
-    set: {{duration: 3, {PLUGIN}: "tests.suite.plugins:Staller"}}
-  - path: {FORKLIFT}
-    name: quick
-    set: {{duration: 1}}
-"""
-    proc = _suite(tmp_path, text, env={STALLED_FILE: str(stalled)})
+    proc = _stuck(tmp_path, quick=True)  # the slow run (the costlier: first) is stuck
     out = tmp_path / "out"
-    while not stalled.exists():  # the slow run (the costlier: first) is stuck mid-way
-        assert proc.poll() is None, proc.communicate()[0]
-        time.sleep(0.05)
     proc.send_signal(signal.SIGINT)
     log = proc.communicate(timeout=300)[0]
     assert proc.returncode == 0, log
@@ -268,19 +255,8 @@ def test_a_host_stops_and_finalizes_its_run_when_the_suite_is_killed(tmp_path: P
     """``kill -9`` of the suite's process while its host runs a run stuck mid-way (it never
     ends on its own): the host gets SIGTERM, the run finalizes its bag and summary
     (interrupted), and the host ends instead of running on alone."""
-    stalled = tmp_path / "stalled"
-    text = f"""
-scenarios:
-  - path: {FORKLIFT}
-    name: slow
-    set: {{duration: 3, {PLUGIN}: "tests.suite.plugins:Staller"}}
-"""
-    proc = _suite(tmp_path, text, env={STALLED_FILE: str(stalled)})
-    while not stalled.exists():  # the run is stuck mid-way, in its host
-        assert proc.poll() is None, proc.communicate()[0]
-        time.sleep(0.05)
-    children = [int(p.name) for p in Path("/proc").iterdir() if p.name.isdigit()
-                and _ppid(p) == proc.pid]
+    proc = _stuck(tmp_path)  # the run is stuck mid-way, in its host
+    children = _children(proc.pid)
     assert len(children) == 1, children
     host = children[0]
     proc.kill()
@@ -297,35 +273,48 @@ scenarios:
 def test_an_idle_host_ends_once_no_run_is_left_to_start(tmp_path: Path) -> None:
     """Once every run has started, a host whose run is done ends at once (its process and
     OpenGL context go beside the runs still going), not when the last run is done."""
-    stalled = tmp_path / "stalled"
-    text = f"""
-scenarios:
-  - path: {FORKLIFT}
-    name: slow
-    set: {{duration: 3, {PLUGIN}: "tests.suite.plugins:Staller"}}
-  - path: {FORKLIFT}
-    name: quick
-    set: {{duration: 1}}
-"""
-    proc = _suite(tmp_path, text, jobs=2, env={STALLED_FILE: str(stalled)})
-
-    def hosts() -> list[int]:
-        return [int(p.name) for p in Path("/proc").iterdir() if p.name.isdigit()
-                and _ppid(p) == proc.pid and _alive(int(p.name))]
-
+    proc = _stuck(tmp_path, quick=True, jobs=2)
     quick = tmp_path / "out" / "runs" / "quick"
-    while not (stalled.exists() and any(quick.rglob("summary.json"))):
+    while not any(quick.rglob("summary.json")):
         assert proc.poll() is None, proc.communicate()[0]
         time.sleep(0.05)
     deadline = time.monotonic() + 120  # a guard only: the quick run's host ends by itself
-    while len(hosts()) > 1:
-        assert time.monotonic() < deadline, f"idle hosts ran on: {hosts()}"
+    while len(_children(proc.pid)) > 1:
+        assert time.monotonic() < deadline, f"idle hosts ran on: {_children(proc.pid)}"
         time.sleep(0.05)
     proc.send_signal(signal.SIGINT)
     log = proc.communicate(timeout=300)[0]
     runs = _runs(tmp_path / "out")
     assert runs["quick#1"]["verdict"] not in ("INTERRUPTED", "INVALID"), log  # it finished
     assert runs["slow#1"]["verdict"] == "INTERRUPTED", log
+
+
+def _stuck(tmp_path: Path, *, quick: bool = False, jobs: int = 1) -> subprocess.Popen[str]:
+    """A suite whose run ``slow`` gets stuck mid-way (and, with ``quick``, a short run
+    ``quick`` after it), returned once ``slow`` is stuck."""
+    stalled = tmp_path / "stalled"
+    text = f"""
+scenarios:
+  - path: {FORKLIFT}
+    name: slow
+    set: {{duration: 3, {PLUGIN}: "tests.suite.plugins:Staller"}}
+"""
+    if quick:
+        text += f"""  - path: {FORKLIFT}
+    name: quick
+    set: {{duration: 1}}
+"""
+    proc = _suite(tmp_path, text, jobs=jobs, env={STALLED_FILE: str(stalled)})
+    while not stalled.exists():
+        assert proc.poll() is None, proc.communicate()[0]
+        time.sleep(0.05)
+    return proc
+
+
+def _children(pid: int) -> list[int]:
+    """The live child processes of ``pid`` (a suite's: its hosts)."""
+    return [int(p.name) for p in Path("/proc").iterdir() if p.name.isdigit()
+            and _ppid(p) == pid and _alive(int(p.name))]
 
 
 def _ppid(proc_dir: Path) -> int | None:
