@@ -685,10 +685,11 @@ def _cmd_suite(args: argparse.Namespace) -> int:
 
 def _suite(args: argparse.Namespace) -> int:
     from harness import api
-    from harness.suite.host import start_early
+    from harness.suite.host import start_early, warm_early
     from harness.suite.progress import SuiteProgress, groups_table
 
-    if args.executor == "local":  # its hosts make their OpenGL contexts while this one plans
+    local = args.executor == "local"
+    if local:  # its hosts start while this one plans (and make their OpenGL contexts then)
         import os
 
         start_early(args.jobs if args.jobs is not None else os.cpu_count() or 1)
@@ -703,7 +704,8 @@ def _suite(args: argparse.Namespace) -> int:
         holder["progress"](ev)
 
     with sigterm_as_interrupt():
-        plan = api.plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout)
+        plan = api.plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout,
+                              on_render=warm_early if local else None)
         for w in plan.warnings:
             _stderr().print(f"srr suite: warning: {w}", markup=False)
         with SuiteProgress(_stdout(), len(plan.runs), live=live) as progress:

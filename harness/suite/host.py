@@ -18,8 +18,9 @@ NumPy's error handling, the umask, the interpreter's switch interval, ``os.envir
 the working directory, ``sys.path``, the warnings filters, ``sys.stdout``/``sys.stderr``, the
 global ``random`` and NumPy RNG states, and the plug-in modules the run imported (dropped, so
 the next run imports them afresh, as a fresh process would). The OpenGL context is kept on
-purpose (:func:`harness.sim.render.keep_gl_contexts`): made once per host, in parallel with the
-other hosts while the suite starts. A run's recording does not depend on which of these it got
+purpose (:func:`harness.sim.render.keep_gl_contexts`): made once per host, when the suite's
+runs render (:meth:`Host.warm`), in parallel with the other hosts while the suite is checked. A
+run's recording does not depend on which of these it got
 (tests compare the bytes with a fresh process's).
 
 Peak memory per run: before each run the host resets its peak resident set (``5`` to
@@ -46,7 +47,7 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["MAX_RUNS", "Host", "StopRequests", "fork_host", "fork_safe_here", "start_early",
-           "stop_early", "take_early"]
+           "stop_early", "take_early", "warm_early"]
 
 #: Runs a host does before it is replaced by a fresh one. What one run can leave behind that
 #: :class:`_Baseline` cannot put back (a fragmented heap, caches of compiled expressions,
@@ -70,6 +71,7 @@ class Host:
     runs: int = 0  # jobs sent
     _buffer: bytes = b""
     returncode: int | None = None
+    warmed: bool = False  # told to make its OpenGL context (:meth:`warm`)
     _eof: bool = field(default=False, repr=False)
 
     def send(self, job: Mapping[str, Any]) -> bool:
@@ -83,7 +85,11 @@ class Host:
         return True
 
     def warm(self) -> None:
-        """Have it make its OpenGL context now, before its first run (the runs render)."""
+        """Have it make its OpenGL context now, before its first run (the runs render); once
+        per host."""
+        if self.warmed:
+            return
+        self.warmed = True
         with contextlib.suppress(OSError):  # gone: found when it is given a run
             os.write(self.jobs, b'{"warm": true}\n')
 
@@ -193,21 +199,32 @@ def fork_safe_here() -> bool:
 
 def start_early(n: int, *, max_runs: int = MAX_RUNS) -> None:
     """Fork ``n`` hosts now, where that is safe, for the suite this process is about to check
-    and run: each makes its OpenGL context (EGL; whether the runs will render is not known
-    yet, and 16 contexts made at once take 1.5 s on a GPU host) while this process checks the
-    suite; the local executor then takes them (:func:`take_early`). ``srr suite`` calls it
+    and run; the local executor then takes them (:func:`take_early`). ``srr suite`` calls it
     once it has imported srr (with MuJoCo, NumPy, pandas, SciPy): the hosts share those
     imports copy-on-write. Forking them before the imports, each importing for itself,
     measured slower on a 16-CPU GPU host: 16 processes importing at once slowed the suite's
-    own imports, and the first run began 1.8 s later."""
+    own imports, and the first run began 1.8 s later.
+
+    They make no OpenGL context until :func:`warm_early` (called by the suite's planning at
+    the first run that renders): then they make it while the rest of the suite is checked
+    (16 contexts made at once take 1.5 s on a GPU host). Hosts that made one for a suite
+    that does not render measured slower there: 30 CPU-only runs on 16 workers took 6.8 s
+    against 6.1 s, their runs 43.7 s against 25.3 s."""
     stop = StopRequests()  # a Ctrl-C during a fork would be lost (see StopRequests)
     with stop.installed():
         while len(_EARLY) < n and fork_safe_here() and not stop.requested:
-            _EARLY.append(fork_host(max_runs=max_runs, warm=True,
+            _EARLY.append(fork_host(max_runs=max_runs,
                                     close=[fd for h in _EARLY for fd in h.fds()]))
     if stop.requested:
         stop_early()
         raise KeyboardInterrupt
+
+
+def warm_early() -> None:
+    """Have the hosts :func:`start_early` made make their OpenGL contexts now (the suite's
+    runs render)."""
+    for host in _EARLY:
+        host.warm()
 
 
 def take_early() -> list[Host]:
@@ -224,12 +241,10 @@ def stop_early() -> None:
         host.stop()
 
 
-def fork_host(*, max_runs: int = MAX_RUNS, warm: bool = False,
-              close: Sequence[int] = ()) -> Host:
+def fork_host(*, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
     """Fork a host; ``close``: descriptors it must not keep (the other hosts' pipes, else
-    they would not see end of file). It imports what runs need (``warm``: after making its
-    OpenGL context), then waits for its jobs (:meth:`Host.warm` first, if the runs
-    render)."""
+    they would not see end of file). It imports what runs need, then waits for its jobs
+    (:meth:`Host.warm` first, if the runs render)."""
     # What every run imports at its end (scoring, report): imported here, before the fork,
     # the hosts share it (copy-on-write) instead of each importing it at its first run's end
     # (and a run's peak memory stays measured as in a host that has it).
@@ -248,7 +263,7 @@ def fork_host(*, max_runs: int = MAX_RUNS, warm: bool = False,
             for fd in (*close, jobs_w, results_r):
                 with contextlib.suppress(OSError):
                     os.close(fd)
-            code = _serve(jobs_r, results_w, max_runs=max_runs, warm=warm, suite=suite)
+            code = _serve(jobs_r, results_w, max_runs=max_runs, suite=suite)
         except BaseException:
             import traceback
 
@@ -265,7 +280,7 @@ def fork_host(*, max_runs: int = MAX_RUNS, warm: bool = False,
     return Host(pid, jobs_w, results_r)
 
 
-def _serve(jobs_r: int, results_w: int, *, max_runs: int, warm: bool, suite: int) -> int:
+def _serve(jobs_r: int, results_w: int, *, max_runs: int, suite: int) -> int:
     """The host's life: set up, then one run per job line until end of file or a reason to
     be replaced. Its exit status: 0."""
     os.setsid()  # the suite signals it (and what it started) as a group; no terminal's Ctrl-C
@@ -287,7 +302,7 @@ def _serve(jobs_r: int, results_w: int, *, max_runs: int, warm: bool, suite: int
     from harness.sim.render import keep_gl_contexts, warm_gl
 
     keep_gl_contexts()
-    warm_s = warm_gl() if warm else 0.0  # while the suite's process imports and checks
+    warm_s = 0.0  # seconds making its OpenGL context, counted in its first run's clock
     from harness.report.templates import environment
     from harness.suite.worker import serve
 

@@ -9,6 +9,7 @@ point (the *group*); a run is ``<group>#<repeat>``. Folders: ``runs/<entry>/<poi
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -63,11 +64,14 @@ def _point_runs(entry: Entry, point: Point, renders: bool, cost: float) -> list[
             for k in range(1, entry.repeat + 1)]
 
 
-def plan_runs(spec: SuiteSpec) -> tuple[RunSpec, ...]:
+def plan_runs(spec: SuiteSpec, *, on_render: Callable[[], None] | None = None,
+              ) -> tuple[RunSpec, ...]:
     """Every run of the suite, entries in order, points in grid order, repeats innermost.
 
     Each sweep point's scenario is loaded once here, so a path that does not exist or a value
-    out of range is reported (naming where the sweep was declared) before anything runs."""
+    out of range is reported (naming where the sweep was declared) before anything runs.
+    ``on_render`` is called once, as soon as a run that renders is planned (``srr suite``
+    then has its hosts make their OpenGL contexts while the rest is planned)."""
     runs: list[RunSpec] = []
     for entry in spec.entries:
         for point in expand(entry.sweep):
@@ -83,6 +87,9 @@ def plan_runs(spec: SuiteSpec) -> tuple[RunSpec, ...]:
             cameras = sum(c.enabled for c in sc.cameras) + sum(
                 r.enabled and r.sensors.camera is not None and r.sensors.camera.enabled
                 for r in sc.robots)
+            if cameras and on_render is not None:
+                on_render()
+                on_render = None
             runs += _point_runs(entry, point, cameras > 0, sc.duration * (1 + cameras))
     return tuple(runs)
 

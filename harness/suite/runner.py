@@ -4,7 +4,7 @@ outputs (``summary.json``, ``junit.xml``, ``index.html``)."""
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -55,13 +55,16 @@ def default_suite_dir(root: Path = Path("reports")) -> Path:
 
 
 def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
-               timeout_s: float | None = None) -> SuitePlan:
+               timeout_s: float | None = None,
+               on_render: Callable[[], None] | None = None) -> SuitePlan:
     """Everything ``srr validate`` checks, for every entry (its first sweep point: the world,
     graphs, systems under test and wiring are built once), and every point's scenario loaded,
-    before anything runs."""
+    before anything runs. ``on_render``: called once, as soon as a run that renders is
+    planned (:func:`~harness.suite.plan.plan_runs`)."""
     t0 = time.monotonic()
     spec = load_suite(paths, repeat=repeat, timeout_s=timeout_s)
-    runs = plan_runs(spec)  # every point loads: a bad sweep path names where it was declared
+    # every point loads: a bad sweep path names where it was declared
+    runs = plan_runs(spec, on_render=on_render)
     warnings: list[str] = []
     for entry in spec.entries:
         first = expand(entry.sweep)[0]

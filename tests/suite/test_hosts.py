@@ -332,3 +332,40 @@ def _alive(pid: int) -> bool:
     except OSError:
         return False
     return stat.rsplit(")", 1)[1].split()[0] != "Z"
+
+
+def _srr_suite(tmp_path: Path, text: str, jobs: int) -> dict[str, dict[str, Any]]:
+    """``srr suite`` itself (its hosts forked before the suite is checked)."""
+    tmp_path.mkdir()
+    suite = tmp_path / "suite.yaml"
+    suite.write_text(text, encoding="utf-8")
+    proc = subprocess.run([sys.executable, "-m", "harness.cli", "suite", str(suite), "--jobs",
+                           str(jobs), "--out", str(tmp_path / "out"), "-q"], cwd=ROOT, text=True,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True,
+                          timeout=600, check=False)
+    assert proc.returncode in (0, 1), proc.stdout + proc.stderr
+    return _runs(tmp_path / "out")
+
+
+def test_srr_suite_hosts_make_an_opengl_context_only_when_the_runs_render(
+        tmp_path: Path) -> None:
+    """The hosts ``srr suite`` forks before it checks the suite make their OpenGL context once
+    the check meets a run that renders: none for a suite without cameras (they made one each,
+    which slowed the runs: contexts are costly when many processes make one), one per host,
+    before its first run, for a suite with cameras."""
+    cpu = _srr_suite(tmp_path / "cpu", f"scenarios:\n  - {{path: {FORKLIFT}, repeat: 2, "
+                     "set: {duration: 0.5}}\n", jobs=2)
+    assert len(cpu) == 2
+    assert [r["timings"]["gl_contexts"] for r in cpu.values()] == [0, 0]
+    assert [r["timings"]["warm_gl_s"] for r in cpu.values()] == [0, 0]
+    # a suite whose second entry renders: found while checking, after the first
+    cams = _srr_suite(tmp_path / "cams", f"scenarios:\n  - {{path: {FORKLIFT}, repeat: 1, "
+                      f"set: {{duration: 0.5}}}}\n  - {{path: {CROSSING}, repeat: 1, "
+                      "set: {duration: 0.5}}\n", jobs=2)
+    assert len(cams) == 2
+    by_pid: dict[int, list[dict[str, Any]]] = {}
+    for run in sorted(cams.values(), key=lambda r: r["timings"]["started_s"]):
+        by_pid.setdefault(run["timings"]["pid"], []).append(run)
+    for runs in by_pid.values():  # made before the host's first run, none during a run
+        assert runs[0]["timings"]["warm_gl_s"] > 0
+        assert all(r["timings"]["gl_context_s"] == 0 for r in runs)
