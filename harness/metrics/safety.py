@@ -56,7 +56,6 @@ __all__ = [
 Point = tuple[float, float]
 
 
-
 @dataclass(frozen=True)
 class Tripwire:
     """A line segment ``a`` → ``b`` and the side of it that is inside the trailer."""

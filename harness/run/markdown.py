@@ -27,7 +27,6 @@ from harness.run.summary import RunSummary
 __all__ = ["default_link_base", "run_markdown", "write_markdown"]
 
 
-
 def default_link_base(target: Path, md_file: Path) -> str:
     """``target`` (a run or suite folder) relative to the folder the Markdown file is in, as
     a POSIX path ('' when they are the same folder): what a link in the file opens."""

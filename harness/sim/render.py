@@ -427,8 +427,7 @@ class Renderer:
             raise SimulationError("renderer is closed")
         if self._gl is None:
             vis = self._model.vis.global_
-            backend = str(getattr(mujoco.GLContext, "__module__", "")).rsplit(".", 1)[-1]
-            if backend == "glfw" and not (os.environ.get("DISPLAY")
+            if _backend() == "glfw" and not (os.environ.get("DISPLAY")
                                           or os.environ.get("WAYLAND_DISPLAY")):
                 # GLFW without a display aborts the process inside mjr_makeContext.
                 raise SimulationError(

@@ -68,7 +68,6 @@ class Host:
     pid: int
     jobs: int  # write end
     results: int  # read end
-    runs: int = 0  # jobs sent
     _buffer: bytes = b""
     returncode: int | None = None
     warmed: bool = False  # told to make its OpenGL context (:meth:`warm`)
@@ -81,7 +80,6 @@ class Host:
             os.write(self.jobs, line)  # far below the pipe's buffer: never blocks
         except OSError:
             return False
-        self.runs += 1
         return True
 
     def warm(self) -> None:
