@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 # Only what the parser needs is imported here: ``srr --help`` and argument errors load no
 # simulation, bus or rendering code. Each command imports the API when it runs.
 from harness import __version__
+from harness.blas import one_blas_thread
 from harness.errors import SrrError, shorten
 from harness.interrupt import sigterm_as_interrupt
 from harness.live.config import DEFAULT_PORT
@@ -829,6 +830,7 @@ COMMANDS = {"run": _cmd_run, "suite": _cmd_suite, "replay": _cmd_replay, "valida
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    one_blas_thread()  # before any command imports NumPy
     args = _parser().parse_args(argv)
     try:
         return COMMANDS[args.command](args)

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from harness.blas import users_environ
 from harness.bus.bus import Envelope, Qos
 from harness.errors import RunStopped, SrrError
 from harness.recording.recorder import Recorder, cdr_bytes
@@ -155,7 +156,8 @@ class Ros2Bridge(SystemUnderTest):
             return
         self.setup_notes = self._tf2_msgs()
         self.lease = lease_domain(self.spec.domain_id)
-        env = dict(os.environ)  # with tf2_msgs on PYTHONPATH for Python nodes
+        # with tf2_msgs on PYTHONPATH for Python nodes; their BLAS threads as the user set them
+        env = users_environ()
         env["ROS_DOMAIN_ID"] = str(self.lease.domain_id)
         env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = ("LOCALHOST" if self.spec.localhost_only
                                                 else "SUBNET")

@@ -16,6 +16,7 @@ import pytest
 from mcap.reader import make_reader
 
 from harness import api
+from harness.blas import one_blas_thread
 from harness.errors import SrrError
 from harness.ros2.domain import lease_domain
 from harness.serde.messages import TYPESTORE
@@ -102,6 +103,25 @@ def test_an_external_process_that_dies_makes_the_run_invalid(tmp_path: Path) -> 
     assert "external process commander exited with code 5" in gate["detail"]
     procs = json.loads((res.run_dir / "ros2" / "processes.json").read_text(encoding="utf-8"))
     assert procs[0]["exit_code"] == 5 and procs[0]["stopped_with"] is None
+
+
+@pytest.mark.parametrize(("srr_set", "seen"), [(True, "unset"), (False, "3")])
+def test_an_external_process_gets_the_users_blas_threads_not_srrs(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, srr_set: bool, seen: str) -> None:
+    """The ``srr`` command asks its own process for one OpenBLAS thread; the nodes it starts
+    see the variable only when the user set it."""
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "SRR_ADDED_OPENBLAS_NUM_THREADS"):
+        monkeypatch.delenv(var, raising=False)
+    if srr_set:
+        assert one_blas_thread() is True  # as `srr` does (monkeypatch restores the variables)
+    else:
+        monkeypatch.setenv("OPENBLAS_NUM_THREADS", "3")
+    cmd = json.dumps(["sh", "-c", 'echo "BLAS=${OPENBLAS_NUM_THREADS-unset}"; exit 5'])
+    sc = api.load(FORKLIFT, duration=1.0, overrides=[
+        *_overrides(timeout=10.0)[:-1], f"ros2.external=[{{name: probe, cmd: {cmd}}}]"])
+    with pytest.raises(SrrError, match="exited with code 5 before it was ready"):
+        api.run_scenario(sc, source=str(FORKLIFT), out=tmp_path / "run")
+    assert (tmp_path / "run" / "ros2" / "probe.log").read_text().strip() == f"BLAS={seen}"
 
 
 def test_runs_take_different_domains_and_release_them() -> None:
