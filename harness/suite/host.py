@@ -19,8 +19,8 @@ the working directory, ``sys.path``, the warnings filters, ``sys.stdout``/``sys.
 global ``random`` and NumPy RNG states, and the plug-in modules the run imported (dropped, so
 the next run imports them afresh, as a fresh process would). The OpenGL context is kept on
 purpose (:func:`harness.sim.render.keep_gl_contexts`): made once per host, when the suite's
-runs render (:meth:`Host.warm`), in parallel with the other hosts while the suite is checked. A
-run's recording does not depend on which of these it got
+runs render (:meth:`Host.warm`), while the suite is checked, at most :data:`WARM_AT_ONCE` hosts
+at a time (:func:`warm_slot`). A run's recording does not depend on which of these it got
 (tests compare the bytes with a fresh process's).
 
 Peak memory per run: before each run the host resets its peak resident set (``5`` to
@@ -46,14 +46,26 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["MAX_RUNS", "Host", "StopRequests", "fork_host", "fork_safe_here", "start_early",
-           "stop_early", "take_early", "warm_early"]
+__all__ = ["MAX_RUNS", "WARM_AT_ONCE", "Host", "StopRequests", "fork_host", "fork_safe_here",
+           "start_early", "stop_early", "take_early", "warm_early", "warm_slot"]
 
 #: Runs a host does before it is replaced by a fresh one. What one run can leave behind that
 #: :class:`_Baseline` cannot put back (a fragmented heap, caches of compiled expressions,
 #: driver memory) is bounded to this many runs, while a slot's runs in a nightly suite
 #: (59 runs on 16 workers: about 4 a slot) mostly share one host and one OpenGL context.
 MAX_RUNS = 8
+
+#: Hosts that make their OpenGL context at the same time. The driver makes contexts at about
+#: the same total rate however many processes ask (on the H100 host, one alone in 0.29 s, four
+#: at once in 0.33 s each, sixteen at once in 1.44 s each), so sixteen hosts asking at once all
+#: wait for the last one; in groups of four the first hosts start their runs sooner. H100 host,
+#: nightly on 16 workers, seven passes beside the unlimited hosts: the first run began 0.5-1.1 s
+#: earlier in every pass, the suites took 71.8 s against 75.6 s in all (8 at a time: no gain).
+WARM_AT_ONCE = 4
+# How long a host waits for its turn before it makes its context anyway (a host killed while
+# it held a turn never gives it back).
+_WARM_WAIT_S = 5.0
+_warm_gate: Any = None  # the semaphore, made by the suite's process before its first fork
 
 _HARNESS = str(Path(__file__).resolve().parents[1])
 _LIBRARIES = tuple({str(Path(p).resolve()) for p in
@@ -239,6 +251,20 @@ def stop_early() -> None:
         host.stop()
 
 
+@contextlib.contextmanager
+def warm_slot() -> Iterator[None]:
+    """Hold one of the :data:`WARM_AT_ONCE` turns to make an OpenGL context, shared by every
+    host this process forks (after :func:`fork_host`'s first call; before it, no limit), for at
+    most ``_WARM_WAIT_S`` of waiting."""
+    gate = _warm_gate
+    held = gate is not None and gate.acquire(timeout=_WARM_WAIT_S)
+    try:
+        yield
+    finally:
+        if held:
+            gate.release()
+
+
 def fork_host(*, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
     """Fork a host; ``close``: descriptors it must not keep (the other hosts' pipes, else
     they would not see end of file). It imports what runs need, then waits for its jobs
@@ -249,6 +275,11 @@ def fork_host(*, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
     from harness.run.record import import_after_the_loop
 
     import_after_the_loop()
+    global _warm_gate
+    if _warm_gate is None:  # a POSIX semaphore: the forked hosts share it
+        import multiprocessing
+
+        _warm_gate = multiprocessing.get_context("fork").Semaphore(WARM_AT_ONCE)
     jobs_r, jobs_w = os.pipe()
     results_r, results_w = os.pipe()
     sys.stdout.flush()
@@ -313,7 +344,8 @@ def _serve(jobs_r: int, results_w: int, *, max_runs: int, suite: int) -> int:
         for line in jobs:
             job = json.loads(line)
             if job.get("warm"):  # what rendering runs need, before the first
-                warm_s += warm_gl()  # none made if it has one
+                with warm_slot():
+                    warm_s += warm_gl()  # none made if it has one
                 with contextlib.suppress(Exception):  # a run without it reports this itself
                     import OpenGL.GL  # noqa: F401 - the renderer's name; no context made
                 continue

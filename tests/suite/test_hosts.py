@@ -369,3 +369,41 @@ def test_srr_suite_hosts_make_an_opengl_context_only_when_the_runs_render(
     for runs in by_pid.values():  # made before the host's first run, none during a run
         assert runs[0]["timings"]["warm_gl_s"] > 0
         assert all(r["timings"]["gl_context_s"] == 0 for r in runs)
+
+
+#: Hosts' turns to make an OpenGL context: the suite's process forks a host (which makes the
+#: shared semaphore), then children of it each take a turn and hold it; each prints when it
+#: held one.
+TURNS = """
+import os, sys, time
+from harness.suite.host import fork_host, warm_slot
+fork_host().stop()
+r, w = os.pipe()
+kids = []
+for _ in range(8):
+    pid = os.fork()
+    if pid == 0:
+        with warm_slot():
+            start = time.monotonic()
+            time.sleep(0.4)
+            os.write(w, f"{start} {time.monotonic()}\\n".encode())
+        os._exit(0)
+    kids.append(pid)
+os.close(w)
+for pid in kids:
+    os.waitpid(pid, 0)
+print(os.read(r, 65536).decode())
+"""
+
+
+def test_hosts_make_their_opengl_contexts_a_few_at_a_time() -> None:
+    from harness.suite.host import WARM_AT_ONCE
+
+    out = subprocess.run([sys.executable, "-c", TURNS], cwd=ROOT, capture_output=True,
+                         text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert out.returncode == 0, out.stderr
+    spans = [tuple(map(float, line.split())) for line in out.stdout.split("\n") if line]
+    assert len(spans) == 8
+    # how many held a turn at each instant one began
+    at_once = max(sum(a <= start < b for a, b in spans) for start, _ in spans)
+    assert 2 <= at_once <= WARM_AT_ONCE
