@@ -65,7 +65,8 @@ WARM_AT_ONCE = 4
 # How long a host waits for its turn before it makes its context anyway (a host killed while
 # it held a turn never gives it back).
 _WARM_WAIT_S = 5.0
-_warm_gate: Any = None  # the semaphore, made by the suite's process before its first fork
+# the semaphore, made by the suite's process before its first fork (False: none can be made)
+_warm_gate: Any = None
 
 _HARNESS = str(Path(__file__).resolve().parents[1])
 _LIBRARIES = tuple({str(Path(p).resolve()) for p in
@@ -254,10 +255,10 @@ def stop_early() -> None:
 @contextlib.contextmanager
 def warm_slot() -> Iterator[None]:
     """Hold one of the :data:`WARM_AT_ONCE` turns to make an OpenGL context, shared by every
-    host this process forks (after :func:`fork_host`'s first call; before it, no limit), for at
-    most ``_WARM_WAIT_S`` of waiting."""
+    host this process forks (after :func:`fork_host`'s first call; before it, or where the
+    platform has no shared semaphores, no limit), for at most ``_WARM_WAIT_S`` of waiting."""
     gate = _warm_gate
-    held = gate is not None and gate.acquire(timeout=_WARM_WAIT_S)
+    held = gate is not None and gate is not False and gate.acquire(timeout=_WARM_WAIT_S)
     try:
         yield
     finally:
@@ -279,7 +280,10 @@ def fork_host(*, max_runs: int = MAX_RUNS, close: Sequence[int] = ()) -> Host:
     if _warm_gate is None:  # a POSIX semaphore: the forked hosts share it
         import multiprocessing
 
-        _warm_gate = multiprocessing.get_context("fork").Semaphore(WARM_AT_ONCE)
+        try:
+            _warm_gate = multiprocessing.get_context("fork").Semaphore(WARM_AT_ONCE)
+        except (ImportError, OSError):  # no working sem_open here (no /dev/shm): no limit
+            _warm_gate = False
     jobs_r, jobs_w = os.pipe()
     results_r, results_w = os.pipe()
     sys.stdout.flush()
