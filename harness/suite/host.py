@@ -46,8 +46,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["MAX_RUNS", "WARM_AT_ONCE", "Host", "StopRequests", "fork_host", "fork_safe_here",
-           "start_early", "stop_early", "take_early", "warm_early", "warm_slot"]
+__all__ = ["MAX_RUNS", "WARM_AT_ONCE", "Host", "RunAfterRun", "StopRequests", "fork_host",
+           "fork_safe_here", "start_early", "stop_early", "stop_with_parent", "take_early",
+           "warm_early", "warm_slot"]
 
 #: Runs a host does before it is replaced by a fresh one. What one run can leave behind that
 #: :class:`_Baseline` cannot put back (a fragmented heap, caches of compiled expressions,
@@ -317,7 +318,7 @@ def _serve(jobs_r: int, results_w: int, *, max_runs: int, suite: int) -> int:
     """The host's life: set up, then one run per job line until end of file or a reason to
     be replaced. Its exit status: 0."""
     os.setsid()  # the suite signals it (and what it started) as a group; no terminal's Ctrl-C
-    _stop_with_parent(suite)
+    stop_with_parent(suite)
     null = os.open(os.devnull, os.O_RDWR)
     for fd in (0, 1, 2):  # between runs, nothing is written anywhere
         os.dup2(null, fd)
@@ -332,9 +333,8 @@ def _serve(jobs_r: int, results_w: int, *, max_runs: int, suite: int) -> int:
     if faulthandler.is_enabled():  # its dump goes to the current run's log (fd 2)
         faulthandler.enable(file=sys.stderr)
     sys.path.insert(0, os.getcwd())  # plug-ins import from here, like `srr run`
-    from harness.sim.render import keep_gl_contexts, warm_gl
+    from harness.sim.render import warm_gl
 
-    keep_gl_contexts()
     warm_s = 0.0  # seconds making its OpenGL context, counted in its first run's clock
     from harness.report.templates import environment
     from harness.suite.worker import serve
@@ -342,7 +342,7 @@ def _serve(jobs_r: int, results_w: int, *, max_runs: int, suite: int) -> int:
     env = environment()  # every run writes a report.html
     for name in env.list_templates(extensions=["html"]):
         env.get_template(name)
-    baseline = _Baseline.take()
+    between = RunAfterRun()  # from here on, OpenGL contexts are kept
     runs = 0
     with os.fdopen(jobs_r, "rb") as jobs:
         for line in jobs:
@@ -357,16 +357,15 @@ def _serve(jobs_r: int, results_w: int, *, max_runs: int, suite: int) -> int:
             os.dup2(log, 1)
             os.dup2(log, 2)
             os.close(log)
-            note = _reset_peak()
+            note = between.before()
             code = serve({**job, "warm_gl_s": warm_s})
             warm_s = 0.0
-            peak = _peak_mb() if note is None else None
             sys.stdout.flush()
             sys.stderr.flush()
             os.dup2(null, 1)
             os.dup2(null, 2)
             runs += 1
-            left = baseline.restore()
+            peak, left = between.after(note)
             leaving = code not in (0, 1) or bool(left) or runs >= max_runs
             answer = {"exit_code": code, "peak_rss_mb": peak, "peak_rss_note": note,
                       "leaving": leaving}
@@ -377,13 +376,14 @@ def _serve(jobs_r: int, results_w: int, *, max_runs: int, suite: int) -> int:
     return 0
 
 
-def _stop_with_parent(suite: int) -> None:
-    """SIGTERM to this host, once, when the suite's process ends, however (``kill -9``
-    included): a run in progress finalizes its bag and summary, as at its timeout, and the host
-    ends instead of running on alone. Linux ``PR_SET_PDEATHSIG``, with SIGHUP relayed as one
-    SIGTERM: the kernel sends the parent-death signal again each time the host passes to
-    another dying thread of the suite's process (its native thread pools), and a second
-    SIGTERM would cut the run's finalizing short. Nothing where ``prctl`` is missing."""
+def stop_with_parent(suite: int) -> None:
+    """SIGTERM to this process (a host; a run's own process under a Ray worker), once, when
+    its parent ``suite`` ends, however (``kill -9`` included): a run in progress finalizes its
+    bag and summary, as at its timeout, instead of running on alone. Linux
+    ``PR_SET_PDEATHSIG``, with SIGHUP relayed as one SIGTERM: the kernel sends the
+    parent-death signal again each time the process passes to another dying thread of its
+    parent (its native thread pools), and a second SIGTERM would cut the run's finalizing
+    short. Nothing where ``prctl`` is missing."""
     import ctypes
 
     try:
@@ -407,6 +407,32 @@ def _stop_with_parent(suite: int) -> None:
 
 _CLEAR_REFS = Path("/proc/self/clear_refs")
 _STATUS = Path("/proc/self/status")
+
+
+class RunAfterRun:
+    """What a process that runs one run after another (a host; a Ray worker) does around each
+    run, so that each records what a fresh process would and reports its own peak memory.
+
+    Made before the first run (keeping OpenGL contexts from then on, and taking the
+    process's :class:`_Baseline`): :meth:`before` each run resets the peak resident set,
+    :meth:`after` it reads that peak and puts the baseline back."""
+
+    def __init__(self) -> None:
+        from harness.sim.render import keep_gl_contexts
+
+        keep_gl_contexts()
+        self._baseline = _Baseline.take()
+
+    def before(self) -> str | None:
+        """Reset the peak memory; None, or why it could not be (then the run has no peak)."""
+        return _reset_peak()
+
+    def after(self, note: str | None) -> tuple[float | None, list[str]]:
+        """The run's peak memory (MiB; None where :meth:`before` said why not) and the names
+        of the threads it left running, once the rest of the process is put back (the
+        process must then run no other run: they may still touch what the next would use)."""
+        peak = _peak_mb() if note is None else None
+        return peak, self._baseline.restore()
 
 
 def _reset_peak() -> str | None:
@@ -446,6 +472,7 @@ class _Baseline:
     mujoco_callbacks: dict[str, Any]
     numpy_errors: Any  # np.geterr()
     umask: int
+    threads: frozenset[int]  # idents of the threads running then (a Ray worker has its own)
 
     @classmethod
     def take(cls) -> _Baseline:
@@ -472,7 +499,8 @@ class _Baseline:
         return cls(handlers, sys.getswitchinterval(), dict(os.environ), os.getcwd(),
                    list(sys.path), list(warnings.filters), (sys.stdout, sys.stderr),
                    random.getstate(), np.random.get_state(), frozenset(sys.modules),
-                   DEFAULT_REGISTRY.snapshot(), _mujoco_callbacks(), np.geterr(), umask)
+                   DEFAULT_REGISTRY.snapshot(), _mujoco_callbacks(), np.geterr(), umask,
+                   frozenset(t.ident for t in threading.enumerate() if t.ident is not None))
 
     def restore(self) -> list[str]:
         """Put it all back; the names of threads the run left running (the host must then
@@ -507,7 +535,7 @@ class _Baseline:
                 getattr(mujoco, f"set_{name}")(callback)
         np.seterr(**self.numpy_errors)
         os.umask(self.umask)
-        return [t.name for t in threading.enumerate() if t is not threading.main_thread()]
+        return [t.name for t in threading.enumerate() if t.ident not in self.threads]
 
 
 def _mujoco_callbacks() -> dict[str, Any]:

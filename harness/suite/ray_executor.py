@@ -3,11 +3,17 @@
 and stopped at the end (never a ``ray start`` cluster that happens to run on this machine).
 
 Each run is one task (``num_cpus=1``; runs that render also ask for ``gpu_share`` of a GPU
-when the cluster has GPUs) in a fresh worker process (``max_calls=1``) with no retries, so a
-segfault or an out-of-memory kill shows up as that run's ``WorkerCrashedError`` /
-``OutOfMemoryError`` (INVALID with the reason), never the suite's. A run past its timeout is
-cancelled (``ray.cancel``: first as an interrupt, so it finalizes, then forced after
-``grace_s``).
+when the cluster has GPUs) with no retries, so a segfault or an out-of-memory kill shows up as
+that run's ``WorkerCrashedError`` / ``OutOfMemoryError`` (INVALID with the reason), never the
+suite's. A run past its timeout is cancelled (``ray.cancel``: first as an interrupt, so it
+finalizes, then forced after ``grace_s``).
+
+A Ray worker process runs up to :data:`~harness.suite.host.MAX_RUNS` runs one after another
+(``max_calls``), as a local host does (:class:`~harness.suite.host.RunAfterRun`: what a run
+could leave behind is put back, each run's own peak memory, the OpenGL context kept), so a run
+does not pay for a fresh interpreter and its imports. A worker whose run left a thread running
+or was interrupted, or that is given a GPU other than the one its context was made on, runs
+its later runs each in a fresh process (``python -m harness.suite.worker``) instead.
 
 With an existing cluster the project folder (the current directory: scenarios, baselines,
 plug-ins; not ``reports/``, ``.venv/``, ``.git/``) travels as the job's ``working_dir``, and a
@@ -20,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import io
+import json
 import logging
 import os
 import tarfile
@@ -32,6 +39,7 @@ from typing import Any
 
 from harness.errors import SrrError
 from harness.suite.events import Event, Listener, not_started
+from harness.suite.host import MAX_RUNS
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, outcome_of
 
@@ -40,22 +48,88 @@ __all__ = ["RayExecutor"]
 _EXCLUDES = ["reports/", ".venv/", ".git/", "**/__pycache__/"]
 
 
+@dataclass
+class _Worker:
+    """This Ray worker process's state across its runs (see the module doc)."""
+
+    between: Any = None  # harness.suite.host.RunAfterRun, made by its first run here
+    device: str | None = None  # the EGL device its OpenGL context is on
+    fresh: bool = False  # every later run in a fresh process
+
+
+_WORKER = _Worker()
+
+
+def _run_fresh(job: dict[str, Any], out_root: str, baselines: str | None) -> dict[str, Any]:
+    """Run ``job`` in a fresh ``python -m harness.suite.worker``: :func:`run_job`'s answer
+    (its clock left out: the child's instants are not measured here), with ``crash`` when the
+    child was killed. An interrupt here (Ray's cancel) is passed on to the child as SIGTERM,
+    so the run finalizes as it would in this process."""
+    import signal
+    import subprocess
+    import sys
+
+    from harness.suite.results import crash_reason
+    from harness.suite.worker import STOP_WITH_PARENT, peak_rss_mb
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "harness.suite.worker",
+         json.dumps({**job, "out_root": out_root, "baselines": baselines})],
+        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+        # plug-ins import from the project folder (a remote worker's working_dir), as here
+        env={**os.environ, STOP_WITH_PARENT: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
+            p for p in (os.getcwd(), os.environ.get("PYTHONPATH")) if p)})
+    assert proc.stderr is not None
+    try:
+        err = proc.stderr.read()
+    except KeyboardInterrupt:
+        proc.send_signal(signal.SIGTERM)
+        err = proc.stderr.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    code = proc.returncode = os.waitstatus_to_exitcode(status)
+    lines = err.decode(errors="replace").strip().splitlines()
+    return {"exit_code": code, "error": lines[-1] if code == 2 and lines else None,
+            "peak_rss_mb": peak_rss_mb(usage), "clock": {}, "pid": proc.pid,
+            "crash": crash_reason(code) if code < 0 else None}
+
+
+def _run_here(job: dict[str, Any], out_root: str, baselines: str | None) -> dict[str, Any]:
+    """Run ``job`` in this worker process, after the runs it has run (see the module doc)."""
+    from harness.suite.worker import run_job
+
+    device = os.environ.get("MUJOCO_EGL_DEVICE_ID")
+    w = _WORKER
+    if w.fresh or (w.between is not None and device != w.device):
+        return _run_fresh(job, out_root, baselines)
+    if w.between is None:
+        from harness.suite.host import RunAfterRun
+
+        w.between, w.device = RunAfterRun(), device
+    w.fresh = True  # until this run has ended and the process is put back
+    note = w.between.before()
+    res = run_job(job, out_root, baselines)
+    peak, left = w.between.after(note)
+    w.fresh = bool(left) or res["exit_code"] == 130  # an interrupt may come again mid-restore
+    from harness.sim.render import gl_contexts_made
+
+    return {**res, "peak_rss_mb": peak, "peak_rss_note": note, "pid": os.getpid(),
+            "gl_contexts": gl_contexts_made()}
+
+
 def _task(job: dict[str, Any], out_root: str, baselines: str | None,
           driver_node: str) -> dict[str, Any]:
-    """The Ray task: run one job in this worker process (see :func:`run_job`)."""
+    """The Ray task: run one job in this worker process (:func:`_run_here`)."""
     import ray
 
     gpu_ids = ray.get_gpu_ids()
     if gpu_ids:  # render on the GPU Ray assigned (EGL device index)
         os.environ["MUJOCO_EGL_DEVICE_ID"] = str(int(float(gpu_ids[0])))
     os.environ.setdefault("MUJOCO_GL", "egl")
-    from harness.suite.worker import run_job
-
     node = ray.get_runtime_context().get_node_id()
     if node == driver_node:
-        return {**run_job(job, out_root, baselines), "archive": None, "node": node}
+        return {**_run_here(job, out_root, baselines), "archive": None, "node": node}
     with tempfile.TemporaryDirectory(prefix="srr-ray-") as tmp:
-        res = run_job(job, tmp, baselines)
+        res = _run_here(job, tmp, baselines)
         buf = io.BytesIO()
         run_dir = Path(tmp) / job["run_dir"]
         if run_dir.is_dir():
@@ -153,7 +227,7 @@ class RayExecutor:
 
     def _submit(self, ray: Any, spec: RunSpec, out_root: Path, driver: str) -> _InFlight:
         gpus = self.gpu_share if spec.renders and self.cluster.get("GPU", 0) > 0 else 0
-        remote = ray.remote(max_calls=1)(_task).options(
+        remote = ray.remote(max_calls=MAX_RUNS)(_task).options(
             num_cpus=1, num_gpus=gpus, max_retries=0, name=f"srr:{spec.id}")
         job = {**spec.job()}
         here = Path.cwd().resolve()
@@ -168,12 +242,15 @@ class RayExecutor:
     def _finish(self, ray: Any, f: _InFlight, out_root: Path) -> RunOutcome:
         reaped = time.monotonic()
         wall = reaped - f.t0
-        crash = error = None
+        crash = error = note = None
         code = 3
         rss = None
+        process: dict[str, float] = {}  # which process ran it, how many contexts it had made
         try:
             res = ray.get(f.ref)
             code, error, rss = int(res["exit_code"]), res["error"], res.get("peak_rss_mb")
+            note, crash = res.get("peak_rss_note"), res.get("crash")
+            process = {k: float(res[k]) for k in ("pid", "gl_contexts") if res.get(k)}
             if res.get("archive"):
                 dest = out_root / f.spec.run_dir
                 dest.mkdir(parents=True, exist_ok=True)
@@ -196,7 +273,8 @@ class RayExecutor:
         outcome = outcome_of(f.spec, out_root, exit_code=code, error=error, wall_s=wall,
                              timed_out=f.timed_out, crash=crash, peak_rss_mb=rss)
         # the task's own instants are another process's (maybe another machine's) clock
-        return dataclasses.replace(outcome, clock={"submitted": f.t0, "reaped": reaped})
+        return dataclasses.replace(outcome, clock={**process, "submitted": f.t0,
+                                                   "reaped": reaped}, peak_rss_note=note)
 
     def _cancel(self, ray: Any, f: _InFlight, now: float) -> None:
         if f.cancelled_at is None:

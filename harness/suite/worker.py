@@ -29,7 +29,11 @@ from harness.run.simulate import run_scenario
 from harness.sim.render import gl_context_seconds, gl_contexts_made
 from harness.suite.timeline import RunClock
 
-__all__ = ["peak_rss_mb", "run_job", "serve"]
+__all__ = ["STOP_WITH_PARENT", "peak_rss_mb", "run_job", "serve"]
+
+#: An environment variable naming the process id whose end should stop the run (SIGTERM: it
+#: finalizes), for :func:`main`.
+STOP_WITH_PARENT = "SRR_STOP_WITH_PARENT"
 
 
 def run_job(job: Mapping[str, Any], out_root: str | Path,
@@ -93,6 +97,11 @@ def main(argv: list[str]) -> int:
         sys.stderr.write("usage: python -m harness.suite.worker JOB_JSON\n")
         return 2
     os.environ.setdefault("MUJOCO_GL", "egl")
+    parent = os.environ.pop(STOP_WITH_PARENT, None)
+    if parent:  # started by a Ray worker that may be killed (a forced cancel)
+        from harness.suite.host import stop_with_parent
+
+        stop_with_parent(int(parent))
     return serve(json.loads(argv[0]))
 
 

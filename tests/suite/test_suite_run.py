@@ -8,6 +8,7 @@ assert holds however slow the machine is: no run can finish before the suite sto
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import signal
@@ -26,6 +27,7 @@ from tests.suite.plugins import PLANNER_PID, STALLED_FILE
 
 ROOT = Path(__file__).resolve().parents[2]
 FORKLIFT = ROOT / "scenarios" / "forklift_warehouse.yaml"
+CROSSING = ROOT / "scenarios" / "dock_worker_crossing.yaml"
 SPEED = "systems_under_test.route_follower.params.speed"
 PLUGIN = "systems_under_test.route_follower.plugin"
 
@@ -157,6 +159,39 @@ def test_ray_suite_on_a_real_local_cluster(suite_file: Path, tmp_path: Path) -> 
     _check_misbehaving(res, out)
     assert res.summary["executor"] == "ray"
     assert "Ray worker died" in _by_id(res.summary, "runs")["segfault#1"]["crash"]
+
+
+@pytest.mark.ray
+def test_a_ray_worker_runs_run_after_run_as_fresh_processes_would(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """One Ray worker slot: three repeats of a rendering scene run in one worker process, with
+    the one OpenGL context it made in the first, and record the bag a fresh process records;
+    a plug-in whose behaviour depends on its module's state drives the same in each run."""
+    pytest.importorskip("ray")
+    monkeypatch.chdir(ROOT)
+    suite = tmp_path / "suite.yaml"
+    suite.write_text(f"""
+scenarios:
+  - {{path: {CROSSING}, name: crossing, repeat: 3, set: {{duration: 1.0}}}}
+  - {{path: {FORKLIFT}, name: counter, repeat: 3,
+     set: {{duration: 1, {PLUGIN}: "tests.suite.plugins:ModuleCounter"}}}}
+""", encoding="utf-8")
+    res = api.suite([suite], executor="ray", jobs=1, out=tmp_path / "ray")
+    assert res.summary["verdict"] != "INVALID", res.summary
+    runs = {r["id"]: r for r in res.summary["runs"]}
+    assert len({r["timings"]["pid"] for r in runs.values()}) == 1  # one worker, six runs
+    crossing = [runs[f"crossing#{k}"] for k in (1, 2, 3)]
+    assert [r["timings"]["gl_contexts"] for r in crossing] == [1, 1, 1]
+    assert all(80 < r["peak_rss_mb"] < 4000 for r in runs.values())
+    assert len({runs[f"counter#{k}"]["digest"] for k in (1, 2, 3)}) == 1
+    (fresh,) = api.suite([suite], executor="local", jobs=1, out=tmp_path / "fresh",
+                         fork=False).summary["runs"][:1]
+    assert fresh["id"] == "crossing#1" and fresh["digest"] is not None
+    sha = {r["id"]: hashlib.sha256((tmp_path / "ray" / r["run_dir"] / "bag" / "bag.mcap")
+                                   .read_bytes()).hexdigest() for r in crossing}
+    reference = hashlib.sha256((tmp_path / "fresh" / fresh["run_dir"] / "bag" / "bag.mcap")
+                               .read_bytes()).hexdigest()
+    assert set(sha.values()) == {reference}
 
 
 def test_runs_stopped_before_their_first_tick_get_an_invalid_run_directory(
