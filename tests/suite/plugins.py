@@ -11,6 +11,7 @@ import ctypes
 import os
 import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -116,6 +117,15 @@ class ModuleCounter(RouteFollower):
     def step(self, now_ns: int) -> None:
         self.p = type(self.p)(**{**self.p.__dict__, "speed": 1.0 + self.seen / 10})
         super().step(now_ns)
+
+
+class LeavesAThread(RouteFollower):
+    """Starts a thread that outlives the run (it waits for ever): the process it ran in must
+    not run another run."""
+
+    def setup(self, ctx: SutContext) -> None:
+        super().setup(ctx)
+        threading.Thread(target=threading.Event().wait, name="left-behind", daemon=True).start()
 
 
 class Exits(RouteFollower):

@@ -166,7 +166,9 @@ def test_a_ray_worker_runs_run_after_run_as_fresh_processes_would(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """One Ray worker slot: three repeats of a rendering scene run in one worker process, with
     the one OpenGL context it made in the first, and record the bag a fresh process records;
-    a plug-in whose behaviour depends on its module's state drives the same in each run."""
+    a plug-in whose behaviour depends on its module's state drives the same in each run. A run
+    that leaves a thread running is the worker's last: the run after it (the cheapest, so it
+    starts last) gets a fresh process."""
     pytest.importorskip("ray")
     monkeypatch.chdir(ROOT)
     suite = tmp_path / "suite.yaml"
@@ -175,11 +177,17 @@ scenarios:
   - {{path: {CROSSING}, name: crossing, repeat: 3, set: {{duration: 1.0}}}}
   - {{path: {FORKLIFT}, name: counter, repeat: 3,
      set: {{duration: 1, {PLUGIN}: "tests.suite.plugins:ModuleCounter"}}}}
+  - {{path: {FORKLIFT}, name: leaves, set: {{duration: 0.5,
+     {PLUGIN}: "tests.suite.plugins:LeavesAThread"}}}}
+  - {{path: {FORKLIFT}, name: after, set: {{duration: 0.3}}}}
 """, encoding="utf-8")
     res = api.suite([suite], executor="ray", jobs=1, out=tmp_path / "ray")
     assert res.summary["verdict"] != "INVALID", res.summary
     runs = {r["id"]: r for r in res.summary["runs"]}
-    assert len({r["timings"]["pid"] for r in runs.values()}) == 1  # one worker, six runs
+    after = runs.pop("after#1")
+    assert len({r["timings"]["pid"] for r in runs.values()}) == 1  # one worker, seven runs
+    assert after["timings"]["pid"] != runs["leaves#1"]["timings"]["pid"]  # a fresh process
+    assert after["verdict"] != "INVALID" and after["digest"] is not None
     crossing = [runs[f"crossing#{k}"] for k in (1, 2, 3)]
     assert [r["timings"]["gl_contexts"] for r in crossing] == [1, 1, 1]
     assert all(80 < r["peak_rss_mb"] < 4000 for r in runs.values())
