@@ -332,15 +332,17 @@ def _in_use(port: int) -> bool:
 def test_ray_suite_joins_an_existing_cluster(tmp_path: Path,
                                              monkeypatch: pytest.MonkeyPatch) -> None:
     """``--address``: a cluster started beforehand with ``ray start``; the project folder
-    travels as the job's working_dir and the cluster keeps running afterwards."""
+    travels as the job's working_dir and the cluster keeps running afterwards. `srr suite`
+    runs as a command of its own: Ray keeps the authentication mode a process first saw, so a
+    driver in this process would leave later tests' local clusters unreachable."""
     pytest.importorskip("ray")
     import socket
 
     monkeypatch.chdir(ROOT)
     ray_bin = str(Path(sys.executable).parent / "ray")
-    # one machine, loopback only: no token to share between `ray start` and this driver
-    monkeypatch.setenv("RAY_AUTH_MODE", "disabled")
-    env = {**os.environ, "RAY_USAGE_STATS_ENABLED": "0"}
+    # one machine, loopback only: no token to share between `ray start` and the driver
+    env = {**os.environ, "RAY_USAGE_STATS_ENABLED": "0", "RAY_AUTH_MODE": "disabled",
+           "PYTHONPATH": str(ROOT)}
     for _ in range(5):
         # `ray start` takes a port number, not 0: one that was free a moment ago may be taken
         # by another process before Ray binds it; then `ray start` fails, and another is tried
@@ -357,15 +359,18 @@ def test_ray_suite_joins_an_existing_cluster(tmp_path: Path,
         suite = tmp_path / "suite.yaml"
         suite.write_text(f"scenarios: [{{path: {FORKLIFT}, "
                          f"set: {{duration: 1}}}}]\n", encoding="utf-8")
-        res = api.suite([suite], executor="ray", address=f"127.0.0.1:{port}",
-                        out=tmp_path / "out")
-        run = res.summary["runs"][0]
-        assert res.summary["address"] == f"127.0.0.1:{port}"
+        done = subprocess.run([sys.executable, "-m", "harness.cli", "suite", str(suite),
+                               "--executor", "ray", "--address", f"127.0.0.1:{port}",
+                               "--out", str(tmp_path / "out"), "-q"],
+                              capture_output=True, text=True, env=env, timeout=300)
+        summary = json.loads((tmp_path / "out" / "summary.json").read_text(encoding="utf-8"))
+        run = summary["runs"][0]
+        assert summary["address"] == f"127.0.0.1:{port}", done.stderr
         assert run["verdict"] == "MISMATCH", run["reasons"]
         assert (tmp_path / "out" / run["report"]).is_file()
-        import ray
-
-        assert not ray.is_initialized()  # srr left, the cluster stays
+        status = subprocess.run([ray_bin, "status", "--address", f"127.0.0.1:{port}"],
+                                capture_output=True, text=True, env=env, timeout=120)
+        assert status.returncode == 0, status.stdout + status.stderr  # the cluster stays
     finally:
         subprocess.run([ray_bin, "stop", "--force"], capture_output=True, env=env,
                        timeout=120)
