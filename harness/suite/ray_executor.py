@@ -12,8 +12,9 @@ A Ray worker process runs up to :data:`~harness.suite.host.MAX_RUNS` runs one af
 (``max_calls``), as a local host does (:class:`~harness.suite.host.RunAfterRun`: what a run
 could leave behind is put back, each run's own peak memory, the OpenGL context kept), so a run
 does not pay for a fresh interpreter and its imports. A worker whose run left a thread running
-or was interrupted, or that is given a GPU other than the one its context was made on, runs
-its later runs each in a fresh process (``python -m harness.suite.worker``) instead.
+or was interrupted runs its later runs each in a fresh process (``python -m
+harness.suite.worker``) instead, and so does a run given a GPU other than the one the worker's
+OpenGL context was made on.
 
 With an existing cluster the project folder (the current directory: scenarios, baselines,
 plug-ins; not ``reports/``, ``.venv/``, ``.git/``) travels as the job's ``working_dir``, and a
@@ -95,11 +96,16 @@ def _run_fresh(job: dict[str, Any], out_root: str, baselines: str | None) -> dic
 
 def _run_here(job: dict[str, Any], out_root: str, baselines: str | None) -> dict[str, Any]:
     """Run ``job`` in this worker process, after the runs it has run (see the module doc)."""
+    from harness.sim.render import gl_contexts_made
     from harness.suite.worker import run_job
 
     device = os.environ.get("MUJOCO_EGL_DEVICE_ID")
     w = _WORKER
-    if w.fresh or (w.between is not None and device != w.device):
+    if w.between is not None and device != w.device:
+        if gl_contexts_made():  # its kept context is on the other GPU
+            return _run_fresh(job, out_root, baselines)
+        w.device = device  # none made yet: its first will be on this one
+    if w.fresh:
         return _run_fresh(job, out_root, baselines)
     if w.between is None:
         from harness.suite.host import RunAfterRun
@@ -110,8 +116,6 @@ def _run_here(job: dict[str, Any], out_root: str, baselines: str | None) -> dict
     res = run_job(job, out_root, baselines)
     peak, left = w.between.after(note)
     w.fresh = bool(left) or res["exit_code"] == 130  # an interrupt may come again mid-restore
-    from harness.sim.render import gl_contexts_made
-
     return {**res, "peak_rss_mb": peak, "peak_rss_note": note, "pid": os.getpid(),
             "gl_contexts": gl_contexts_made()}
 

@@ -202,6 +202,43 @@ scenarios:
     assert set(sha.values()) == {reference}
 
 
+#: A Ray worker's runs, called as its task calls them (no cluster needed for this part): the
+#: GPU Ray names for each run (MUJOCO_EGL_DEVICE_ID), then whether the run stayed in this
+#: process. An OpenGL context made here is stood in for by the renderer's count.
+GPUS = """
+import json, os, sys
+from harness.suite.runner import plan_suite
+from harness.suite import ray_executor
+import harness.sim.render as render
+(spec,) = plan_suite([sys.argv[1]]).runs
+here = []
+for k, (device, contexts) in enumerate([(None, 0), ("3", 0), ("4", 1)]):
+    os.environ.pop("MUJOCO_EGL_DEVICE_ID", None)
+    if device is not None:
+        os.environ["MUJOCO_EGL_DEVICE_ID"] = device
+    render._CONTEXTS_MADE = contexts
+    res = ray_executor._run_here(spec.job(), os.path.join(sys.argv[2], str(k)), None)
+    here.append((res["pid"] == os.getpid(), res["exit_code"]))
+print(json.dumps(here))
+"""
+
+
+def test_a_ray_worker_runs_elsewhere_a_run_given_another_gpu_than_its_context(
+        tmp_path: Path) -> None:
+    """A worker that has made no OpenGL context takes whatever GPU Ray names next; once it has
+    one, a run on another GPU gets a fresh process (its context would be on the wrong GPU)."""
+    suite = tmp_path / "suite.yaml"
+    suite.write_text(f"scenarios: [{{path: {FORKLIFT}, set: {{duration: 0.5}}}}]\n",
+                     encoding="utf-8")
+    out = subprocess.run([sys.executable, "-c", GPUS, str(suite), str(tmp_path / "out")],
+                         cwd=ROOT, capture_output=True, text=True, timeout=300,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert out.returncode == 0, out.stderr
+    here = json.loads(out.stdout.strip().splitlines()[-1])
+    assert [h for h, _ in here] == [True, True, False]
+    assert all(code in (0, 1) for _, code in here), here  # each ran to its verdict
+
+
 def test_runs_stopped_before_their_first_tick_get_an_invalid_run_directory(
         suite_file: Path, tmp_path: Path) -> None:
     """A run that times out before it has written anything, and one whose worker is killed
