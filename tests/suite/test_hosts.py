@@ -78,8 +78,10 @@ def test_a_host_makes_one_opengl_context_and_records_what_a_fresh_process_record
     text = f"scenarios:\n  - {{path: {CROSSING}, repeat: 3, set: {{duration: 1.0}}}}\n"
     runs = [r for _, r in sorted(_finished(tmp_path, text).items())]
     assert len({r["timings"]["pid"] for r in runs}) == 1  # one host
+    # the host made one context, before the first run (its warm-up's), and no run made one;
+    # (a run's gl_context_s, the time it took to make the kept one current, is not 0 on a
+    # loaded machine: counts, not times, say what was made)
     assert [r["timings"]["gl_contexts"] for r in runs] == [1, 1, 1]
-    assert [r["timings"]["gl_context_s"] for r in runs] == [0, 0, 0]
     assert runs[0]["timings"]["warm_gl_s"] > 0  # made before the first run, counted there
     for before, after in itertools.pairwise(runs):
         assert after["timings"]["started_s"] >= before["timings"]["finished_s"]
@@ -368,7 +370,7 @@ def test_srr_suite_hosts_make_an_opengl_context_only_when_the_runs_render(
         by_pid.setdefault(run["timings"]["pid"], []).append(run)
     for runs in by_pid.values():  # made before the host's first run, none during a run
         assert runs[0]["timings"]["warm_gl_s"] > 0
-        assert all(r["timings"]["gl_context_s"] == 0 for r in runs)
+        assert all(r["timings"]["gl_contexts"] == 1 for r in runs)
 
 
 #: Hosts' turns to make an OpenGL context: the suite's process forks a host (which makes the
