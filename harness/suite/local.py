@@ -32,12 +32,10 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import json
 import os
 import select
 import signal
 import subprocess
-import sys
 import time
 from collections import deque
 from collections.abc import Sequence
@@ -56,7 +54,7 @@ from harness.suite.host import (
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, crash_reason, outcome_of
 from harness.suite.timeline import clock_path, take_clock
-from harness.suite.worker import peak_rss_mb
+from harness.suite.worker import fresh_process, peak_rss_mb
 
 __all__ = ["LocalExecutor", "fork_safe"]
 
@@ -157,16 +155,11 @@ class LocalExecutor:
             if host.send(job):
                 return _Running(spec, t0, host=host)
             self._retire(host)  # gone while it waited: a fresh one
-        env = dict(os.environ)
-        # the worker imports plug-ins ("module:Class") from here, like `srr run` does
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (os.getcwd(), env.get("PYTHONPATH"))
-                                            if p)
+        argv, env = fresh_process(job)
         with Path(str(job["log"])).open("wb") as log:
             t0 = time.monotonic()
-            proc = subprocess.Popen(
-                [sys.executable, "-m", "harness.suite.worker", json.dumps(job)],
-                stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, env=env,
-                start_new_session=True)
+            proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=log,
+                                    stderr=subprocess.STDOUT, env=env, start_new_session=True)
         return _Running(spec, t0, proc=proc)
 
     def _retire(self, host: Host) -> None:

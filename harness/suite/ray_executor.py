@@ -27,7 +27,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import io
-import json
 import logging
 import os
 import tarfile
@@ -68,18 +67,16 @@ def _run_fresh(job: dict[str, Any], out_root: str, baselines: str | None) -> dic
     so the run finalizes as it would in this process."""
     import signal
     import subprocess
-    import sys
 
     from harness.suite.results import crash_reason
-    from harness.suite.worker import STOP_WITH_PARENT, peak_rss_mb
+    from harness.suite.worker import STOP_WITH_PARENT, fresh_process, peak_rss_mb
 
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "harness.suite.worker",
-         json.dumps({**job, "out_root": out_root, "baselines": baselines})],
-        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-        # plug-ins import from the project folder (a remote worker's working_dir), as here
-        env={**os.environ, STOP_WITH_PARENT: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
-            p for p in (os.getcwd(), os.environ.get("PYTHONPATH")) if p)})
+    # plug-ins import from the current directory: the project folder (a remote worker's
+    # working_dir), as in this process
+    argv, env = fresh_process({**job, "out_root": out_root, "baselines": baselines},
+                              {STOP_WITH_PARENT: str(os.getpid())})
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, env=env)
     assert proc.stderr is not None
     try:
         err = proc.stderr.read()

@@ -29,7 +29,7 @@ from harness.run.simulate import run_scenario
 from harness.sim.render import gl_context_seconds, gl_contexts_made
 from harness.suite.timeline import RunClock
 
-__all__ = ["STOP_WITH_PARENT", "peak_rss_mb", "run_job", "serve"]
+__all__ = ["STOP_WITH_PARENT", "fresh_process", "peak_rss_mb", "run_job", "serve"]
 
 #: An environment variable naming the process id whose end should stop the run (SIGTERM: it
 #: finalizes), for :func:`main`.
@@ -68,6 +68,17 @@ def run_job(job: Mapping[str, Any], out_root: str | Path,
     except KeyboardInterrupt:
         return ended(130, "interrupted before the run directory was written")
     return ended(res.exit_code, None)
+
+
+def fresh_process(job: Mapping[str, Any], extra_env: Mapping[str, str] | None = None,
+                  ) -> tuple[list[str], dict[str, str]]:
+    """The command that runs ``job`` (with ``out_root``, as :func:`serve` takes it) in a fresh
+    ``python -m harness.suite.worker``, and its environment: this process's, with the current
+    directory first on ``PYTHONPATH`` (plug-ins, ``module:Class``, import from there, as with
+    ``srr run``), and ``extra_env`` added."""
+    path = os.pathsep.join(p for p in (os.getcwd(), os.environ.get("PYTHONPATH")) if p)
+    return ([sys.executable, "-m", "harness.suite.worker", json.dumps(dict(job))],
+            {**os.environ, "PYTHONPATH": path, **(extra_env or {})})
 
 
 def peak_rss_mb(usage: resource.struct_rusage | None = None) -> float:
