@@ -157,6 +157,11 @@ class RayExecutor:
                  grace_s: float = 10.0, poll_s: float = 0.1) -> None:
         if not 0 < gpu_share <= 1:
             raise SrrError(f"--gpu-share: expected a fraction in (0, 1], got {gpu_share!r}")
+        try:  # said before anything runs or is written
+            import ray  # noqa: F401
+        except ImportError as err:
+            raise SrrError("--executor ray: Ray is not installed (pip install 'srr[ray]')") \
+                from err
         self.address = address
         self.jobs = jobs or 0  # 0: as many as the cluster has CPUs
         self.baselines = baselines
@@ -168,11 +173,8 @@ class RayExecutor:
     def _connect(self) -> bool:
         """Start or join the cluster; True when srr connected (and must disconnect: that stops
         a cluster it started, and only leaves one it joined)."""
-        try:
-            import ray
-        except ImportError as err:
-            raise SrrError("--executor ray: Ray is not installed (pip install 'srr[ray]')") \
-                from err
+        import ray  # installed: checked when this executor was made
+
         if ray.is_initialized():
             return False
         cwd = os.getcwd()

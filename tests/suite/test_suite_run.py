@@ -333,6 +333,26 @@ def test_cli_bad_suite_is_one_line_exit_2(tmp_path: Path) -> None:
     assert not out.exists()  # nothing half-written
 
 
+def test_cli_ray_executor_without_ray_is_one_line_exit_2(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+        ) -> None:
+    """``--executor ray`` where Ray is not installed: the install hint on one line, exit 2,
+    before anything runs or is written (it was a traceback once the suite had been checked)."""
+    monkeypatch.setitem(sys.modules, "ray", None)  # `import ray` fails as if not installed
+    suite = tmp_path / "suite.yaml"
+    suite.write_text(f"scenarios: [{{path: {FORKLIFT}, set: {{duration: 0.5}}}}]\n",
+                     encoding="utf-8")
+    from harness.cli import main
+
+    out = tmp_path / "out"
+    assert main(["suite", str(suite), "--executor", "ray", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == ("srr suite: --executor ray: Ray is not installed "
+                       "(pip install 'srr[ray]')"), err
+    assert "Traceback" not in "\n".join(err)
+    assert not out.exists()  # nothing half-written
+
+
 def test_bundled_scenarios_are_not_flaky(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """Each repeat in its own process: digests must agree across processes."""
     monkeypatch.chdir(ROOT)
