@@ -28,6 +28,13 @@ by Hamilton products. MuJoCo's compiled
 formulas in Python for some inputs, so quaternions that go into a MuJoCo model or come out
 of its poses are computed by MuJoCo itself, in :mod:`harness.sim.mjquat` (which passes
 MuJoCo's product as the ``mul`` of :func:`quat_wxyz_from_rpy_deg`).
+
+Nothing here, and nothing else on a recording's path, multiplies vectors or matrices through
+numpy's ``@``, ``dot`` or ``linalg.norm`` of a vector: those call BLAS, and OpenBLAS picks its
+kernel by CPU (a 2-element dot product is fused multiply-add on AVX-512 kernels and not on
+others, a 3x3 product differs between AVX2 and older kernels), so the same run recorded
+different bytes on different machines. :func:`dot_floats` and :func:`rotate_rows` write the
+sums out, one IEEE operation at a time, in a fixed order.
 """
 
 from __future__ import annotations
@@ -45,6 +52,7 @@ __all__ = [
     "QuatProduct",
     "QuatTuple",
     "Vec3",
+    "dot_floats",
     "mat_from_quat_wxyz",
     "quat_wxyz_conj",
     "quat_wxyz_conj_floats",
@@ -57,6 +65,7 @@ __all__ = [
     "quat_wxyz_rotate_floats",
     "quat_xyzw_mul_columns",
     "quat_xyzw_rotate_columns",
+    "rotate_rows",
     "rpy_from_quat_wxyz",
     "wxyz_to_xyzw",
     "xyzw_to_wxyz",
@@ -226,6 +235,25 @@ def yaw_between(front: FloatVec) -> float:
 
 
 # --------------------------------------------------------------------------- matrices
+
+
+def dot_floats(a: Sequence[float], b: Sequence[float]) -> float:
+    """``a · b`` of two short vectors of Python floats, summed left to right without fused
+    multiply-adds (``a[0] * b[0] + a[1] * b[1] + ...``): the same value on every CPU, where
+    numpy's ``a @ b`` is BLAS's, which is not."""
+    products = [x * y for x, y in zip(a, b, strict=True)]
+    total = products[0]
+    for p in products[1:]:
+        total += p
+    return total
+
+
+def rotate_rows(v: FloatArray, rot: FloatArray) -> FloatArray:
+    """``v @ rot.T``: each row of ``v`` (n x 3) rotated by the 3x3 ``rot``, written out as
+    three elementwise products summed in order, so that the result does not depend on the
+    CPU's BLAS kernel."""
+    out: FloatArray = v[:, 0:1] * rot[:, 0] + v[:, 1:2] * rot[:, 1] + v[:, 2:3] * rot[:, 2]
+    return out
 
 
 def mat_from_quat_wxyz(q: FloatVec) -> FloatArray:

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from harness.geometry import FloatArray
+from harness.geometry import FloatArray, rotate_rows
 
 __all__ = ["MIN_WIDTH", "SEGMENTS", "Footprint", "geom_footprint", "geom_points"]
 
@@ -96,7 +96,7 @@ def geom_points(model: mujoco.MjModel, data: mujoco.MjData, geom: int) -> FloatA
     else:
         aabb = np.asarray(model.geom_aabb[geom], dtype=np.float64)
         local = aabb[:3] + _CORNERS * aabb[3:]
-    out: FloatArray = pos + local @ rot.T
+    out: FloatArray = pos + rotate_rows(local, rot)
     return out
 
 

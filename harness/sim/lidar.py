@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from harness.errors import SimulationError
+from harness.geometry import rotate_rows
 from harness.scenario.schema import LidarSpec
 
 __all__ = [
@@ -149,7 +150,7 @@ class Lidar:
         m, d = self._world.model, self._world.data
         origin = d.site_xpos[self._site].copy()
         rot = d.site_xmat[self._site].reshape(3, 3)
-        dirs = np.ascontiguousarray(self._local_dirs @ rot.T)
+        dirs = np.ascontiguousarray(rotate_rows(self._local_dirs, rot))
         cutoff = self.config.range_max + 1.0 + 10.0 * self.config.noise_std
         mujoco.mj_multiRay(m, d, origin, dirs.ravel(), LIDAR_GEOM_GROUPS, 1, self._site_body,
                            self._geomid, self._dist, None, self.config.beams, cutoff)
@@ -209,4 +210,7 @@ class Lidar:
         mat = m.geom_matid[geoms]
         with_mat = mat >= 0
         rgba[with_mat] = m.mat_rgba[mat[with_mat]]
-        return np.asarray(rgba[:, :3] @ _LUMA, dtype=np.float64)
+        rgb = rgba[:, :3].astype(np.float64)  # Rec. 709 luma, summed in order (no BLAS)
+        luma: npt.NDArray[np.float64] = (rgb[:, 0] * _LUMA[0] + rgb[:, 1] * _LUMA[1]
+                                         + rgb[:, 2] * _LUMA[2])
+        return luma

@@ -17,15 +17,16 @@ and publishes confirmed tracks as ``visualization_msgs/MarkerArray`` in the worl
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
 
-from harness.geometry import mat_from_quat_wxyz, xyzw_to_wxyz
+from harness.geometry import dot_floats, mat_from_quat_wxyz, rotate_rows, xyzw_to_wxyz
 from harness.scenario.schema import num
 from harness.serde.messages import header, make
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
@@ -168,7 +169,7 @@ class DepthPeopleTracker(SystemUnderTest):
             tr.last_ns = now_ns
         matched: set[int] = set()
         if self.tracks and detections:
-            cost = np.array([[float(np.linalg.norm(tr.position - d)) for d in detections]
+            cost = np.array([[_distance(tr.position, d) for d in detections]
                              for tr in self.tracks])
             rows, cols = linear_sum_assignment(np.where(cost <= self.p.gate, cost, 1e6))
             for r, c in zip(rows, cols, strict=True):
@@ -216,8 +217,13 @@ class DepthPeopleTracker(SystemUnderTest):
 
 def _rotate_many(q: np.ndarray, v: np.ndarray) -> npt.NDArray[np.float64]:
     """Rotate rows of ``v`` by the (w, x, y, z) quaternion ``q``."""
-    r = mat_from_quat_wxyz(q)
-    return cast("npt.NDArray[np.float64]", v @ r.T)  # numpy types ``@`` of unshaped arrays as Any
+    return rotate_rows(v, mat_from_quat_wxyz(q))
+
+
+def _distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Euclidean distance of two points, the same on every CPU (no BLAS)."""
+    gap = (a - b).tolist()
+    return math.sqrt(dot_floats(gap, gap))
 
 
 def _person_marker(now_ns: int, frame: str, tr: Track) -> Any:

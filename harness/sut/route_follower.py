@@ -22,8 +22,8 @@ from functools import partial
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from harness.geometry import dot_floats
 from harness.scenario.schema import num
 from harness.serde.messages import twist, twist_packer
 from harness.sut.base import SutContext, SystemUnderTest, sut_params
@@ -60,18 +60,14 @@ def clip(x: float, lo: float, hi: float) -> float:
     return hi if m > hi else m
 
 
-def _norm(v: npt.NDArray[np.float64]) -> float:
-    """``float(np.linalg.norm(v))`` for a 1-d float64 vector: numpy computes it as
-    ``sqrt(v.dot(v))`` (BLAS, which may fuse the multiply-adds, so the dot product stays with
-    numpy) and both square roots are IEEE's correctly rounded one."""
-    return math.sqrt(float(v.dot(v)))
+def _norm(v: Sequence[float]) -> float:
+    """Length of a short vector: ``sqrt`` of :func:`dot_floats`, the same on every CPU."""
+    return math.sqrt(dot_floats(v, v))
 
 
 class _Route:
     """A route as the follower walks it: the waypoints, cumulative arc length, and per
-    segment its vector, squared length and length, computed once with the same operations
-    as per call before (so the same values), as arrays where numpy's dot product needs them
-    and as Python floats elsewhere."""
+    segment its vector, squared length and length, computed once, as Python floats."""
 
     def __init__(self, waypoints: object) -> None:
         self.path = np.array(waypoints, dtype=np.float64)
@@ -81,23 +77,21 @@ class _Route:
         self.points: list[list[float]] = self.path.tolist()
         self.segs = [self.path[i + 1] - self.path[i] for i in range(len(self.path) - 1)]
         self.segs_f: list[list[float]] = [seg.tolist() for seg in self.segs]
-        self.length2 = [float(seg @ seg) for seg in self.segs]
+        self.length2 = [dot_floats(seg, seg) for seg in self.segs_f]
         self.length = [math.sqrt(l2) for l2 in self.length2]
         last = self.path[-1] - self.path[-2]
-        self.last_dir: list[float] = (last / max(_norm(last), 1e-9)).tolist()
+        self.last_dir: list[float] = (last / max(_norm(last.tolist()), 1e-9)).tolist()
 
 
-def _project(route: _Route, p: npt.NDArray[np.float64], start: int) -> tuple[float, int]:
-    """Arc length of the point of the route closest to ``p`` (x, y), searching segments from
-    ``start`` on (progress never goes backwards)."""
-    px, py = p.tolist()
+def _project(route: _Route, px: float, py: float, start: int) -> tuple[float, int]:
+    """Arc length of the point of the route closest to (``px``, ``py``), searching segments
+    from ``start`` on (progress never goes backwards)."""
     best = (math.inf, route.cum_f[start], start)
     for i in range(start, len(route.points) - 1):
         (ax, ay), (sx, sy), length2 = route.points[i], route.segs_f[i], route.length2[i]
-        t = 0.0 if length2 == 0 else clip(float((p - route.path[i]) @ route.segs[i]) / length2,
+        t = 0.0 if length2 == 0 else clip(dot_floats((px - ax, py - ay), (sx, sy)) / length2,
                                           0.0, 1.0)
-        # a + t * seg - p, element by element, as numpy evaluates it
-        d = _norm(np.array((ax + t * sx - px, ay + t * sy - py)))
+        d = _norm((ax + t * sx - px, ay + t * sy - py))
         if d < best[0] - 1e-12:
             best = (d, route.cum_f[i] + t * route.length[i], i)
     return best[1], best[2]
@@ -153,9 +147,9 @@ class RouteFollower(SystemUnderTest):
             return 0.0, 0.0
         x, y, yaw = pose
         route, p = self.route, self.p
-        here = np.array([x, y])
-        goal_dist = _norm(route.path[-1] - here)
-        s, self.segment = _project(route, here, self.segment)
+        gx, gy = route.points[-1]
+        goal_dist = _norm((gx - x, gy - y))
+        s, self.segment = _project(route, x, y, self.segment)
         end = route.cum_f[-1]
         remaining = end - s
         if goal_dist < p.goal_tolerance or (remaining < p.goal_tolerance

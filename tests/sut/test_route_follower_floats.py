@@ -1,6 +1,9 @@
 """The route follower computes on Python floats what it computed on small numpy arrays; these
 tests hold it to the numpy version (kept here as the reference) bit for bit, through the real
-bus, scenario and messages, over poses along, off and past the bundled route."""
+bus, scenario and messages, over poses along, off and past the bundled route. The reference
+sums its dot products elementwise (``np.sum(a * b)``), not with ``@``: BLAS's kernel, and so
+its last bit, depends on the CPU, and the follower's outputs must not
+(``tests/e2e/test_cross_cpu.py``)."""
 
 from __future__ import annotations
 
@@ -37,14 +40,22 @@ SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehou
 
 # -- the numpy reference (the follower's code before it moved to Python floats) -------------
 
+def ref_dot(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.sum(a * b))
+
+
+def ref_norm(v: np.ndarray) -> float:
+    return math.sqrt(ref_dot(v, v))
+
+
 def ref_project(path: np.ndarray, cum: np.ndarray, p: np.ndarray, start: int) -> tuple[Any, int]:
     best = (math.inf, cum[start], start)
     for i in range(start, len(path) - 1):
         a, b = path[i], path[i + 1]
         seg = b - a
-        length2 = float(seg @ seg)
-        t = 0.0 if length2 == 0 else float(np.clip((p - a) @ seg / length2, 0.0, 1.0))
-        d = float(np.linalg.norm(a + t * seg - p))
+        length2 = ref_dot(seg, seg)
+        t = 0.0 if length2 == 0 else float(np.clip(ref_dot(p - a, seg) / length2, 0.0, 1.0))
+        d = ref_norm(a + t * seg - p)
         if d < best[0] - 1e-12:
             best = (d, cum[i] + t * math.sqrt(length2), i)
     return best[1], best[2]
@@ -66,7 +77,7 @@ def ref_command(f: RouteFollower, pose: tuple[float, float, float],
     p, path, cum = f.p, f.path, f.cum
     x, y, yaw = pose
     here = np.array([x, y])
-    goal_dist = float(np.linalg.norm(path[-1] - here))
+    goal_dist = ref_norm(path[-1] - here)
     s, segment = ref_project(path, cum, here, segment)
     remaining = float(cum[-1]) - s
     if goal_dist < p.goal_tolerance or (remaining < p.goal_tolerance
@@ -75,7 +86,7 @@ def ref_command(f: RouteFollower, pose: tuple[float, float, float],
     target = ref_point_at(path, cum, s + p.lookahead)
     if s + p.lookahead > cum[-1]:
         direction = path[-1] - path[-2]
-        direction = direction / max(float(np.linalg.norm(direction)), 1e-9)
+        direction = direction / max(ref_norm(direction), 1e-9)
         target = path[-1] + direction * (s + p.lookahead - cum[-1])
     v = p.speed * min(1.0, max(0.15, remaining / p.slow_radius))
     w = float(np.clip(pure_pursuit(x, y, yaw, target) * v, -p.max_angular, p.max_angular))
@@ -166,7 +177,7 @@ def test_projection_and_lookahead_point_are_the_numpy_ones(waypoints: list[list[
     for _ in range(3000):
         here = np.array([rng.uniform(-14, 23), rng.uniform(-6, 6)])
         for start in range(len(waypoints) - 1):
-            s, i = _project(route, here, start)
+            s, i = _project(route, float(here[0]), float(here[1]), start)
             rs, ri = ref_project(route.path, route.cum, here, start)
             assert (float(s).hex(), i) == (float(rs).hex(), ri)
         s = rng.uniform(-1.0, float(route.cum[-1]) + 2.0)
