@@ -21,7 +21,7 @@ from harness.blas import one_blas_thread
 from harness.errors import SrrError, shorten
 from harness.interrupt import sigterm_as_interrupt
 from harness.live.config import DEFAULT_PORT
-from harness.summary import replay_note
+from harness.summary import recording_note, replay_note
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -441,6 +441,9 @@ def _print_run(res: api.RunResult) -> None:
     replay = replay_note(s)
     if replay is not None:
         _stdout().print(f"this run is an {replay}", markup=False)
+    recording = recording_note(s)
+    if recording is not None:
+        _stdout().print(recording, markup=False)
     _stdout().print(f"verdict: {res.verdict}", markup=False)
     for reason in s.get("reasons", []):
         _stdout().print(f"  - {reason}", markup=False)

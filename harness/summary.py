@@ -20,7 +20,8 @@ from harness.errors import SrrError
 from harness.validation import validate
 
 __all__ = ["SUMMARY_NAME", "HealthRow", "MetricRow", "SummaryFile", "TopicDigest",
-           "check_summary", "fail", "read_summary", "replay_note"]
+           "check_summary", "fail", "read_summary", "recording_note", "replay_note",
+           "versions_note"]
 
 SUMMARY_NAME = "summary.json"
 
@@ -95,6 +96,37 @@ def replay_note(summary: Mapping[str, Any]) -> str | None:
             "nothing changed: the recorded systems under test and settings")
     into = " into external ROS 2 nodes in lockstep" if r.get("mode") == "ros2-lockstep" else ""
     return f"open-loop replay{into} of {r.get('run_dir', '?')} ({what})"
+
+
+def recording_note(summary: Mapping[str, Any], *, most: int = 4) -> str | None:
+    """``recording identical to the baseline's``, or ``recording differs from the baseline's
+    in 2 of 16 topics (/a, /b); versions differ: numpy 2.4.6 → 2.5.2``, or None without a
+    baseline: what the console, the report and the Markdown summary say of the bytes (the
+    metrics are judged on their own, within their tolerances). At most ``most`` names."""
+    b = summary.get("baseline")
+    if not isinstance(b, Mapping):
+        return None
+    if b.get("digest_matches"):
+        return "recording identical to the baseline's"
+    note = "recording differs from the baseline's"
+    topics = [str(t) for t in b.get("topics_differing") or ()]
+    if topics:
+        shown = ", ".join(topics[:most]) + (", …" if len(topics) > most else "")
+        note += f" in {len(topics)} of {len(summary.get('topics') or {})} topics ({shown})"
+    versions = versions_note(b)
+    if versions:
+        note += f"; versions differ: {versions}"
+    return note
+
+
+def versions_note(baseline: Mapping[str, Any]) -> str:
+    """``numpy 2.4.6 → 2.5.2, python 3.11.7 → 3.12.3`` from a summary's ``baseline`` entry
+    (its ``versions_differing``: the baseline's, then the run's); empty when none differ."""
+    versions = baseline.get("versions_differing")
+    if not isinstance(versions, Mapping):
+        return ""
+    return ", ".join(f"{name} {v.get('baseline') or '—'} → {v.get('run') or '—'}"
+                     for name, v in versions.items() if isinstance(v, Mapping))
 
 
 def fail(path: Path, field: str, message: str) -> SrrError:

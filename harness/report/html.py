@@ -57,7 +57,7 @@ from harness.report.video import (
     write_videos,
 )
 from harness.scenario import Scenario
-from harness.summary import replay_note
+from harness.summary import recording_note, replay_note, versions_note
 
 __all__ = ["GraphRebuild", "clip_specs", "cursor_context", "fmt_value", "fmt_windows",
            "render_report", "write_report"]
@@ -416,8 +416,7 @@ def _render(data: RunData, rebuild_graphs: GraphRebuild | None, videos: VideoSet
         meta.append(f"baseline {Path(str(baseline.get('path', ''))).stem}, blessed "
                     f"{str(baseline.get('blessed_at', ''))[:10]} by "
                     f"{baseline.get('blessed_by', '?')}")
-        meta.append("recording identical to the baseline's" if baseline.get("digest_matches")
-                    else "recording differs from the baseline's")
+        meta.append(recording_note(s) or "")
     no_baseline = ""
     if not baseline and s.get("metrics"):
         no_baseline = next((r for r in reasons if "baseline" in r), "")
@@ -462,6 +461,11 @@ def _render(data: RunData, rebuild_graphs: GraphRebuild | None, videos: VideoSet
                                           f"{baseline.get('reason', '')}"),
                      ("baseline digest", f"{baseline.get('digest', '')} ("
                       + ("same" if baseline.get("digest_matches") else "differs") + ")")]
+        if baseline.get("topics_differing"):
+            run_info.append(("topics differing from the baseline's",
+                             ", ".join(map(str, baseline["topics_differing"]))))
+        if versions_note(baseline):
+            run_info.append(("versions differing (baseline → run)", versions_note(baseline)))
     ctx = {
         "verdict": verdict,
         "exit_code": s.get("exit_code", ""),

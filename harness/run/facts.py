@@ -30,13 +30,18 @@ __all__ = [
 ]
 
 
-def versions() -> dict[str, str]:
+def versions(gl_renderer: str | None = None) -> dict[str, str]:
+    """srr's, Python's and the recording libraries' versions, and for a run that rendered,
+    the OpenGL renderer that drew its images (``gl_renderer``: camera images are the
+    driver's, so a GPU and Mesa's llvmpipe record different pixels)."""
     out = {"srr": __version__, "python": platform.python_version()}
     for dist in ("mujoco", "numpy", "rosbags", "mcap", "pandas"):
         try:
             out[dist] = metadata.version(dist)
         except metadata.PackageNotFoundError:
             out[dist] = "not installed"
+    if gl_renderer:
+        out["gl_renderer"] = gl_renderer
     return out
 
 

@@ -19,11 +19,11 @@ from harness.regression import (
 )
 from harness.regression.reference import reference_path
 from harness.run.baselines import baseline_name, scene_config
-from harness.run.summary import BaselineRef
+from harness.run.summary import BaselineRef, TopicRow
 from harness.scenario import Scenario
 from harness.scoring import Scores
 
-__all__ = ["Judgement", "judge"]
+__all__ = ["Judgement", "differing_topics", "differing_versions", "judge"]
 
 
 @dataclass(frozen=True)
@@ -38,10 +38,31 @@ class Judgement:
     comparison: tuple[dict[str, Any], ...]
 
 
+def differing_topics(base: Mapping[str, Mapping[str, Any]],
+                     run: Mapping[str, TopicRow]) -> tuple[str, ...]:
+    """Topics whose SHA-256 differs between a baseline's per-topic table and a run's, or that
+    only one of them recorded, in name order."""
+    return tuple(sorted(name for name in set(base) | set(run)
+                        if name not in base or name not in run
+                        or base[name].get("sha256") != run[name].sha256))
+
+
+def differing_versions(base: Mapping[str, str],
+                       run: Mapping[str, str]) -> dict[str, dict[str, str]]:
+    """``{name: {"baseline": ..., "run": ...}}`` for each version both recorded that differs,
+    in name order: what besides the scene may have changed the bytes (a version only one side
+    recorded is unknown on the other, not different)."""
+    return {name: {"baseline": str(base[name]), "run": str(run[name])}
+            for name in sorted(set(base) & set(run)) if str(base[name]) != str(run[name])}
+
+
 def judge(scenario: Scenario, scores: Scores, bdir: Path, *, digest: str,
-          scene_files: Mapping[str, str] | None) -> Judgement:
+          scene_files: Mapping[str, str] | None, topics: Mapping[str, TopicRow],
+          versions: Mapping[str, str]) -> Judgement:
     """Compare ``scores`` with the baseline of ``scenario`` in ``bdir``; ``digest`` is the
-    run's combined digest and ``scene_files`` its model files' digests (its configuration)."""
+    run's combined digest and ``scene_files`` its model files' digests (its configuration);
+    ``topics`` and ``versions``, the run's, say which topics differ from the baseline's
+    recording and which versions from those it was blessed with."""
     path = baseline_path(baseline_name(scenario), bdir)
     base = load_baseline(path) if scores.metrics else None
     cmp = compare(scores.metrics, base, scenario.scoring.tolerances) if base else None
@@ -62,6 +83,9 @@ def judge(scenario: Scenario, scores: Scores, bdir: Path, *, digest: str,
         path=str(path), blessed_by=base.blessed_by, reason=base.reason,
         blessed_at=base.blessed_at, seed=base.seed, digest=base.digest,
         digest_matches=base.digest == digest, config_checked=base.config is not None,
+        topics_differing=() if base.digest == digest or not base.topics
+        else differing_topics(base.topics, topics),
+        versions_differing=differing_versions(base.versions, versions),
         config_differences=tuple(mismatch),
         reference=str(reference_path(path)) if base.reference
         and reference_path(path).is_file() else None)

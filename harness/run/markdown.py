@@ -23,6 +23,7 @@ from harness.report.markdown import (
     verdict_mark,
 )
 from harness.run.summary import RunSummary
+from harness.summary import recording_note
 
 __all__ = ["default_link_base", "run_markdown", "write_markdown"]
 
@@ -53,6 +54,10 @@ def run_markdown(summary: RunSummary, *, link_base: str = "",
              f"seed {s.seed}, {s.simulated_s:.1f} s simulated, {len(s.topics)} topics, "
              f"digest {code(s.digest[:16])} · {link('report', link_base, 'report.html')} · "
              f"{link('summary.json', link_base, 'summary.json')}", ""]
+    recording = recording_note({"baseline": s.baseline.to_json() if s.baseline else None,
+                                "topics": s.topics})
+    if recording is not None:
+        lines += [cell(recording, 1000), ""]
     if s.reasons:
         lines += [f"- {cell(r, 1000)}" for r in s.reasons] + [""]
     bad = [h for h in s.health if not h.ok]

@@ -65,6 +65,7 @@ from harness.run.judge import judge
 from harness.run.summary import RunSummary, TopicRow
 from harness.scenario import Scenario
 from harness.scoring import Scores, scenario_frames, score_frames
+from harness.sim.render import gl_renderer_name
 from harness.sut.base import SutContext
 from harness.sut.participant import Participant
 
@@ -196,7 +197,8 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
                          participants=participants)
     if update_baseline and not ended.interrupted:
         _update_baseline(scenario, summary, bdir, run_dir, update_reason)
-    j = judge(scenario, scores, bdir, digest=summary.digest, scene_files=summary.scene_files)
+    j = judge(scenario, scores, bdir, digest=summary.digest, scene_files=summary.scene_files,
+              topics=summary.topics, versions=summary.versions)
     summary = dataclasses.replace(summary, verdict=j.verdict, exit_code=j.exit_code,
                                   reasons=j.reasons, baseline=j.baseline,
                                   comparison=j.comparison)
@@ -309,7 +311,8 @@ def _summarize(scenario: Scenario, loop: Loop, recorder: Any, *, source: str, sc
         metrics=tuple(dataclasses.asdict(m) for m in scores.metrics), graphs=loop.graph_paths,
         systems_under_test=tuple(name for name, _, _ in loop.suts),
         sut_endpoints=sut_endpoints(loop.suts), output=loop.output.summary(),
-        topics=topics, digest=combined_digest(topics), versions=versions(),
+        topics=topics, digest=combined_digest(topics),
+        versions=versions(gl_renderer_name() if scenario.camera_count else None),
         scene_files=loop.scene_files, command=loop.command, replay_of=loop.replay_of,
         world_map=loop.world_map,
         # published in the run, recorded compressed (or not at all)

@@ -64,13 +64,24 @@ class BaselineRef:
     config_checked: bool = False
     config_differences: tuple[str, ...] = ()
     reference: str | None = None
+    # topics whose digest differs from the baseline's, or that only one side recorded
+    topics_differing: tuple[str, ...] = ()
+    # each version that differs: {"baseline": ..., "run": ...} ("" where one side lacks it)
+    versions_differing: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
-        return {"path": self.path, "blessed_by": self.blessed_by, "reason": self.reason,
-                "blessed_at": self.blessed_at, "seed": self.seed, "digest": self.digest,
-                "digest_matches": self.digest_matches, "config_checked": self.config_checked,
-                "config_differences": list(self.config_differences),
-                "reference": self.reference}
+        out: dict[str, Any] = {
+            "path": self.path, "blessed_by": self.blessed_by, "reason": self.reason,
+            "blessed_at": self.blessed_at, "seed": self.seed, "digest": self.digest,
+            "digest_matches": self.digest_matches, "config_checked": self.config_checked,
+            "config_differences": list(self.config_differences), "reference": self.reference}
+        # written only when there is something to say (a summary of an earlier srr, which
+        # had neither, reads and writes back unchanged)
+        if self.topics_differing:
+            out["topics_differing"] = list(self.topics_differing)
+        if self.versions_differing:
+            out["versions_differing"] = {k: dict(v) for k, v in self.versions_differing.items()}
+        return out
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> BaselineRef:
@@ -81,7 +92,12 @@ class BaselineRef:
                    digest_matches=bool(data.get("digest_matches")),
                    config_checked=bool(data.get("config_checked")),
                    config_differences=tuple(data.get("config_differences") or ()),
-                   reference=data.get("reference"))
+                   reference=data.get("reference"),
+                   topics_differing=tuple(data.get("topics_differing") or ()),
+                   versions_differing={
+                       str(name): {"baseline": str(v.get("baseline", "")),
+                                   "run": str(v.get("run", ""))}
+                       for name, v in (data.get("versions_differing") or {}).items()})
 
 
 @dataclass(frozen=True)

@@ -902,6 +902,13 @@ class Scenario:
     def n_ticks(self) -> int:
         return round(self.duration * self.physics.tick_hz)
 
+    @property
+    def camera_count(self) -> int:
+        """Enabled cameras: fixed ones and those on enabled robots (a run renders if any)."""
+        return sum(c.enabled for c in self.cameras) + sum(
+            r.enabled and r.sensors.camera is not None and r.sensors.camera.enabled
+            for r in self.robots)
+
     def worker_name(self, index: int) -> str:
         """Name of ``workers[index]``: its ``name`` or ``character_<index>``."""
         return self.workers[index].name or f"character_{index}"

@@ -163,9 +163,7 @@ def plan_search(cfg: SearchConfig) -> SearchPlan:
             _load(cfg, Point(((dim.path, v),)).overrides(), f"--space {dim.path}")
     check_scored(cfg.objective, sc.scoring, cfg.scenario_file)
     warnings = tuple(validate(sc, cfg.scenario_file))
-    cameras = sum(c.enabled for c in sc.cameras) + sum(
-        r.enabled and r.sensors.camera is not None and r.sensors.camera.enabled
-        for r in sc.robots)
+    cameras = sc.camera_count
     name = cfg.name or sc.name
     if not name or safe_file_name(name) != name:
         raise SrrError(f"--name {name!r}: expected letters, digits, '_', '-' and '.'")

@@ -69,6 +69,7 @@ __all__ = [
     "depth_from_buffer",
     "gl_context_seconds",
     "gl_contexts_made",
+    "gl_renderer_name",
     "is_software_renderer",
     "keep_gl_contexts",
     "points_from_depth",
@@ -136,6 +137,7 @@ _CONTEXTS_MADE = 0  # OpenGL contexts this process created
 _CONTEXT_S = 0.0  # wall seconds this process spent creating OpenGL contexts
 _SPARE: list[Any] = []  # contexts released, current on no thread, for the next renderers
 _KEEP = False  # keep_gl_contexts() was called: a closing renderer's context goes to _SPARE
+_GL_RENDERER: str | None = None  # GL_RENDERER of this process's contexts, once read
 
 
 def rendered_in_this_process() -> bool:
@@ -148,6 +150,13 @@ def gl_context_seconds() -> float:
     """Wall seconds this process has spent creating OpenGL contexts (every renderer's, on
     whichever thread); 0 when it never rendered."""
     return _CONTEXT_S
+
+
+def gl_renderer_name() -> str | None:
+    """The OpenGL ``GL_RENDERER`` string of this process's contexts (``llvmpipe (LLVM 15.0.6,
+    256 bits)``, ``NVIDIA H100 80GB HBM3/PCIe/SSE2``), read when the first renderer started;
+    None before any did, "" when it could not be read."""
+    return _GL_RENDERER
 
 
 def gl_contexts_made() -> int:
@@ -200,6 +209,17 @@ def _new_context(width: int, height: int) -> Any:
         return _SPARE.pop()
     _CONTEXTS_MADE += 1
     return mujoco.GLContext(width, height)
+
+
+def _read_renderer() -> str:
+    """``GL_RENDERER`` of the context current on this thread; "" when it cannot be read."""
+    try:
+        from OpenGL import GL
+
+        name = GL.glGetString(GL.GL_RENDERER)
+    except Exception:  # informational: PyOpenGL missing or the platform disagrees
+        return ""
+    return name.decode(errors="replace") if isinstance(name, bytes) else str(name or "")
 
 
 def _release(gl: Any) -> None:
@@ -434,7 +454,7 @@ class Renderer:
                     "cannot render: MuJoCo uses GLFW (MUJOCO_GL unset or 'glfw') and there is "
                     "no display; set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa "
                     "before starting")
-            global _CONTEXT_S
+            global _CONTEXT_S, _GL_RENDERER
             t0 = time.monotonic()
             try:
                 self._gl = _new_context(max(1, vis.offwidth), max(1, vis.offheight))
@@ -445,6 +465,8 @@ class Renderer:
                     f"cannot create an OpenGL context for rendering ({type(err).__name__}: "
                     f"{err}); set MUJOCO_GL=egl (GPU, or Mesa llvmpipe) or MUJOCO_GL=osmesa"
                 ) from err
+            if _GL_RENDERER is None:
+                _GL_RENDERER = _read_renderer()
         else:
             self._gl.make_current()
 
@@ -452,13 +474,7 @@ class Renderer:
         """The OpenGL ``GL_RENDERER`` string (creates the context on this thread); empty when
         it cannot be read."""
         self.start()
-        try:
-            from OpenGL import GL
-
-            name = GL.glGetString(GL.GL_RENDERER)
-        except Exception:  # informational: PyOpenGL missing or the platform disagrees
-            return ""
-        return name.decode(errors="replace") if isinstance(name, bytes) else str(name or "")
+        return _GL_RENDERER or ""
 
     def target(self, width: int, height: int) -> None:
         """Create the offscreen buffer for ``width`` x ``height`` now (the context must be

@@ -84,9 +84,7 @@ def plan_runs(spec: SuiteSpec, *, on_render: Callable[[], None] | None = None,
                 what = f"{err.field}: {err.message}" if err.file == "--set" else str(err)
                 raise ScenarioError(entry.sweep_source, f"sweep ({point.label})",
                                     what) from None
-            cameras = sum(c.enabled for c in sc.cameras) + sum(
-                r.enabled and r.sensors.camera is not None and r.sensors.camera.enabled
-                for r in sc.robots)
+            cameras = sc.camera_count
             if cameras and on_render is not None:
                 on_render()
                 on_render = None

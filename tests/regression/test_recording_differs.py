@@ -1,0 +1,106 @@
+"""What a run says of its bytes against the baseline's: identical, or which topics differ and
+which versions it ran with that the baseline was not blessed with (the console line, the
+summary's ``baseline`` entry, the Markdown summary and the report)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from harness.cli import main
+from harness.run.judge import differing_topics, differing_versions
+from harness.run.summary import TopicRow
+from harness.summary import recording_note
+
+ROOT = Path(__file__).resolve().parents[2]
+FW = ROOT / "scenarios" / "forklift_warehouse.yaml"
+
+
+def _row(sha: str) -> TopicRow:
+    return TopicRow(type="std_msgs/msg/Bool", count=1, sha256=sha)
+
+
+def test_topics_and_versions_that_differ() -> None:
+    base = {"/a": {"sha256": "1"}, "/b": {"sha256": "2"}, "/gone": {"sha256": "3"}}
+    run = {"/a": _row("1"), "/b": _row("X"), "/new": _row("4")}
+    assert differing_topics(base, run) == ("/b", "/gone", "/new")
+    assert differing_topics(base, {"/a": _row("1"), "/b": _row("2"), "/gone": _row("3")}) == ()
+    assert differing_versions({"numpy": "2.4.6", "mujoco": "4.0.0", "old": "1"},
+                              {"numpy": "2.5.2", "mujoco": "4.0.0", "new": "2"}) == {
+        "numpy": {"baseline": "2.4.6", "run": "2.5.2"}}  # one side's alone: unknown
+
+
+def test_the_note_names_the_topics_and_versions() -> None:
+    topics = {f"/t{i}": {} for i in range(16)}
+    assert recording_note({"topics": topics}) is None  # no baseline
+    assert recording_note({"topics": topics, "baseline": {"digest_matches": True}}) == \
+        "recording identical to the baseline's"
+    note = recording_note({"topics": topics, "baseline": {
+        "digest_matches": False, "topics_differing": ["/a", "/b", "/c", "/d", "/e"],
+        "versions_differing": {"numpy": {"baseline": "2.4.6", "run": "2.5.2"},
+                               "gl": {"baseline": "", "run": "llvmpipe"}}}})
+    assert note == ("recording differs from the baseline's in 5 of 16 topics "
+                    "(/a, /b, /c, /d, …); versions differ: numpy 2.4.6 → 2.5.2, gl — → llvmpipe")
+    # a baseline from before per-topic digests: the verdict on the bytes alone
+    assert recording_note({"topics": topics, "baseline": {"digest_matches": False}}) == \
+        "recording differs from the baseline's"
+
+
+@pytest.mark.slow
+def test_a_run_says_which_topics_differ_from_its_baseline(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    shipped = json.loads((ROOT / "baselines" / "forklift_warehouse.json").read_text())
+    bdir = tmp_path / "baselines"
+    bdir.mkdir()
+    edited = dict(shipped, digest="0" * 64,
+                  topics={**shipped["topics"], "/ghost": {"count": 1, "sha256": "0" * 64,
+                                                          "type": "std_msgs/msg/Bool"}},
+                  versions={**shipped["versions"], "numpy": "1.0.0"})
+    edited["topics"]["/odom"] = dict(edited["topics"]["/odom"], sha256="f" * 64)
+    (bdir / "forklift_warehouse.json").write_text(json.dumps(edited))
+    shutil.copy(ROOT / "baselines" / "forklift_warehouse.mcap", bdir)
+
+    for name, baselines in (("shipped", ROOT / "baselines"), ("edited", bdir)):
+        code = main(["run", str(FW), "--out", str(tmp_path / name), "-q", "--no-video",
+                     "--baselines", str(baselines), "--summary-md", str(tmp_path / f"{name}.md")])
+        assert code == 0  # the metrics hold either way: the bytes are reported, not judged
+    out = capsys.readouterr().out
+    edited_run = json.loads((tmp_path / "edited" / "summary.json").read_text())
+    b = edited_run["baseline"]
+    assert b["digest_matches"] is False and b["topics_differing"] == ["/ghost", "/odom"]
+    numpy = edited_run["versions"]["numpy"]
+    assert b["versions_differing"] == {"numpy": {"baseline": "1.0.0", "run": numpy}}
+    line = ("recording differs from the baseline's in 2 of 6 topics (/ghost, /odom); "
+            f"versions differ: numpy 1.0.0 → {numpy}")
+    assert line in out.splitlines()
+    assert line in (tmp_path / "edited.md").read_text()
+    assert "recording differs from the baseline&#39;s in 2 of 6 topics" in \
+        (tmp_path / "edited" / "report.html").read_text()
+
+    # the shipped baseline, recorded on another machine: byte for byte the same recording
+    # wherever srr and MuJoCo are the versions it was blessed with
+    run = json.loads((tmp_path / "shipped" / "summary.json").read_text())["baseline"]
+    other = {k for k in run.get("versions_differing", {}) if k in ("srr", "mujoco")}
+    if other:
+        pytest.skip(f"the shipped baselines were blessed with other versions of {other}")
+    assert run["digest_matches"] is True and "topics_differing" not in run
+    assert "recording identical to the baseline's" in out.splitlines()
+
+
+@pytest.mark.slow
+def test_a_run_that_renders_names_its_opengl_renderer(tmp_path: Path) -> None:
+    """Camera images are the OpenGL driver's: a run that rendered records which one drew
+    them among its versions (a camera-free run has none to record)."""
+    from harness.sim.render import gl_renderer_name
+
+    main(["run", str(ROOT / "scenarios" / "dock_empty.yaml"), "--duration", "0.5",
+          "--out", str(tmp_path / "dock"), "-q", "--no-video"])
+    renderer = json.loads((tmp_path / "dock" / "summary.json").read_text())["versions"][
+        "gl_renderer"]
+    assert renderer and renderer.isprintable() and renderer == gl_renderer_name()
+    main(["run", str(FW), "--duration", "0.5", "--out", str(tmp_path / "fw"), "-q"])
+    assert "gl_renderer" not in json.loads((tmp_path / "fw" / "summary.json").read_text())[
+        "versions"]
