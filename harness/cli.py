@@ -168,7 +168,9 @@ def _parser() -> argparse.ArgumentParser:
     su.add_argument("--gpu-share", type=float, default=0.5,
                     help="GPU fraction a rendering run asks Ray for (default 0.5)")
     su.add_argument("--update-baselines", action="store_true",
-                    help="bless the first repeat of every valid, non-flaky group")
+                    help="bless the first repeat of every valid, non-flaky group whose "
+                         "baseline it changes (recording, metrics, configuration, versions); "
+                         "baselines that already hold the same are left as they are")
     su.add_argument("--reason", default=None, help="why (with --update-baselines)")
     su.add_argument("--quiet", "-q", action="store_true", help="no live lines")
     _summary_md_options(su)
@@ -727,6 +729,10 @@ def _suite(args: argparse.Namespace) -> int:
         _stderr().print(f"srr suite: warning: {w}", markup=False)
     for path in res.blessed:
         _stdout().print(f"blessed {path}", markup=False)
+    if res.unchanged:
+        _stdout().print(f"unchanged: {len(res.unchanged)} baseline(s) already hold what these "
+                        "runs recorded and scored (left as they are): "
+                        + ", ".join(p.name for p in res.unchanged), markup=False)
     _stdout().print(f"verdict: {res.verdict}", markup=False)
     _stdout().print(f"{res.out_dir / 'index.html'}", markup=False)
     _write_summary_md(args, res)

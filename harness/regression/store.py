@@ -23,7 +23,7 @@ from harness.regression.reference import reference_path, write_reference
 from harness.validation import validate
 
 __all__ = ["BASELINE_VERSION", "Baseline", "BaselineError", "BaselineMetric", "baseline_path",
-           "load_baseline", "save_baseline"]
+           "load_baseline", "same_substance", "save_baseline"]
 
 BASELINE_VERSION = 1
 
@@ -99,13 +99,28 @@ def who() -> str:
         return "unknown"
 
 
+#: What blessing the same run again changes: who, when, why and from which run directory.
+_BLESSING = ("blessed_at", "blessed_by", "reason", "source_run", "reference")
+
+
+def same_substance(old: Baseline, new: Baseline) -> bool:
+    """Whether two baselines hold the same scenario, seed, metrics, per-topic digests,
+    versions and configuration: whether blessing ``new`` over ``old`` would change anything
+    but who blessed which run when and why (the reference recording follows the digests)."""
+    a, b = old.to_json(), new.to_json()
+    return all(a[k] == b[k] for k in a if k not in _BLESSING)
+
+
 def save_baseline(path: Path, summary: Mapping[str, Any], *, reason: str,
                   source_run: str, config: Mapping[str, Any] | None = None,
-                  bag: Path | None = None) -> Baseline:
+                  bag: Path | None = None, keep_unchanged: bool = False) -> Baseline | None:
     """Write a baseline from a run's ``summary.json`` content (atomically); ``config`` is the
     comparable part of the run's scenario (:func:`~harness.regression.config.comparable_config`);
     ``bag``: the run's bag, whose small topics become the reference recording next to the
-    JSON (:mod:`harness.regression.reference`; without it an old reference is removed)."""
+    JSON (:mod:`harness.regression.reference`; without it an old reference is removed).
+    With ``keep_unchanged``, a baseline already there that :func:`same_substance` finds equal
+    (and whose reference recording is in place when ``bag`` is given) is left as it is, and
+    None is returned: a bulk re-bless then rewrites only what changed."""
     if not reason.strip():
         raise SrrError("--reason: say why this run becomes the baseline")
     metrics = {m["name"]: BaselineMetric(m["value"], m["unit"], m["direction"])
@@ -119,8 +134,13 @@ def save_baseline(path: Path, summary: Mapping[str, Any], *, reason: str,
         blessed_at=time.strftime("%Y-%m-%dT%H:%M:%S%z"), source_run=source_run,
         config=dict(config) if config is not None else None,
     )
-    path.parent.mkdir(parents=True, exist_ok=True)
     ref_path = reference_path(path)
+    if keep_unchanged:
+        old = load_baseline(path)
+        if old is not None and same_substance(old, baseline) and (
+                bag is None or (old.reference is not None and ref_path.is_file())):
+            return None
+    path.parent.mkdir(parents=True, exist_ok=True)
     if bag is not None:
         info = write_reference(bag, ref_path)
         baseline = replace(baseline, reference={"file": ref_path.name, "bytes": info.bytes,

@@ -76,6 +76,14 @@ def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
     ``baselines`` if given, else in the folder the run was judged against (its summary's
     ``baselines_dir``; for runs from before it was recorded, :func:`baselines_dir` of its
     scenario file). An INVALID or interrupted run is refused (SrrError, exit 2)."""
+    return bless_if_changed(run_dir, reason, baselines=baselines, keep_unchanged=False)[0]
+
+
+def bless_if_changed(run_dir: Path, reason: str, *, baselines: Path | None = None,
+                     keep_unchanged: bool = True) -> tuple[Path, bool]:
+    """:func:`bless`, leaving a baseline that would only change in who blessed it when and
+    why as it is (``srr suite --update-baselines``); the baseline's path and whether it was
+    written."""
     runlock.refuse_if_live(run_dir)
     summary = RunSummary.read(run_dir)
     if summary.verdict == "INVALID" or summary.interrupted:
@@ -88,7 +96,7 @@ def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
     path = baseline_path(baseline_name(scenario), baselines_dir(
         summary.scenario_file, baselines if baselines is not None
         else Path(recorded) if recorded else None, scenario))
-    save_baseline(path, summary.to_json(), reason=reason, source_run=str(run_dir),
-                  config=scene_config(scenario, summary.scene_files),
-                  bag=Path(run_dir) / "bag")
-    return path
+    written = save_baseline(path, summary.to_json(), reason=reason, source_run=str(run_dir),
+                            config=scene_config(scenario, summary.scene_files),
+                            bag=Path(run_dir) / "bag", keep_unchanged=keep_unchanged)
+    return path, written is not None

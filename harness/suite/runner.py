@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from harness.errors import SrrError
-from harness.run.baselines import baselines_dir, bless
+from harness.run.baselines import baselines_dir, bless_if_changed
 from harness.run.loading import load
 from harness.run.simulate import validate
 from harness.scenario import load_scenario, parse_override
@@ -42,6 +42,7 @@ class SuiteResult:
     summary: dict[str, Any]
     groups: tuple[GroupResult, ...]
     blessed: tuple[Path, ...] = ()
+    unchanged: tuple[Path, ...] = ()  # baselines --update-baselines found up to date
 
 
 def default_suite_dir(root: Path = Path("reports")) -> Path:
@@ -92,7 +93,9 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
 
     ``history``: a folder of earlier suite outputs whose metrics the page shows as trends.
     ``bless_reason``: make the first repeat of every group that is neither INVALID, FLAKY nor
-    interrupted its baseline (``--update-baselines``), e.g. to bless each sweep point."""
+    interrupted its baseline (``--update-baselines``), e.g. to bless each sweep point; a
+    baseline that would change only in who blessed it when and why is left as it is
+    (:attr:`SuiteResult.unchanged`), so a re-bless rewrites only what changed."""
     from harness.suite.history import load_history
 
     if history is not None and not Path(history).is_dir():
@@ -132,6 +135,7 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
         summary["history"] = load_history([Path(history)], summary)
     summary["timeline"]["judged_s"] = round(time.monotonic() - t_judge, 3)
     blessed: list[Path] = []
+    unchanged: list[Path] = []
     if bless_reason is not None and not interrupted:
         for g in groups:
             if g.verdict not in ("INVALID", "FLAKY", "INTERRUPTED") and g.runs[0].run_dir:
@@ -141,8 +145,10 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
                 here = baselines if baselines is not None else baselines_dir(
                     spec.scenario_file, None, load(spec.scenario_file,
                                                        overrides=spec.overrides))
-                blessed.append(bless(out_dir / g.runs[0].run_dir, bless_reason,
-                                         baselines=here))
+                path, written = bless_if_changed(out_dir / g.runs[0].run_dir, bless_reason,
+                                                 baselines=here)
+                (blessed if written else unchanged).append(path)
     summary = write_outputs(out_dir, summary, ranked)
-    return SuiteResult(out_dir, verdict, code, summary, tuple(ranked), tuple(blessed))
+    return SuiteResult(out_dir, verdict, code, summary, tuple(ranked), tuple(blessed),
+                       tuple(unchanged))
 

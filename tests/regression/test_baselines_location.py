@@ -159,3 +159,37 @@ def test_a_baselines_path_that_is_a_file_is_refused(tmp_path: Path,
     assert not (tmp_path / "r").exists()
     assert main(["validate", str(src)]) == 2
     assert "baselines: " in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_suite_rebless_rewrites_only_the_baselines_that_change(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--update-baselines`` over baselines that already hold what the runs recorded leaves
+    their files as they are (no new date, reason or run directory to review); a scene that
+    changed is blessed again."""
+    (tmp_path / ".git").mkdir()
+    hall = "format_version: 1\nname: {name}\nduration: {d}\nclock: {{enabled: true}}\n" \
+        "world: {{size: [30.0, 20.0], shelves: [], dock: {{enabled: false}}}}\n"
+    for name in ("hall", "yard"):
+        (tmp_path / f"{name}.yaml").write_text(hall.format(name=name, d=0.25))
+
+    def suite(out: str, reason: str) -> list[str]:
+        main(["suite", str(tmp_path / "hall.yaml"), str(tmp_path / "yard.yaml"), "--jobs", "1",
+              "-q", "--out", str(tmp_path / out), "--update-baselines", "--reason", reason])
+        return capsys.readouterr().out.splitlines()
+
+    suite("s1", "first")
+    files = {n: (tmp_path / "baselines" / f"{n}.json").read_bytes() for n in ("hall", "yard")}
+    assert all(b'"reason": "first"' in data for data in files.values())
+    lines = suite("s2", "again")
+    assert not [line for line in lines if line.startswith("blessed ")]
+    assert "unchanged: 2 baseline(s) already hold what these runs recorded and scored (left as " \
+        "they are): hall.json, yard.json" in lines
+    assert {n: (tmp_path / "baselines" / f"{n}.json").read_bytes() for n in files} == files
+
+    (tmp_path / "yard.yaml").write_text(hall.format(name="yard", d=0.5))  # another scene
+    lines = suite("s3", "longer")
+    assert f"blessed {tmp_path / 'baselines' / 'yard.json'}" in lines
+    assert (tmp_path / "baselines" / "hall.json").read_bytes() == files["hall"]
+    yard = json.loads((tmp_path / "baselines" / "yard.json").read_text())
+    assert yard["reason"] == "longer" and yard["config"]["duration"] == 0.5
