@@ -19,9 +19,21 @@ from typing import Any
 from harness.errors import SrrError
 from harness.validation import validate
 
-__all__ = ["SUMMARY_NAME", "HealthRow", "MetricRow", "SummaryFile", "TopicDigest",
-           "check_summary", "fail", "read_summary", "recording_note", "replay_note",
-           "versions_note"]
+__all__ = [
+    "SUMMARY_NAME",
+    "BaselineEntry",
+    "HealthRow",
+    "MetricRow",
+    "SummaryFile",
+    "TopicDigest",
+    "VersionPair",
+    "check_summary",
+    "fail",
+    "read_summary",
+    "recording_note",
+    "replay_note",
+    "versions_note",
+]
 
 SUMMARY_NAME = "summary.json"
 
@@ -59,6 +71,34 @@ class TopicDigest:
 
 
 @dataclass(frozen=True)
+class VersionPair:
+    """One of ``baseline.versions_differing``: the version the baseline was blessed with and
+    the run's."""
+
+    baseline: str
+    run: str
+
+
+@dataclass(frozen=True)
+class BaselineEntry:
+    """``baseline``: the baseline a run was judged against, as readers use it (every field
+    may be missing from a summary of an earlier srr)."""
+
+    path: str = ""
+    blessed_by: str = ""
+    reason: str = ""
+    blessed_at: str = ""
+    seed: int | None = None
+    digest: str = ""
+    digest_matches: bool = False
+    config_checked: bool = False
+    config_differences: tuple[str, ...] = ()
+    reference: str | None = None
+    topics_differing: tuple[str, ...] = ()
+    versions_differing: dict[str, VersionPair] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class SummaryFile:
     """What every reader of ``summary.json`` relies on; keys not named here are not checked
     (:class:`harness.run.summary.RunSummary` reads the whole summary)."""
@@ -78,7 +118,7 @@ class SummaryFile:
     sut_endpoints: dict[str, Any] = field(default_factory=dict)
     replay_of: dict[str, Any] = field(default_factory=dict)
     comparison: tuple[Any, ...] = ()
-    baseline: dict[str, Any] | None = None
+    baseline: BaselineEntry | None = None
     interrupted: bool = False
 
 

@@ -193,6 +193,37 @@ def test_malformed_summary(good_run: Path, tmp_path: Path, capsys: pytest.Captur
     assert (run / "report.html").read_bytes() == before
 
 
+BASELINE_ENTRIES = [("baseline", 5), ("baseline.topics_differing", 5),
+                    ("baseline.versions_differing", "x"),
+                    ("baseline.versions_differing", {"numpy": 3}),
+                    ("baseline.config_differences", 7), ("baseline.digest_matches", "yes")]
+
+
+@pytest.mark.parametrize(("field", "value"), BASELINE_ENTRIES)
+@pytest.mark.parametrize("command", ["report", "bless"])
+def test_malformed_baseline_entry(good_run: Path, tmp_path: Path,
+                                  capsys: pytest.CaptureFixture[str], field: str, value: object,
+                                  command: str) -> None:
+    """The summary's ``baseline`` entry, which the report and the console phrase, is checked
+    field by field like the rest: one line naming it, nothing written."""
+    run = copy_run(good_run, tmp_path)
+    data = json.loads((run / "summary.json").read_text())
+    if field == "baseline":
+        data["baseline"] = value
+    else:
+        data["baseline"] = {"digest": "0", "digest_matches": False, field.split(".")[1]: value}
+    (run / "summary.json").write_text(json.dumps(data))
+    before = (run / "report.html").read_bytes()
+    argv = {"report": ["report", str(run)],
+            "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
+                      str(tmp_path / "b")]}[command]
+    code, err = cli(capsys, *argv)
+    assert code == 2, err
+    one_clean_line(code, err, argv[0])
+    assert f"summary.json: {field}" in err, err
+    assert not (tmp_path / "b").exists() and (run / "report.html").read_bytes() == before
+
+
 def test_missing_summary_and_missing_bag(good_run: Path, tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str]) -> None:
     run = copy_run(good_run, tmp_path)
