@@ -22,6 +22,7 @@ from harness.validation import validate
 __all__ = [
     "SUMMARY_NAME",
     "BaselineEntry",
+    "ComparisonRow",
     "HealthRow",
     "MetricRow",
     "SummaryFile",
@@ -71,6 +72,21 @@ class TopicDigest:
 
 
 @dataclass(frozen=True)
+class ComparisonRow:
+    """One of ``comparison``: a metric against the baseline's value, with its tolerance and
+    status (further keys are not checked)."""
+
+    name: str
+    status: str
+    value: float | None = None
+    baseline: float | None = None
+    delta: float | None = None
+    tolerance: float | None = None
+    unit: str = ""
+    direction: str = ""
+
+
+@dataclass(frozen=True)
 class VersionPair:
     """One of ``baseline.versions_differing``: the version the baseline was blessed with and
     the run's."""
@@ -111,15 +127,22 @@ class SummaryFile:
     health: tuple[HealthRow, ...]
     topics: dict[str, TopicDigest]
     ticks: int = 0
+    duration_s: float = 0.0
     simulated_s: float = 0.0
     srr_gt: bool = False
     scenario_file: str = ""
     baselines_dir: str = ""
     sut_endpoints: dict[str, Any] = field(default_factory=dict)
     replay_of: dict[str, Any] = field(default_factory=dict)
-    comparison: tuple[Any, ...] = ()
+    comparison: tuple[ComparisonRow, ...] = ()
     baseline: BaselineEntry | None = None
     interrupted: bool = False
+    reasons: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+    systems_under_test: tuple[str, ...] = ()
+    graphs: tuple[str, ...] = ()
+    versions: dict[str, str] = field(default_factory=dict)
+    scene_files: dict[str, str] | None = None
 
 
 def replay_note(summary: Mapping[str, Any]) -> str | None:

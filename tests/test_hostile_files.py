@@ -193,25 +193,29 @@ def test_malformed_summary(good_run: Path, tmp_path: Path, capsys: pytest.Captur
     assert (run / "report.html").read_bytes() == before
 
 
-BASELINE_ENTRIES = [("baseline", 5), ("baseline.topics_differing", 5),
-                    ("baseline.versions_differing", "x"),
-                    ("baseline.versions_differing", {"numpy": 3}),
-                    ("baseline.config_differences", 7), ("baseline.digest_matches", "yes")]
+SUMMARY_FIELDS = [("baseline", 5), ("baseline.topics_differing", 5),
+                  ("baseline.versions_differing", "x"),
+                  ("baseline.versions_differing", {"numpy": 3}),
+                  ("baseline.config_differences", 7), ("baseline.digest_matches", "yes"),
+                  ("comparison", [1]), ("comparison", [{"name": "m"}]), ("duration_s", "x"),
+                  ("reasons", 5), ("warnings", 5), ("systems_under_test", 5), ("versions", 5),
+                  ("versions", {"numpy": [2]}), ("scene_files", 5), ("graphs", [{}])]
 
 
-@pytest.mark.parametrize(("field", "value"), BASELINE_ENTRIES)
+@pytest.mark.parametrize(("field", "value"), SUMMARY_FIELDS)
 @pytest.mark.parametrize("command", ["report", "bless"])
-def test_malformed_baseline_entry(good_run: Path, tmp_path: Path,
-                                  capsys: pytest.CaptureFixture[str], field: str, value: object,
-                                  command: str) -> None:
-    """The summary's ``baseline`` entry, which the report and the console phrase, is checked
-    field by field like the rest: one line naming it, nothing written."""
+def test_malformed_summary_field(good_run: Path, tmp_path: Path,
+                                 capsys: pytest.CaptureFixture[str], field: str, value: object,
+                                 command: str) -> None:
+    """Every part of a summary that the report, the console or blessing reads (the baseline
+    entry, the comparison rows, reasons, versions, ...) is checked field by field: a wrong
+    type is one line naming it, nothing written (they were tracebacks)."""
     run = copy_run(good_run, tmp_path)
     data = json.loads((run / "summary.json").read_text())
-    if field == "baseline":
-        data["baseline"] = value
-    else:
+    if field.startswith("baseline."):
         data["baseline"] = {"digest": "0", "digest_matches": False, field.split(".")[1]: value}
+    else:
+        data[field] = value
     (run / "summary.json").write_text(json.dumps(data))
     before = (run / "report.html").read_bytes()
     argv = {"report": ["report", str(run)],

@@ -105,12 +105,7 @@ class _RunSummaryFile(SummaryFile):
     """The keys :meth:`RunSummary.from_json` converts beyond those :func:`read_summary`
     checks."""
 
-    warnings: tuple[Any, ...] = ()
-    graphs: tuple[Any, ...] = ()
-    systems_under_test: tuple[Any, ...] = ()
-    reasons: tuple[Any, ...] = ()
     exit_code: int = 3
-    versions: dict[str, Any] = field(default_factory=dict)
     schema_version: int = SCHEMA_VERSION
 
 
