@@ -26,6 +26,7 @@ __all__ = [
     "HealthRow",
     "MetricRow",
     "SummaryFile",
+    "SutEndpoints",
     "TopicDigest",
     "VersionPair",
     "check_summary",
@@ -87,6 +88,16 @@ class ComparisonRow:
 
 
 @dataclass(frozen=True)
+class SutEndpoints:
+    """One of ``sut_endpoints``: a system under test's plug-in and the topics it publishes and
+    subscribes (what a replay withholds and feeds)."""
+
+    plugin: str = ""
+    publishes: tuple[str, ...] = ()
+    subscribes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
 class VersionPair:
     """One of ``baseline.versions_differing``: the version the baseline was blessed with and
     the run's."""
@@ -132,7 +143,7 @@ class SummaryFile:
     srr_gt: bool = False
     scenario_file: str = ""
     baselines_dir: str = ""
-    sut_endpoints: dict[str, Any] = field(default_factory=dict)
+    sut_endpoints: dict[str, SutEndpoints] | None = None
     replay_of: dict[str, Any] = field(default_factory=dict)
     comparison: tuple[ComparisonRow, ...] = ()
     baseline: BaselineEntry | None = None

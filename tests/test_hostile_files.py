@@ -199,11 +199,12 @@ SUMMARY_FIELDS = [("baseline", 5), ("baseline.topics_differing", 5),
                   ("baseline.config_differences", 7), ("baseline.digest_matches", "yes"),
                   ("comparison", [1]), ("comparison", [{"name": "m"}]), ("duration_s", "x"),
                   ("reasons", 5), ("warnings", 5), ("systems_under_test", 5), ("versions", 5),
-                  ("versions", {"numpy": [2]}), ("scene_files", 5), ("graphs", [{}])]
+                  ("versions", {"numpy": [2]}), ("scene_files", 5), ("graphs", [{}]),
+                  ("sut_endpoints", {"follower": {"publishes": 5}})]
 
 
 @pytest.mark.parametrize(("field", "value"), SUMMARY_FIELDS)
-@pytest.mark.parametrize("command", ["report", "bless"])
+@pytest.mark.parametrize("command", ["report", "bless", "replay"])
 def test_malformed_summary_field(good_run: Path, tmp_path: Path,
                                  capsys: pytest.CaptureFixture[str], field: str, value: object,
                                  command: str) -> None:
@@ -220,7 +221,8 @@ def test_malformed_summary_field(good_run: Path, tmp_path: Path,
     before = (run / "report.html").read_bytes()
     argv = {"report": ["report", str(run)],
             "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
-                      str(tmp_path / "b")]}[command]
+                      str(tmp_path / "b")],
+            "replay": ["replay", str(run), "--out", str(tmp_path / "b"), "-q"]}[command]
     code, err = cli(capsys, *argv)
     assert code == 2, err
     one_clean_line(code, err, argv[0])
