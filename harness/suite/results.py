@@ -66,6 +66,9 @@ class RunOutcome:
     #: When it was submitted and reaped, and the worker's :data:`harness.suite.worker.PHASES`
     #: (``time.monotonic`` instants of this machine; :mod:`harness.suite.timeline`)
     clock: Mapping[str, float] | None = None
+    #: The run's bytes against its baseline's (trusted runs with a baseline only): the
+    #: summary's ``digest_matches``, ``topics_differing`` and ``versions_differing``
+    against_baseline: Mapping[str, Any] | None = None
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -77,6 +80,8 @@ class RunOutcome:
             "run_dir": self.run_dir, "report": self.report, "log": self.log,
             "digest": self.digest, "timed_out": self.timed_out, "crash": self.crash,
             "metrics": {m["name"]: m.get("value") for m in self.metrics},
+            "recording_matches_baseline": None if self.against_baseline is None
+            else bool(self.against_baseline.get("digest_matches")),
             **({"peak_rss_note": self.peak_rss_note} if self.peak_rss_note else {}),
         }
 
@@ -138,7 +143,17 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
         base, verdict=verdict, exit_code=int(summary.get("exit_code", 3)),
         reasons=tuple(str(r) for r in summary.get("reasons", [])),
         metrics=tuple(summary.get("metrics", [])) if trusted else (),
-        comparison=tuple(summary.get("comparison") or []) if trusted else ())
+        comparison=tuple(summary.get("comparison") or []) if trusted else (),
+        against_baseline=_against_baseline(summary) if trusted else None)
+
+
+def _against_baseline(summary: Mapping[str, Any]) -> dict[str, Any] | None:
+    b = summary.get("baseline")
+    if not isinstance(b, Mapping):
+        return None
+    return {"digest_matches": bool(b.get("digest_matches")),
+            "topics_differing": list(b.get("topics_differing") or ()),
+            "versions_differing": dict(b.get("versions_differing") or {})}
 
 
 @dataclass(frozen=True)
@@ -167,7 +182,15 @@ class GroupResult:
             "flaky": self.flaky, "flaky_detail": self.flaky_detail,
             "stats": {k: dict(v) for k, v in self.stats.items()},
             "runs": [r.spec.id for r in self.runs],
+            "against_baseline": self.against_baseline,
         }
+
+    @property
+    def against_baseline(self) -> Mapping[str, Any] | None:
+        """The first repeat's bytes against the baseline's (a group that is not flaky
+        recorded the same bytes in every repeat): ``digest_matches``, ``topics_differing``,
+        ``versions_differing``; None without a baseline or a trusted run."""
+        return self.runs[0].against_baseline if self.runs else None
 
 
 def _stats(runs: Sequence[RunOutcome]) -> dict[str, dict[str, Any]]:

@@ -6,6 +6,7 @@ and the command-line options' checks, made before anything runs."""
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -173,3 +174,33 @@ def test_bad_summary_options_are_one_line_exit_2_before_anything_runs(
                  "--repeat", "2"]) == 2
     assert "--summary-md: one run" in capsys.readouterr().err
     assert not (tmp_path / "pr.md").exists()
+
+
+def test_groups_whose_bytes_are_not_their_baselines_are_listed_folded(tmp_path: Path) -> None:
+    """A group whose metrics held but whose recording is not byte for byte its baseline's is
+    listed, folded away, with the topics and versions that differ; one whose bytes match,
+    a flaky one (its repeats disagree anyway) and one without a baseline are not."""
+    drift = {"digest_matches": False, "topics_differing": ["/cam_rgb", "/cam_depth"],
+             "versions_differing": {"gl_renderer": {"baseline": "llvmpipe", "run": "NVIDIA"}}}
+    same = {"digest_matches": True, "topics_differing": [], "versions_differing": {}}
+    outcomes = [
+        replace(_run("camera_scene", 1, 1, "PASS", value=0.96), against_baseline=drift),
+        replace(_run("forklift", 1, 1, "PASS", value=0.96), against_baseline=same),
+        replace(_run("wobbly", 1, 2, "PASS", value=0.96), against_baseline=drift),
+        replace(_run("wobbly", 2, 2, "FAIL", value=0.96, digest="e" * 64),
+                against_baseline=drift),
+        _run("no_baseline", 1, 1, "PASS", value=0.96),
+    ]
+    res = _suite(tmp_path, outcomes)
+    md = suite_markdown(res)
+    head = "<details><summary>1 group(s) recorded other bytes than their baselines</summary>"
+    assert head in md
+    rows = md.split(head, 1)[1].split("</details>", 1)[0].strip().splitlines()[2:]
+    assert rows == ["| `camera_scene` | PASS | 2: `/cam_rgb`, `/cam_depth` | gl\\_renderer "
+                    "llvmpipe → NVIDIA | [report](runs/camera_scene/nominal/r1/report.html) |"]
+    by_id = {g.id: g.to_json() for g in res.groups}
+    assert by_id["camera_scene"]["against_baseline"] == drift
+    assert by_id["no_baseline"]["against_baseline"] is None
+    assert [r.to_json()["recording_matches_baseline"] for r in outcomes] == [
+        False, True, False, False, None]
+    assert "recorded other bytes" not in suite_markdown(_suite(tmp_path, outcomes[1:2]))
