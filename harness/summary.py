@@ -186,7 +186,8 @@ def recording_note(summary: Mapping[str, Any], *, most: int = 4) -> str | None:
     topics = [str(t) for t in b.get("topics_differing") or ()]
     if topics:
         shown = ", ".join(topics[:most]) + (", …" if len(topics) > most else "")
-        note += f" in {len(topics)} of {len(summary.get('topics') or {})} topics ({shown})"
+        total = f" of {len(summary['topics'])}" if summary.get("topics") else ""
+        note += f" in {len(topics)}{total} topics ({shown})"
     versions = versions_note(b)
     if versions:
         note += f"; versions differ: {versions}"

@@ -37,6 +37,7 @@ from harness.report.suite_plots import (
     verdict_strip,
 )
 from harness.report.templates import template
+from harness.summary import recording_note
 
 __all__ = ["SUITE_PAGE_NAME", "VERDICT_ORDER", "render_suite_page", "write_suite_page"]
 
@@ -165,6 +166,7 @@ class GroupView:
     runs: tuple[RunCell, ...]
     flaky: FlakyView | None
     stats: tuple[StatRow, ...]
+    other_bytes: str | None = None  # the first repeat's recording is not its baseline's
 
 
 @dataclass(frozen=True)
@@ -322,10 +324,14 @@ def _group_view(i: int, g: Mapping[str, Any], runs_by_id: Mapping[str, Mapping[s
         run_ids = [rid for rid, r in runs_by_id.items() if r.get("group") == gid]
     cells = tuple(_run_cell(rid, runs_by_id.get(rid), root) for rid in run_ids)
     key = _key_lines(g)
+    flaky = _flaky_view(g, cells)
+    against = g.get("against_baseline")
+    other = (recording_note({"baseline": against}) if flaky is None and isinstance(against, dict)
+             and not against.get("digest_matches") else None)
     return GroupView(gid, f"g{i}", _verdict(g.get("verdict")), _params_text(g.get("params")),
                      g.get("repeats", len(cells)), tuple(key[:MAX_KEY]),
-                     max(0, len(key) - MAX_KEY), cells, _flaky_view(g, cells),
-                     _stat_rows(g.get("stats")))
+                     max(0, len(key) - MAX_KEY), cells, flaky, _stat_rows(g.get("stats")),
+                     other)
 
 
 def _banner(s: Mapping[str, Any], groups: Sequence[GroupView], n_runs: int) -> Banner:

@@ -73,7 +73,10 @@ def _mode_sweep(b: SuiteBuilder) -> None:
 def build_suite(out: Path, report: Path) -> dict[str, Any]:
     b = SuiteBuilder(out, report)
     b.group("forklift_nominal", [FakeRun("PASS", {"safety.match_rate": 99.0})] * 2,
-            baselines={"safety.match_rate": (99.0, 1.0)})  # PASS first: the page must sort
+            baselines={"safety.match_rate": (99.0, 1.0)},  # PASS first: the page must sort
+            against_baseline={"digest_matches": False, "topics_differing": ["/odom", "/tf"],
+                              "versions_differing": {"numpy": {"baseline": "2.4.6",
+                                                               "run": "2.5.2"}}})
     _speed_sweep(b)
     regressed = {f"control.{m}": 2.0 for m in ("cross_track_error.max", "cross_track_error.mean",
                                                "heading_error.max")}
@@ -195,6 +198,15 @@ def test_runs_without_a_report_say_why_and_link_the_log(suite: tuple[Path, dict,
 
 
 @pytest.mark.slow
+def test_a_group_that_recorded_other_bytes_than_its_baseline_says_so(
+        suite: tuple[Path, dict, str]) -> None:
+    html = suite[2]
+    row = _between(html, '<tr data-group="forklift_nominal"', '<ul class="runs">')
+    assert ('<div class="note other-bytes">recording differs from the baseline&#39;s in 2 '
+            "topics (/odom, /tf); versions differ: numpy 2.4.6 → 2.5.2</div>") in row
+    assert html.count("other-bytes") == 1  # not the flaky group, not the others
+
+
 def test_flaky_group_names_topics_divergence_and_each_repeat(
         suite: tuple[Path, dict, str]) -> None:
     html = suite[2]

@@ -87,7 +87,8 @@ class SuiteBuilder:
               params: Mapping[str, Any] | None = None, sweep: str | None = None,
               baselines: Mapping[str, tuple[float, float]] | None = None,
               verdict: str | None = None, reasons: Sequence[str] = (),
-              flaky_detail: Mapping[str, Any] | None = None) -> str:
+              flaky_detail: Mapping[str, Any] | None = None,
+              against_baseline: Mapping[str, Any] | None = None) -> str:
         params = dict(params or {})
         label = ",".join(f"{k}={v}" for k, v in params.items())
         gid = f"{entry}[{label}]" if params else entry
@@ -132,7 +133,8 @@ class SuiteBuilder:
             "exit_code": {"PASS": 0, "INVALID": 3}.get(verdict, 1),
             "reasons": list(reasons), "flaky": flaky_detail is not None,
             "flaky_detail": None if flaky_detail is None else dict(flaky_detail),
-            "stats": stats, "runs": run_ids})
+            "stats": stats, "runs": run_ids,
+            "against_baseline": None if against_baseline is None else dict(against_baseline)})
         return gid
 
     def sweep(self, name: str, params: Sequence[str], groups: Sequence[str]) -> None:
