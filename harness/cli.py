@@ -119,7 +119,8 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     _add_live_args(rp)
 
-    val = sub.add_parser("validate", help="check a scenario file without running it")
+    val = sub.add_parser("validate", help="check a scenario file without running it (or a "
+                         "suite file, or a folder of scenarios: every entry and sweep point)")
     val.add_argument("scenario", type=Path)
     val.add_argument("--set", dest="overrides", action="append", default=[])
 
@@ -472,7 +473,10 @@ def _cmd_ros2(args: argparse.Namespace) -> int:
 
 def _cmd_validate(args: argparse.Namespace) -> int:
     from harness import api
+    from harness.suite.spec import is_suite_path
 
+    if is_suite_path(args.scenario):
+        return _validate_suite(args)
     sc = api.load(args.scenario, overrides=args.overrides)
     warnings = api.validate(sc, source=str(args.scenario))
     for w in warnings:
@@ -482,6 +486,26 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         for r in sc.robots if r.enabled) or "none"
     _stdout().print(f"{args.scenario}: ok — {sc.name}, {sc.duration:g} s, seed {sc.seed}, "
                     f"robots: {robots}" + (f", {len(warnings)} warning(s)" if warnings else ""),
+                    markup=False)
+    return 0
+
+
+def _validate_suite(args: argparse.Namespace) -> int:
+    """``srr validate SUITE.yaml`` (or a folder): what ``srr suite`` checks before its first
+    run, every entry and sweep point, and nothing run."""
+    from harness import api
+
+    if args.overrides:
+        raise SrrError(f"--set: {args.scenario} is a suite; a suite changes its scenarios "
+                       "with `set:` in its entries")
+    plan = api.plan_suite([args.scenario])
+    for w in plan.warnings:
+        _stderr().print(f"srr validate: warning: {w}", markup=False)
+    groups = len({r.group for r in plan.runs})
+    what = "a folder of" if args.scenario.is_dir() else f"suite {plan.spec.name}:"
+    _stdout().print(f"{args.scenario}: ok — {what} {len(plan.spec.entries)} scenario entries, "
+                    f"{groups} groups, {len(plan.runs)} runs"
+                    + (f", {len(plan.warnings)} warning(s)" if plan.warnings else ""),
                     markup=False)
     return 0
 

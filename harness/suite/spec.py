@@ -36,7 +36,7 @@ from harness.suite.sweep import SweepParam, parse_sweep
 from harness.validation import validate
 
 __all__ = ["DefaultsFile", "Entry", "EntryFile", "SuiteFile", "SuiteSpec", "is_suite_file",
-           "load_suite"]
+           "is_suite_path", "load_suite"]
 
 
 @dataclass(frozen=True)
@@ -79,6 +79,18 @@ def _read(path: Path) -> Any:
 
 def is_suite_file(data: Any) -> bool:
     return isinstance(data, Mapping) and isinstance(data.get("scenarios"), list)
+
+
+def is_suite_path(path: Path) -> bool:
+    """Whether ``path`` is a suite file or a folder of scenarios (what ``srr validate``
+    checks as a suite); False for a file that cannot be read or parsed, which the scenario
+    loader then names."""
+    if path.is_dir():
+        return True
+    try:
+        return is_suite_file(_read(path))
+    except SrrError:
+        return False
 
 
 def _is_scenario(data: Any) -> bool:

@@ -169,3 +169,32 @@ def test_stats_ci_is_scipy_students_t_interval(n: int) -> None:
     assert d.ci95 == (d.mean - half, d.mean + half)
     assert math.isclose(d.ci95[0], lo, rel_tol=1e-12) and math.isclose(d.ci95[1], hi,
                                                                       rel_tol=1e-12)
+
+
+def test_srr_validate_checks_a_suite_file_and_a_folder_without_running(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """``srr validate`` on a suite file (or a folder of scenarios) checks what ``srr suite``
+    checks before its first run, every entry and sweep point, and runs nothing."""
+    from harness.cli import main
+
+    monkeypatch.chdir(tmp_path)
+
+    nightly = ROOT / "scenarios" / "suites" / "nightly.yaml"
+    assert main(["validate", str(nightly)]) == 0
+    out = capsys.readouterr().out
+    assert f"{nightly}: ok — suite nightly: 10 scenario entries, 14 groups, 23 runs" in out
+    (tmp_path / "hall.yaml").write_text(
+        "format_version: 1\nname: hall\nduration: 0.25\n"
+        "world: {size: [30.0, 20.0], shelves: [], dock: {enabled: false}}\n")
+    assert main(["validate", str(tmp_path)]) == 0
+    assert f"{tmp_path}: ok — a folder of 1 scenario entries, 1 groups, 1 runs" in \
+        capsys.readouterr().out
+    bad = tmp_path / "suite.yaml"
+    bad.write_text("suite: s\nscenarios:\n  - {path: hall.yaml, sweep: {duration: [0.25, -1]}}\n")
+    assert main(["validate", str(bad)]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert err.startswith("srr validate: ") and "duration" in err and "Traceback" not in err
+    assert main(["validate", str(nightly), "--set", "duration=3"]) == 2
+    assert "is a suite; a suite changes its scenarios with `set:`" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["hall.yaml", "suite.yaml"]  # no output
