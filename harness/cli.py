@@ -180,7 +180,9 @@ def _parser() -> argparse.ArgumentParser:
 
     dif = sub.add_parser("diff", help="compare two runs: recorded topics, first divergence, "
                          "metrics side by side")
-    dif.add_argument("run_a", type=Path, help="baseline run directory")
+    dif.add_argument("run_a", type=Path, help="baseline run directory, or a baseline file "
+                     "(baselines/NAME.json: its reference recording; the topics it does not "
+                     "keep, by digest)")
     dif.add_argument("run_b", type=Path, help="candidate run directory")
     dif.add_argument("--tolerance", dest="tolerances", action="append", default=[],
                      metavar="TOPIC_GLOB[:FIELD_GLOB]=ABS[,REL]",
@@ -447,6 +449,9 @@ def _print_run(res: api.RunResult) -> None:
     recording = recording_note(s)
     if recording is not None:
         _stdout().print(recording, markup=False)
+        b = s.get("baseline") or {}
+        if not b.get("digest_matches") and b.get("reference"):
+            _stdout().print(f"  where: srr diff {b['path']} {res.run_dir}", markup=False)
     _stdout().print(f"verdict: {res.verdict}", markup=False)
     for reason in s.get("reasons", []):
         _stdout().print(f"  - {reason}", markup=False)
@@ -693,6 +698,9 @@ def _cmd_diff(args: argparse.Namespace) -> int:
 
     _writable("--html", args.html)
     _writable("--json", args.json)
+    if args.html is not None and Path(args.run_a).is_file():
+        raise SrrError(f"--html: shows two run directories; {args.run_a} is a baseline file "
+                       "(the run's report.html overlays it, under 'Against the baseline')")
     result = api.diff_runs(args.run_a, args.run_b, tolerances=args.tolerances)
     _print_diff(result)
     if args.json is not None:

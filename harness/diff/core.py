@@ -1,5 +1,7 @@
 """``diff_runs``: two run directories compared — recorded data topic by topic, metrics side by
-side.
+side. Run A may be a baseline file instead (``baselines/<name>.json``): its reference
+recording stands for A's bag, and the topics the reference does not keep (images, the dynamic
+``/tf``) are compared by the per-topic digests the baseline holds.
 
 The outcome (:attr:`DiffResult.equal`, exit 0 or 1) depends on the recorded data only: both
 runs record the same topics with the same types and message counts, and every topic is
@@ -11,6 +13,7 @@ score equally, and the point of ``diff`` is to say where the data part.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -25,7 +28,7 @@ from harness.recording.errors import BagError
 from harness.scenario.schema import ToleranceSpec
 from harness.summary import replay_note
 
-__all__ = ["check_against_summary", "diff_runs", "open_run"]
+__all__ = ["check_against_summary", "diff_runs", "open_baseline", "open_run"]
 
 
 def open_run(path: Path) -> tuple[dict[str, Any], Path]:
@@ -44,6 +47,51 @@ def open_run(path: Path) -> tuple[dict[str, Any], Path]:
     if not (bag / "metadata.yaml").is_file() and ros1_recording(bag) is None:
         raise SrrError(f"{bag / 'metadata.yaml'}: missing (not a rosbag2 directory)")
     return summary, bag
+
+
+def open_baseline(path: Path) -> tuple[dict[str, Any], Path, frozenset[str]]:
+    """(a summary-like mapping, the reference recording, the topics it keeps) of a baseline
+    file; :class:`SrrError` (exit 2) when it is malformed or has no reference recording."""
+    from harness.regression import load_baseline
+    from harness.regression.reference import reference_path
+
+    base = load_baseline(path)
+    if base is None:
+        raise SrrError(f"{path}: no such baseline file")
+    ref = reference_path(path)
+    if base.reference is None or not ref.is_file():
+        raise SrrError(f"{ref}: missing: this baseline has no reference recording to compare "
+                       "messages with (bless it again: `srr baseline bless RUN_DIR`)")
+    duration = (base.config or {}).get("duration")
+    summary = {"scenario": base.scenario, "seed": base.seed, "verdict": "baseline",
+               "simulated_s": duration, "digest": base.digest,
+               "topics": {k: dict(v) for k, v in base.topics.items()},
+               "metrics": [{"name": n, "value": m.value, "unit": m.unit,
+                            "direction": m.direction} for n, m in base.metrics.items()]}
+    kept = base.reference.get("topics")
+    return summary, ref, frozenset(kept if isinstance(kept, Mapping) else ())
+
+
+def _by_digest(topics: Sequence[TopicDiff], recorded: Mapping[str, Any],
+               kept: frozenset[str]) -> tuple[TopicDiff, ...]:
+    """A baseline's topics that its reference recording leaves out, compared by the digest
+    and count the baseline holds: identical, or differs (no message to point at)."""
+    out = {t.name: t for t in topics}
+    for name, entry in recorded.items():
+        if name in kept:
+            continue
+        t = out.get(name)
+        sha, count = str(entry.get("sha256")), int(entry.get("count") or 0)
+        if t is None:  # in the baseline, not in the run
+            out[name] = TopicDiff(name, str(entry.get("type")), None, count, 0, sha, None,
+                                  "only_in_a", 0, None, None, (), (), 0, None, ())
+            continue
+        same = t.sha256_b == sha and t.count_b == count
+        out[name] = dataclasses.replace(  # no messages of A's to pair: no divergence to show
+            t, type_a=str(entry.get("type")), count_a=count, sha256_a=sha,
+            status="identical" if same else "differs", messages_differ=0, first=None,
+            first_beyond=None, fields=(), mismatches=(), time_shifts=0, worst=None)
+    return tuple(out[n] for n in sorted(out))
 
 
 def _info(path: Path, s: Mapping[str, Any]) -> RunInfo:
@@ -98,23 +146,35 @@ def diff_runs(a: str | Path, b: str | Path, *,
     ``summary.json``, a bag that does not read back or does not match its summary."""
     tols = tuple(t if isinstance(t, Tolerance) else parse_tolerance(t) for t in tolerances)
     pa, pb = Path(a), Path(b)
-    sa, bag_a = open_run(pa)
+    kept: frozenset[str] | None = None  # A is a baseline: the topics its reference keeps
+    if pa.suffix == ".json" and not pa.is_dir():
+        sa, bag_a, kept = open_baseline(pa)
+    else:
+        sa, bag_a = open_run(pa)
     sb, bag_b = open_run(pb)
-    ma = summary_metrics(sa, pa / "summary.json")
+    ma = summary_metrics(sa, pa if kept is not None else pa / "summary.json")
     mb = summary_metrics(sb, pb / "summary.json")
     topics = diff_bags(bag_a, bag_b, tols)
     notes: list[str] = []
+    if kept is not None:
+        recorded = sa["topics"]
+        topics = _by_digest(topics, recorded, kept)
+        sa = dict(sa, topics={k: v for k, v in recorded.items() if k in kept})
+        notes.append(f"A is the baseline {pa}: its reference recording keeps {len(kept)} of "
+                     f"its {len(recorded)} topics; the others are compared by their digests "
+                     "only")
     for t in tols:
         if not any(glob_match(td.name, t.topic) for td in topics):
             notes.append(f"--tolerance {t.spec!r} matches no topic of either run")
+    read_back = topics if kept is None else tuple(t for t in topics if t.name in kept)
     for side, (s, bag) in enumerate(((sa, bag_a), (sb, bag_b))):
-        note = check_against_summary(bag, s, topics, side)
+        note = check_against_summary(bag, s, read_back if side == 0 else topics, side)
         if note:
             notes.append(note)
     if sa.get("scenario") != sb.get("scenario"):
         notes.append(f"the runs are of different scenarios: {sa.get('scenario')!r} (A) and "
                      f"{sb.get('scenario')!r} (B)")
-    metric_tols, problem = _scenario_tolerances(pa)
+    metric_tols, problem = _scenario_tolerances(pb if kept is not None else pa)
     if problem and (ma or mb):
         notes.append(problem)
     return DiffResult(_info(pa, sa), _info(pb, sb), topics, metric_deltas(ma, mb, metric_tols),

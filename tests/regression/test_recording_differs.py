@@ -76,6 +76,8 @@ def test_a_run_says_which_topics_differ_from_its_baseline(
     line = ("recording differs from the baseline's in 2 of 6 topics (/ghost, /odom); "
             f"versions differ: numpy 1.0.0 → {numpy}")
     assert line in out.splitlines()
+    where = f"  where: srr diff {bdir / 'forklift_warehouse.json'} {tmp_path / 'edited'}"
+    assert out.splitlines()[out.splitlines().index(line) + 1] == where
     assert line in (tmp_path / "edited.md").read_text()
     assert "recording differs from the baseline&#39;s in 2 of 6 topics" in \
         (tmp_path / "edited" / "report.html").read_text()
