@@ -75,8 +75,9 @@ def one_pass(tree: Path, suite: str, jobs: int, repeat: int, out: Path) -> dict[
         to_first: float | None = float(first_file.read_text()) - t0
     except (OSError, ValueError):
         to_first = None
-    if not (out / "summary.json").is_file():
-        raise SystemExit(f"{tree}: the suite wrote no summary:\n{proc.stderr[-2000:]}")
+    if proc.returncode == 2 or not (out / "summary.json").is_file():
+        raise SystemExit(f"{tree}: the suite did not run (exit {proc.returncode}):\n"
+                         f"{proc.stderr[-2000:]}")
     s = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     runs = s["runs"]
     busy = sum(r["wall_s"] for r in runs)
@@ -156,10 +157,12 @@ def main() -> None:
     print(f"machine: {os.cpu_count()} CPUs; suite {args.suite}")
     results: dict[str, dict[tuple[int, int], dict[str, Any]]] = {name: {} for name, _ in trees}
     with tempfile.TemporaryDirectory() as tmp:
-        for jobs, repeat in configs:
+        for k, (jobs, repeat) in enumerate(configs):
             for name, tree in trees:
+                # a folder per pass: a configuration listed twice runs twice (the later pass's
+                # figures are the ones kept for the efficiency)
                 r = one_pass(tree, args.suite, jobs, repeat,
-                             Path(tmp) / f"{name}_{jobs}_{repeat}")
+                             Path(tmp) / f"{name}_{jobs}_{repeat}_{k}")
                 results[name][(jobs, repeat)] = r
                 if args.keep:
                     args.keep.mkdir(parents=True, exist_ok=True)
