@@ -765,6 +765,12 @@ def _suite(args: argparse.Namespace) -> int:
         _stdout().print(f"unchanged: {len(res.unchanged)} baseline(s) already hold what these "
                         "runs recorded and scored (left as they are): "
                         + ", ".join(p.name for p in res.unchanged), markup=False)
+    other = [g.id for g in res.groups if not g.flaky and g.against_baseline is not None
+             and not g.against_baseline.get("digest_matches")]
+    if other:
+        _stdout().print(f"recording: {len(other)} group(s) recorded other bytes than their "
+                        "baselines (their metrics judged on their own): " + ", ".join(other),
+                        markup=False)
     _stdout().print(f"verdict: {res.verdict}", markup=False)
     _stdout().print(f"{res.out_dir / 'index.html'}", markup=False)
     _write_summary_md(args, res)

@@ -106,3 +106,24 @@ def test_a_run_that_renders_names_its_opengl_renderer(tmp_path: Path) -> None:
     main(["run", str(FW), "--duration", "0.5", "--out", str(tmp_path / "fw"), "-q"])
     assert "gl_renderer" not in json.loads((tmp_path / "fw" / "summary.json").read_text())[
         "versions"]
+
+
+@pytest.mark.slow
+def test_a_suite_names_the_groups_whose_recording_is_not_their_baselines(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    shipped = json.loads((ROOT / "baselines" / "forklift_warehouse.json").read_text())
+    bdir = tmp_path / "baselines"
+    bdir.mkdir()
+    shipped["topics"]["/tf"] = dict(shipped["topics"]["/tf"], sha256="e" * 64)
+    shipped["digest"] = "e" * 64
+    (bdir / "forklift_warehouse.json").write_text(json.dumps(shipped))
+    shutil.copy(ROOT / "baselines" / "forklift_warehouse.mcap", bdir)
+    code = main(["suite", str(FW), "--jobs", "1", "-q", "--out", str(tmp_path / "s"),
+                 "--baselines", str(bdir), "--summary-md", str(tmp_path / "s.md")])
+    assert code == 0  # the metrics held
+    assert ("recording: 1 group(s) recorded other bytes than their baselines (their metrics "
+            "judged on their own): forklift_warehouse") in capsys.readouterr().out.splitlines()
+    (group,) = json.loads((tmp_path / "s" / "summary.json").read_text())["groups"]
+    assert group["against_baseline"]["topics_differing"] == ["/tf"]
+    assert "1 group(s) recorded other bytes than their baselines" in \
+        (tmp_path / "s.md").read_text()
