@@ -19,6 +19,19 @@ ROOT = Path(__file__).resolve().parents[2]
 FW = ROOT / "scenarios" / "forklift_warehouse.yaml"
 
 
+def _edited_baseline(tmp_path: Path, topics: dict[str, dict[str, object]],
+                     **fields: object) -> Path:
+    """A copy of the shipped forklift baseline (and its reference recording) in a folder of
+    its own, with these topics' entries and fields replaced and another combined digest."""
+    data = json.loads((ROOT / "baselines" / "forklift_warehouse.json").read_text())
+    data.update(fields, digest="0" * 64, topics={**data["topics"], **topics})
+    bdir = tmp_path / "baselines"
+    bdir.mkdir()
+    (bdir / "forklift_warehouse.json").write_text(json.dumps(data))
+    shutil.copy(ROOT / "baselines" / "forklift_warehouse.mcap", bdir)
+    return bdir
+
+
 def _row(sha: str) -> TopicRow:
     return TopicRow(type="std_msgs/msg/Bool", count=1, sha256=sha)
 
@@ -53,15 +66,10 @@ def test_the_note_names_the_topics_and_versions() -> None:
 def test_a_run_says_which_topics_differ_from_its_baseline(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     shipped = json.loads((ROOT / "baselines" / "forklift_warehouse.json").read_text())
-    bdir = tmp_path / "baselines"
-    bdir.mkdir()
-    edited = dict(shipped, digest="0" * 64,
-                  topics={**shipped["topics"], "/ghost": {"count": 1, "sha256": "0" * 64,
-                                                          "type": "std_msgs/msg/Bool"}},
-                  versions={**shipped["versions"], "numpy": "1.0.0"})
-    edited["topics"]["/odom"] = dict(edited["topics"]["/odom"], sha256="f" * 64)
-    (bdir / "forklift_warehouse.json").write_text(json.dumps(edited))
-    shutil.copy(ROOT / "baselines" / "forklift_warehouse.mcap", bdir)
+    bdir = _edited_baseline(tmp_path, {
+        "/ghost": {"count": 1, "sha256": "0" * 64, "type": "std_msgs/msg/Bool"},
+        "/odom": dict(shipped["topics"]["/odom"], sha256="f" * 64)},
+        versions={**shipped["versions"], "numpy": "1.0.0"})
 
     for name, baselines in (("shipped", ROOT / "baselines"), ("edited", bdir)):
         code = main(["run", str(FW), "--out", str(tmp_path / name), "-q", "--no-video",
@@ -112,12 +120,7 @@ def test_a_run_that_renders_names_its_opengl_renderer(tmp_path: Path) -> None:
 def test_a_suite_names_the_groups_whose_recording_is_not_their_baselines(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     shipped = json.loads((ROOT / "baselines" / "forklift_warehouse.json").read_text())
-    bdir = tmp_path / "baselines"
-    bdir.mkdir()
-    shipped["topics"]["/tf"] = dict(shipped["topics"]["/tf"], sha256="e" * 64)
-    shipped["digest"] = "e" * 64
-    (bdir / "forklift_warehouse.json").write_text(json.dumps(shipped))
-    shutil.copy(ROOT / "baselines" / "forklift_warehouse.mcap", bdir)
+    bdir = _edited_baseline(tmp_path, {"/tf": dict(shipped["topics"]["/tf"], sha256="e" * 64)})
     code = main(["suite", str(FW), "--jobs", "1", "-q", "--out", str(tmp_path / "s"),
                  "--baselines", str(bdir), "--summary-md", str(tmp_path / "s.md")])
     assert code == 0  # the metrics held
