@@ -446,6 +446,13 @@ def _render(data: RunData, rebuild_graphs: GraphRebuild | None, videos: VideoSet
                else "", "bytes": _human_bytes(t.get("bytes")),
                "durability": t.get("durability", ""), "sha256": str(t.get("sha256", ""))}
               for name, t in sorted((s.get("topics") or {}).items())]
+    # each topic's bytes against the baseline's: "same" / "differs" (only when there is a
+    # baseline with per-topic digests to say it from)
+    differing = set((baseline or {}).get("topics_differing") or ())
+    vs_baseline = baseline is not None and (bool(baseline.get("digest_matches"))
+                                            or bool(differing))
+    for row in topics:
+        row["vs_baseline"] = "differs" if row["name"] in differing else "same"
     run_info = [("run directory", str(data.run_dir)),
                 ("scenario file", s.get("scenario_file", "")),
                 ("seed", s.get("seed", "")),
@@ -500,7 +507,7 @@ def _render(data: RunData, rebuild_graphs: GraphRebuild | None, videos: VideoSet
         "graphs": [{"path": g.path, "svg": Markup(g.svg)} for g in graphs],
         "graph_paths": s.get("graphs", []) if not graphs else [],
         "mermaid": mermaid,
-        "topics": topics,
+        "topics": topics, "topics_vs_baseline": vs_baseline,
         "command": s.get("command", ""),
         "command_exact": _exact_command(data),
         "run_info": run_info,

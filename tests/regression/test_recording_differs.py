@@ -5,6 +5,7 @@ summary's ``baseline`` entry, the Markdown summary and the report)."""
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -87,8 +88,12 @@ def test_a_run_says_which_topics_differ_from_its_baseline(
     where = f"  where: srr diff {bdir / 'forklift_warehouse.json'} {tmp_path / 'edited'}"
     assert out.splitlines()[out.splitlines().index(line) + 1] == where
     assert line in (tmp_path / "edited.md").read_text()
-    assert "recording differs from the baseline&#39;s in 2 of 6 topics" in \
-        (tmp_path / "edited" / "report.html").read_text()
+    page = (tmp_path / "edited" / "report.html").read_text()
+    assert "recording differs from the baseline&#39;s in 2 of 6 topics" in page
+    marks = dict(re.findall(r'<tr data-topic="([^"]+)">.*?<td class="vs-baseline">(\w+)</td>',
+                            page, re.S))
+    assert marks == {"/clock": "same", "/cmd_vel": "same", "/gt/forklift/tf": "same",
+                     "/odom": "differs", "/tf": "same", "/tf_static": "same"}
 
     # the shipped baseline, recorded on another machine: byte for byte the same recording
     # wherever srr and MuJoCo are the versions it was blessed with
