@@ -136,7 +136,10 @@ def save_baseline(path: Path, summary: Mapping[str, Any], *, reason: str,
     )
     ref_path = reference_path(path)
     if keep_unchanged:
-        old = load_baseline(path)
+        try:
+            old = load_baseline(path)
+        except BaselineError:  # a damaged file is replaced, as without keep_unchanged
+            old = None
         if old is not None and same_substance(old, baseline) and (
                 bag is None or (old.reference is not None and ref_path.is_file())):
             return None
