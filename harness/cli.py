@@ -695,10 +695,11 @@ def _print_diff(r: DiffResult) -> None:
 def _cmd_diff(args: argparse.Namespace) -> int:
     from harness import api
     from harness.atomic import write_json_atomic
+    from harness.diff.core import is_baseline_file
 
     _writable("--html", args.html)
     _writable("--json", args.json)
-    if args.html is not None and Path(args.run_a).is_file():
+    if args.html is not None and is_baseline_file(Path(args.run_a)):
         raise SrrError(f"--html: shows two run directories; {args.run_a} is a baseline file "
                        "(the run's report.html overlays it, under 'Against the baseline')")
     result = api.diff_runs(args.run_a, args.run_b, tolerances=args.tolerances)
@@ -765,8 +766,7 @@ def _suite(args: argparse.Namespace) -> int:
         _stdout().print(f"unchanged: {len(res.unchanged)} baseline(s) already hold what these "
                         "runs recorded and scored (left as they are): "
                         + ", ".join(p.name for p in res.unchanged), markup=False)
-    other = [g.id for g in res.groups if not g.flaky and g.against_baseline is not None
-             and not g.against_baseline.get("digest_matches")]
+    other = [g.id for g in res.groups if g.recorded_other_bytes]
     if other:
         _stdout().print(f"recording: {len(other)} group(s) recorded other bytes than their "
                         "baselines (their metrics judged on their own): " + ", ".join(other),

@@ -28,7 +28,14 @@ from harness.recording.errors import BagError
 from harness.scenario.schema import ToleranceSpec
 from harness.summary import replay_note
 
-__all__ = ["check_against_summary", "diff_runs", "open_baseline", "open_run"]
+__all__ = ["check_against_summary", "diff_runs", "is_baseline_file", "open_baseline",
+           "open_run"]
+
+
+def is_baseline_file(path: Path) -> bool:
+    """Whether ``srr diff`` reads ``path`` as a baseline file (``baselines/<name>.json``)
+    rather than a run directory."""
+    return path.suffix == ".json" and not path.is_dir()
 
 
 def open_run(path: Path) -> tuple[dict[str, Any], Path]:
@@ -83,8 +90,11 @@ def _by_digest(topics: Sequence[TopicDiff], recorded: Mapping[str, Any],
         t = out.get(name)
         sha, count = str(entry.get("sha256")), int(entry.get("count") or 0)
         if t is None:  # in the baseline, not in the run
-            out[name] = TopicDiff(name, str(entry.get("type")), None, count, 0, sha, None,
-                                  "only_in_a", 0, None, None, (), (), 0, None, ())
+            out[name] = TopicDiff(
+                name=name, type_a=str(entry.get("type")), type_b=None, count_a=count,
+                count_b=0, sha256_a=sha, sha256_b=None, status="only_in_a", messages_differ=0,
+                first=None, first_beyond=None, fields=(), mismatches=(), time_shifts=0,
+                worst=None, tolerances=())
             continue
         same = t.sha256_b == sha and t.count_b == count
         out[name] = dataclasses.replace(  # no messages of A's to pair: no divergence to show
@@ -147,7 +157,7 @@ def diff_runs(a: str | Path, b: str | Path, *,
     tols = tuple(t if isinstance(t, Tolerance) else parse_tolerance(t) for t in tolerances)
     pa, pb = Path(a), Path(b)
     kept: frozenset[str] | None = None  # A is a baseline: the topics its reference keeps
-    if pa.suffix == ".json" and not pa.is_dir():
+    if is_baseline_file(pa):
         sa, bag_a, kept = open_baseline(pa)
     else:
         sa, bag_a = open_run(pa)

@@ -471,8 +471,9 @@ def _render(data: RunData, rebuild_graphs: GraphRebuild | None, videos: VideoSet
         if baseline.get("topics_differing"):
             run_info.append(("topics differing from the baseline's",
                              ", ".join(map(str, baseline["topics_differing"]))))
-        if versions_note(baseline):
-            run_info.append(("versions differing (baseline → run)", versions_note(baseline)))
+        differ = versions_note(baseline)
+        if differ:
+            run_info.append(("versions differing (baseline → run)", differ))
     ctx = {
         "verdict": verdict,
         "exit_code": s.get("exit_code", ""),

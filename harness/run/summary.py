@@ -66,7 +66,7 @@ class BaselineRef:
     reference: str | None = None
     # topics whose digest differs from the baseline's, or that only one side recorded
     topics_differing: tuple[str, ...] = ()
-    # each version that differs: {"baseline": ..., "run": ...} ("" where one side lacks it)
+    # each version both sides recorded that differs: {"baseline": ..., "run": ...}
     versions_differing: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:

@@ -136,7 +136,7 @@ def _other_bytes(groups: Sequence[GroupResult], base: str) -> list[str]:
     rows = []
     for g in groups:
         b = g.against_baseline
-        if g.flaky or b is None or b.get("digest_matches"):
+        if b is None or not g.recorded_other_bytes:
             continue
         topics = [str(t) for t in b.get("topics_differing") or ()]
         shown = ", ".join(code(t) for t in topics[:6]) + (" …" if len(topics) > 6 else "")

@@ -192,6 +192,14 @@ class GroupResult:
         ``versions_differing``; None without a baseline or a trusted run."""
         return self.runs[0].against_baseline if self.runs else None
 
+    @property
+    def recorded_other_bytes(self) -> bool:
+        """Whether the group (not flaky) recorded other bytes than its baseline's while its
+        metrics were judged on their own: what the console, the Markdown summary and the page
+        point out."""
+        b = self.against_baseline
+        return not self.flaky and b is not None and not b.get("digest_matches")
+
 
 def _stats(runs: Sequence[RunOutcome]) -> dict[str, dict[str, Any]]:
     names: dict[str, Mapping[str, Any]] = {}

@@ -90,6 +90,8 @@ def test_a_run_says_which_topics_differ_from_its_baseline(
     assert line in (tmp_path / "edited.md").read_text()
     page = (tmp_path / "edited" / "report.html").read_text()
     assert "recording differs from the baseline&#39;s in 2 of 6 topics" in page
+    assert (f'<dt>versions differing (baseline → run)</dt><dd class="mono">numpy 1.0.0 → '
+            f'{numpy}</dd>') in page
     marks = dict(re.findall(r'<tr data-topic="([^"]+)">.*?<td class="vs-baseline">(\w+)</td>',
                             page, re.S))
     assert marks == {"/clock": "same", "/cmd_vel": "same", "/gt/forklift/tf": "same",
