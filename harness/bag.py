@@ -40,8 +40,8 @@ def inspect_bag(path: str | Path) -> BagInfo:
     types as recorded (``sensor_msgs/Image`` in a ROS 1 recording), latched ROS 1 topics as
     ``transient_local``. Raises :class:`~harness.recording.errors.BagError`."""
     p = Path(path)
-    if (p / "bag" / "metadata.yaml").exists() or ros1_recording(p / "bag") is not None:
-        p = p / "bag"
+    if (p / "bag").is_dir() and not (p / "metadata.yaml").exists():
+        p = p / "bag"  # a run directory: its recording, finished or not
     if not p.exists():
         raise BagError(f"{path}: no such bag directory")
     ros1 = p if p.is_file() and p.suffix in (".bag", ".mcap") else ros1_recording(p)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from harness import runmarker
 from harness.errors import SrrError
 from harness.validation import validate
 
@@ -216,6 +217,11 @@ def read_summary(run_dir: str | Path) -> dict[str, Any]:
     if not run.is_dir():
         raise SrrError(f"{run}: not a run directory (no such directory)")
     if not path.is_file():
+        marker = runmarker.read(run)
+        if marker is not None:
+            raise SrrError(f"{path}: missing: the run did not finish (killed while "
+                           f"{marker.get('phase', 'unknown')}); `srr recover {run}` makes it "
+                           "a finished run directory")
         raise SrrError(f"{path}: missing (not a finished run directory)")
     try:
         data = json.loads(path.read_text(encoding="utf-8"))

@@ -188,3 +188,22 @@ def test_inspect_on_a_killed_bag_points_to_recover(tmp_path: Path,
     (bag / "bag.mcap").write_bytes(b"\x89MCAP0\r\n")
     assert main(["inspect", str(bag)]) == 2
     assert "srr recover" in capsys.readouterr().err
+
+
+def test_commands_on_a_killed_run_directory_point_to_recover(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A killed run's directory (its marker, a cut bag, no summary): every command that reads
+    it says so and names ``srr recover``, rather than "not a run directory"."""
+    run = tmp_path / "run"
+    (run / "bag").mkdir(parents=True)
+    (run / "bag" / "bag.mcap").write_bytes(b"\x89MCAP0\r\n")
+    runmarker.mark(run, "recording", command="srr run x.yaml")
+    for argv in (["inspect", str(run)], ["report", str(run)], ["diff", str(run), str(run)],
+                 ["replay", str(run)], ["baseline", "bless", str(run), "--reason", "x"]):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert "srr recover" in err and err.count("\n") == 1, (argv, err)
+        assert "killed while recording" in err or "did not finish" in err, (argv, err)
+    runmarker.clear(run)  # no marker: nothing says the run was killed
+    assert main(["report", str(run)]) == 2
+    assert "not a finished run directory" in capsys.readouterr().err
