@@ -44,6 +44,7 @@ from harness.bus import Bus
 from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
 from harness.errors import RunStopped, SrrError
+from harness.interrupt import StopRequests
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.output import ROS2_OUTPUT, OutputKind
@@ -230,38 +231,43 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
     """Open the recorder on the bus and attach every participant to it (the systems under
     test, then ``participants``), then run the ticks, each followed by every participant's
     ``after_tick``.
-    A low disk or a :class:`RunStopped` stops the loop at a tick boundary and Ctrl-C ends it,
-    what was recorded kept; any other error removes the run directory. The loop is closed
-    however it ends."""
+    A low disk or a :class:`RunStopped` stops the loop at a tick boundary and Ctrl-C (or
+    SIGTERM) ends it, whatever error it became where it landed, what was recorded kept; any
+    other error removes the run directory. The loop is closed however it ends."""
     guard = DiskGuard(run_dir, round(scenario.recording.min_free_mb * MB), free_space,
                       every_ticks=scenario.physics.tick_hz)
     hz = scenario.physics.tick_hz
+    stop = StopRequests(at_once=True)
     try:
         recorder.open(loop.bus.qos)
         loop.bus.add_tap(recorder)
         everyone = (*(sut for _, sut, _ in loop.suts), *participants)
         for p in everyone:  # the ROS 2 bridge publishes the recorder's bytes; the live view
             p.attach(recorder)  # serves them
-        for _ in range(n_ticks):
-            loop.step()
-            ticks = loop.ticks()
-            now_ns = (ticks - 1) * 1_000_000_000 // hz  # the tick just run
-            for p in everyone:
-                p.after_tick(now_ns)
-            if progress is not None:
-                progress(ticks, n_ticks)
-            if ticks % hz == 0:  # flat resident memory however long the run
-                release_free_memory()
-            low = guard.poll(ticks, recorder.bytes_serialized)
-            if low is not None:
-                return _Ended(stopped=f"{low}: the run was stopped after "
-                                      f"{ticks / hz:g} s of simulated time")
+        with stop.installed():
+            for _ in range(n_ticks):
+                loop.step()
+                ticks = loop.ticks()
+                now_ns = (ticks - 1) * 1_000_000_000 // hz  # the tick just run
+                for p in everyone:
+                    p.after_tick(now_ns)
+                if progress is not None:
+                    progress(ticks, n_ticks)
+                if ticks % hz == 0:  # flat resident memory however long the run
+                    release_free_memory()
+                low = guard.poll(ticks, recorder.bytes_serialized)
+                if low is not None:
+                    return _Ended(stopped=f"{low}: the run was stopped after "
+                                          f"{ticks / hz:g} s of simulated time")
+                stop.check()  # a Ctrl-C that code in the tick caught and dropped
     except KeyboardInterrupt:
         return _Ended(interrupted=True)
     except RunStopped as err:  # at a tick boundary: what was recorded stays, INVALID
         return _Ended(gate=err.gate, stopped=f"{err}; the run was stopped after "
                                              f"{loop.ticks() / hz:g} s of simulated time")
     except BaseException:
+        if stop.requested:  # a Ctrl-C that became another error where it landed
+            return _Ended(interrupted=True)
         with contextlib.suppress(Exception):  # the original error is the one to report
             recorder.close()
         shutil.rmtree(run_dir, ignore_errors=True)

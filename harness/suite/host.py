@@ -46,7 +46,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["MAX_RUNS", "WARM_AT_ONCE", "Host", "RunAfterRun", "StopRequests", "fork_host",
+from harness.interrupt import StopRequests
+
+__all__ = ["MAX_RUNS", "WARM_AT_ONCE", "Host", "RunAfterRun", "fork_host",
            "fork_safe_here", "start_early", "stop_early", "stop_with_parent", "take_early",
            "warm_early", "warm_slot"]
 
@@ -160,41 +162,6 @@ class Host:
 
     def fds(self) -> tuple[int, ...]:
         return tuple(fd for fd in (self.jobs, self.results) if fd >= 0)
-
-
-class StopRequests:
-    """Ctrl-C and SIGTERM while hosts or workers are forked and watched, taken as a request
-    the caller acts on between its steps (:meth:`check` raises :class:`KeyboardInterrupt`).
-
-    Why not let the signal raise where it lands: CPython runs ``os.fork``'s at-fork hooks
-    (``logging``'s lock release among them) in Python, and drops an exception raised there
-    ("Exception ignored in ..."), so a Ctrl-C that arrived while a worker was forked was lost
-    and the suite ran on (seen as a hang about one time in four on a loaded machine)."""
-
-    def __init__(self) -> None:
-        self.requested = False
-
-    def _request(self, signum: int, frame: Any) -> None:
-        self.requested = True
-
-    @contextlib.contextmanager
-    def installed(self) -> Iterator[None]:
-        """Take SIGINT and SIGTERM as requests within the block (main thread only; elsewhere
-        the handlers stay as they are)."""
-        if threading.current_thread() is not threading.main_thread():
-            yield
-            return
-        previous = {sig: signal.signal(sig, self._request)
-                    for sig in (signal.SIGINT, signal.SIGTERM)}
-        try:
-            yield
-        finally:
-            for sig, handler in previous.items():
-                signal.signal(sig, handler)
-
-    def check(self) -> None:
-        if self.requested:
-            raise KeyboardInterrupt
 
 
 _EARLY: list[Host] = []  # started by start_early, not yet taken

@@ -42,11 +42,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from harness.interrupt import StopRequests
 from harness.suite.events import Event, Listener, log_path, not_started
 from harness.suite.host import (
     MAX_RUNS,
     Host,
-    StopRequests,
     fork_host,
     fork_safe_here,
     take_early,

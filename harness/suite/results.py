@@ -26,6 +26,9 @@ from harness.suite.stats import describe
 from harness.suite.unfinished import Settled, settle
 from harness.summary import SUMMARY_NAME, read_summary
 
+#: The exit status of a run stopped by Ctrl-C or SIGTERM (128 + SIGINT), as `srr run` exits.
+INTERRUPTED_EXIT = 130
+
 __all__ = ["GROUP_ORDER", "GroupResult", "RunOutcome", "crash_reason", "group_runs",
            "outcome_of", "suite_exit_code", "worst"]
 
@@ -114,8 +117,13 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
         problem = f"the worker crashed: {crash}"
     elif not (run_path / SUMMARY_NAME).is_file():
         problem = (f"it could not run: {error}" if error else
+                   "interrupted (Ctrl-C or SIGTERM) before it wrote summary.json"
+                   if exit_code == INTERRUPTED_EXIT else
                    f"the worker exited with status {exit_code} without writing summary.json")
-    settled = (settle(run_path, spec, problem or f"the worker exited with status {exit_code}")
+    # a worker that exits 130 on its own (not at its timeout) was stopped by Ctrl-C or SIGTERM
+    interrupted = exit_code == INTERRUPTED_EXIT and not timed_out and crash is None
+    settled = (settle(run_path, spec, problem or f"the worker exited with status {exit_code}",
+                      interrupted=interrupted)
                if problem is not None or exit_code not in (0, 1, 3) else Settled(None))
     summary: dict[str, Any] | None = None
     if (run_path / SUMMARY_NAME).is_file() and not settled.written:
@@ -135,6 +143,8 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
         topics={} if summary is None else {
             t: str(v.get("sha256")) for t, v in summary.get("topics", {}).items()})
     if problem is not None:
+        if interrupted and error is None:
+            base = dataclasses.replace(base, verdict="INTERRUPTED", exit_code=INTERRUPTED_EXIT)
         return dataclasses.replace(base, reasons=(problem, *([salvaged] if salvaged else [])))
     assert summary is not None
     verdict = str(summary.get("verdict", "INVALID"))
@@ -230,6 +240,9 @@ def _stats(runs: Sequence[RunOutcome]) -> dict[str, dict[str, Any]]:
 
 
 def _flaky(runs: Sequence[RunOutcome], out_root: Path) -> dict[str, Any] | None:
+    """How the repeats disagree (digests or verdicts), None when they agree. Repeats that
+    were interrupted (Ctrl-C) are left out: stopping a run is no disagreement."""
+    runs = [r for r in runs if r.verdict != "INTERRUPTED"]
     finished = [r for r in runs if r.digest is not None and r.run_dir is not None]
     verdicts = [r.verdict for r in runs]
     odd = next((r for r in finished[1:] if r.digest != finished[0].digest), None)
@@ -262,7 +275,8 @@ def _group(gid: str, runs: Sequence[RunOutcome], out_root: Path) -> GroupResult:
     if flaky is not None:
         what = (f"digests differ on {', '.join(flaky['differing_topics'])}"
                 if flaky["differing_topics"] else "verdicts differ")
-        reasons.append(f"flaky over {len(runs)} repeats ({' / '.join(flaky['verdicts'])}): "
+        verdicts = flaky["verdicts"]
+        reasons.append(f"flaky over {len(verdicts)} repeats ({' / '.join(verdicts)}): "
                        f"{what}" + (f"; first divergence: {flaky['first_divergence']}"
                                     if flaky["first_divergence"] else ""))
     for r in runs:

@@ -8,8 +8,9 @@ killed at its timeout or on Ctrl-C, or — on Ray — been cancelled before it e
   from its complete chunks, a summary marked recovered, its report);
 * a run that left no summary — stopped or dead before its first tick, before it wrote
   anything, or with nothing that could be recovered — gets its directory written here: the
-  resolved ``scenario.yaml``, a ``summary.json`` with verdict INVALID, no topics and no scores,
-  whose reason says what happened, and ``junit.xml``.
+  resolved ``scenario.yaml``, a ``summary.json`` with verdict INVALID (INTERRUPTED when the
+  worker was stopped by Ctrl-C or SIGTERM), no topics and no scores, whose reason says what
+  happened, and ``junit.xml``.
 """
 
 from __future__ import annotations
@@ -60,10 +61,12 @@ def _salvage(run_path: Path) -> str | None:
     return f"{kept} recorded messages were recovered from its complete chunks"
 
 
-def settle(run_path: Path, spec: RunSpec, problem: str) -> Settled:
+def settle(run_path: Path, spec: RunSpec, problem: str, *, interrupted: bool = False
+           ) -> Settled:
     """Leave ``run_path`` (run ``spec``'s directory; its worker has ended, for ``problem``) with
-    a ``summary.json``: what the run left, recovered; else one written here, INVALID, saying
-    ``problem`` and how far the run got."""
+    a ``summary.json``: what the run left, recovered; else one written here, INVALID (or
+    INTERRUPTED when the worker was ``interrupted``: Ctrl-C or SIGTERM), saying ``problem``
+    and how far the run got."""
     try:
         note = _salvage(run_path)
         if (run_path / SUMMARY_NAME).is_file():
@@ -72,17 +75,18 @@ def settle(run_path: Path, spec: RunSpec, problem: str) -> Settled:
     except SrrError as err:
         what = f"what it recorded could not be recovered ({err})"
     try:
-        _write(run_path, spec, f"{problem}; {what}")
+        _write(run_path, spec, f"{problem}; {what}", interrupted=interrupted)
     except (SrrError, OSError) as err:
         return Settled(f"{what}; its run directory could not be written ({err})")
-    return Settled(f"{what}; the suite wrote its run directory with an INVALID summary",
+    verdict = "INTERRUPTED" if interrupted else "INVALID"
+    return Settled(f"{what}; the suite wrote its run directory with an {verdict} summary",
                    written=True)
 
 
-def _write(run_path: Path, spec: RunSpec, detail: str) -> None:
-    """The resolved scenario, an INVALID ``summary.json`` (no topics, no scores) whose one
-    failed health gate says ``detail``, and its ``junit.xml``; the in-progress marker, if any,
-    removed."""
+def _write(run_path: Path, spec: RunSpec, detail: str, *, interrupted: bool) -> None:
+    """The resolved scenario, an INVALID (``interrupted``: INTERRUPTED) ``summary.json`` (no
+    topics, no scores) whose one failed health gate says ``detail``, and its ``junit.xml``;
+    the in-progress marker, if any, removed."""
     scenario = load(spec.scenario_file, overrides=list(spec.overrides))
     run_path.mkdir(parents=True, exist_ok=True)
     write_scenario(run_path, scenario)
@@ -94,7 +98,8 @@ def _write(run_path: Path, spec: RunSpec, detail: str) -> None:
         systems_under_test=tuple(s.name for s in scenario.systems_under_test if s.enabled),
         topics={}, digest=combined_digest({}), versions=versions(),
         command=reproduce_command(spec.scenario_file, scenario, run_path),
-        verdict="INVALID", exit_code=3, reasons=(f"health {GATE}: {detail}",))
+        verdict="INTERRUPTED" if interrupted else "INVALID", exit_code=130 if interrupted else 3,
+        reasons=(f"health {GATE}: {detail}",))
     write_junit(run_path / "junit.xml", scenario.name, junit_cases(summary.to_json()))
     summary.write(run_path)
     runmarker.clear(run_path)

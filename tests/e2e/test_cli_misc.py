@@ -66,3 +66,20 @@ def test_out_dir_not_empty_is_refused(tmp_path: Path, capsys: pytest.CaptureFixt
     code = main(["run", str(SCENARIO), "--out", str(tmp_path), "--duration", "0.5", "-q"])
     assert code == 2 and "not empty" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.txt"]
+
+
+@pytest.mark.slow
+def test_a_ctrl_c_that_lands_in_a_ctypes_call_interrupts_the_run(tmp_path: Path) -> None:
+    """Ctrl-C raised inside a ``ctypes`` argument conversion reaches the loop as
+    ``ArgumentError``, not ``KeyboardInterrupt``: the run still ends INTERRUPTED (exit 130)
+    with its recording kept, not as a failed plug-in with its run directory removed."""
+    sc = api.load(SCENARIO, duration=3.0, overrides=[
+        "systems_under_test.route_follower.plugin=tests.e2e.interrupt_plugins:CtrlCInCtypes"])
+    res = api.run_scenario(sc, out=tmp_path / "r")
+    summary = json.loads((res.run_dir / "summary.json").read_text())
+    assert (res.exit_code, summary["verdict"]) == (130, "INTERRUPTED")
+    clock = summary["topics"]["/clock"]["count"]
+    assert 55 <= clock <= 62  # stopped in the tick at 1 s (60 Hz), not before
+    from harness.bag import inspect_bag
+
+    assert {t.name: t.count for t in inspect_bag(res.run_dir).topics}["/clock"] == clock

@@ -4,10 +4,12 @@ nothing there at all, or a recording that cannot be recovered."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 from harness import api, runmarker
 from harness.suite.plan import RunSpec
+from harness.suite.results import RunOutcome, group_runs, outcome_of
 from harness.suite.unfinished import settle
 from harness.summary import read_summary
 
@@ -59,3 +61,42 @@ def test_a_finished_run_is_left_alone(tmp_path: Path) -> None:
     assert settle(run, _spec(), "the worker exited with status 130").note is None
     assert sorted(p.name for p in run.iterdir()) == ["summary.json"]
     assert (run / "summary.json").read_text() == '{"verdict": "INTERRUPTED"}'
+
+
+def test_a_worker_stopped_by_ctrl_c_before_its_first_tick_is_interrupted(tmp_path: Path
+                                                                          ) -> None:
+    """A worker that exits 130 (Ctrl-C or SIGTERM) without a summary was interrupted, not
+    broken: INTERRUPTED, exit 130, in the outcome and in the summary the suite writes."""
+    spec = _spec()
+    out = outcome_of(spec, tmp_path, exit_code=130, error=None, wall_s=0.4)
+    assert (out.verdict, out.exit_code) == ("INTERRUPTED", 130)
+    assert out.reasons[0] == "interrupted (Ctrl-C or SIGTERM) before it wrote summary.json"
+    summary = read_summary(tmp_path / spec.run_dir)
+    assert (summary["verdict"], summary["exit_code"]) == ("INTERRUPTED", 130)
+    # the same exit status at the run's timeout is the suite's doing: INVALID, timed out
+    late = outcome_of(replace(spec, run_dir="runs/f/nominal/r2"), tmp_path, exit_code=130,
+                      error=None, wall_s=5.0, timed_out=True)
+    assert (late.verdict, late.exit_code) == ("INVALID", 3)
+    assert late.reasons[0].startswith("timed out after 5 s")
+
+
+def _repeat(k: int, verdict: str, digest: str | None) -> RunOutcome:
+    spec = replace(_spec(), id=f"f#{k}", repeat=k, repeats=4, run_dir=f"runs/f/nominal/r{k}")
+    return RunOutcome(spec=spec, verdict=verdict, exit_code={"PASS": 0}.get(verdict, 130),
+                      reasons=(), wall_s=1.0, run_dir=spec.run_dir, report=None, log=None,
+                      digest=digest)
+
+
+def test_interrupted_repeats_do_not_make_a_group_flaky(tmp_path: Path) -> None:
+    """Repeats stopped by Ctrl-C (a shorter recording, or none) are no disagreement between
+    repeats: the group is INTERRUPTED, not FLAKY; two finished repeats that differ still are."""
+    (group,) = group_runs([_repeat(1, "PASS", "a" * 64), _repeat(2, "PASS", "a" * 64),
+                           _repeat(3, "INTERRUPTED", "b" * 64),
+                           _repeat(4, "INTERRUPTED", None)], tmp_path)
+    assert (group.verdict, group.flaky) == ("INTERRUPTED", False)
+    assert not any(r.startswith("flaky") for r in group.reasons)
+    (group,) = group_runs([_repeat(1, "PASS", "a" * 64), _repeat(2, "FAIL", "a" * 64),
+                           _repeat(3, "INTERRUPTED", None)], tmp_path)
+    assert (group.verdict, group.flaky) == ("FLAKY", True)
+    assert group.flaky_detail is not None and group.flaky_detail["verdicts"] == ["PASS", "FAIL"]
+    assert group.reasons[0].startswith("flaky over 2 repeats (PASS / FAIL)")
