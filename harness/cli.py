@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 from harness import __version__
 from harness.blas import one_blas_thread
 from harness.errors import SrrError, shorten
-from harness.interrupt import sigterm_as_interrupt
+from harness.interrupt import StopRequests
 from harness.live.config import DEFAULT_PORT
 from harness.summary import recording_note, replay_note
 
@@ -279,20 +279,19 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         if bar is not None and (done % 15 == 0 or done == total):
             bar.update(task, completed=done, total=total)
 
-    with sigterm_as_interrupt():
+    if bar is not None:
+        bar.start()
+        task = bar.add_task(f"replay {args.run_dir.name}", total=None, sim="")
+    try:
+        res = api.replay(args.run_dir, suts=args.suts, overrides=args.overrides,
+                         out=args.out, progress=tick, baselines=args.baselines,
+                         started=_started(bar), ros2=args.ros2,
+                         externals=args.externals, live=live,
+                         notice=lambda text: _stderr().print(f"srr replay: {text}",
+                                                             markup=False))
+    finally:
         if bar is not None:
-            bar.start()
-            task = bar.add_task(f"replay {args.run_dir.name}", total=None, sim="")
-        try:
-            res = api.replay(args.run_dir, suts=args.suts, overrides=args.overrides,
-                             out=args.out, progress=tick, baselines=args.baselines,
-                             started=_started(bar), ros2=args.ros2,
-                             externals=args.externals, live=live,
-                             notice=lambda text: _stderr().print(f"srr replay: {text}",
-                                                                 markup=False))
-        finally:
-            if bar is not None:
-                bar.stop()
+            bar.stop()
     _print_run(res)
     return res.exit_code
 
@@ -360,26 +359,25 @@ def _cmd_run(args: argparse.Namespace) -> int:
             bar.update(task, completed=done, total=total,
                        sim=f"{done / scenario.physics.tick_hz:6.1f} s sim")
 
-    with sigterm_as_interrupt():
+    if bar is not None:
+        bar.start()
+        task = bar.add_task(scenario.name, total=scenario.n_ticks, sim="")
+    try:
+        if args.repeat != 1:
+            rep = api.run_repeat(scenario, args.repeat, source=str(args.scenario),
+                                 out=args.out, progress=tick, baselines=args.baselines,
+                                 started=_started(bar))
+        else:
+            res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
+                                   progress=tick, baselines=args.baselines,
+                                   update_baseline=args.update_baseline,
+                                   update_reason=args.reason, live=live,
+                                   notice=lambda text: _stderr().print(
+                                       f"srr run: {text}", markup=False),
+                                   started=_started(bar), video=args.video)
+    finally:
         if bar is not None:
-            bar.start()
-            task = bar.add_task(scenario.name, total=scenario.n_ticks, sim="")
-        try:
-            if args.repeat != 1:
-                rep = api.run_repeat(scenario, args.repeat, source=str(args.scenario),
-                                     out=args.out, progress=tick, baselines=args.baselines,
-                                     started=_started(bar))
-            else:
-                res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
-                                       progress=tick, baselines=args.baselines,
-                                       update_baseline=args.update_baseline,
-                                       update_reason=args.reason, live=live,
-                                       notice=lambda text: _stderr().print(
-                                           f"srr run: {text}", markup=False),
-                                       started=_started(bar), video=args.video)
-        finally:
-            if bar is not None:
-                bar.stop()
+            bar.stop()
     if args.repeat != 1:
         table = Table(title=f"determinism over {args.repeat} runs")
         table.add_column("run")
@@ -742,19 +740,18 @@ def _suite(args: argparse.Namespace) -> int:
     def listen(ev: Any) -> None:
         holder["progress"](ev)
 
-    with sigterm_as_interrupt():
-        plan = api.plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout,
-                              on_render=warm_early if local else None)
-        for w in plan.warnings:
-            _stderr().print(f"srr suite: warning: {w}", markup=False)
-        with SuiteProgress(_stdout(), len(plan.runs), live=live) as progress:
-            holder["progress"] = progress
-            res = api.run_planned_suite(
-                plan, executor=args.executor, jobs=args.jobs, address=args.address,
-                out=args.out, history=args.history, baselines=args.baselines,
-                gpu_share=args.gpu_share,
-                bless_reason=args.reason if args.update_baselines else None, listen=listen,
-                fork=True)  # this process only plans: workers fork from it when safe
+    plan = api.plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout,
+                          on_render=warm_early if local else None)
+    for w in plan.warnings:
+        _stderr().print(f"srr suite: warning: {w}", markup=False)
+    with SuiteProgress(_stdout(), len(plan.runs), live=live) as progress:
+        holder["progress"] = progress
+        res = api.run_planned_suite(
+            plan, executor=args.executor, jobs=args.jobs, address=args.address,
+            out=args.out, history=args.history, baselines=args.baselines,
+            gpu_share=args.gpu_share,
+            bless_reason=args.reason if args.update_baselines else None, listen=listen,
+            fork=True)  # this process only plans: workers fork from it when safe
     s = res.summary
     _stdout().print(groups_table(res.groups, f"suite {s['name']}: {len(s['runs'])} runs on "
                                    f"{s['executor']} × {s['jobs']} in {s['wall_s']:.1f} s"))
@@ -837,16 +834,15 @@ def _cmd_search(args: argparse.Namespace) -> int:
                             + ", ".join(f"{k}={v}" for k, v in rec.params.items()),
                             markup=False)
 
-    with sigterm_as_interrupt():
-        res = api.search(
-            args.scenario, space=args.space, objective=args.objective,
-            violated_below=args.violated_below, violated_above=args.violated_above,
-            overrides=args.overrides, sampler=args.sampler, seed=args.seed,
-            budget=args.budget, stop_at_first=args.stop_at_first, executor=args.executor,
-            jobs=args.jobs, address=args.address, out=args.out, timeout_s=args.timeout,
-            name=args.name, counterexamples=args.counterexamples, prune=args.prune,
-            add_to_suite=args.add_to_suite, bless_reason=args.reason if args.bless else None,
-            baselines=args.baselines, on_trial=on_trial, fork=True)
+    res = api.search(
+        args.scenario, space=args.space, objective=args.objective,
+        violated_below=args.violated_below, violated_above=args.violated_above,
+        overrides=args.overrides, sampler=args.sampler, seed=args.seed,
+        budget=args.budget, stop_at_first=args.stop_at_first, executor=args.executor,
+        jobs=args.jobs, address=args.address, out=args.out, timeout_s=args.timeout,
+        name=args.name, counterexamples=args.counterexamples, prune=args.prune,
+        add_to_suite=args.add_to_suite, bless_reason=args.reason if args.bless else None,
+        baselines=args.baselines, on_trial=on_trial, fork=True)
     for w in res.warnings:
         _stderr().print(f"srr search: warning: {w}", markup=False)
     c = res.summary["counts"]
@@ -879,16 +875,31 @@ COMMANDS = {"run": _cmd_run, "suite": _cmd_suite, "replay": _cmd_replay, "valida
 def main(argv: Sequence[str] | None = None) -> int:
     one_blas_thread()  # before any command imports NumPy
     args = _parser().parse_args(argv)
+    # Ctrl-C and SIGTERM raise KeyboardInterrupt, and are noted: one that code turned into
+    # another error where it landed (an import of a C extension, a ctypes call) still reads
+    # as the interrupt it was, not as that error with a traceback.
+    stop = StopRequests(at_once=True)
     try:
-        return COMMANDS[args.command](args)
+        with stop.installed():
+            return COMMANDS[args.command](args)
     except SrrError as err:
+        if stop.requested:
+            return _interrupted(args.command)
         one_line = shorten(" ".join(part.strip() for part in str(err).splitlines()
                                     if part.strip()))
         _stderr().print(f"srr {args.command}: {one_line}", markup=False)
         return err.exit_code
     except KeyboardInterrupt:
-        _stderr().print(f"srr {args.command}: interrupted", markup=False)
-        return 130
+        return _interrupted(args.command)
+    except Exception:
+        if stop.requested:
+            return _interrupted(args.command)
+        raise
+
+
+def _interrupted(command: str) -> int:
+    _stderr().print(f"srr {command}: interrupted", markup=False)
+    return 130
 
 
 def entry() -> None:

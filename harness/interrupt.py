@@ -1,10 +1,10 @@
 """Ctrl-C and SIGTERM: how srr stops.
 
-* :func:`sigterm_as_interrupt`: SIGTERM handled like Ctrl-C, so a run stopped by a job
-  scheduler, a suite's timeout or a ``kill`` finalizes its bag and summary (INTERRUPTED) the
-  way an interactive Ctrl-C does.
-* :class:`StopRequests`: within a block, Ctrl-C and SIGTERM set a flag that the code acts on
-  between its steps, whatever became of the signal where it landed.
+SIGTERM is handled like Ctrl-C, so a run stopped by a job scheduler, a suite's timeout or a
+``kill`` finalizes its bag and summary (INTERRUPTED) the way an interactive Ctrl-C does. Within
+:meth:`StopRequests.installed` both set a flag that the code acts on between its steps,
+whatever became of the signal where it landed; with ``at_once`` they also raise
+:class:`KeyboardInterrupt` there (the ``srr`` command, a run's tick loop).
 """
 
 from __future__ import annotations
@@ -15,21 +15,7 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["StopRequests", "sigterm_as_interrupt"]
-
-
-@contextlib.contextmanager
-def sigterm_as_interrupt() -> Iterator[None]:
-    """Within the block SIGTERM raises :class:`KeyboardInterrupt` (main thread only)."""
-
-    def handler(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+__all__ = ["StopRequests"]
 
 
 class StopRequests:
@@ -62,12 +48,15 @@ class StopRequests:
     @contextlib.contextmanager
     def installed(self) -> Iterator[None]:
         """Take SIGINT and SIGTERM as requests within the block (main thread only; elsewhere
-        the handlers stay as they are)."""
+        the handlers stay as they are). A signal this process ignores stays ignored: a
+        process started in the background by a shell without job control inherits SIGINT
+        ignored, and Python, like every Unix program, leaves it so."""
         if threading.current_thread() is not threading.main_thread():
             yield
             return
         previous = {sig: signal.signal(sig, self._request)
-                    for sig in (signal.SIGINT, signal.SIGTERM)}
+                    for sig in (signal.SIGINT, signal.SIGTERM)
+                    if signal.getsignal(sig) is not signal.SIG_IGN}
         try:
             yield
         finally:

@@ -172,7 +172,12 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     loop) are attached and told of each tick after the systems under test. ``video=False``:
     the report without camera videos (``srr run --no-video``)."""
     command = loop.command
-    recorder = _open_recorder(scenario, loop, run_dir, source=source, command=command)
+    try:  # nothing recorded yet: an error (or Ctrl-C) here leaves no half-made directory
+        recorder = _open_recorder(scenario, loop, run_dir, source=source, command=command)
+    except BaseException:
+        loop.close()
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise
     ended = _tick_loop(scenario, loop, recorder, run_dir, n_ticks=n_ticks, progress=progress,
                        free_space=free_space, participants=participants)
     try:  # until summary.json exists the directory is half-written: an error removes it

@@ -115,13 +115,12 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
                    if spec.timeout_s is not None else "timed out")
     elif crash is not None:
         problem = f"the worker crashed: {crash}"
-    elif not (run_path / SUMMARY_NAME).is_file():
-        problem = (f"it could not run: {error}" if error else
-                   "interrupted (Ctrl-C or SIGTERM) before it wrote summary.json"
-                   if exit_code == INTERRUPTED_EXIT else
-                   f"the worker exited with status {exit_code} without writing summary.json")
     # a worker that exits 130 on its own (not at its timeout) was stopped by Ctrl-C or SIGTERM
     interrupted = exit_code == INTERRUPTED_EXIT and not timed_out and crash is None
+    if problem is None and not (run_path / SUMMARY_NAME).is_file():
+        problem = (error or "interrupted (Ctrl-C or SIGTERM) before it wrote summary.json"
+                   if interrupted else f"it could not run: {error}" if error else
+                   f"the worker exited with status {exit_code} without writing summary.json")
     settled = (settle(run_path, spec, problem or f"the worker exited with status {exit_code}",
                       interrupted=interrupted)
                if problem is not None or exit_code not in (0, 1, 3) else Settled(None))
@@ -143,7 +142,7 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
         topics={} if summary is None else {
             t: str(v.get("sha256")) for t, v in summary.get("topics", {}).items()})
     if problem is not None:
-        if interrupted and error is None:
+        if interrupted:
             base = dataclasses.replace(base, verdict="INTERRUPTED", exit_code=INTERRUPTED_EXIT)
         return dataclasses.replace(base, reasons=(problem, *([salvaged] if salvaged else [])))
     assert summary is not None

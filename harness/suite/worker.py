@@ -23,7 +23,7 @@ from typing import Any
 
 from harness.atomic import write_json_atomic
 from harness.errors import SrrError
-from harness.interrupt import sigterm_as_interrupt
+from harness.interrupt import StopRequests
 from harness.run.loading import load
 from harness.run.simulate import run_scenario
 from harness.sim.render import gl_context_seconds, gl_contexts_made
@@ -54,8 +54,9 @@ def run_job(job: Mapping[str, Any], out_root: str | Path,
         return {"exit_code": code, "error": error, "peak_rss_mb": peak_rss_mb(),
                 "clock": clock.to_json(gl_context_seconds() - gl_before)}
 
+    stop = StopRequests(at_once=True)
     try:
-        with sigterm_as_interrupt():
+        with stop.installed():
             scenario = load(job["scenario_file"], overrides=list(job["overrides"]))
             clock.mark("loaded")
             res = run_scenario(scenario, source=str(job["scenario_file"]), out=run_dir,
@@ -63,10 +64,14 @@ def run_job(job: Mapping[str, Any], out_root: str | Path,
                                progress=clock.progress,
                                started=lambda _dir: clock.mark("built"))
             clock.mark("done")
-    except SrrError as err:
-        return ended(err.exit_code, str(err))
     except KeyboardInterrupt:
         return ended(130, "interrupted before the run directory was written")
+    except Exception as err:
+        if stop.requested:  # an interrupt that became this error where it landed
+            return ended(130, "interrupted before the run directory was written")
+        if isinstance(err, SrrError):
+            return ended(err.exit_code, str(err))
+        raise
     return ended(res.exit_code, None)
 
 

@@ -33,3 +33,13 @@ class CtrlCInCtypes(RouteFollower):
             c_abs.argtypes = [_Pressing]
             c_abs(-1)
         super().step(now_ns)
+
+
+class CtrlCInCtypesAtSetup(RouteFollower):
+    """Presses Ctrl-C the same way in its set-up, before the run's first tick."""
+
+    def setup(self, ctx: Any) -> None:
+        c_abs = ctypes.CDLL(None).abs
+        c_abs.argtypes = [_Pressing]
+        c_abs(-1)
+        super().setup(ctx)

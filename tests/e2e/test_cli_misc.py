@@ -83,3 +83,16 @@ def test_a_ctrl_c_that_lands_in_a_ctypes_call_interrupts_the_run(tmp_path: Path)
     from harness.bag import inspect_bag
 
     assert {t.name: t.count for t in inspect_bag(res.run_dir).topics}["/clock"] == clock
+
+
+def test_a_ctrl_c_that_lands_in_a_ctypes_call_before_the_run_is_an_interrupt(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The same Ctrl-C in a plug-in's set-up, before the first tick: ``srr run`` says it was
+    interrupted (exit 130), not that the plug-in failed, and leaves no run directory."""
+    out = tmp_path / "r"
+    code = main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(out), "--set",
+                 "systems_under_test.route_follower.plugin="
+                 "tests.e2e.interrupt_plugins:CtrlCInCtypesAtSetup"])
+    err = capsys.readouterr().err
+    assert code == 130 and err.strip().splitlines()[-1] == "srr run: interrupted", err
+    assert not out.exists()
