@@ -284,11 +284,13 @@ def _buffer_limit(near: float, far: float,
 
 def _linear_depth(buffer: npt.NDArray[np.float32], near: float, far: float,
                   d_limit: npt.NDArray[np.float32] | float) -> Float32Array:
-    """``near·far / (near + d·(far - near))`` in float32, ``+inf`` where ``d <= d_limit``."""
+    """``near·far / (near + d·(far - near))`` in float32, ``+inf`` where ``d <= d_limit``
+    (``d_limit >= 0``, as :func:`_buffer_limit` makes it: a camera's every frame compares
+    with its cached limit as it is, no clamped copy of it a frame)."""
     z = np.multiply(buffer, np.float32(far - near))
     z += np.float32(near)
     np.divide(np.float32(near * far), z, out=z)
-    z[buffer <= np.maximum(d_limit, 0.0)] = np.inf
+    np.copyto(z, np.float32(np.inf), where=np.less_equal(buffer, d_limit))
     return z
 
 
