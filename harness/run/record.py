@@ -184,6 +184,8 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
         # The recorder's queue written out and the bag closed before the phase says the loop
         # is over: a run killed while finalizing has its whole recording on disk.
         stats = recorder.close()
+    except KeyboardInterrupt:
+        raise  # what was recorded stays, as a killed run's: `srr recover` makes it whole
     except BaseException:
         shutil.rmtree(run_dir, ignore_errors=True)
         raise
@@ -191,6 +193,8 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     try:
         scores, frames, topics, sim_s = _score(scenario, loop, recorder, stats, run_dir,
                                                source)
+    except KeyboardInterrupt:
+        raise  # the recording is whole on disk (phase "finalizing"), for `srr recover`
     except BaseException:
         shutil.rmtree(run_dir, ignore_errors=True)
         raise

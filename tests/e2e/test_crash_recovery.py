@@ -207,3 +207,25 @@ def test_commands_on_a_killed_run_directory_point_to_recover(
     runmarker.clear(run)  # no marker: nothing says the run was killed
     assert main(["report", str(run)]) == 2
     assert "not a finished run directory" in capsys.readouterr().err
+
+
+def test_a_ctrl_c_while_finalizing_keeps_the_recording_for_recover(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """A second Ctrl-C after the bag is closed (here: while the run is scored) never costs the
+    recording: the directory stays as a killed run's, phase ``finalizing``, and ``srr
+    recover`` makes it a finished run directory with every message."""
+    from harness.run import record
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(record, "_score", interrupted)
+    out = tmp_path / "run"
+    assert main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(out)]) == 130
+    assert capsys.readouterr().err.strip().endswith("srr run: interrupted")
+    assert runmarker.read(out)["phase"] == "finalizing"  # type: ignore[index]
+    assert inspect_bag(out / "bag").message_count > 0  # the bag was closed whole
+    monkeypatch.undo()
+    assert main(["recover", str(out)]) == 0
+    assert json.loads((out / "summary.json").read_text())["recovered"]
