@@ -48,15 +48,14 @@ class StopRequests:
     @contextlib.contextmanager
     def installed(self) -> Iterator[None]:
         """Take SIGINT and SIGTERM as requests within the block (main thread only; elsewhere
-        the handlers stay as they are). A signal this process ignores stays ignored: a
-        process started in the background by a shell without job control inherits SIGINT
-        ignored, and Python, like every Unix program, leaves it so."""
+        the handlers stay as they are), also where the process inherited them ignored (a
+        process started in the background by a shell without job control: CI jobs, scripts),
+        so that ``kill -INT`` stops srr the same way wherever it was started."""
         if threading.current_thread() is not threading.main_thread():
             yield
             return
         previous = {sig: signal.signal(sig, self._request)
-                    for sig in (signal.SIGINT, signal.SIGTERM)
-                    if signal.getsignal(sig) is not signal.SIG_IGN}
+                    for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
             yield
         finally:
