@@ -448,7 +448,7 @@ def _print_run(res: api.RunResult) -> None:
     if recording is not None:
         _stdout().print(recording, markup=False)
         b = s.get("baseline") or {}
-        if not b.get("digest_matches") and b.get("reference"):
+        if not b.get("digest_matches") and b.get("reference") and not s.get("interrupted"):
             _stdout().print(f"  where: srr diff {b['path']} {res.run_dir}", markup=False)
     _stdout().print(f"verdict: {res.verdict}", markup=False)
     for reason in s.get("reasons", []):

@@ -61,6 +61,10 @@ def test_the_note_names_the_topics_and_versions() -> None:
     # a baseline from before per-topic digests: the verdict on the bytes alone
     assert recording_note({"topics": topics, "baseline": {"digest_matches": False}}) == \
         "recording differs from the baseline's"
+    # an interrupted run's shorter recording differs in every topic: it says why instead
+    assert recording_note({"topics": topics, "interrupted": True, "baseline": {
+        "digest_matches": False, "topics_differing": ["/a"]}}) == \
+        "recording cut short (interrupted): not the baseline's"
 
 
 @pytest.mark.slow
