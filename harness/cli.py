@@ -386,8 +386,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
         for r in rep.runs:
             table.add_row(str(r.run_dir), r.verdict, r.summary["digest"][:16])
         _stdout().print(table)
-        if rep.identical:
-            _stdout().print(f"identical per-topic digests across {args.repeat} runs")
+        finished = len(rep.finished)
+        if rep.interrupted:
+            _stdout().print(f"interrupted in run {len(rep.runs)} of {args.repeat}: its "
+                            "recording is left out of the comparison", markup=False)
+        if finished < 2:
+            _stdout().print(f"{finished} finished run: no digests to compare", markup=False)
+        elif rep.identical:
+            _stdout().print(f"identical per-topic digests across {finished} runs")
         else:
             _stdout().print("digests DIFFER on: " + ", ".join(rep.differing_topics))
         _stdout().print(str(rep.out_dir))
@@ -889,16 +895,16 @@ def main(argv: Sequence[str] | None = None) -> int:
                                     if part.strip()))
         _stderr().print(f"srr {args.command}: {one_line}", markup=False)
         return err.exit_code
-    except KeyboardInterrupt:
-        return _interrupted(args.command)
+    except KeyboardInterrupt as err:  # its text, if any, says what was left where
+        return _interrupted(args.command, str(err))
     except Exception:
         if stop.requested:
             return _interrupted(args.command)
         raise
 
 
-def _interrupted(command: str) -> int:
-    _stderr().print(f"srr {command}: interrupted", markup=False)
+def _interrupted(command: str, note: str = "") -> int:
+    _stderr().print(f"srr {command}: interrupted" + (f"; {note}" if note else ""), markup=False)
     return 130
 
 

@@ -184,8 +184,8 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
         # The recorder's queue written out and the bag closed before the phase says the loop
         # is over: a run killed while finalizing has its whole recording on disk.
         stats = recorder.close()
-    except KeyboardInterrupt:
-        raise  # what was recorded stays, as a killed run's: `srr recover` makes it whole
+    except KeyboardInterrupt as err:  # what was recorded stays, as a killed run's
+        raise _left_for_recover(run_dir) from err
     except BaseException:
         shutil.rmtree(run_dir, ignore_errors=True)
         raise
@@ -193,8 +193,8 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     try:
         scores, frames, topics, sim_s = _score(scenario, loop, recorder, stats, run_dir,
                                                source)
-    except KeyboardInterrupt:
-        raise  # the recording is whole on disk (phase "finalizing"), for `srr recover`
+    except KeyboardInterrupt as err:  # the recording is whole on disk (phase "finalizing")
+        raise _left_for_recover(run_dir) from err
     except BaseException:
         shutil.rmtree(run_dir, ignore_errors=True)
         raise
@@ -217,6 +217,12 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
                                       reasons=("interrupted before the end of the scenario",))
     data = _write_outputs(scenario, summary, run_dir, frames, video=video)
     return RunResult(run_dir, summary.verdict, summary.exit_code, data, summary)
+
+
+def _left_for_recover(run_dir: Path) -> KeyboardInterrupt:
+    """The interrupt of a run stopped after its loop, saying where its recording is."""
+    return KeyboardInterrupt(f"the recording is in {run_dir}; `srr recover {run_dir}` makes it "
+                             "a finished run directory")
 
 
 def _open_recorder(scenario: Scenario, loop: Loop, run_dir: Path, *, source: str,

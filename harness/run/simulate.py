@@ -46,10 +46,16 @@ Notice = Callable[[str], None]
 @dataclass(frozen=True)
 class RepeatResult:
     runs: tuple[RunResult, ...]
-    identical: bool
+    identical: bool  # the finished runs' per-topic digests (an interrupted one is left out)
     differing_topics: tuple[str, ...]
     exit_code: int
     out_dir: Path
+    interrupted: bool = False  # Ctrl-C stopped a run: the runs after it were not started
+
+    @property
+    def finished(self) -> tuple[RunResult, ...]:
+        """The runs that were not interrupted: what the digests compare."""
+        return tuple(r for r in self.runs if r.verdict != "INTERRUPTED")
 
 
 def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
@@ -184,28 +190,36 @@ def ros2_bridge(scenario: Scenario, run_dir: Path | None,
 def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
                out: Path | None = None, progress: Progress | None = None,
                baselines: Path | None = None, started: Started | None = None) -> RepeatResult:
-    """Run ``n`` times (``run_1`` … ``run_n`` under one directory) and compare digests."""
+    """Run ``n`` times (``run_1`` … ``run_n`` under one directory) and compare digests. A
+    run that Ctrl-C interrupts is the last one started, and its shorter recording is left out
+    of the comparison (exit 130)."""
     if n < 1:
         raise SrrError(f"--repeat: must be >= 1, got {n}")
     out_dir = Path(out) if out is not None else default_run_dir(scenario)
-    runs = tuple(run_scenario(scenario, source=source, out=out_dir / f"run_{i + 1}",
-                              progress=progress, baselines=baselines, started=started)
-                 for i in range(n))
-    first = runs[0].summary["topics"]
-    differing = sorted({t for r in runs[1:] for t in set(first) | set(r.summary["topics"])
+    runs: list[RunResult] = []
+    for i in range(n):
+        runs.append(run_scenario(scenario, source=source, out=out_dir / f"run_{i + 1}",
+                                 progress=progress, baselines=baselines, started=started))
+        if runs[-1].verdict == "INTERRUPTED":
+            break
+    finished = [r for r in runs if r.verdict != "INTERRUPTED"]
+    first = finished[0].summary["topics"] if finished else {}
+    differing = sorted({t for r in finished[1:] for t in set(first) | set(r.summary["topics"])
                         if first.get(t, {}).get("sha256")
                         != r.summary["topics"].get(t, {}).get("sha256")})
     identical = not differing
+    interrupted = len(finished) < len(runs)
     report = {
         "runs": [str(r.run_dir) for r in runs],
         "identical": identical,
         "differing_topics": differing,
         "digests": [r.summary["digest"] for r in runs],
+        "interrupted": interrupted,
     }
     write_json_atomic(out_dir / "determinism.json", report)
     worst = max(r.exit_code for r in runs)
-    return RepeatResult(runs, identical, tuple(differing),
-                        worst if identical else max(worst, 1), out_dir)
+    code = 130 if interrupted else worst if identical else max(worst, 1)
+    return RepeatResult(tuple(runs), identical, tuple(differing), code, out_dir, interrupted)
 
 
 def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:

@@ -223,7 +223,9 @@ def test_a_ctrl_c_while_finalizing_keeps_the_recording_for_recover(
     monkeypatch.setattr(record, "_score", interrupted)
     out = tmp_path / "run"
     assert main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(out)]) == 130
-    assert capsys.readouterr().err.strip().endswith("srr run: interrupted")
+    assert capsys.readouterr().err.strip().endswith(
+        f"srr run: interrupted; the recording is in {out}; `srr recover {out}` makes it a "
+        "finished run directory")
     assert runmarker.read(out)["phase"] == "finalizing"  # type: ignore[index]
     assert inspect_bag(out / "bag").message_count > 0  # the bag was closed whole
     monkeypatch.undo()

@@ -106,6 +106,27 @@ def test_three_runs_give_identical_digests(tmp_path: Path,
     assert "identical per-topic digests across 3 runs" in out
 
 
+def test_ctrl_c_in_a_repeat_stops_the_series(tmp_path: Path) -> None:
+    """Ctrl-C in the second of three runs ends that run INTERRUPTED and starts no third; the
+    cut-short recording is no evidence against determinism (exit 130, not 'digests DIFFER')."""
+    from tests.conftest import SCENARIOS
+
+    sc = api.load(SCENARIOS / "forklift_warehouse.yaml", duration=1.0)
+    seen = {"ticks": 0}
+
+    def press_ctrl_c(done: int, total: int) -> None:
+        seen["ticks"] += 1
+        if seen["ticks"] == total + 20:  # tick 20 of the second run
+            raise KeyboardInterrupt
+
+    rep = api.run_repeat(sc, 3, out=tmp_path, progress=press_ctrl_c)
+    assert [r.verdict for r in rep.runs][1:] == ["INTERRUPTED"] and len(rep.runs) == 2
+    assert not (tmp_path / "run_3").exists()
+    assert (rep.interrupted, rep.identical, rep.exit_code) == (True, True, 130)
+    report = json.loads((tmp_path / "determinism.json").read_text())
+    assert report["interrupted"] and report["differing_topics"] == []
+
+
 def test_different_seed_or_physics_changes_digests(run: api.RunResult, tmp_path: Path) -> None:
     """The digest comparison can fail: a changed wheelbase changes the recorded motion."""
     from tests.conftest import SCENARIOS
