@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 from harness import __version__
 from harness.blas import one_blas_thread
 from harness.errors import SrrError, shorten
-from harness.interrupt import StopRequests
+from harness.interrupt import INTERRUPTED_EXIT, StopRequests
 from harness.live.config import DEFAULT_PORT
 from harness.summary import recording_note, replay_note
 
@@ -391,7 +391,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             _stdout().print(f"interrupted in run {len(rep.runs)} of {args.repeat}: its "
                             "recording is left out of the comparison", markup=False)
         if finished < 2:
-            _stdout().print(f"{finished} finished run: no digests to compare", markup=False)
+            _stdout().print(f"finished runs: {finished}, no digests to compare", markup=False)
         elif rep.identical:
             _stdout().print(f"identical per-topic digests across {finished} runs")
         else:
@@ -888,24 +888,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with stop.installed():
             return COMMANDS[args.command](args)
-    except SrrError as err:
-        if stop.requested:
+    except KeyboardInterrupt as err:  # its text, if any, says what was left where
+        return _interrupted(args.command, str(err))
+    except Exception as err:
+        if stop.requested:  # an interrupt that became this error where it landed
             return _interrupted(args.command)
+        if not isinstance(err, SrrError):
+            raise
         one_line = shorten(" ".join(part.strip() for part in str(err).splitlines()
                                     if part.strip()))
         _stderr().print(f"srr {args.command}: {one_line}", markup=False)
         return err.exit_code
-    except KeyboardInterrupt as err:  # its text, if any, says what was left where
-        return _interrupted(args.command, str(err))
-    except Exception:
-        if stop.requested:
-            return _interrupted(args.command)
-        raise
 
 
 def _interrupted(command: str, note: str = "") -> int:
     _stderr().print(f"srr {command}: interrupted" + (f"; {note}" if note else ""), markup=False)
-    return 130
+    return INTERRUPTED_EXIT
 
 
 def entry() -> None:

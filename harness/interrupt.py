@@ -15,7 +15,11 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["StopRequests"]
+__all__ = ["INTERRUPTED_EXIT", "StopRequests"]
+
+#: The exit status of a command or run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as a shell
+#: reports a process that SIGINT ended).
+INTERRUPTED_EXIT = 130
 
 
 class StopRequests:

@@ -34,7 +34,7 @@ import contextlib
 import dataclasses
 import importlib
 import shutil
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -44,7 +44,7 @@ from harness.bus import Bus
 from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
 from harness.errors import RunStopped, SrrError
-from harness.interrupt import StopRequests
+from harness.interrupt import INTERRUPTED_EXIT, StopRequests
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
 from harness.output import ROS2_OUTPUT, OutputKind
@@ -180,24 +180,14 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
         raise
     ended = _tick_loop(scenario, loop, recorder, run_dir, n_ticks=n_ticks, progress=progress,
                        free_space=free_space, participants=participants)
-    try:  # until summary.json exists the directory is half-written: an error removes it
+    with _half_written(run_dir):
         # The recorder's queue written out and the bag closed before the phase says the loop
         # is over: a run killed while finalizing has its whole recording on disk.
         stats = recorder.close()
-    except KeyboardInterrupt as err:  # what was recorded stays, as a killed run's
-        raise _left_for_recover(run_dir) from err
-    except BaseException:
-        shutil.rmtree(run_dir, ignore_errors=True)
-        raise
     runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
-    try:
+    with _half_written(run_dir):
         scores, frames, topics, sim_s = _score(scenario, loop, recorder, stats, run_dir,
                                                source)
-    except KeyboardInterrupt as err:  # the recording is whole on disk (phase "finalizing")
-        raise _left_for_recover(run_dir) from err
-    except BaseException:
-        shutil.rmtree(run_dir, ignore_errors=True)
-        raise
     if ended.stopped is not None:
         scores = dataclasses.replace(
             scores, health=(*scores.health, HealthResult(ended.gate, False, ended.stopped)))
@@ -213,16 +203,25 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
                                   reasons=j.reasons, baseline=j.baseline,
                                   comparison=j.comparison)
     if ended.interrupted:
-        summary = dataclasses.replace(summary, verdict="INTERRUPTED", exit_code=130,
+        summary = dataclasses.replace(summary, verdict="INTERRUPTED", exit_code=INTERRUPTED_EXIT,
                                       reasons=("interrupted before the end of the scenario",))
     data = _write_outputs(scenario, summary, run_dir, frames, video=video)
     return RunResult(run_dir, summary.verdict, summary.exit_code, data, summary)
 
 
-def _left_for_recover(run_dir: Path) -> KeyboardInterrupt:
-    """The interrupt of a run stopped after its loop, saying where its recording is."""
-    return KeyboardInterrupt(f"the recording is in {run_dir}; `srr recover {run_dir}` makes it "
-                             "a finished run directory")
+@contextlib.contextmanager
+def _half_written(run_dir: Path) -> Iterator[None]:
+    """A step after the loop, before ``summary.json`` exists: an error removes the directory;
+    Ctrl-C leaves it as a killed run's (what was recorded stays, for ``srr recover``) and
+    says where."""
+    try:
+        yield
+    except KeyboardInterrupt as err:
+        raise KeyboardInterrupt(f"the recording is in {run_dir}; `srr recover {run_dir}` "
+                                "makes it a finished run directory") from err
+    except BaseException:
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise
 
 
 def _open_recorder(scenario: Scenario, loop: Loop, run_dir: Path, *, source: str,

@@ -5,7 +5,7 @@ simulation, serve its live view and streams, then record it (:mod:`harness.run.r
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,6 +15,7 @@ from harness.camera_topics import recorded_cameras
 from harness.diskspace import FreeSpace, check_free_space, disk_free, large_bag_notice
 from harness.engine import Joined, Simulation
 from harness.errors import ScenarioError, SrrError
+from harness.interrupt import INTERRUPTED_EXIT
 from harness.live.view import LiveConfig, LiveView
 from harness.output import check_output_topics, decide_output
 from harness.run.baselines import baselines_dir
@@ -50,12 +51,20 @@ class RepeatResult:
     differing_topics: tuple[str, ...]
     exit_code: int
     out_dir: Path
-    interrupted: bool = False  # Ctrl-C stopped a run: the runs after it were not started
 
     @property
     def finished(self) -> tuple[RunResult, ...]:
         """The runs that were not interrupted: what the digests compare."""
-        return tuple(r for r in self.runs if r.verdict != "INTERRUPTED")
+        return _finished(self.runs)
+
+    @property
+    def interrupted(self) -> bool:
+        """Whether Ctrl-C stopped a run (the last one: none was started after it)."""
+        return len(self.finished) < len(self.runs)
+
+
+def _finished(runs: Sequence[RunResult]) -> tuple[RunResult, ...]:
+    return tuple(r for r in runs if r.verdict != "INTERRUPTED")
 
 
 def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
@@ -202,7 +211,7 @@ def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
                                  progress=progress, baselines=baselines, started=started))
         if runs[-1].verdict == "INTERRUPTED":
             break
-    finished = [r for r in runs if r.verdict != "INTERRUPTED"]
+    finished = _finished(runs)
     first = finished[0].summary["topics"] if finished else {}
     differing = sorted({t for r in finished[1:] for t in set(first) | set(r.summary["topics"])
                         if first.get(t, {}).get("sha256")
@@ -218,8 +227,8 @@ def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
     }
     write_json_atomic(out_dir / "determinism.json", report)
     worst = max(r.exit_code for r in runs)
-    code = 130 if interrupted else worst if identical else max(worst, 1)
-    return RepeatResult(tuple(runs), identical, tuple(differing), code, out_dir, interrupted)
+    code = INTERRUPTED_EXIT if interrupted else worst if identical else max(worst, 1)
+    return RepeatResult(tuple(runs), identical, tuple(differing), code, out_dir)
 
 
 def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:

@@ -28,6 +28,7 @@ from typing import Any
 
 from harness.atomic import write_json_atomic
 from harness.errors import ScenarioError, SrrError
+from harness.interrupt import INTERRUPTED_EXIT
 from harness.report.junit import Case, write_junit
 from harness.report.search_page import write_search_page
 from harness.run.baselines import baselines_dir
@@ -300,7 +301,7 @@ def _outputs(plan: SearchPlan, out_dir: Path, study: Any, records: Sequence[Tria
     valid = [r for r in records if r.status in ("violated", "holds")]
     invalid = [r for r in records if r.status in ("invalid", "no-value")]
     if meta.get("interrupted"):
-        code, verdict = 130, "INTERRUPTED"
+        code, verdict = INTERRUPTED_EXIT, "INTERRUPTED"
     elif violated:
         code, verdict = 1, "VIOLATED"
     elif valid:

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal, Protocol
 
+from harness.interrupt import INTERRUPTED_EXIT
 from harness.suite.plan import RunSpec, safe_file_name
 from harness.suite.results import RunOutcome
 
@@ -43,6 +44,6 @@ def log_path(out_root: Path, spec: RunSpec) -> Path:
 
 
 def not_started(spec: RunSpec) -> RunOutcome:
-    return RunOutcome(spec=spec, verdict="INTERRUPTED", exit_code=130,
+    return RunOutcome(spec=spec, verdict="INTERRUPTED", exit_code=INTERRUPTED_EXIT,
                       reasons=("not started: the suite was interrupted",), wall_s=0.0,
                       run_dir=None, report=None, log=None, digest=None)

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from harness.errors import SrrError
+from harness.interrupt import INTERRUPTED_EXIT
 from harness.suite.events import Event, Listener, not_started
 from harness.suite.host import MAX_RUNS
 from harness.suite.plan import RunSpec
@@ -112,7 +113,8 @@ def _run_here(job: dict[str, Any], out_root: str, baselines: str | None) -> dict
     note = w.between.before()
     res = run_job(job, out_root, baselines)
     peak, left = w.between.after(note)
-    w.fresh = bool(left) or res["exit_code"] == 130  # an interrupt may come again mid-restore
+    # an interrupt may come again mid-restore
+    w.fresh = bool(left) or res["exit_code"] == INTERRUPTED_EXIT
     return {**res, "peak_rss_mb": peak, "peak_rss_note": note, "pid": os.getpid(),
             "gl_contexts": gl_contexts_made()}
 

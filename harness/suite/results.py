@@ -20,14 +20,12 @@ from pathlib import Path
 from typing import Any
 
 from harness.errors import SrrError
+from harness.interrupt import INTERRUPTED_EXIT
 from harness.regression.verdict import OK_VERDICTS
 from harness.suite.plan import RunSpec
 from harness.suite.stats import describe
 from harness.suite.unfinished import Settled, settle
 from harness.summary import SUMMARY_NAME, read_summary
-
-#: The exit status of a run stopped by Ctrl-C or SIGTERM (128 + SIGINT), as `srr run` exits.
-INTERRUPTED_EXIT = 130
 
 __all__ = ["GROUP_ORDER", "GroupResult", "RunOutcome", "crash_reason", "group_runs",
            "outcome_of", "suite_exit_code", "worst"]
@@ -118,9 +116,12 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
     # a worker that exits 130 on its own (not at its timeout) was stopped by Ctrl-C or SIGTERM
     interrupted = exit_code == INTERRUPTED_EXIT and not timed_out and crash is None
     if problem is None and not (run_path / SUMMARY_NAME).is_file():
-        problem = (error or "interrupted (Ctrl-C or SIGTERM) before it wrote summary.json"
-                   if interrupted else f"it could not run: {error}" if error else
-                   f"the worker exited with status {exit_code} without writing summary.json")
+        if interrupted:
+            problem = error or "interrupted (Ctrl-C or SIGTERM) before it wrote summary.json"
+        elif error:
+            problem = f"it could not run: {error}"
+        else:
+            problem = f"the worker exited with status {exit_code} without writing summary.json"
     settled = (settle(run_path, spec, problem or f"the worker exited with status {exit_code}",
                       interrupted=interrupted)
                if problem is not None or exit_code not in (0, 1, 3) else Settled(None))
@@ -179,7 +180,8 @@ class GroupResult:
 
     @property
     def exit_code(self) -> int:
-        return {"PASS": 0, "RECORDED": 0, "INVALID": 3, "INTERRUPTED": 130}.get(self.verdict, 1)
+        return {"PASS": 0, "RECORDED": 0, "INVALID": 3,
+                "INTERRUPTED": INTERRUPTED_EXIT}.get(self.verdict, 1)
 
     def to_json(self) -> dict[str, Any]:
         first = self.runs[0].spec
@@ -299,7 +301,7 @@ def suite_exit_code(groups: Sequence[GroupResult], interrupted: bool) -> int:
     """130 interrupted; 3 any INVALID; 1 any regression, failure, mismatch or flaky; 0 all
     PASS or RECORDED (an empty suite is not a pass)."""
     if interrupted:
-        return 130
+        return INTERRUPTED_EXIT
     if not groups or any(g.verdict == "INVALID" for g in groups):
         return 3
     return 0 if all(g.verdict in OK_VERDICTS for g in groups) else 1

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from harness import runmarker
 from harness.errors import SrrError
+from harness.interrupt import INTERRUPTED_EXIT
 from harness.metrics.types import HealthResult
 from harness.report.junit import junit_cases, write_junit
 from harness.run.facts import combined_digest, reproduce_command, versions, write_scenario
@@ -98,7 +99,8 @@ def _write(run_path: Path, spec: RunSpec, detail: str, *, interrupted: bool) -> 
         systems_under_test=tuple(s.name for s in scenario.systems_under_test if s.enabled),
         topics={}, digest=combined_digest({}), versions=versions(),
         command=reproduce_command(spec.scenario_file, scenario, run_path),
-        verdict="INTERRUPTED" if interrupted else "INVALID", exit_code=130 if interrupted else 3,
+        verdict="INTERRUPTED" if interrupted else "INVALID",
+        exit_code=INTERRUPTED_EXIT if interrupted else 3,
         reasons=(f"health {GATE}: {detail}",))
     write_junit(run_path / "junit.xml", scenario.name, junit_cases(summary.to_json()))
     summary.write(run_path)

@@ -23,7 +23,7 @@ from typing import Any
 
 from harness.atomic import write_json_atomic
 from harness.errors import SrrError
-from harness.interrupt import StopRequests
+from harness.interrupt import INTERRUPTED_EXIT, StopRequests
 from harness.run.loading import load
 from harness.run.simulate import run_scenario
 from harness.sim.render import gl_context_seconds, gl_contexts_made
@@ -64,11 +64,10 @@ def run_job(job: Mapping[str, Any], out_root: str | Path,
                                progress=clock.progress,
                                started=lambda _dir: clock.mark("built"))
             clock.mark("done")
-    except KeyboardInterrupt:
-        return ended(130, "interrupted before the run directory was written")
-    except Exception as err:
-        if stop.requested:  # an interrupt that became this error where it landed
-            return ended(130, "interrupted before the run directory was written")
+    except (KeyboardInterrupt, Exception) as err:
+        # stop.requested: an interrupt that became this error where it landed
+        if isinstance(err, KeyboardInterrupt) or stop.requested:
+            return ended(INTERRUPTED_EXIT, "interrupted before the run directory was written")
         if isinstance(err, SrrError):
             return ended(err.exit_code, str(err))
         raise
