@@ -23,11 +23,12 @@ from typing import Literal
 from harness.metrics.types import NEAR_AT, HealthResult, MetricResult
 from harness.regression.compare import Comparison
 
-__all__ = ["GOAL_REACHED", "GOAL_REACHED_AT", "OK_VERDICTS", "Verdict", "absolute_failures",
-           "decide"]
+__all__ = ["EXIT_CODES", "GOAL_REACHED", "GOAL_REACHED_AT", "OK_VERDICTS", "Verdict",
+           "absolute_failures", "decide"]
 
 VerdictName = Literal["PASS", "RECORDED", "FAIL", "REGRESSED", "MISMATCH", "UNSCORED",
                       "INVALID"]
+#: the exit status of each verdict (``srr run``'s, and a suite run's)
 EXIT_CODES: dict[str, int] = {"PASS": 0, "RECORDED": 0, "FAIL": 1, "REGRESSED": 1,
                               "MISMATCH": 1, "UNSCORED": 1, "INVALID": 3}
 #: the verdicts that exit 0: compared and held, or recorded on purpose with healthy gates
@@ -41,8 +42,11 @@ GOAL_REACHED_AT = 0.5
 @dataclass(frozen=True)
 class Verdict:
     name: VerdictName
-    exit_code: int
     reasons: tuple[str, ...]
+
+    @property
+    def exit_code(self) -> int:
+        return EXIT_CODES[self.name]
 
 
 def absolute_failures(metrics: Sequence[MetricResult]) -> list[str]:
@@ -72,19 +76,19 @@ def decide(health: Sequence[HealthResult], metrics: Sequence[MetricResult],
     records on purpose (``scoring.record_only``): RECORDED when every health gate held."""
     tripped = [f"health {h.name}: {h.detail}" for h in health if not h.ok]
     if tripped:
-        return Verdict("INVALID", 3, tuple(tripped))
+        return Verdict("INVALID", tuple(tripped))
     if record_only:
-        return Verdict("RECORDED", 0, (
+        return Verdict("RECORDED", (
             f"recorded on purpose (scoring.record_only): nothing was scored or compared; "
             f"{len(health)} health gates held",))
     if mismatch:
-        return Verdict("MISMATCH", 1, (
+        return Verdict("MISMATCH", (
             "not compared: the baseline was recorded with another configuration ("
             + "; ".join(mismatch) + "); bless a baseline for this configuration "
             "(--update-baseline) if the change is intended",
             *absolute_failures(metrics)))
     if comparison is not None and comparison.regressed:
-        return Verdict("REGRESSED", 1, tuple(e.describe() for e in comparison.regressions))
+        return Verdict("REGRESSED", tuple(e.describe() for e in comparison.regressions))
     failures = absolute_failures(metrics)
     if comparison is None and metrics:
         failures.append(baseline_note or "no baseline to compare with")
@@ -94,10 +98,10 @@ def decide(health: Sequence[HealthResult], metrics: Sequence[MetricResult],
         failures.append(f"the baseline holds none of this run's {len(metrics)} metrics, so "
                         "nothing was compared; bless a baseline from this configuration")
     if failures:
-        return Verdict("FAIL", 1, tuple(failures))
+        return Verdict("FAIL", tuple(failures))
     if not metrics:
-        return Verdict("UNSCORED", 1, (
+        return Verdict("UNSCORED", (
             "nothing was scored: the scenario has no scoring block (control, perception or "
             "safety), so the run was recorded but not compared with anything; a scenario "
             "that only records says so with scoring: {record_only: true}",))
-    return Verdict("PASS", 0, ())
+    return Verdict("PASS", ())

@@ -373,6 +373,9 @@ def _write_outputs(scenario: Scenario, summary: RunSummary, run_dir: Path,
                      rebuild_graphs=rebuild_graphs, video=video)
     except SrrError:
         raise
+    except KeyboardInterrupt as err:  # the run is complete; only its report is missing
+        raise KeyboardInterrupt(f"the run is complete in {run_dir} but has no report; "
+                                f"`srr report {run_dir}` renders it") from err
     except Exception as err:
         raise SrrError(f"{run_dir / 'report.html'}: the report could not be rendered "
                        f"({type(err).__name__}: {err}); summary.json is complete") from err

@@ -21,7 +21,7 @@ from typing import Any
 
 from harness.errors import SrrError
 from harness.interrupt import INTERRUPTED_EXIT
-from harness.regression.verdict import OK_VERDICTS
+from harness.regression.verdict import EXIT_CODES, OK_VERDICTS
 from harness.suite.plan import RunSpec
 from harness.suite.stats import describe
 from harness.suite.unfinished import Settled, settle
@@ -180,8 +180,9 @@ class GroupResult:
 
     @property
     def exit_code(self) -> int:
-        return {"PASS": 0, "RECORDED": 0, "INVALID": 3,
-                "INTERRUPTED": INTERRUPTED_EXIT}.get(self.verdict, 1)
+        if self.verdict == "INTERRUPTED":
+            return INTERRUPTED_EXIT
+        return EXIT_CODES.get(self.verdict, 1)
 
     def to_json(self) -> dict[str, Any]:
         first = self.runs[0].spec

@@ -67,7 +67,11 @@ def run_job(job: Mapping[str, Any], out_root: str | Path,
     except (KeyboardInterrupt, Exception) as err:
         # stop.requested: an interrupt that became this error where it landed
         if isinstance(err, KeyboardInterrupt) or stop.requested:
-            return ended(INTERRUPTED_EXIT, "interrupted before the run directory was written")
+            # stopped after its loop, the run's directory holds its recording (the suite
+            # recovers it); before its first tick, there is none
+            return ended(INTERRUPTED_EXIT, "interrupted before the run's summary was written"
+                         if run_dir.is_dir() else
+                         "interrupted before the run directory was written")
         if isinstance(err, SrrError):
             return ended(err.exit_code, str(err))
         raise

@@ -231,3 +231,25 @@ def test_a_ctrl_c_while_finalizing_keeps_the_recording_for_recover(
     monkeypatch.undo()
     assert main(["recover", str(out)]) == 0
     assert json.loads((out / "summary.json").read_text())["recovered"]
+
+
+def test_a_ctrl_c_while_the_report_renders_leaves_a_complete_run(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """Ctrl-C after ``summary.json``, while the report renders: the run is complete (no
+    marker, its summary), no half-written report, and the message says how to render it."""
+    from harness.report import html
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(html, "write_report", interrupted)
+    out = tmp_path / "run"
+    assert main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(out)]) == 130
+    assert capsys.readouterr().err.strip().endswith(
+        f"srr run: interrupted; the run is complete in {out} but has no report; "
+        f"`srr report {out}` renders it")
+    assert runmarker.read(out) is None and not (out / "report.html").exists()
+    assert json.loads((out / "summary.json").read_text())["verdict"] != "INTERRUPTED"
+    monkeypatch.undo()
+    assert main(["report", str(out)]) == 0 and (out / "report.html").is_file()

@@ -7,6 +7,8 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+import pytest
+
 from harness import api, runmarker
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, group_runs, outcome_of
@@ -100,3 +102,28 @@ def test_interrupted_repeats_do_not_make_a_group_flaky(tmp_path: Path) -> None:
     assert (group.verdict, group.flaky) == ("FLAKY", True)
     assert group.flaky_detail is not None and group.flaky_detail["verdicts"] == ["PASS", "FAIL"]
     assert group.reasons[0].startswith("flaky over 2 repeats (PASS / FAIL)")
+
+
+def test_a_worker_stopped_after_its_loop_keeps_its_recording(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C while the run is scored (after its loop): the worker says the run's directory
+    holds its recording, and the suite recovers every message of it, INTERRUPTED."""
+    from harness.run import record
+    from harness.suite.worker import run_job
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(record, "_score", interrupted)
+    spec = _spec()
+    job = spec.job()
+    ended = run_job(job, tmp_path)
+    assert (ended["exit_code"], ended["error"]) == (
+        130, "interrupted before the run's summary was written")
+    monkeypatch.undo()
+    out = outcome_of(spec, tmp_path, exit_code=ended["exit_code"], error=ended["error"],
+                     wall_s=1.0)
+    assert (out.verdict, out.exit_code) == ("INTERRUPTED", 130)
+    assert "recorded messages were recovered" in " ".join(out.reasons)
+    summary = read_summary(tmp_path / spec.run_dir)
+    assert summary["recovered"] and sum(t["count"] for t in summary["topics"].values()) > 0
