@@ -209,6 +209,18 @@ def test_commands_on_a_killed_run_directory_point_to_recover(
     assert "not a finished run directory" in capsys.readouterr().err
 
 
+def _run_interrupted_in(monkeypatch: pytest.MonkeyPatch, module: object, name: str,
+                        out: Path) -> Path:
+    """``srr run`` (1 s) into ``out`` with a Ctrl-C raised by ``module.name``: exit 130."""
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(module, name, interrupted)
+    assert main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(out)]) == 130
+    return out
+
+
 def test_a_ctrl_c_while_finalizing_keeps_the_recording_for_recover(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
         capsys: pytest.CaptureFixture[str]) -> None:
@@ -217,12 +229,7 @@ def test_a_ctrl_c_while_finalizing_keeps_the_recording_for_recover(
     recover`` makes it a finished run directory with every message."""
     from harness.run import record
 
-    def interrupted(*args: object, **kwargs: object) -> None:
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(record, "_score", interrupted)
-    out = tmp_path / "run"
-    assert main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(out)]) == 130
+    out = _run_interrupted_in(monkeypatch, record, "_score", tmp_path / "run")
     assert capsys.readouterr().err.strip().endswith(
         f"srr run: interrupted; the recording is in {out}; `srr recover {out}` makes it a "
         "finished run directory")
@@ -240,12 +247,7 @@ def test_a_ctrl_c_while_the_report_renders_leaves_a_complete_run(
     marker, its summary), no half-written report, and the message says how to render it."""
     from harness.report import html
 
-    def interrupted(*args: object, **kwargs: object) -> None:
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(html, "write_report", interrupted)
-    out = tmp_path / "run"
-    assert main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(out)]) == 130
+    out = _run_interrupted_in(monkeypatch, html, "write_report", tmp_path / "run")
     assert capsys.readouterr().err.strip().endswith(
         f"srr run: interrupted; the run is complete in {out} but has no report; "
         f"`srr report {out}` renders it")
