@@ -454,7 +454,8 @@ def _print_run(res: api.RunResult) -> None:
     if recording is not None:
         _stdout().print(recording, markup=False)
         b = s.get("baseline") or {}
-        if not b.get("digest_matches") and b.get("reference") and not s.get("interrupted"):
+        cut_short = s.get("interrupted") or s.get("stopped")
+        if not b.get("digest_matches") and b.get("reference") and not cut_short:
             _stdout().print(f"  where: srr diff {b['path']} {res.run_dir}", markup=False)
     _stdout().print(f"verdict: {res.verdict}", markup=False)
     for reason in s.get("reasons", []):

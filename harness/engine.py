@@ -23,7 +23,7 @@ from harness.bus import Bus, Envelope
 from harness.graph import GraphStage
 from harness.scenario import Scenario
 from harness.sim import World
-from harness.sut.base import SutContext, load_suts
+from harness.sut.base import SutContext, load_suts, setup_suts, step_suts
 from harness.sut.participant import Participant
 from harness.wiring import Plan, plan_wiring
 
@@ -110,8 +110,7 @@ class Simulation:
         self.bus.add_tap(tap)
 
     def start(self) -> None:
-        for _, sut, sut_ctx in self.suts:
-            sut.setup(sut_ctx)
+        setup_suts(self.suts)
         self._started = True
 
     def step_tick(self) -> None:
@@ -125,8 +124,7 @@ class Simulation:
         with self.stage:
             self.stage.evaluate(self.ctx)
         self.bus.spin()
-        for _, sut, _ in self.suts:
-            sut.step(self.time_ns)
+        step_suts(self.suts, self.time_ns)
         self.bus.spin()
         self.world.step(self.scenario.physics.substeps)
         self.tick_index += 1

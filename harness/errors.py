@@ -148,12 +148,14 @@ class RunInUseError(SrrError):
 
 class RunStopped(SrrError):
     """Raised from inside a tick to stop the run at that tick boundary, INVALID: the health
-    gate ``gate`` trips with this message (e.g. an external ROS 2 output that never came)."""
+    gate ``gate`` trips with this message (e.g. an external ROS 2 output that never came).
+    ``details`` (a traceback, say) is kept beside the recording, too long for the message."""
 
     exit_code = 3
 
-    def __init__(self, gate: str, message: str) -> None:
+    def __init__(self, gate: str, message: str, details: str | None = None) -> None:
         self.gate = gate
+        self.details = details
         super().__init__(message)
 
 

@@ -46,7 +46,7 @@ from harness.recording.bagread import (
 from harness.recording.errors import BagError
 from harness.scenario import Scenario
 from harness.serde.ros1 import ros1_type
-from harness.sut.base import SutContext, load_suts
+from harness.sut.base import SutContext, load_suts, setup_suts, step_suts
 from harness.sut.participant import Participant
 from harness.video.codec import H264Decoder, decode_depth_png, decode_rgb
 from harness.video.errors import VideoError
@@ -254,8 +254,7 @@ class Replay:
         return {d.stream.raw_topic for d in self._decoders.values()}
 
     def start(self) -> None:
-        for _, sut, ctx in self.suts:
-            sut.setup(ctx)
+        setup_suts(self.suts)
         wanted = self.bus.subscribed()
         for cam in recorded_cameras(self.scenario):
             for cs in compressed_streams(cam):
@@ -295,8 +294,7 @@ class Replay:
                         self.bus.publish(dec.stream.raw_topic, IMAGE, image)
             self._pending = next(self._groups, None)
         self.bus.spin()
-        for _, sut, _ in self.suts:
-            sut.step(self.time_ns)
+        step_suts(self.suts, self.time_ns)
         self.bus.spin()
         self.tick_index = k + 1
 

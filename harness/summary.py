@@ -185,6 +185,8 @@ def recording_note(summary: Mapping[str, Any], *, most: int = 4) -> str | None:
         return "recording identical to the baseline's"
     if summary.get("interrupted"):  # which topics differ says nothing of a run cut short
         return "recording cut short (interrupted): not the baseline's"
+    if summary.get("stopped"):  # a gate (a plug-in's error, the disk) ended it early
+        return "recording cut short (the run was stopped): not the baseline's"
     note = "recording differs from the baseline's"
     topics = [str(t) for t in b.get("topics_differing") or ()]
     if topics:

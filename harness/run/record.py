@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from harness import runlock, runmarker
+from harness.atomic import write_text_atomic
 from harness.bus import Bus
 from harness.camera_topics import unrecorded_topics
 from harness.diskspace import MB, DiskGuard, FreeSpace, disk_free
@@ -80,6 +81,9 @@ __all__ = ["AFTER_THE_LOOP", "Loop", "Progress", "RunResult", "Started", "import
 #: metrics (pandas, SciPy), the report (Jinja2, its plots). A run starts its loop without them.
 AFTER_THE_LOOP = ("harness.frames", "harness.metrics.control", "harness.metrics.health",
                   "harness.metrics.perception", "harness.metrics.safety", "harness.report.html")
+
+#: A run stopped by a plug-in's error keeps its traceback here, in the run directory.
+TRACEBACK_NAME = "traceback.txt"
 
 Progress = Callable[[int, int], None]
 Started = Callable[[Path], None]  # told the run directory once it is created and owned
@@ -277,7 +281,11 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
     except KeyboardInterrupt:
         return _Ended(interrupted=True)
     except RunStopped as err:  # at a tick boundary: what was recorded stays, INVALID
-        return _Ended(gate=err.gate, stopped=f"{err}; the run was stopped after "
+        said = str(err)
+        if err.details:  # a plug-in's traceback, beside the recording
+            write_text_atomic(run_dir / TRACEBACK_NAME, err.details)
+            said += f" (traceback: {run_dir / TRACEBACK_NAME})"
+        return _Ended(gate=err.gate, stopped=f"{said}; the run was stopped after "
                                              f"{loop.ticks() / hz:g} s of simulated time")
     except BaseException:
         if stop.requested:  # a Ctrl-C that became another error where it landed

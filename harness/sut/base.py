@@ -20,8 +20,9 @@ import dataclasses
 import importlib
 import os
 import sys
+import traceback
 import zlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from types import ModuleType
 from typing import Any, Literal
@@ -30,13 +31,13 @@ import numpy as np
 
 from harness.bus import Bus, Envelope, Publisher, Qos, TopicNameError, remap_topic
 from harness.bus.endpoints import Endpoint
-from harness.errors import ScenarioError
+from harness.errors import ScenarioError, SrrError, reason
 from harness.scenario import RobotSpec, Scenario, SutSpec, validate_dataclass
-from harness.sut.errors import PluginError
+from harness.sut.errors import PluginError, SutRaised
 from harness.sut.participant import Participant, as_participant, is_plugin
 
 __all__ = ["SutContext", "SystemUnderTest", "import_project_module", "load_sut", "load_suts",
-           "sut_params"]
+           "setup_suts", "step_suts", "sut_params"]
 
 
 @dataclass(frozen=True)
@@ -94,13 +95,29 @@ class SutContext:
         return self.bus.advertise(self._declare("pub", topic, msgtype), msgtype, qos)
 
     def subscribe(self, topic: str, msgtype: str, callback: Callable[[Any], None]) -> None:
-        self.bus.subscribe(self._declare("sub", topic, msgtype), msgtype, callback)
+        self.bus.subscribe(self._declare("sub", topic, msgtype), msgtype,
+                           self._guarded(topic, callback))
 
     def subscribe_envelopes(self, topic: str, msgtype: str,
                             callback: Callable[[Envelope], None]) -> None:
         """:meth:`subscribe`, handing ``callback`` each message's envelope (its ``msg`` built
         when read: see :meth:`harness.bus.Bus.subscribe_envelopes`)."""
-        self.bus.subscribe_envelopes(self._declare("sub", topic, msgtype), msgtype, callback)
+        self.bus.subscribe_envelopes(self._declare("sub", topic, msgtype), msgtype,
+                                     self._guarded(topic, callback))
+
+    def _guarded(self, topic: str, callback: Callable[[Any], None]) -> Callable[[Any], None]:
+        """``callback``, an error it raises (the plug-in's own) turned into :class:`SutRaised`."""
+        name = self.name
+
+        def deliver(message: Any) -> None:
+            try:
+                callback(message)
+            except SrrError:
+                raise
+            except Exception as err:
+                raise SutRaised(name, f"in its callback on {topic}", err) from err
+
+        return deliver
 
 
 class SystemUnderTest(Participant):
@@ -159,3 +176,32 @@ def load_suts(scenario: Scenario, bus: Bus, source: str = "<scenario>"
         out.append((spec.name, load_sut(spec, where),
                     SutContext.for_spec(spec, scenario, bus, where)))
     return out
+
+
+def setup_suts(suts: Sequence[tuple[str, Participant, SutContext]]) -> None:
+    """``setup`` every system under test, in order (before the run: its wiring is planned
+    from what they advertise). An error a plug-in raises there (not an
+    :class:`~harness.errors.SrrError`: one that breaks the contract says so itself) is a
+    :class:`PluginError` naming its field and where in the plug-in it was raised."""
+    for name, sut, ctx in suts:
+        try:
+            sut.setup(ctx)
+        except SrrError:
+            raise
+        except Exception as err:
+            frame = traceback.extract_tb(err.__traceback__)[-1]
+            raise PluginError(f"{ctx.field}: {name} raised {type(err).__name__} in setup: "
+                              f"{reason(err)} ({frame.filename}:{frame.lineno})") from err
+
+
+def step_suts(suts: Sequence[tuple[str, Participant, SutContext]], now_ns: int) -> None:
+    """``step(now_ns)`` every system under test, in order; an error a plug-in raises (not an
+    :class:`~harness.errors.SrrError`) stops the run: :class:`SutRaised`."""
+    for name, sut, _ in suts:
+        try:
+            sut.step(now_ns)
+        except SrrError:
+            raise
+        except Exception as err:
+            raise SutRaised(name, f"in step at {now_ns / 1e9:g} s of simulated time",
+                            err) from err

@@ -65,6 +65,9 @@ def test_the_note_names_the_topics_and_versions() -> None:
     assert recording_note({"topics": topics, "interrupted": True, "baseline": {
         "digest_matches": False, "topics_differing": ["/a"]}}) == \
         "recording cut short (interrupted): not the baseline's"
+    assert recording_note({"topics": topics, "stopped": "disk_space: ...", "baseline": {
+        "digest_matches": False, "topics_differing": ["/a"]}}) == \
+        "recording cut short (the run was stopped): not the baseline's"
 
 
 @pytest.mark.slow
