@@ -399,6 +399,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
         _stdout().print(str(rep.out_dir))
         return rep.exit_code
     _print_run(res)
+    if res.blessed is not None:
+        _stdout().print(f"blessed {res.run_dir} as {res.blessed.resolve()}", markup=False)
+    if res.not_blessed is not None:
+        _stderr().print(f"srr run: {res.not_blessed}", markup=False)
     _write_summary_md(args, res)
     return res.exit_code
 

@@ -4,9 +4,9 @@ Every error a user can cause derives from :class:`SrrError`; the CLI turns it in
 its ``exit_code``. Library code raises these and never calls ``sys.exit`` or prints. Errors
 narrow per package: a package's own live in its ``errors.py`` (:mod:`harness.recording.errors`,
 :mod:`harness.graph.errors`, :mod:`harness.video.errors`, :mod:`harness.live.errors`,
-:mod:`harness.sut.errors`, :mod:`harness.run.errors`); those kept here are raised from more
-than one layer (:class:`ScenarioError` from the validator up, :class:`SimulationError` from
-the scenario's prims up, :class:`RunStopped` from the ROS 2 bridge and the run).
+:mod:`harness.sut.errors`); those kept here are raised from more than one layer
+(:class:`ScenarioError` from the validator up, :class:`SimulationError` from the scenario's
+prims up, :class:`RunStopped` from the ROS 2 bridge, the systems under test and the run).
 """
 
 from __future__ import annotations

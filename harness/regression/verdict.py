@@ -68,12 +68,16 @@ def absolute_failures(metrics: Sequence[MetricResult]) -> list[str]:
 
 def decide(health: Sequence[HealthResult], metrics: Sequence[MetricResult],
            comparison: Comparison | None, baseline_note: str | None,
-           mismatch: Sequence[str] = (), *, record_only: bool = False) -> Verdict:
+           mismatch: Sequence[str] = (), *, record_only: bool = False,
+           first_baseline: bool = False) -> Verdict:
     """``comparison`` is None when there is no baseline; ``baseline_note`` then says where
     one was looked for and how to bless one. ``mismatch``: the configuration fields in which
     the run differs from the baseline (:func:`~harness.regression.config.config_differences`);
     any makes the verdict MISMATCH, whatever the metrics say. ``record_only``: the scenario
-    records on purpose (``scoring.record_only``): RECORDED when every health gate held."""
+    records on purpose (``scoring.record_only``): RECORDED when every health gate held.
+    ``first_baseline``: the run is about to become its scenario's first baseline
+    (``--update-baseline`` with none yet): RECORDED, ``baseline_note`` saying so, unless an
+    absolute criterion failed."""
     tripped = [f"health {h.name}: {h.detail}" for h in health if not h.ok]
     if tripped:
         return Verdict("INVALID", tuple(tripped))
@@ -91,6 +95,8 @@ def decide(health: Sequence[HealthResult], metrics: Sequence[MetricResult],
         return Verdict("REGRESSED", tuple(e.describe() for e in comparison.regressions))
     failures = absolute_failures(metrics)
     if comparison is None and metrics:
+        if first_baseline and not failures:
+            return Verdict("RECORDED", (baseline_note or "no baseline to compare with",))
         failures.append(baseline_note or "no baseline to compare with")
     compared = [] if comparison is None else [
         e for e in comparison.entries if e.status in ("ok", "improved", "changed")]

@@ -23,7 +23,7 @@ from harness.run.summary import BaselineRef, TopicRow
 from harness.scenario import Scenario
 from harness.scoring import Scores
 
-__all__ = ["Judgement", "differing_topics", "differing_versions", "judge"]
+__all__ = ["Judgement", "check_baseline", "differing_topics", "differing_versions", "judge"]
 
 
 @dataclass(frozen=True)
@@ -56,19 +56,31 @@ def differing_versions(base: Mapping[str, str],
             for name in sorted(set(base) & set(run)) if str(base[name]) != str(run[name])}
 
 
+def check_baseline(scenario: Scenario, bdir: Path) -> None:
+    """Read ``scenario``'s baseline in ``bdir``, if it has one, before a run: a malformed file
+    is refused then (:class:`~harness.regression.BaselineError`, exit 2), before anything is
+    built or recorded, rather than after the run."""
+    load_baseline(baseline_path(baseline_name(scenario), bdir))
+
+
 def judge(scenario: Scenario, scores: Scores, bdir: Path, *, digest: str,
           scene_files: Mapping[str, str] | None, topics: Mapping[str, TopicRow],
-          versions: Mapping[str, str]) -> Judgement:
+          versions: Mapping[str, str], blessing: bool = False) -> Judgement:
     """Compare ``scores`` with the baseline of ``scenario`` in ``bdir``; ``digest`` is the
     run's combined digest and ``scene_files`` its model files' digests (its configuration);
     ``topics`` and ``versions``, the run's, say which topics differ from the baseline's
-    recording and which versions from those it was blessed with."""
+    recording and which versions from those it was blessed with. ``blessing``: the run is
+    about to become the baseline (``--update-baseline``): it is judged against the one it
+    replaces, and is RECORDED when there is none yet."""
     path = baseline_path(baseline_name(scenario), bdir)
     base = load_baseline(path) if scores.metrics else None
     cmp = compare(scores.metrics, base, scenario.scoring.tolerances) if base else None
     note = (f"no baseline at {path}: bless one with `srr baseline bless RUN_DIR --reason "
             "TEXT` or `srr run ... --update-baseline`")
-    if "@" in baseline_name(scenario):  # a sweep point's own baseline
+    if blessing:
+        note = (f"no baseline at {path} before this run: it becomes the first one "
+                "(--update-baseline); nothing was compared")
+    elif "@" in baseline_name(scenario):  # a sweep point's own baseline
         note = (f"no baseline at {path}: bless every sweep point with `srr suite SUITE "
                 "--update-baselines --reason TEXT`")
     files = scene_files if base is not None and base.config is not None \
@@ -78,7 +90,8 @@ def judge(scenario: Scenario, scores: Scores, bdir: Path, *, digest: str,
     if cmp is not None and mismatch:  # a baseline of another configuration judges nothing
         cmp = cmp.not_compared()
     verdict = decide(scores.health, scores.metrics, cmp, note, mismatch,
-                     record_only=scenario.scoring.record_only)
+                     record_only=scenario.scoring.record_only,
+                     first_baseline=blessing and base is None)
     baseline = None if base is None else BaselineRef(
         path=str(path), blessed_by=base.blessed_by, reason=base.reason,
         blessed_at=base.blessed_at, seed=base.seed, digest=base.digest,

@@ -54,7 +54,6 @@ from harness.regression import baseline_path, save_baseline
 from harness.report.graphs import RunGraphs, write_graphs
 from harness.report.junit import junit_cases, write_junit
 from harness.run.baselines import baseline_name, baselines_dir, scene_config
-from harness.run.errors import InvalidRunError
 from harness.run.facts import (
     combined_digest,
     sut_endpoints,
@@ -99,6 +98,9 @@ class RunResult:
     exit_code: int
     summary: dict[str, Any]
     run_summary: RunSummary
+    #: ``--update-baseline``: the baseline written from this run, or why it was not
+    blessed: Path | None = None
+    not_blessed: str | None = None
 
 
 @dataclass(frozen=True)
@@ -199,10 +201,9 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     summary = _summarize(scenario, loop, recorder, source=source, scores=scores,
                          topics=topics, sim_s=sim_s, ended=ended, bdir=bdir,
                          participants=participants)
-    if update_baseline and not ended.interrupted:
-        _update_baseline(scenario, summary, bdir, run_dir, update_reason)
+    blessing = update_baseline and not ended.interrupted
     j = judge(scenario, scores, bdir, digest=summary.digest, scene_files=summary.scene_files,
-              topics=summary.topics, versions=summary.versions)
+              topics=summary.topics, versions=summary.versions, blessing=blessing)
     summary = dataclasses.replace(summary, verdict=j.verdict, exit_code=j.exit_code,
                                   reasons=j.reasons, baseline=j.baseline,
                                   comparison=j.comparison)
@@ -210,7 +211,15 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
         summary = dataclasses.replace(summary, verdict="INTERRUPTED", exit_code=INTERRUPTED_EXIT,
                                       reasons=("interrupted before the end of the scenario",))
     data = _write_outputs(scenario, summary, run_dir, frames, video=video)
-    return RunResult(run_dir, summary.verdict, summary.exit_code, data, summary)
+    blessed = not_blessed = None
+    if blessing:  # judged against the baseline it replaces, written out, then blessed
+        if summary.ok:
+            blessed = _update_baseline(scenario, summary, bdir, run_dir, update_reason)
+        else:
+            not_blessed = (f"{run_dir}: not blessed: health gates tripped; an invalid run "
+                           "cannot become the baseline")
+    return RunResult(run_dir, summary.verdict, summary.exit_code, data, summary,
+                     blessed=blessed, not_blessed=not_blessed)
 
 
 @contextlib.contextmanager
@@ -281,6 +290,8 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
     except KeyboardInterrupt:
         return _Ended(interrupted=True)
     except RunStopped as err:  # at a tick boundary: what was recorded stays, INVALID
+        if stop.requested:  # a Ctrl-C that a plug-in's error (SutRaised) carries
+            return _Ended(interrupted=True)
         said = str(err)
         if err.details:  # a plug-in's traceback, beside the recording
             write_text_atomic(run_dir / TRACEBACK_NAME, err.details)
@@ -351,16 +362,13 @@ def _summarize(scenario: Scenario, loop: Loop, recorder: Any, *, source: str, sc
 
 
 def _update_baseline(scenario: Scenario, summary: RunSummary, bdir: Path, run_dir: Path,
-                     reason: str) -> None:
-    """``--update-baseline``: this run becomes its scenario's baseline; an invalid run is
-    refused (:class:`InvalidRunError`)."""
-    if not summary.ok:
-        raise InvalidRunError(f"{run_dir}: health gates tripped; an invalid run cannot "
-                              "become the baseline")
-    save_baseline(baseline_path(baseline_name(scenario), bdir), summary.to_json(),
-                  reason=reason, source_run=str(run_dir),
-                  config=scene_config(scenario, summary.scene_files),
-                  bag=run_dir / "bag")
+                     reason: str) -> Path:
+    """``--update-baseline``: this valid, finished run becomes its scenario's baseline; its
+    path."""
+    path = baseline_path(baseline_name(scenario), bdir)
+    save_baseline(path, summary.to_json(), reason=reason, source_run=str(run_dir),
+                  config=scene_config(scenario, summary.scene_files), bag=run_dir / "bag")
+    return path
 
 
 def _write_outputs(scenario: Scenario, summary: RunSummary, run_dir: Path,

@@ -29,6 +29,7 @@ from harness.replay import Playback, Replay
 from harness.report.graphs import read_graphs
 from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir
+from harness.run.judge import check_baseline
 from harness.run.participants import LiveViewParticipant
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
 from harness.run.simulate import Notice, ros2_bridge
@@ -83,6 +84,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     judged = summary.baselines_dir  # judged against the recorded run's baselines
     baselines = baselines_dir(source, baselines if baselines is not None
                               else Path(judged) if judged else None, scenario)
+    check_baseline(scenario, baselines)
     playback = Playback(src / "bag")
     if playback.output.ros == 1 and live is not None:  # (ros2.enabled: the scenario says)
         raise SrrError(f"{src}: --foxglove: the live view serves ROS 2 messages, and "

@@ -21,6 +21,7 @@ from harness.output import check_output_topics, decide_output
 from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir, reproduce_command
 from harness.run.graphs import graphs_of
+from harness.run.judge import check_baseline
 from harness.run.participants import LiveViewParticipant, RtspParticipant
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
 from harness.scenario import Scenario, rate_warnings
@@ -88,6 +89,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     leaves the camera videos out of the report (``srr run --no-video``)."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
     baselines = baselines_dir(source, baselines, scenario)  # a bad folder stops it here
+    check_baseline(scenario, baselines)  # and a malformed baseline
     if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
         scenario = dataclasses.replace(scenario, baselines=str(baselines))
     prepare(run_dir)
@@ -237,7 +239,8 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     setting up the systems under test, and the wiring (topics and TF). Raises the first error;
     returns the warnings."""
     check_scoring(scenario, srr_gt=scenario.srr_gt, source=source)
-    baselines_dir(source, None, scenario)  # a baselines: path that is not a folder
+    # a baselines: path that is not a folder, a malformed baseline
+    check_baseline(scenario, baselines_dir(source, None, scenario))
     busy = check_video(scenario, source)
     sim = Simulation(scenario, source=source, joined=ros2_bridge(scenario, None, source))
     try:

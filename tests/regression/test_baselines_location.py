@@ -72,7 +72,8 @@ def test_the_baselines_field_is_relative_to_the_scenario_file(
     monkeypatch.chdir(tmp_path / "a")
     res = api.run_scenario(api.load(src, duration=1.0), source=str(src), out=Path("r1"),
                            update_baseline=True, update_reason="kept elsewhere")
-    assert kept.is_file() and res.summary["baseline"]["path"] == str(kept)
+    assert kept.is_file() and res.blessed == kept
+    assert res.summary["baselines_dir"] == str(kept.parent)
     assert not any((tmp_path / "scene" / "baselines").iterdir())
     resolved = (tmp_path / "a" / "r1" / "scenario.yaml").read_text()  # absolute once resolved
     assert f"baselines: {kept.parent}\n" in resolved
