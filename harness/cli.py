@@ -52,7 +52,9 @@ class _Parser(argparse.ArgumentParser):
     """argparse that reports bad arguments as one line and exit code 2."""
 
     def error(self, message: str) -> NoReturn:
-        _stderr().print(f"srr {self.prog.split()[-1]}: error: {shorten(message)}", markup=False)
+        name = self.prog.split()[-1]  # the subcommand's, or "srr" itself
+        where = "srr" if name == "srr" else f"srr {name}"
+        _stderr().print(f"{where}: error: {shorten(message)}", markup=False)
         raise SystemExit(2)
 
 

@@ -48,6 +48,7 @@ from harness.errors import RunStopped, SrrError
 from harness.interrupt import INTERRUPTED_EXIT, StopRequests
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
+from harness.outdir import check_out_folder
 from harness.output import ROS2_OUTPUT, OutputKind
 from harness.recording.bagfile import ChunkPolicy
 from harness.regression import baseline_path, save_baseline
@@ -125,7 +126,9 @@ class Loop:
 
 
 def prepare(run_dir: Path) -> None:
-    """Refuse a run directory another process is writing, or one that is not empty."""
+    """Refuse a run directory another process is writing, one that is not empty, or a path
+    where no folder can be."""
+    check_out_folder(run_dir)
     runlock.refuse_if_live(run_dir)
     if run_dir.exists() and any(run_dir.iterdir()):
         raise SrrError(f"--out {run_dir}: directory exists and is not empty")

@@ -29,6 +29,7 @@ from typing import Any
 from harness.atomic import write_json_atomic
 from harness.errors import ScenarioError, SrrError
 from harness.interrupt import INTERRUPTED_EXIT
+from harness.outdir import check_out_folder
 from harness.report.junit import Case, write_junit
 from harness.report.search_page import write_search_page
 from harness.run.baselines import baselines_dir
@@ -354,8 +355,7 @@ def run_search(plan: SearchPlan, executor: Executor, *, out: Path | None = None,
     cfg = plan.config
     out_dir = Path(out) if out is not None else default_search_dir(plan.name)
     db = out_dir / "study.db"
-    if out_dir.exists() and not out_dir.is_dir():
-        raise SrrError(f"--out {out_dir}: is a file, not a folder")
+    check_out_folder(out_dir)
     if out_dir.exists() and not db.is_file() and any(out_dir.iterdir()):
         raise SrrError(f"--out {out_dir}: folder exists, is not empty and holds no search "
                        "(study.db) to resume")

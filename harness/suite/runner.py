@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from harness.errors import SrrError
+from harness.outdir import check_out_folder
 from harness.run.baselines import baselines_dir, bless_if_changed
 from harness.run.loading import load
 from harness.run.simulate import validate
@@ -101,6 +102,7 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
     if history is not None and not Path(history).is_dir():
         raise SrrError(f"--history {history}: no such folder")
     out_dir = Path(out) if out is not None else default_suite_dir()
+    check_out_folder(out_dir)
     if out_dir.exists() and any(out_dir.iterdir()):
         raise SrrError(f"--out {out_dir}: folder exists and is not empty")
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -1,0 +1,38 @@
+"""``--out`` paths where no output folder can be: one line naming the option, exit 2."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from harness.cli import main
+
+SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "forklift_warehouse.yaml"
+SUITE = Path(__file__).resolve().parents[1] / "scenarios" / "suites" / "pr.yaml"
+
+
+@pytest.mark.parametrize("command", [["run", str(SCENARIO)], ["suite", str(SUITE)]])
+def test_an_out_path_that_cannot_be_a_folder_is_one_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], command: list[str]) -> None:
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    for out, said in ((afile, f"--out {afile}: is a file, not a folder"),
+                      (afile / "sub" / "x", f"--out {afile / 'sub' / 'x'}: {afile} is a file, "
+                                            "not a folder")):
+        assert main([*command, "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()  # warnings first, in a suite
+        assert err[-1] == f"srr {command[0]}: {said}", err
+    assert afile.read_text() == "mine"
+
+
+def test_a_bad_argument_is_one_line_naming_the_command_once(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    for argv, said in ((["bogus"], "srr: error: argument command: invalid choice"),
+                       (["validate", "a.yaml", "b.yaml"], "srr: error: unrecognized "
+                                                          "arguments: b.yaml"),
+                       (["run", "--seed", "x", "a.yaml"], "srr run: error: argument --seed")):
+        with pytest.raises(SystemExit) as exit_:
+            main(argv)
+        assert exit_.value.code == 2
+        assert capsys.readouterr().err.startswith(said)
