@@ -152,16 +152,22 @@ def load_sut(spec: SutSpec, field: str) -> Participant:
     module_name, _, attr = spec.plugin.partition(":")
     try:
         module = import_project_module(module_name)
-    except ImportError as err:
-        raise PluginError(f"{field}.plugin: cannot import module {module_name!r}: {err}") \
-            from err
+    except Exception as err:  # ImportError, a syntax error, the module raising as it imports
+        raise PluginError(f"{field}.plugin: cannot import module {module_name!r}: "
+                          f"{type(err).__name__}: {reason(err)}") from err
     cls = getattr(module, attr, None)
     if cls is None:
         raise PluginError(f"{field}.plugin: module {module_name!r} has no {attr!r}")
     if not isinstance(cls, type) or not is_plugin(cls):
         raise PluginError(f"{field}.plugin: {spec.plugin} is not a system under test "
                           "(needs setup, step and shutdown)")
-    return as_participant(cls(), f"{field}.plugin")
+    try:
+        made = cls()
+    except Exception as err:  # its parameters come in setup(ctx), not to its constructor
+        raise PluginError(f"{field}.plugin: {spec.plugin}() failed ({type(err).__name__}: "
+                          f"{reason(err)}); a plug-in is made with no arguments and gets its "
+                          "parameters in setup(ctx)") from err
+    return as_participant(made, f"{field}.plugin")
 
 
 def load_suts(scenario: Scenario, bus: Bus, source: str = "<scenario>"

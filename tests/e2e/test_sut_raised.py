@@ -74,3 +74,25 @@ def test_a_suite_run_whose_plug_in_raises_is_invalid_for_that_reason(tmp_path: P
     assert (ended["exit_code"], ended["error"]) == (3, None)
     summary = json.loads((tmp_path / "r1" / "summary.json").read_text())
     assert "route_follower raised RuntimeError in step" in " ".join(summary["reasons"])
+
+
+def test_a_plug_in_that_cannot_be_imported_or_made_is_one_line(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "srr_bad_syntax.py").write_text("def f(: pass\n")
+    (tmp_path / "srr_init_args.py").write_text(
+        "from harness.sut.route_follower import RouteFollower\n"
+        "class NeedsArgs(RouteFollower):\n"
+        "    def __init__(self, x):\n"
+        "        self.x = x\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    field = f"{SCENARIO}: systems_under_test[0].plugin"
+    for plugin, said in (
+            ("srr_bad_syntax:X", f"{field}: cannot import module 'srr_bad_syntax': "
+                                 "SyntaxError: invalid syntax"),
+            ("srr_init_args:NeedsArgs", f"{field}: srr_init_args:NeedsArgs() failed "
+                                        "(TypeError: ")):
+        assert main(["validate", str(SCENARIO), "--set",
+                     f"systems_under_test.route_follower.plugin={plugin}"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith(f"srr validate: {said}") and "\n" not in err, err

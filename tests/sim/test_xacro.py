@@ -139,6 +139,11 @@ def test_the_digest_does_not_depend_on_where_the_files_are(tmp_path: Path) -> No
         (ROBOT / "urdf" / "xbot.urdf.xacro").read_text().replace(
             '<xacro:arg name="wheel_radius" default="0.05"/>', "")), {},
      ["$(arg wheel_radius) has no value: give it in the model's args"]),
+    (lambda r: (r / "urdf" / "xbot.urdf.xacro").write_text(  # a tag without an attribute
+        (ROBOT / "urdf" / "xbot.urdf.xacro").read_text().replace(
+            '<xacro:arg name="wheel_radius" default="0.05"/>',
+            '<xacro:arg name="wheel_radius"/>')), {},
+     ["xacro cannot expand it", "missing attribute 'default'"]),
     (lambda r: (r / "urdf" / "wheel.xacro").write_text(
         (ROBOT / "urdf" / "wheel.xacro").read_text().replace(
             "</xacro:macro>", '<xacro:wheel side="x" y="0" radius="1"/></xacro:macro>')), {},

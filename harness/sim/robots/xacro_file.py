@@ -138,7 +138,8 @@ def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> 
             raise XacroError("xacro cannot expand it: too deep a recursion (a macro that "
                              "calls itself?)") from err
         except (xacro.XacroException, OSError, ValueError, TypeError, NameError,
-                KeyError, AttributeError, SyntaxError) as err:
+                KeyError, AttributeError, SyntaxError, RuntimeError) as err:
+            # RuntimeError: a tag without a required attribute (xacro:arg without default)
             name = _missing_arg(err)
             if name is not None:
                 raise XacroError(f"$(arg {name}) has no value: give it in the model's args "
