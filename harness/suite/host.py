@@ -15,13 +15,16 @@ out-of-memory killer, SIGKILL after a timeout) costs the run it had.
 What a run could leave to the next one in the same process is put back before the next job
 (:class:`_Baseline`): signal handlers, MuJoCo's global callbacks (``mjcb_control`` ...),
 NumPy's error handling, the umask, the interpreter's switch interval, ``os.environ``,
-the working directory, ``sys.path``, the warnings filters, ``sys.stdout``/``sys.stderr``, the
-global ``random`` and NumPy RNG states, and the plug-in modules the run imported (dropped, so
-the next run imports them afresh, as a fresh process would). The OpenGL context is kept on
-purpose (:func:`harness.sim.render.keep_gl_contexts`): made once per host, when the suite's
-runs render (:meth:`Host.warm`), while the suite is checked, at most :data:`WARM_AT_ONCE` hosts
-at a time (:func:`warm_slot`). A run's recording does not depend on which of these it got
-(tests compare the bytes with a fresh process's).
+the working directory, ``sys.path``, the warnings filters, ``sys.stdout``/``sys.stderr``, and
+the plug-in modules the run imported (dropped, so the next run imports them afresh, as a fresh
+process would). The global ``random`` and NumPy generators are seeded from the operating
+system before each run, as a fresh process's are: a plug-in that draws from them unseeded
+gets other numbers in every run, so its repeats differ and the suite calls it flaky (put back
+to one saved state, every run of a host, and every host forked from the suite, drew the same).
+The OpenGL context is kept on purpose (:func:`harness.sim.render.keep_gl_contexts`): made
+once per host, when the suite's runs render (:meth:`Host.warm`), while the suite is checked, at
+most :data:`WARM_AT_ONCE` hosts at a time (:func:`warm_slot`). A run's recording does not
+depend on which of these it got (tests compare the bytes with a fresh process's).
 
 Peak memory per run: before each run the host resets its peak resident set (``5`` to
 ``/proc/self/clear_refs``) and reads ``VmHWM`` from ``/proc/self/status`` after it. Where the
@@ -391,7 +394,13 @@ class RunAfterRun:
         self._baseline = _Baseline.take()
 
     def before(self) -> str | None:
-        """Reset the peak memory; None, or why it could not be (then the run has no peak)."""
+        """Seed the global generators from the operating system, as a fresh process does (see
+        the module doc), and reset the peak memory; None, or why that could not be (then the
+        run has no peak)."""
+        import numpy as np
+
+        random.seed()
+        np.random.seed()
         return _reset_peak()
 
     def after(self, note: str | None) -> tuple[float | None, list[str]]:
@@ -432,8 +441,6 @@ class _Baseline:
     path: list[str]
     filters: list[Any]
     streams: tuple[Any, Any]
-    random_state: Any
-    numpy_state: Any
     modules: frozenset[str]
     registry: Any
     mujoco_callbacks: dict[str, Any]
@@ -465,7 +472,7 @@ class _Baseline:
         os.umask(umask)
         return cls(handlers, sys.getswitchinterval(), dict(os.environ), os.getcwd(),
                    list(sys.path), list(warnings.filters), (sys.stdout, sys.stderr),
-                   random.getstate(), np.random.get_state(), frozenset(sys.modules),
+                   frozenset(sys.modules),
                    DEFAULT_REGISTRY.snapshot(), _mujoco_callbacks(), np.geterr(), umask,
                    frozenset(t.ident for t in threading.enumerate() if t.ident is not None))
 
@@ -489,8 +496,6 @@ class _Baseline:
         sys.path[:] = self.path
         warnings.filters[:] = self.filters  # type: ignore[index]
         sys.stdout, sys.stderr = self.streams
-        random.setstate(self.random_state)
-        np.random.set_state(self.numpy_state)
         for name in [n for n in sys.modules if n not in self.modules]:
             if _is_plugin(sys.modules.get(name)):
                 del sys.modules[name]

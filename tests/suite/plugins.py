@@ -173,3 +173,17 @@ class SetsMujocoCallback(RouteFollower):
                 data.ctrl[:] += 0.5  # type: ignore[attr-defined]
 
             mujoco.set_mjcb_control(push)
+
+
+class Unseeded(RouteFollower):
+    """Follows the route at a speed drawn from the global generators, unseeded (a leak a
+    nightly's repeats must catch): every run of a fresh process drives differently."""
+
+    def setup(self, ctx: SutContext) -> None:
+        import random
+
+        import numpy as np
+
+        super().setup(ctx)
+        self.p = type(self.p)(**{**self.p.__dict__, "speed": 0.5 + random.random() * 0.1
+                                 + float(np.random.random()) * 0.1})

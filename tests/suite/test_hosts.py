@@ -167,6 +167,24 @@ scenarios:
     assert not s["groups"][0]["flaky"]
 
 
+def test_unseeded_randomness_differs_between_runs_of_a_host(tmp_path: Path) -> None:
+    """A plug-in drawing from the global generators unseeded: each run of one host draws
+    other numbers, as a fresh process would, so the repeats differ and the group is flaky
+    (it once drew the same numbers in every run of a host, and the suite called it PASS)."""
+    text = f"""
+scenarios:
+  - {{path: {FORKLIFT}, name: unseeded, repeat: 3,
+     set: {{duration: 1, {PLUGIN}: "tests.suite.plugins:Unseeded"}}}}
+"""
+    proc = _suite(tmp_path, text)
+    log = proc.communicate(timeout=600)[0]
+    runs = _runs(tmp_path / "out")
+    assert len({r["timings"]["pid"] for r in runs.values()}) == 1, log  # one host
+    assert len({r["digest"] for r in runs.values()}) == 3, runs
+    s = json.loads((tmp_path / "out" / "summary.json").read_text(encoding="utf-8"))
+    assert s["groups"][0]["flaky"] and s["groups"][0]["verdict"] == "FLAKY"
+
+
 def test_a_mujoco_callback_set_by_a_run_does_not_reach_the_next(tmp_path: Path) -> None:
     """A plug-in sets MuJoCo's process-wide control callback and leaves it set; the next run
     in the same host records what a fresh process records."""
