@@ -861,6 +861,8 @@ def _cmd_search(args: argparse.Namespace) -> int:
     c = res.summary["counts"]
     _stdout().print(f"search {res.summary['name']}: {c['trials']} trials ({res.ran} now), "
                     f"{c['violated']} violated, {c['invalid']} invalid"
+                    + (f", {c['no_value']} where {res.summary['objective']['metric']} had no "
+                       "value" if c.get("no_value") else "")
                     + (f", {c['killed']} killed" if c.get("killed") else ""), markup=False)
     for path in res.counterexamples:
         _stdout().print(f"counterexample {path}", markup=False)

@@ -162,7 +162,12 @@ def plan_search(cfg: SearchConfig) -> SearchPlan:
     sc = _load(cfg, (), "--set")
     for dim in cfg.space:
         for v in _corners(dim):
-            _load(cfg, Point(((dim.path, v),)).overrides(), f"--space {dim.path}")
+            corner = _load(cfg, Point(((dim.path, v),)).overrides(), f"--space {dim.path}")
+            if dim.path.startswith("systems_under_test"):  # plug-in parameters: in set-up
+                try:
+                    validate(corner, cfg.scenario_file)
+                except SrrError as err:
+                    raise SrrError(f"--space {dim.path}={v}: {err}") from None
     check_scored(cfg.objective, sc.scoring, cfg.scenario_file)
     warnings = tuple(validate(sc, cfg.scenario_file))
     cameras = sc.camera_count
@@ -300,7 +305,8 @@ def _outputs(plan: SearchPlan, out_dir: Path, study: Any, records: Sequence[Tria
     violated = sorted((r for r in records if r.status == "violated"),
                       key=lambda r: (r.margin if r.margin is not None else 0.0, r.number))
     valid = [r for r in records if r.status in ("violated", "holds")]
-    invalid = [r for r in records if r.status in ("invalid", "no-value")]
+    invalid = [r for r in records if r.status == "invalid"]
+    no_value = [r for r in records if r.status == "no-value"]
     if meta.get("interrupted"):
         code, verdict = INTERRUPTED_EXIT, "INTERRUPTED"
     elif violated:
@@ -323,7 +329,7 @@ def _outputs(plan: SearchPlan, out_dir: Path, study: Any, records: Sequence[Tria
         "stop_at_first": cfg.stop_at_first, **meta,
         "verdict": verdict, "exit_code": code,
         "counts": {"trials": len(records), "violated": len(violated), "valid": len(valid),
-                   "invalid": len(invalid),
+                   "invalid": len(invalid), "no_value": len(no_value),
                    "killed": sum(r.status == "killed" for r in records)},
         "best": None if best is None else {"trial": best.number, "value": best.value},
         "first_violation": min((r.number for r in violated), default=None),
@@ -337,7 +343,7 @@ def _outputs(plan: SearchPlan, out_dir: Path, study: Any, records: Sequence[Tria
                   (f"{len(violated)} of {len(records)} trials violate {obj.describe()}; worst "
                    f"{violated[0].id}: {violated[0].value:g}") if violated else
                   (f"no trial of {len(records)} violates {obj.describe()} ({len(valid)} valid, "
-                   f"{len(invalid)} invalid)"))]
+                   f"{len(invalid)} invalid, {len(no_value)} without a value)"))]
     cases += [Case(f"counterexample.{c['id']}", False,
                    f"{obj.metric} = {c['value']:g} at "
                    + ", ".join(f"{k}={v}" for k, v in c["params"].items())) for c in cex]
@@ -356,9 +362,14 @@ def run_search(plan: SearchPlan, executor: Executor, *, out: Path | None = None,
     out_dir = Path(out) if out is not None else default_search_dir(plan.name)
     db = out_dir / "study.db"
     check_out_folder(out_dir)
-    if out_dir.exists() and not db.is_file() and any(out_dir.iterdir()):
+    # an empty study.db is no search either: a new study there would number its trials from
+    # 0 again, into the run directories left beside it
+    holds_study = db.is_file() and db.stat().st_size > 0
+    if out_dir.exists() and not holds_study and any(p.name != db.name
+                                                    for p in out_dir.iterdir()):
         raise SrrError(f"--out {out_dir}: folder exists, is not empty and holds no search "
-                       "(study.db) to resume")
+                       f"({db.name}{' is empty' if db.is_file() else ''}) to resume")
+    made = not out_dir.exists() or not any(out_dir.iterdir())  # by this search
     out_dir.mkdir(parents=True, exist_ok=True)
     study = open_study(db, cfg.objective, _config_key(plan))
     t0 = time.monotonic()
@@ -406,10 +417,13 @@ def run_search(plan: SearchPlan, executor: Executor, *, out: Path | None = None,
     meta = {"started_at": started, "wall_s": round(time.monotonic() - t0, 3),
             "executor": getattr(executor, "name", "?"), "jobs": executor.jobs,
             "interrupted": interrupted, "ran_now": ran}
+    if stop is not None:  # a bad --objective, seen in the first run's metrics
+        if made:  # exit 2 leaves nothing, and the corrected command can use the same --out
+            del study
+            shutil.rmtree(out_dir, ignore_errors=True)
+        raise SrrError(stop)
     recs = records()
     summary, code, verdict = _outputs(plan, out_dir, study, recs, meta)
-    if stop is not None:
-        raise SrrError(stop)
     cex = tuple(out_dir / c["file"] for c in summary["counterexamples"])
     return SearchResult(out_dir, code, verdict, tuple(recs), cex, summary, ran,
                         plan.warnings)

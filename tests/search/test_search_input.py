@@ -73,6 +73,15 @@ def _search(tmp_path: Path, *extra: str) -> list[str]:
 @pytest.mark.parametrize("extra, line", [
     (["--space", "workers.0.speed=2..1", "--objective", "safety.over_mute",
       "--violated-above", "1"], "srr search: --space workers.0.speed=2..1: HI (1) must be"),
+    # a plug-in's parameters are checked at both ends too (they are read in its set-up)
+    (["--space", "systems_under_test.safety_monitor.params.reaction_delai=0..1",
+      "--objective", "safety.over_mute", "--violated-above", "1"],
+     "srr search: --space systems_under_test.safety_monitor.params.reaction_delai=0.0: "
+     f"{CROSSING}: systems_under_test[2].params.reaction_delai: unknown field"),
+    (["--space", "systems_under_test.safety_monitor.params.reaction_delay=0..4000",
+      "--objective", "safety.over_mute", "--violated-above", "1"],
+     "srr search: --space systems_under_test.safety_monitor.params.reaction_delay=4000.0: "
+     f"{CROSSING}: systems_under_test[2].params.reaction_delay: must be <= 3600"),
     (["--space", "workers.0.speed=0.5..2", "--objective", "safety.over_mute",
       "--violated-above", "1", "--sampler", "annealing"],
      "srr search: --sampler annealing: expected one of tpe, random, qmc, cmaes"),
@@ -123,6 +132,10 @@ def test_add_to_suite_must_be_a_suite_file(tmp_path: Path,
     (lambda out: out.write_text("x"), "is a file, not a folder"),
     (lambda out: (out.mkdir(), (out / "keep.txt").write_text("x")),
      "holds no search (study.db) to resume"),
+    # an emptied study.db beside earlier trials' run directories: no search to resume either
+    (lambda out: (out.mkdir(), (out / "keep.txt").write_text("x"),
+                  (out / "study.db").write_bytes(b"")),
+     "holds no search (study.db is empty) to resume"),
 ])
 def test_out_that_is_not_a_search_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                              make: Any, words: str) -> None:
@@ -132,4 +145,5 @@ def test_out_that_is_not_a_search_is_refused(tmp_path: Path, capsys: pytest.Capt
             "--objective", "safety.over_mute", "--violated-above", "1"]
     assert main(argv) == 2
     assert words in capsys.readouterr().err
-    assert not out.is_dir() or sorted(p.name for p in out.iterdir()) == ["keep.txt"]
+    assert not out.is_dir() or sorted(p.name for p in out.iterdir()
+                                      if p.name != "study.db") == ["keep.txt"]
