@@ -20,7 +20,13 @@ from harness import runmarker
 from harness.errors import SrrError
 from harness.validation import validate
 
+#: The version of the summary format srr writes (as ``schema_version``) and reads. A summary
+#: without the key, as srr wrote them before, is version 1; a summary of a version newer than
+#: this one is refused wherever a summary is read.
+SCHEMA_VERSION = 1
+
 __all__ = [
+    "SCHEMA_VERSION",
     "SUMMARY_NAME",
     "BaselineEntry",
     "ComparisonRow",
@@ -242,3 +248,7 @@ def check_summary(data: Any, path: Path, model: type[SummaryFile] = SummaryFile)
     if not isinstance(data, dict):
         raise SrrError(f"{path}: expected a JSON object, got {type(data).__name__}")
     validate(model, data, str(path), unknown="ignore", missing=_MISSING, yaml=False)
+    version = data.get("schema_version", 1)
+    if isinstance(version, int) and version > SCHEMA_VERSION:  # (its type: checked above)
+        raise fail(path, "schema_version", f"{version} is newer than this srr reads "
+                   f"(up to {SCHEMA_VERSION}); use a newer srr")

@@ -13,14 +13,15 @@ from typing import Any, ClassVar
 
 from harness.atomic import write_json_atomic
 from harness.metrics.types import HealthResult
-from harness.summary import SUMMARY_NAME, SummaryFile, check_summary, fail, read_summary
+from harness.summary import (
+    SCHEMA_VERSION,
+    SUMMARY_NAME,
+    SummaryFile,
+    check_summary,
+    read_summary,
+)
 
 __all__ = ["SCHEMA_VERSION", "BaselineRef", "RunSummary", "TopicRow"]
-
-#: The version of the summary format :class:`RunSummary` writes (as ``schema_version``) and
-#: reads. A summary without the key, as srr wrote them before, is version 1; a summary of a
-#: version newer than this one is refused.
-SCHEMA_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -199,10 +200,6 @@ class RunSummary:
         names it in errors): :class:`SrrError` when malformed or of a newer version."""
         where = Path(path)
         check_summary(data, where, _RunSummaryFile)
-        version = data.get("schema_version", 1)
-        if version > SCHEMA_VERSION:
-            raise fail(where, "schema_version", f"{version} is newer than this srr reads "
-                        f"(up to {SCHEMA_VERSION}); use a newer srr")
         known = {f.name for f in dataclasses.fields(cls)} | {"schema_version"}
         baseline = data.get("baseline")
         return cls(
