@@ -230,6 +230,11 @@ def _summary_md_options(p: argparse.ArgumentParser) -> None:
 def _check_summary_md(args: argparse.Namespace) -> None:
     if args.summary_link_base is not None and args.summary_md is None:
         raise SrrError("--summary-link-base: only with --summary-md FILE")
+    out = getattr(args, "out", None)
+    if args.summary_md is not None and out is not None and \
+            Path(out).resolve() in Path(args.summary_md).resolve().parents:
+        raise SrrError(f"--summary-md {args.summary_md}: inside --out {out}, whose files srr "
+                       "writes (summary.json, report.html, ...); write it beside that folder")
     _writable("--summary-md", args.summary_md)
 
 

@@ -89,23 +89,30 @@ def table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
     return out
 
 
-def cap(lines: Sequence[str], limit: int) -> str:
-    """The lines as one document of at most ``limit`` UTF-8 bytes (so within as many
-    characters too): cut before the first line that does not fit, with a last line saying
-    how many lines were left out."""
-    text = "\n".join(lines) + "\n"
+def cap(lines: Sequence[str], limit: int, *, last: str | None = None) -> str:
+    """The lines (then ``last``, if given) as one document of at most ``limit`` UTF-8 bytes
+    (so within as many characters too): cut before the first line that does not fit, with a
+    line saying how many lines were left out. A folded block (``<details>``) open where the
+    cut falls is closed first, so the note is not folded away; ``last`` (the links to the
+    whole results) is kept whatever is cut."""
+    ending = [] if last is None else [last]
+    text = "\n".join([*lines, *ending]) + "\n"
     if len(text.encode("utf-8")) <= limit:
         return text
+    tail = "" if last is None else f"\n{last}\n"
     kept: list[str] = []
     size = 0
     for i, line in enumerate(lines):
-        note = (f"\n*… truncated: {len(lines) - i} more line(s) left out to stay within "
+        opened = sum(k.startswith("<details>") for k in kept) > sum(
+            k.startswith("</details>") for k in kept)
+        close = "\n</details>\n" if opened else ""
+        note = (f"{close}\n*… truncated: {len(lines) - i} more line(s) left out to stay within "
                 f"{limit} bytes (the full results are in the suite's summary.json and "
                 "reports).*\n")
         n = len(line.encode("utf-8")) + 1
-        if size + n + len(note.encode("utf-8")) > limit:
+        if size + n + len((note + tail).encode("utf-8")) > limit:
             # a table cut in the middle ends where it was cut: the note starts after a blank
-            return "\n".join(kept) + "\n" + note
+            return "\n".join(kept) + "\n" + note + tail
         kept.append(line)
         size += n
     return "\n".join(kept) + "\n"  # pragma: no cover - the whole text fitted

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 from harness.atomic import write_text_atomic
 from harness.report.markdown import (
@@ -30,9 +31,11 @@ __all__ = ["default_link_base", "run_markdown", "write_markdown"]
 
 def default_link_base(target: Path, md_file: Path) -> str:
     """``target`` (a run or suite folder) relative to the folder the Markdown file is in, as
-    a POSIX path ('' when they are the same folder): what a link in the file opens."""
+    a POSIX path ('' when they are the same folder), percent-encoded as a link's base (a
+    ``#`` or ``?`` in a folder's name is not a URL's fragment or query): what a link in the
+    file opens."""
     rel = os.path.relpath(Path(target).resolve(), Path(md_file).resolve().parent)
-    return "" if rel == "." else Path(rel).as_posix()
+    return "" if rel == "." else quote(Path(rel).as_posix(), safe="/=,@")
 
 
 def _comparison_row(e: Any) -> list[str]:

@@ -171,11 +171,10 @@ def suite_markdown(result: SuiteResult, *, link_base: str = "",
         lines += ["The suite was interrupted: the runs not finished are not judged.", ""]
     lines += [*_not_passing(groups, link_base), *_regressed(groups),
               *_flaky(groups, link_base), *_broken(groups, link_base),
-              *_other_bytes(groups, link_base), *_passing(groups, link_base),
-              f"Suite page: {link('index.html', link_base, 'index.html')} · "
-              f"{link('summary.json', link_base, 'summary.json')} · "
-              f"{link('junit.xml', link_base, 'junit.xml')}"]
-    return cap(lines, limit)
+              *_other_bytes(groups, link_base), *_passing(groups, link_base)]
+    return cap(lines, limit, last=f"Suite page: {link('index.html', link_base, 'index.html')} · "
+                                  f"{link('summary.json', link_base, 'summary.json')} · "
+                                  f"{link('junit.xml', link_base, 'junit.xml')}")
 
 
 def write_markdown(result: SuiteResult, path: Path, *, link_base: str | None = None,

@@ -136,6 +136,11 @@ def test_links_default_to_the_suite_folder_relative_to_the_file(tmp_path: Path) 
     assert "[report](runs/a/nominal/r1/report.html)" in inside
     beside = write_markdown(res, tmp_path / "pr.md").read_text(encoding="utf-8")
     assert "[report](suite/runs/a/nominal/r1/report.html)" in beside
+    odd = tmp_path / "d e#f"  # a folder name is no URL: its '#' is not a fragment
+    odd.mkdir()
+    res = _suite(odd, [_run("a", 1, 1, "PASS", value=0.96)])
+    beside = write_markdown(res, tmp_path / "pr.md").read_text(encoding="utf-8")
+    assert "[report](d%20e%23f/runs/a/nominal/r1/report.html)" in beside
     assert join_link("https://github.com/o/r/actions/runs/1#", "index.html") == (
         "https://github.com/o/r/actions/runs/1#index.html")
 
@@ -149,10 +154,18 @@ def test_a_long_summary_is_cut_at_a_line_and_says_so(tmp_path: Path) -> None:
     md = suite_markdown(res)
     assert len(md.encode()) <= 65536 and len(md) <= 65536
     assert full.startswith(md.rsplit("\n*… truncated", 1)[0])
-    left = len(full.splitlines()) - len(md.rsplit("\n*… truncated", 1)[0].splitlines())
+    left = len(full.splitlines()) - len(md.rsplit("\n*… truncated", 1)[0].splitlines()) - 1
+    # (the last line, the links to the whole results, is kept)
     assert md.endswith(f"*… truncated: {left} more line(s) left out to stay within 65536 bytes "
-                       "(the full results are in the suite's summary.json and reports).*\n")
+                       "(the full results are in the suite's summary.json and reports).*\n"
+                       "\nSuite page: [index.html](index.html) · [summary.json](summary.json) "
+                       "· [junit.xml](junit.xml)\n")
     assert cap(["a", "b"], 100) == "a\nb\n"
+    # cut inside a folded block: the block is closed, so the note and the links show
+    folded = cap(["<details><summary>x</summary>", "", *["row"] * 50, "</details>"], 200,
+                 last="links")
+    assert folded.count("<details>") == folded.count("</details>") == 1
+    assert folded.endswith("reports).*\n\nlinks\n") and len(folded.encode()) <= 200
 
 
 def test_cells_and_code_spans_cannot_break_out() -> None:
@@ -174,6 +187,12 @@ def test_bad_summary_options_are_one_line_exit_2_before_anything_runs(
                  "--repeat", "2"]) == 2
     assert "--summary-md: one run" in capsys.readouterr().err
     assert not (tmp_path / "pr.md").exists()
+    for command in ("run", "suite"):  # never over a file of the run's or the suite's own
+        out = tmp_path / "out"
+        assert main([command, str(suite), "--out", str(out), "--summary-md",
+                     str(out / "summary.json")]) == 2
+        assert f"--summary-md {out / 'summary.json'}: inside --out {out}" in \
+            capsys.readouterr().err
 
 
 def test_groups_whose_bytes_are_not_their_baselines_are_listed_folded(tmp_path: Path) -> None:
