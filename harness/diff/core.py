@@ -24,7 +24,7 @@ from harness.diff.tolerance import Tolerance, glob_match, parse_tolerance
 from harness.diff.topics import diff_bags
 from harness.errors import SrrError
 from harness.recording.bagread import ros1_recording
-from harness.recording.errors import BagError
+from harness.recording.verify import check_read_back
 from harness.scenario.schema import ToleranceSpec
 from harness.summary import replay_note
 
@@ -131,18 +131,9 @@ def check_against_summary(bag: Path, summary: Mapping[str, Any], topics: Sequenc
     recorded = summary.get("topics") or {}
     if not recorded:
         return f"{bag.parent / 'summary.json'}: no per-topic digests; the bag is not checked"
-    for t in topics:
-        sha, count = (t.sha256_a, t.count_a) if side == 0 else (t.sha256_b, t.count_b)
-        entry = recorded.get(t.name)
-        if sha is None and entry is None:
-            continue
-        if sha is None or entry is None or entry.get("sha256") != sha \
-                or entry.get("count") != count:
-            got = "absent" if sha is None else f"{count} messages"
-            want = "absent" if entry is None else f"{entry.get('count')} messages"
-            raise BagError(f"{bag}: {t.name}: does not match summary.json (read back: {got}; "
-                           f"recorded: {want}, digest differs): the bag is damaged or "
-                           "truncated, or the summary belongs to another recording")
+    read = {t.name: (t.count_a, t.sha256_a) if side == 0 else (t.count_b, t.sha256_b)
+            for t in topics}
+    check_read_back(bag, recorded, {k: (c or 0, sha) for k, (c, sha) in read.items()})
     return None
 
 

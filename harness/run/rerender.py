@@ -7,6 +7,7 @@ from pathlib import Path
 from harness import runlock
 from harness.recording.bagread import ros1_recording
 from harness.recording.errors import BagError
+from harness.recording.verify import verify_recording
 from harness.report.html import write_report
 from harness.run.graphs import rebuild_graphs
 from harness.scenario import load_scenario
@@ -28,6 +29,7 @@ def report(run_dir: str | Path, *, video: bool = True) -> Path:
     scenario = load_scenario(run / "scenario.yaml")
     if not (run / "bag" / "metadata.yaml").is_file() and ros1_recording(run / "bag") is None:
         raise BagError(f"{run / 'bag'}: metadata.yaml: missing (not a rosbag2 directory)")
+    verify_recording(run, summary)  # the page draws this bag under this summary's verdict
     frames = scenario_frames(scenario, run / "bag")
     return write_report(run, summary=summary, scenario=scenario, frames=frames,
                         rebuild_graphs=rebuild_graphs, video=video)
