@@ -500,6 +500,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         return _validate_suite(args)
     sc = api.load(args.scenario, overrides=args.overrides)
     warnings = api.validate(sc, source=str(args.scenario))
+    if sc.sweep and not args.overrides:  # its own sweep: every point, as srr suite would
+        api.plan_suite([args.scenario])
     for w in warnings:
         _stderr().print(f"srr validate: warning: {w}", markup=False)
     robots = ", ".join(

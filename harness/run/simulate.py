@@ -4,6 +4,7 @@ simulation, serve its live view and streams, then record it (:mod:`harness.run.r
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -34,6 +35,7 @@ __all__ = [
     "ROS2_BRIDGE",
     "Notice",
     "RepeatResult",
+    "check_suts",
     "check_video",
     "ros2_bridge",
     "run_repeat",
@@ -231,6 +233,22 @@ def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
     worst = max(r.exit_code for r in runs)
     code = INTERRUPTED_EXIT if interrupted else worst if identical else max(worst, 1)
     return RepeatResult(tuple(runs), identical, tuple(differing), code, out_dir)
+
+
+def check_suts(scenario: Scenario, source: str = "<scenario>") -> None:
+    """Load and set up ``scenario``'s systems under test on a bus of their own (their
+    parameters are read in set-up), and shut them down: the part of :func:`validate` that
+    the points of a sweep differ in, without building the world again for each."""
+    from harness.bus import Bus
+    from harness.sut.base import load_suts, setup_suts
+
+    suts = load_suts(scenario, Bus(lambda: 0), source)
+    try:
+        setup_suts(suts)
+    finally:
+        for _, sut, _ in suts:
+            with contextlib.suppress(Exception):  # one not set up may not shut down
+                sut.shutdown()
 
 
 def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:

@@ -14,7 +14,7 @@ from harness.errors import SrrError
 from harness.outdir import check_out_folder
 from harness.run.baselines import baselines_dir, bless_if_changed
 from harness.run.loading import load
-from harness.run.simulate import validate
+from harness.run.simulate import check_suts, validate
 from harness.scenario import load_scenario, parse_override
 from harness.suite.events import Executor, Listener
 from harness.suite.outputs import FORMAT, write_outputs
@@ -69,10 +69,16 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
     runs = plan_runs(spec, on_render=on_render)
     warnings: list[str] = []
     for entry in spec.entries:
-        first = expand(entry.sweep)[0]
+        first, *others = expand(entry.sweep)
         pairs = [parse_override(o) for o in entry.overrides + first.overrides()]
         sc = load_scenario(entry.scenario_file, pairs)
         warnings += [f"{entry.name}: {w}" for w in validate(sc, entry.scenario_file)]
+        for point in others:  # what the points differ in: their systems under test's set-up
+            pairs = [parse_override(o) for o in entry.overrides + point.overrides()]
+            try:
+                check_suts(load_scenario(entry.scenario_file, pairs), entry.scenario_file)
+            except SrrError as err:
+                raise SrrError(f"{entry.name}[{point.label}]: {err}") from None
     return SuitePlan(spec, runs, tuple(warnings), time.monotonic() - t0)
 
 

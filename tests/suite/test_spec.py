@@ -198,3 +198,24 @@ def test_srr_validate_checks_a_suite_file_and_a_folder_without_running(
     assert main(["validate", str(nightly), "--set", "duration=3"]) == 2
     assert "is a suite; a suite changes its scenarios with `set:`" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["hall.yaml", "suite.yaml"]  # no output
+
+
+def test_every_sweep_point_sets_its_systems_under_test_up_before_the_suite(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A plug-in parameter is read in set-up: a bad value at any sweep point (not only the
+    first) stops ``srr validate`` and ``srr suite`` before a run, naming the point."""
+    from harness.cli import main
+
+    _with_includes(tmp_path)
+    speed = "systems_under_test.route_follower.params.speed"
+    suite = tmp_path / "suite.yaml"
+    suite.write_text(f"scenarios:\n  - path: {FORKLIFT}\n    sweep: {{{speed}: [0.2, -1]}}\n",
+                     encoding="utf-8")
+    with pytest.raises(SrrError, match=r"^forklift_warehouse\[speed=-1\]: .*"
+                                       r"systems_under_test\[0\]\.params\.speed: must be > 0"):
+        plan_suite([suite])
+    own = tmp_path / "sw.yaml"  # the scenario's own sweep, validated on its own
+    own.write_text(FORKLIFT.read_text(encoding="utf-8") + f"\nsweep: {{{speed}: [0.2, -1]}}\n",
+                   encoding="utf-8")
+    assert main(["validate", str(own)]) == 2
+    assert "forklift_warehouse[speed=-1]: " in capsys.readouterr().err
