@@ -36,3 +36,25 @@ def test_a_bad_argument_is_one_line_naming_the_command_once(
             main(argv)
         assert exit_.value.code == 2
         assert capsys.readouterr().err.startswith(said)
+
+
+def test_a_run_that_fails_leaves_an_out_folder_the_user_made(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """A run that fails after it took its (empty, user-made) --out folder removes what it
+    wrote there, not the folder."""
+    from harness.errors import SrrError
+    from harness.run import record
+
+    def fails(*args: object, **kwargs: object) -> None:
+        raise SrrError("no recorder today")
+
+    monkeypatch.setattr(record, "_open_recorder", fails)
+    out = tmp_path / "mine"
+    out.mkdir()
+    assert main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().endswith("no recorder today")
+    assert out.is_dir() and not any(out.iterdir())
+    fresh = tmp_path / "fresh"  # one srr made goes with what it wrote
+    assert main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(fresh)]) == 2
+    assert not fresh.exists()

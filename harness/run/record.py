@@ -143,7 +143,10 @@ def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_tick
     created and locked first (a live owner is refused), and released, its lock file
     removed, however the run ends (``kill -9`` releases the lock too). ``participants``
     (started) are shut down after that, in reverse order, however the run ends."""
+    existed = run_dir.is_dir()  # made (empty) by the user: a failed run leaves it so
     with contextlib.ExitStack() as owned:
+        if existed:
+            owned.callback(lambda: run_dir.mkdir(exist_ok=True))
         for p in participants:  # called last, in reverse order
             owned.callback(p.shutdown)
         try:
