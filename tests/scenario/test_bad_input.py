@@ -110,3 +110,18 @@ def test_unscorable_scoring_is_refused_before_running(tmp_path: Path,
         code, err = _run(capsys, *argv)
         assert code == 2 and f"{path}: {field}:" in err and len(err.splitlines()) == 1
     assert not (tmp_path / "r").exists()
+
+
+def test_a_lidar_range_min_above_its_range_max_is_a_scenario_error(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from tests.conftest import SCENARIOS
+
+    path = str(SCENARIOS / "forklift_warehouse.yaml")
+    override = "robots.0.sensors.lidar={range_min: 10, range_max: 6}"
+    for argv in (["validate", path, "--set", override],
+                 ["run", path, "--set", override, "--out", str(tmp_path / "r")]):
+        code, err = _run(capsys, *argv)
+        assert code == 2 and len(err.splitlines()) == 1, err
+        assert err.endswith("robots[0].sensors.lidar.range_min: must be below range_max (6), "
+                            "got 10"), err
+    assert not (tmp_path / "r").exists()
