@@ -108,6 +108,13 @@ def _show(value: Any) -> str:
 _ABSENT = object()
 
 
+def _emptied(key: str, one: Mapping[str, Any], other: Mapping[str, Any]) -> bool:
+    """``key`` is an empty list or mapping on ``one`` side and holds items on the ``other``
+    (flattened under it): the items' own lines say what was added or removed."""
+    return (one.get(key, _ABSENT) in ([], {}) and key not in other
+            and any(k.startswith((f"{key}[", f"{key}.")) for k in other))
+
+
 def config_differences(baseline: Mapping[str, Any], run: Mapping[str, Any],
                        limit: int = 8) -> list[str]:
     """``field: baseline value → run value`` for every leaf that differs (sorted; at most
@@ -117,7 +124,8 @@ def config_differences(baseline: Mapping[str, Any], run: Mapping[str, Any],
     _flat(comparable_config(baseline), "", a)
     _flat(comparable_config(run), "", b)
     diffs = [f"{k}: {_show(a.get(k, _ABSENT))} → {_show(b.get(k, _ABSENT))}"
-             for k in sorted(set(a) | set(b)) if a.get(k, _ABSENT) != b.get(k, _ABSENT)]
+             for k in sorted(set(a) | set(b)) if a.get(k, _ABSENT) != b.get(k, _ABSENT)
+             and not _emptied(k, a, b) and not _emptied(k, b, a)]
     if len(diffs) > limit:
         diffs = [*diffs[:limit], f"… and {len(diffs) - limit} more"]
     return diffs

@@ -89,7 +89,8 @@ def decide(health: Sequence[HealthResult], metrics: Sequence[MetricResult],
         return Verdict("MISMATCH", (
             "not compared: the baseline was recorded with another configuration ("
             + "; ".join(mismatch) + "); bless a baseline for this configuration "
-            "(--update-baseline) if the change is intended",
+            "if the change is intended (srr baseline bless RUN_DIR; in a suite, "
+            "--update-baselines)",
             *absolute_failures(metrics)))
     if comparison is not None and comparison.regressed:
         return Verdict("REGRESSED", tuple(e.describe() for e in comparison.regressions))

@@ -133,7 +133,8 @@ def open_study(db: Path, objective: Objective, config: Mapping[str, Any]) -> Any
     elif stored != dict(config):
         diff = sorted(k for k in set(stored) | set(config) if stored.get(k) != config.get(k))
         raise SrrError(f"--out {db.parent}: holds a search with other settings "
-                       f"({', '.join(diff)} differ); give another --out or the same command")
+                       f"({', '.join(diff)} {'differs' if len(diff) == 1 else 'differ'}); give "
+                       "another --out or the same command")
     running = optuna.trial.TrialState.RUNNING
     for t in study.get_trials(deepcopy=False, states=(running,)):
         study._storage.set_trial_user_attr(t._trial_id, ATTR, {"status": "killed"})

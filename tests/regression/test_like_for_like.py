@@ -141,3 +141,14 @@ def test_a_world_file_is_part_of_the_configuration() -> None:
     world = World.build(load_scenario(path), str(path))
     assert dict(world.scene_files) == stored["config"]["scene_files"]
     assert set(world.scene_files) == {"world.model"}
+
+
+def test_a_list_that_gained_its_first_item_says_so_in_the_right_direction() -> None:
+    """A baseline without workers against a run with one: the lines are the worker's own
+    fields, added (not the run's ``workers`` said to be absent)."""
+    base = {"workers": [], "seed": 1}
+    run = {"workers": [{"enabled": True, "speed": 1.0}], "seed": 1}
+    assert config_differences(base, run) == ["workers[0].enabled: (absent) → True",
+                                             "workers[0].speed: (absent) → 1.0"]
+    assert config_differences(run, base) == ["workers[0].enabled: True → (absent)",
+                                             "workers[0].speed: 1.0 → (absent)"]
