@@ -60,7 +60,7 @@ def test_a_trial_left_running_is_marked_killed(tmp_path: Path) -> None:
 def test_other_settings_are_refused(tmp_path: Path) -> None:
     db = tmp_path / "s.db"
     open_study(db, OBJ, CONFIG)
-    with pytest.raises(SrrError, match=r"holds a search with other settings \(seed differ\)"):
+    with pytest.raises(SrrError, match=r"holds a search with other settings \(seed differs\)"):
         open_study(db, OBJ, {**CONFIG, "seed": 8})
 
 
