@@ -773,7 +773,10 @@ def _suite(args: argparse.Namespace) -> int:
             bless_reason=args.reason if args.update_baselines else None, listen=listen,
             fork=True)  # this process only plans: workers fork from it when safe
     s = res.summary
-    _stdout().print(groups_table(res.groups, f"suite {s['name']}: {len(s['runs'])} runs on "
+    unstarted = sum(not r.started for g in res.groups for r in g.runs)
+    runs = (f"{len(s['runs']) - unstarted} of {len(s['runs'])} runs" if unstarted
+            else f"{len(s['runs'])} runs")
+    _stdout().print(groups_table(res.groups, f"suite {s['name']}: {runs} on "
                                    f"{s['executor']} × {s['jobs']} in {s['wall_s']:.1f} s"))
     for w in (s.get("history") or {}).get("warnings", []):
         _stderr().print(f"srr suite: warning: {w}", markup=False)

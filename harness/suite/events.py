@@ -46,4 +46,4 @@ def log_path(out_root: Path, spec: RunSpec) -> Path:
 def not_started(spec: RunSpec) -> RunOutcome:
     return RunOutcome(spec=spec, verdict="INTERRUPTED", exit_code=INTERRUPTED_EXIT,
                       reasons=("not started: the suite was interrupted",), wall_s=0.0,
-                      run_dir=None, report=None, log=None, digest=None)
+                      run_dir=None, report=None, log=None, digest=None, started=False)

@@ -70,6 +70,8 @@ class RunOutcome:
     #: The run's bytes against its baseline's (trusted runs with a baseline only): the
     #: summary's ``digest_matches``, ``topics_differing`` and ``versions_differing``
     against_baseline: Mapping[str, Any] | None = None
+    #: False for a run the suite never started (it was interrupted first)
+    started: bool = True
 
     def to_json(self) -> dict[str, Any]:
         return {
