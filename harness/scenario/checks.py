@@ -185,10 +185,6 @@ def _check_robots(sc: Scenario, v: Validator) -> None:
     from harness.scenario.prims import check_prim_path
 
     for i, robot in enumerate(sc.robots):
-        lidar = robot.sensors.lidar
-        if lidar is not None and not lidar.range_min < lidar.range_max:
-            v.fail(f"robots[{i}].sensors.lidar.range_min", f"must be below range_max "
-                   f"({lidar.range_max:g}), got {lidar.range_min:g}")
         if robot.articulation_prim:
             try:
                 check_prim_path(robot.prim)

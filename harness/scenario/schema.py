@@ -184,7 +184,7 @@ class ShelfSpec:
     """A rack of shelving: centre on the floor, footprint ``size`` (length, depth, height)."""
 
     position: Vec2 = (0.0, 0.0)
-    size: Vec3 = (6.0, 1.0, 2.5)
+    size: Vec3 = field(default=(6.0, 1.0, 2.5), metadata=_range(0.0, 1000.0, lo_open=True))
     yaw_deg: float = 0.0
 
 
@@ -235,7 +235,7 @@ class WorldSpec:
     """The warehouse: floor of ``size`` metres centred on the origin, walls, shelving, dock;
     or (``model``) a world from a file, instead of it or in it."""
 
-    size: Vec2 = (30.0, 20.0)
+    size: Vec2 = field(default=(30.0, 20.0), metadata=_range(0.0, 10000.0, lo_open=True))
     wall_height: float = num(4.0, 0.5, 20.0)
     shelves: tuple[ShelfSpec, ...] = (
         ShelfSpec(position=(-6.0, 6.0)),

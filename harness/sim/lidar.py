@@ -32,15 +32,16 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from harness.errors import SimulationError
+from harness.errors import ScenarioError, SimulationError
 from harness.geometry import rotate_rows
-from harness.scenario.schema import LidarSpec
+from harness.scenario.schema import LidarSpec, Scenario
 
 __all__ = [
     "LIDAR_GEOM_GROUPS",
     "Lidar",
     "LidarConfig",
     "Scan",
+    "check_lidars",
     "noise_rng",
 ]
 
@@ -55,6 +56,19 @@ Float32Array = npt.NDArray[np.float32]
 def noise_rng(seed: int, key: str) -> np.random.Generator:
     """A generator seeded from the scenario ``seed`` and a stable ``key`` (a node path)."""
     return np.random.default_rng([int(seed), zlib.crc32(key.encode("utf-8"))])
+
+
+def check_lidars(scenario: Scenario, source: str = "<scenario>") -> None:
+    """Refuse (:class:`ScenarioError`, naming the file and the field) a lidar whose
+    ``range_min`` is not below its ``range_max`` (each is in range on its own: a rule of
+    two fields, checked when the world is built, as ``srr validate`` builds it)."""
+    for i, robot in enumerate(scenario.robots):
+        lidar = robot.sensors.lidar
+        if robot.enabled and lidar is not None and not lidar.range_min < lidar.range_max:
+            field = f"robots[{i}].sensors.lidar.range_min"
+            raise ScenarioError(scenario.file_for(field, source), field,
+                                f"must be below range_max ({lidar.range_max:g}), got "
+                                f"{lidar.range_min:g}")
 
 
 @dataclass(frozen=True)

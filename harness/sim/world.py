@@ -43,6 +43,7 @@ from harness.scenario.schema import Scenario, WorldSpec
 from harness.sim.cameras import add_fixed_camera, world_convention_quat
 from harness.sim.footprints import Footprint
 from harness.sim.layout import check_layout
+from harness.sim.lidar import check_lidars
 from harness.sim.mjquat import quat_wxyz_from_mat_mj, quat_wxyz_from_rpy_deg_mj
 from harness.sim.prims import PrimKind, PrimRef, PrimTable
 from harness.sim.render import apply_render_settings
@@ -313,6 +314,7 @@ class World:
         ``environ`` (default: the process environment) holds ``SRR_PACKAGE_PATH`` /
         ``ROS_PACKAGE_PATH``."""
         check_layout(scenario, source)
+        check_lidars(scenario, source)
         prims = PrimTable()
         workers = plan_workers(scenario)
         env = os.environ if environ is None else environ
