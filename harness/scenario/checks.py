@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from harness.errors import SrrError
@@ -32,6 +32,19 @@ from harness.validation import Validator, close_match, join
 
 __all__ = ["H264_PRESETS", "RATE_TOLERANCE", "check_semantics", "rate_warnings", "sensor_rates",
            "spec_context"]
+
+
+def _check_polygon(v: Validator, field: str, points: Sequence[Sequence[float]]) -> None:
+    """A polygon (given: none is fine) has three points or more and an area."""
+    if not points:
+        return
+    if len(points) < 3:
+        v.fail(field, f"a polygon needs at least three points, got {len(points)}")
+    ring = list(points)
+    area2 = sum(x0 * y1 - x1 * y0
+                for (x0, y0), (x1, y1) in zip(ring, ring[1:] + ring[:1], strict=True))
+    if abs(area2) < 1e-9:
+        v.fail(field, "the polygon has zero area")
 
 
 def check_semantics(sc: Scenario, v: Validator) -> None:
@@ -476,14 +489,9 @@ def _check_workers_and_zones(sc: Scenario, v: Validator) -> None:
         if worker.radius > worker.height / 3:
             v.fail(f"{where}.radius", f"must be at most height / 3 ({worker.height / 3:g}), "
                    f"got {worker.radius!r}")
-    roi = sc.zones.loading_roi
-    if roi:
-        if len(roi) < 3:
-            v.fail("zones.loading_roi", f"a polygon needs at least three points, got {len(roi)}")
-        area2 = sum(x0 * y1 - x1 * y0
-                    for (x0, y0), (x1, y1) in zip(roi, roi[1:] + roi[:1], strict=True))
-        if abs(area2) < 1e-9:
-            v.fail("zones.loading_roi", "the polygon has zero area")
+    _check_polygon(v, "zones.loading_roi", sc.zones.loading_roi)
+    if sc.scoring.perception is not None:  # empty: everywhere
+        _check_polygon(v, "scoring.perception.area", sc.scoring.perception.area)
     wire = sc.zones.trailer_tripwire
     if wire is not None and wire.a == wire.b:
         v.fail("zones.trailer_tripwire.b", f"must differ from a {list(wire.a)}")

@@ -125,3 +125,13 @@ def test_a_lidar_range_min_above_its_range_max_is_a_scenario_error(
         assert err.endswith("robots[0].sensors.lidar.range_min: must be below range_max (6), "
                             "got 10"), err
     assert not (tmp_path / "r").exists()
+
+
+def test_a_perception_area_is_a_polygon(capsys: pytest.CaptureFixture[str]) -> None:
+    """Two points make no area: every perception metric would have been '—', silently."""
+    from tests.conftest import SCENARIOS
+
+    path = str(SCENARIOS / "dock_nominal.yaml")
+    code, err = _run(capsys, "validate", path, "--set", "scoring.perception.area=[[0,0],[1,1]]")
+    assert code == 2 and err.endswith(
+        "scoring.perception.area: a polygon needs at least three points, got 2"), err
