@@ -4,7 +4,9 @@ and combined digest, the command that reproduces it, and the default run directo
 from __future__ import annotations
 
 import hashlib
+import json
 import platform
+import shlex
 import time
 from collections.abc import Mapping, Sequence
 from importlib import metadata
@@ -89,9 +91,21 @@ def sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any]
     return out
 
 
-def reproduce_command(source: str, scenario: Scenario, run_dir: Path) -> str:
-    return (f"srr run {source} --seed {scenario.seed} --duration {scenario.duration:g} "
-            f"--out {run_dir}")
+def reproduce_command(source: str, scenario: Scenario, run_dir: Path,
+                      baselines: Path | None = None) -> str:
+    """The ``srr run`` command line that records this run again (into ``run_dir``, once it is
+    moved away): the scenario file, seed and duration, every ``--set`` the scenario was
+    loaded with (values as JSON, which YAML reads back the same) and ``--baselines`` when
+    one was given; paths absolute, so it works from any directory."""
+    file = Path(source).absolute() if Path(source).is_file() else source
+    args = ["srr", "run", str(file), "--seed", str(scenario.seed),
+            "--duration", f"{scenario.duration:g}"]
+    for key, value in scenario.overrides:
+        if key not in ("seed", "duration"):  # said above
+            args += ["--set", f"{key}={json.dumps(value)}"]
+    if baselines is not None:
+        args += ["--baselines", str(Path(baselines).absolute())]
+    return shlex.join([*args, "--out", str(Path(run_dir).absolute())])
 
 
 def scenario_text(scenario: Scenario) -> str:

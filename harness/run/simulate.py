@@ -90,6 +90,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     for the user; ``started`` the run directory, once it is created and owned. ``video=False``
     leaves the camera videos out of the report (``srr run --no-video``)."""
     run_dir = Path(out) if out is not None else default_run_dir(scenario)
+    user_baselines = baselines  # --baselines as given, for the command that reproduces it
     baselines = baselines_dir(source, baselines, scenario)  # a bad folder stops it here
     check_baseline(scenario, baselines)  # and a malformed baseline
     if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
@@ -131,7 +132,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
             p.shutdown()
         raise
     loop = Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
-                sim.srr_gt, command=reproduce_command(source, scenario, run_dir),
+                sim.srr_gt, command=reproduce_command(source, scenario, run_dir, user_baselines),
                 warnings=tuple(warnings), graph_paths=tuple(sim.graph_paths),
                 scene_files=dict(sim.world.scene_files), world_map=world_map, output=output,
                 graphs=graphs)

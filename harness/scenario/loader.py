@@ -90,7 +90,8 @@ def load_scenario(path: str | Path,
         apply_overrides(data, overrides)
         for key, _ in overrides:
             origins.by_key.setdefault(key.split(".", 1)[0], shown)
-    return scenario_from_mapping(data, shown, origins.by_key)
+    sc = scenario_from_mapping(data, shown, origins.by_key)
+    return dataclasses.replace(sc, overrides=tuple(overrides)) if overrides else sc
 
 
 def scenario_to_mapping(sc: Scenario) -> dict[str, Any]:

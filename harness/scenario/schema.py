@@ -893,6 +893,10 @@ class Scenario:
     # messages after loading. Filled by the loader; not part of the scenario's content.
     origins: dict[str, str] = field(default_factory=dict, compare=False, repr=False,
                                     metadata={"internal": True})
+    # The ``--set`` overrides the loader applied, (dotted path, value) in order: what a run's
+    # command line needs to reproduce it. Filled by the loader; not part of the content.
+    overrides: tuple[tuple[str, Any], ...] = field(default=(), compare=False, repr=False,
+                                                  metadata={"internal": True})
 
     @property
     def tick_ns(self) -> int:

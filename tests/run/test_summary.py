@@ -142,3 +142,31 @@ def test_a_fresh_run_writes_the_summary_its_result_holds(tmp_path: Path) -> None
     shutil.copytree(res.run_dir, copy)
     on_disk.write(copy)
     assert (copy / SUMMARY_NAME).read_bytes() == (res.run_dir / SUMMARY_NAME).read_bytes()
+
+
+def test_the_command_reproduces_the_run_from_anywhere(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``summary.json``'s command names every ``--set`` and ``--baselines``, with absolute
+    paths: run from another directory (once the run directory is moved away), it records
+    the same bytes."""
+    import shlex
+
+    from harness.cli import main
+
+    scenario = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(scenario), "--duration", "1", "-q", "--no-video", "--set",
+                 "systems_under_test.route_follower.params.speed=0.7", "--baselines", "bl",
+                 "--out", "first"]) in (0, 1)
+    first = json.loads((tmp_path / "first" / "summary.json").read_text())
+    argv = shlex.split(first["command"])
+    assert argv[:3] == ["srr", "run", str(scenario)]
+    assert "systems_under_test.route_follower.params.speed=0.7" in argv
+    assert argv[argv.index("--baselines") + 1] == str(tmp_path / "bl")
+    assert argv[-2:] == ["--out", str(tmp_path / "first")]
+    (tmp_path / "first").rename(tmp_path / "kept")
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    assert main([*argv[1:], "-q", "--no-video"]) in (0, 1)
+    again = json.loads((tmp_path / "first" / "summary.json").read_text())
+    assert again["digest"] == first["digest"] and again["command"] == first["command"]
