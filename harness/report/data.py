@@ -10,9 +10,10 @@ is what was scored: the expected mute state comes from
 
 from __future__ import annotations
 
+import json
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -269,6 +270,17 @@ def _series(data: RunData, scenario: Scenario, frames: Frames) -> None:
     data.perception = _perception(scenario, frames)
 
 
+def _blessed_since(base: Mapping[str, Any]) -> bool:
+    """Whether the baseline file the run was judged against now holds another recording
+    (its ``digest`` is not the one the run's summary recorded of it)."""
+    try:
+        now = json.loads(Path(str(base.get("path"))).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False  # gone or unreadable: the reference file says what there is
+    return isinstance(now, dict) and bool(base.get("digest")) and \
+        now.get("digest") != base.get("digest")
+
+
 def _reference(data: RunData, scenario: Scenario) -> RunData | None:
     """The baseline's reference recording as a run of the same scenario, when the run was
     compared like for like with a baseline that has one (``summary.baseline.reference``)."""
@@ -279,6 +291,11 @@ def _reference(data: RunData, scenario: Scenario) -> RunData | None:
     path = Path(str(base["reference"]))
     if not path.is_file():
         data.problems.append(f"the baseline's reference recording {path} is gone: no overlay")
+        return None
+    if _blessed_since(base):
+        data.problems.append(f"the baseline {base.get('path')} was blessed again after this run "
+                             "was judged: its reference recording is another run's, so it is "
+                             "not drawn against this one (the verdict is the one judged then)")
         return None
     try:
         frames = scenario_frames(scenario, path)

@@ -378,7 +378,9 @@ def render_report(run_dir: str | Path, *, summary: dict[str, Any] | None = None,
     :mod:`harness.api`, which can build the scene) supplies them, or the page says they are
     missing. ``videos``: the run's videos (:func:`write_report` writes them), played in the
     page; None: none. Raises :class:`SrrError` when ``run_dir`` is not a run directory."""
-    data = load_run(Path(run_dir), summary=summary, scenario=scenario, frames=frames)
+    # resolved: the page names the run directory the same however it was spelt (a
+    # re-render from another directory writes the same bytes)
+    data = load_run(Path(run_dir).resolve(), summary=summary, scenario=scenario, frames=frames)
     return _render(data, rebuild_graphs, videos, [])
 
 

@@ -75,3 +75,22 @@ def test_a_malformed_baseline_is_refused_before_the_run(
         err = capsys.readouterr().err.strip().splitlines()[-1]
         assert err.startswith(f"srr run: {bl / 'dock_empty.json'}: not a valid baseline: ")
         assert not out.exists()
+
+
+def test_a_report_rendered_after_a_re_bless_draws_no_other_runs_reference(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A run judged against one baseline, whose baseline was blessed again since: its page,
+    rendered again, does not draw the new baseline's recording against it under the verdict
+    judged against the old one; it says why."""
+    bl = tmp_path / "bl"
+    assert _run(tmp_path / "first", bl) == 0
+    late = tmp_path / "late"
+    assert main(["run", str(DOCK), *SHORT, "--baselines", str(bl), "--out", str(late),
+                 *LATE_TRIPWIRE]) == 1  # REGRESSED against the first
+    assert "was blessed again" not in (late / "report.html").read_text()
+    assert main(["baseline", "bless", str(late), "--reason", "accept"]) == 0
+    capsys.readouterr()
+    assert main(["report", str(late), "--no-video"]) == 0
+    page = (late / "report.html").read_text()
+    assert f"the baseline {bl / 'dock_empty.json'} was blessed again after this run was " \
+           "judged" in page
