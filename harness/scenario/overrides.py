@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from typing import Any
 
@@ -13,10 +14,14 @@ from harness.errors import ScenarioError
 __all__ = ["apply_overrides", "parse_override"]
 
 
+_INDEX = re.compile(r"\[(-?\d+)\]")
+
+
 def parse_override(text: str) -> tuple[str, Any]:
     """``"robots.forklift.spawn.position=[1, 2, 0]"`` → (path, parsed YAML value)."""
     key, sep, value = text.partition("=")
-    key = key.strip()
+    # ``workers[0].speed``, as every error message writes a list item, is ``workers.0.speed``
+    key = _INDEX.sub(r".\1", key.strip())
     if not sep or not key:
         raise ScenarioError("--set", text, "expected KEY=VALUE")
     try:

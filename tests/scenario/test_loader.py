@@ -38,6 +38,11 @@ def test_overrides_by_index_and_by_name(scenarios_dir: Path) -> None:
     assert sc.robots[0].control_spec.wheelbase == 1.6  # type: ignore[union-attr]
     assert sc.robots[0].spawn.position == (1.0, 2.0, 0.0)
     assert sc.seed == 11
+    # the [i] form every error message writes works too
+    assert parse_override("robots[0].spawn.position=[3, 2, 0]") == (
+        "robots.0.spawn.position", [3, 2, 0])
+    sc = load_scenario(path, [parse_override("robots[0].spawn.position=[3, 2, 0]")])
+    assert sc.robots[0].spawn.position == (3.0, 2.0, 0.0)
 
 
 def test_control_block_follows_model() -> None:
