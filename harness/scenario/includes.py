@@ -80,6 +80,12 @@ def expand_includes(path: Path, data: dict[str, Any], origins: Origins) -> dict[
             raise ScenarioError(shown, field, f"not a file name: {rel!r}")
         inc_path = (path.parent / rel).resolve()
         inc_shown = str(path.parent / rel)
+        try:
+            missing = not inc_path.exists()
+        except OSError:  # a name the OS refuses: read_yaml says so
+            missing = False
+        if missing:  # named from the file that includes it
+            raise ScenarioError(shown, field, f"{inc_shown}: file not found")
         inc = read_yaml(inc_path, inc_shown, field)
         if "include" in inc:
             raise ScenarioError(inc_shown, "include", "nested includes are not supported")

@@ -52,8 +52,9 @@ def test_bad_scenario_is_one_line_exit_2(tmp_path: Path, capsys: pytest.CaptureF
         assert code == 2, err
         assert len(err.splitlines()) == 1, err
         assert "Traceback" not in err
-        culprit = str(tmp_path / "missing_robots.yaml") if "include" in field else str(path)
-        assert culprit in err
+        assert str(path) in err  # the file that says it (a missing include: the including)
+        if "include" in field:
+            assert f"{path}: include: {tmp_path / 'missing_robots.yaml'}: " in err, err
         assert f": {field}:" in err if field else True
         assert words in err
     assert not (tmp_path / "out").exists(), "a rejected scenario must not leave a run dir"
