@@ -6,6 +6,7 @@ the file and the field (:meth:`harness.validation.Validator.fail`)."""
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import re
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -68,6 +69,7 @@ def check_semantics(sc: Scenario, v: Validator) -> None:
     _check_suts(sc, v)
     _check_graphs(sc, v)
     _check_control_scoring(sc, v)
+    _check_tolerances(sc, v)
     _check_specs(sc, v)
     _check_output(sc, v)
     _check_rates(sc, v)
@@ -443,6 +445,24 @@ def _check_graphs(sc: Scenario, v: Validator) -> None:
             hint = f"did you mean {close!r}? " if close else ""
             v.fail(f"{where}.robot", f"no enabled robot named {spec.robot!r} ({hint}robots: "
                    f"{', '.join(robots) or 'none'})")
+
+
+#: What a metric's name starts with (``harness.metrics.types.MetricResult.group``; ``*``:
+#: a glob that may match any group).
+METRIC_GROUPS = ("control", "perception", "safety", "spec")
+
+
+def _check_tolerances(sc: Scenario, v: Validator) -> None:
+    """A tolerance's key is a metric name or glob: it starts with a metric group (a misspelt
+    group would match nothing, and the tolerance would silently not apply)."""
+    for key in sc.scoring.tolerances:
+        head = key.split(".", 1)[0]
+        if head in METRIC_GROUPS or any(c in head for c in "*?["):
+            continue
+        near = difflib.get_close_matches(head, METRIC_GROUPS, n=1)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        v.fail(f"scoring.tolerances.{key}", f"matches no metric: metric names start with "
+               f"{', '.join(METRIC_GROUPS)}{hint}")
 
 
 def _check_control_scoring(sc: Scenario, v: Validator) -> None:

@@ -136,3 +136,19 @@ def test_a_perception_area_is_a_polygon(capsys: pytest.CaptureFixture[str]) -> N
     code, err = _run(capsys, "validate", path, "--set", "scoring.perception.area=[[0,0],[1,1]]")
     assert code == 2 and err.endswith(
         "scoring.perception.area: a polygon needs at least three points, got 2"), err
+
+
+def test_a_tolerance_for_no_metric_group_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    """A misspelt group in a tolerance's key would match no metric, and the tolerance would
+    silently not apply."""
+    from tests.conftest import SCENARIOS
+
+    path = str(SCENARIOS / "dock_nominal.yaml")
+    code, err = _run(capsys, "validate", path, "--set",
+                     'scoring.tolerances={"percepton.*": {abs: 1}}')
+    assert code == 2 and err.endswith("scoring.tolerances.percepton.*: matches no metric: "
+                                      "metric names start with control, perception, safety, "
+                                      "spec (did you mean 'perception'?)"), err
+    code, err = _run(capsys, "validate", path, "--set",
+                     'scoring.tolerances={"perception.*": {abs: 1}, "*.rms": {rel: 0.1}}')
+    assert code == 0, err
