@@ -28,11 +28,12 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import types
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import mujoco
 import numpy as np
@@ -257,6 +258,19 @@ def _assemble(scenario: Scenario, prims: PrimTable, source: str, environ: Mappin
     return spec, builds
 
 
+def _robot_of_element(scenario: Scenario, message: str) -> tuple[int, Any] | None:
+    """(index, model file) of the enabled robot with a model file whose element MuJoCo's
+    ``message`` names (``Element name 'diffbot/base_link'``: the robot's name is the
+    prefix of its elements), else None."""
+    found = re.search(r"Element name '([^'/]+)/", message)
+    if found is None:
+        return None
+    for i, robot in enumerate(scenario.robots):
+        if robot.enabled and robot.name == found.group(1) and robot.model_file is not None:
+            return i, robot.model_file
+    return None
+
+
 def _check_spawns(world: World, loaded: LoadedWorld, source: str) -> None:
     """No robot starts inside a static geom of the world file: the contacts at the spawn
     state (after ``mj_forward``) between a robot and such a geom (planes aside) must not be
@@ -328,6 +342,13 @@ class World:
             add_workers(spec, workers, prims)
             model = spec.compile()
         except ValueError as err:  # MuJoCo refuses a spec element (e.g. a repeated name)
+            robot = _robot_of_element(scenario, str(err))
+            if robot is not None:  # an element of a robot's model file: name that file
+                i, model = robot
+                field = f"robots[{i}].model"
+                raise ScenarioError(scenario.file_for(f"robots[{i}]", source), field,
+                                    f"{model.path}: MuJoCo cannot build the robot from it: "
+                                    f"{' '.join(str(err).split())}") from err
             raise SimulationError(f"scenario {scenario.name}: MuJoCo model could not be built: "
                                   f"{err}") from err
         apply_render_settings(model, scenario.render)

@@ -333,3 +333,21 @@ def test_turtlebot3_from_urdf_drives_like_the_built_in(tmp_path: Path) -> None:
     x, y, yaw = ref[-1, :3]
     assert (x, y) == pytest.approx((0.29, 0.29), abs=0.02) and yaw == pytest.approx(
         math.pi / 2, abs=0.05)
+
+
+def test_a_model_mujoco_cannot_build_names_the_robot_and_its_file(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A URDF whose only link has no inertia compiles in no scene: one line naming the
+    scenario, the robot's model field and the file (exit 2), not the whole scene (exit 3)."""
+    from harness.cli import main
+
+    bare = tmp_path / "bare.urdf"
+    bare.write_text('<robot name="m"><link name="base_link"/></robot>\n')
+    scenario = Path(__file__).resolve().parents[2] / "scenarios" / "diffbot_urdf.yaml"
+    sets = [f"robots.0.model.urdf={bare}", "robots.0.sensors={}",
+            "robots.0.control.enabled=false", "robots.0.model.frictionless_links=[]",
+            "scoring.control=null", "systems_under_test=[]"]
+    assert main(["validate", str(scenario), *[a for s in sets for a in ("--set", s)]]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"srr validate: {scenario}: robots[0].model: {bare}: MuJoCo cannot "
+                          "build the robot from it: Error: mass and inertia"), err
