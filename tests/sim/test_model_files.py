@@ -136,7 +136,7 @@ ASCII_STL = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0
     (lambda t: pallet(model={"mjcf": "broken.xml"}), "robots[0].model.mjcf",
      ["broken.xml: MuJoCo cannot read it as MJCF", "unrecognized element"]),
     (lambda t: diffbot(model={"urdf": "ascii.urdf"}), "robots[0].model.urdf",
-     ["ascii.urdf: MuJoCo cannot build it", "ASCII"]),
+     ["ascii.urdf: MuJoCo cannot build it", "ASCII", "flat.stl'"]),  # the user's mesh
     (lambda t: diffbot(model={"urdf": "nomesh.urdf"}), "robots[0].model.urdf",
      ["nomesh.urdf: mesh 'package://srr_diffbot/meshes/nope.stl': file not found"]),
     (lambda t: pallet(model={"mjcf": "two.xml"}), "robots[0].model.mjcf",

@@ -29,6 +29,7 @@ field.
 from __future__ import annotations
 
 import hashlib
+import re
 import types
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
@@ -173,6 +174,26 @@ def _parse(path: Path, kind: ModelKind, packages: PackagePath,
     return spec, urdf_types, inputs
 
 
+#: The file each in-memory asset name was read from (names are content hashes), so that
+#: MuJoCo's messages, which name the asset, can name the user's file instead.
+_ASSET_FILES: dict[str, str] = {}
+_ASSET_NAME = re.compile(r"srr-[0-9a-f]{20}\.\w+")
+
+
+def _shown(file: Path, folder: Path) -> str:
+    """``file`` as a message shows it: relative to the model file's folder when inside it
+    (short, as the model names it), else whole."""
+    try:
+        return file.resolve().relative_to(folder.resolve()).as_posix()
+    except ValueError:
+        return str(file)
+
+
+def _named(message: str) -> str:
+    """``message`` with each in-memory asset name replaced by the file it was read from."""
+    return _ASSET_NAME.sub(lambda m: _ASSET_FILES.get(m.group(0), m.group(0)), message)
+
+
 def _take_assets(spec: mujoco.MjSpec, path: Path, packages: PackagePath) -> dict[str, bytes]:
     """Read every asset file into memory and point the spec at it by content hash."""
     base = Path(spec.modelfiledir) if spec.modelfiledir else path.parent
@@ -193,6 +214,7 @@ def _take_assets(spec: mujoco.MjSpec, path: Path, packages: PackagePath) -> dict
                 raise ModelFileError(f"{what} {item.file!r}: file not found ({file})") from None
             key = f"srr-{hashlib.sha256(data).hexdigest()[:20]}{file.suffix.lower()}"
             assets[key] = data
+            _ASSET_FILES[key] = _shown(file, path.parent)
             item.file = key
     spec.meshdir = ""
     spec.texturedir = ""
@@ -264,7 +286,7 @@ def load_model_file(path: Path, kind: ModelKind, packages: PackagePath,
     try:
         model = spec.compile()
     except ValueError as err:
-        raise ModelFileError(f"MuJoCo cannot build it: {one_line(err)}") from err
+        raise ModelFileError(f"MuJoCo cannot build it: {_named(one_line(err))}") from err
 
     def name(objtype: mujoco.mjtObj, idx: int) -> str:
         return mujoco.mj_id2name(model, objtype, idx) or ""
