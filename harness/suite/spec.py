@@ -22,6 +22,7 @@ fragments in it are skipped). Every error names the file and the field.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -200,7 +201,13 @@ def _entry(item: str | EntryFile, raw: Any, base: Path, file: str, field: str,
                         sweep_file=file, sweep_field=f"{field}.sweep",
                         declared_in=f"{file}: {field}")
     except ScenarioError as err:
-        if err.file != "--set":
+        # a value the entry's set: gave is the suite file's to answer for, wherever the
+        # loader found it wrong (an unknown key, a value out of range)
+        keys = [parse_override(o)[0] for o in overrides]  # dotted, as the loader got them
+        dotted = re.sub(r"\[(\d+)\]", r".\1", err.field)
+        ours = err.file == "--set" or any(dotted == k or dotted.startswith(f"{k}.")
+                                          for k in keys)
+        if not ours:
             raise
         raise ScenarioError(file, f"{field}.set", f"{err.field}: {err.message}") from None
 

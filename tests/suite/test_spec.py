@@ -219,3 +219,18 @@ def test_every_sweep_point_sets_its_systems_under_test_up_before_the_suite(
                    encoding="utf-8")
     assert main(["validate", str(own)]) == 2
     assert "forklift_warehouse[speed=-1]: " in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("value", "said"), [
+    ("{duraton: 2}", "duraton: unknown field (did you mean 'duration'?)"),
+    ("{duration: -2}", "duration: must be > 0, got -2"),
+])
+def test_a_bad_set_value_is_the_suite_files(tmp_path: Path, value: str, said: str) -> None:
+    """A value an entry's ``set:`` gave is named in the suite file, not in the scenario file
+    the loader found it wrong in."""
+    _with_includes(tmp_path)
+    suite = tmp_path / "suite.yaml"
+    suite.write_text(f"scenarios:\n  - path: {FORKLIFT}\n    set: {value}\n", encoding="utf-8")
+    with pytest.raises(ScenarioError) as err:
+        load_suite([suite])
+    assert str(err.value) == f"{suite}: scenarios[0].set: {said}"
