@@ -24,7 +24,7 @@ from harness.interrupt import INTERRUPTED_EXIT
 from harness.regression.verdict import EXIT_CODES, OK_VERDICTS
 from harness.suite.plan import RunSpec
 from harness.suite.stats import describe
-from harness.suite.unfinished import Settled, settle
+from harness.suite.unfinished import Settled, mark_timed_out, settle
 from harness.summary import SUMMARY_NAME, read_summary
 
 __all__ = ["GROUP_ORDER", "GroupResult", "RunOutcome", "crash_reason", "group_runs",
@@ -131,6 +131,9 @@ def outcome_of(spec: RunSpec, out_root: Path, *, exit_code: int, error: str | No
     if (run_path / SUMMARY_NAME).is_file() and not settled.written:
         try:
             summary = read_summary(run_path)
+            if timed_out and problem is not None and summary.get("verdict") == "INTERRUPTED":
+                mark_timed_out(run_path, problem)  # its summary says what the suite says
+                summary = read_summary(run_path)
         except SrrError as err:
             problem = problem or f"its summary.json is unreadable ({err})"
     salvaged = settled.note

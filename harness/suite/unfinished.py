@@ -16,6 +16,7 @@ killed at its timeout or on Ctrl-C, or — on Ray — been cancelled before it e
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,7 +31,11 @@ from harness.run.summary import RunSummary
 from harness.suite.plan import RunSpec
 from harness.summary import SUMMARY_NAME
 
-__all__ = ["Settled", "settle"]
+__all__ = ["TIMEOUT_GATE", "Settled", "mark_timed_out", "settle"]
+
+#: The health gate a run the suite stopped at its timeout fails (its own summary said only
+#: that it was interrupted: the suite's SIGTERM reached it as a Ctrl-C would).
+TIMEOUT_GATE = "wall_clock_timeout"
 
 #: The health gate a settled run fails, as a recovered one does.
 GATE = "recording_complete"
@@ -105,3 +110,21 @@ def _write(run_path: Path, spec: RunSpec, detail: str, *, interrupted: bool) -> 
     write_junit(run_path / "junit.xml", scenario.name, junit_cases(summary.to_json()))
     summary.write(run_path)
     runmarker.clear(run_path)
+
+
+def mark_timed_out(run_path: Path, detail: str) -> None:
+    """A run the suite stopped at its timeout finalized itself as INTERRUPTED (the SIGTERM
+    reached it as Ctrl-C would): its ``summary.json`` and ``junit.xml`` are made to say what
+    the suite says, INVALID (exit 3), the health gate :data:`TIMEOUT_GATE` failed with
+    ``detail`` first among its reasons, and its report rendered again so the page agrees."""
+    summary = RunSummary.read(run_path)
+    summary = dataclasses.replace(
+        summary, verdict="INVALID", exit_code=3,
+        health=(*summary.health, HealthResult(TIMEOUT_GATE, False, detail)),
+        reasons=(f"health {TIMEOUT_GATE}: {detail}", *summary.reasons))
+    write_junit(run_path / "junit.xml", summary.scenario, junit_cases(summary.to_json()))
+    summary.write(run_path)
+    from harness.run.rerender import report
+
+    with contextlib.suppress(SrrError):  # the summary is what counts; the page follows it
+        report(run_path, video=(run_path / "video").is_dir())
