@@ -86,7 +86,7 @@ def _parser() -> argparse.ArgumentParser:
                      "as an h264 RTSP stream while the run goes (= --set rtsp.enabled=true)")
     run.add_argument("--update-baseline", action="store_true",
                      help="bless this run as the scenario's baseline")
-    run.add_argument("--reason", default="updated with --update-baseline",
+    run.add_argument("--reason", default=None,
                      help="why, recorded in the baseline (with --update-baseline)")
     run.add_argument("--baselines", type=Path, default=None,
                      help="baselines folder (default: the project's baselines/)")
@@ -358,6 +358,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
                         srr_gt=args.srr_gt, overrides=overrides)
     if args.update_baseline and args.repeat != 1:
         raise SrrError("--update-baseline: bless one run, not a --repeat series")
+    if args.reason is not None and not args.update_baseline:
+        raise SrrError("--reason: only with --update-baseline (it is recorded in the baseline)")
     bar = _progress(args.quiet)
     task: Any = None
 
@@ -378,7 +380,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
             res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
                                    progress=tick, baselines=args.baselines,
                                    update_baseline=args.update_baseline,
-                                   update_reason=args.reason, live=live,
+                                   update_reason=args.reason or "updated with "
+                                   "--update-baseline", live=live,
                                    notice=lambda text: _stderr().print(
                                        f"srr run: {text}", markup=False),
                                    started=_started(bar), video=args.video)
@@ -753,6 +756,9 @@ def _suite(args: argparse.Namespace) -> int:
 
     if args.update_baselines and not args.reason:
         raise SrrError("--update-baselines: say why with --reason TEXT")
+    if args.reason is not None and not args.update_baselines:
+        raise SrrError("--reason: only with --update-baselines (it is recorded in the "
+                       "baselines blessed)")
     _check_summary_md(args)
     live = not args.quiet and _stdout().is_terminal
     holder: dict[str, Any] = {}
@@ -848,6 +854,8 @@ def _cmd_search(args: argparse.Namespace) -> int:
 
     if args.bless and not args.reason:
         raise SrrError("--bless: say why with --reason TEXT")
+    if args.reason is not None and not args.bless:
+        raise SrrError("--reason: only with --bless (it is recorded in the baselines blessed)")
     quiet = args.quiet
 
     def on_trial(rec: Any) -> None:

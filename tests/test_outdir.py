@@ -58,3 +58,15 @@ def test_a_run_that_fails_leaves_an_out_folder_the_user_made(
     fresh = tmp_path / "fresh"  # one srr made goes with what it wrote
     assert main(["run", str(SCENARIO), "--duration", "1", "-q", "--out", str(fresh)]) == 2
     assert not fresh.exists()
+
+
+def test_reason_without_a_bless_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    """--reason says why a baseline is blessed: given without the option that blesses, it
+    would be dropped silently."""
+    for argv, said in (
+            (["run", str(SCENARIO), "--reason", "x"], "srr run: --reason: only with "
+                                                      "--update-baseline"),
+            (["suite", str(SUITE), "--reason", "x"], "srr suite: --reason: only with "
+                                                     "--update-baselines")):
+        assert main(argv) == 2
+        assert capsys.readouterr().err.strip().splitlines()[-1].startswith(said)
