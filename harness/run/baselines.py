@@ -9,7 +9,6 @@ from typing import Any
 
 from harness import runlock
 from harness.errors import ScenarioError, SrrError
-from harness.recording.verify import verify_recording
 from harness.regression import baseline_path, comparable_config, save_baseline
 from harness.run.summary import RunSummary
 from harness.scenario import Scenario, load_scenario, scenario_to_mapping
@@ -92,6 +91,9 @@ def bless_if_changed(run_dir: Path, reason: str, *, baselines: Path | None = Non
         raise SrrError(f"{Path(run_dir).resolve()}: not blessed: the run is "
                        f"{summary.verdict} ({why or 'no reason recorded'}); "
                        "only a valid, complete run can become the baseline")
+    # imported here: reading bags back is a bless's, never a run's start
+    from harness.recording.verify import verify_recording
+
     verify_recording(Path(run_dir), summary.to_json())  # the bag is the summary's
     scenario = load_scenario(Path(run_dir) / "scenario.yaml")
     recorded = summary.baselines_dir  # the folder the run was judged against
