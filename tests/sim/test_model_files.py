@@ -87,6 +87,32 @@ def test_package_uris_resolve_like_ros(tmp_path: Path) -> None:
         resolve_uri("package://nope/m.stl", tmp_path, PackagePath(()))
 
 
+def test_packages_deeper_in_a_workspace_are_found_as_rospack_finds_them(tmp_path: Path
+                                                                        ) -> None:
+    """A package two levels down, in a folder not named after it (a repository checked out
+    in a workspace), is found by its package.xml's name; nothing is found below a package,
+    in an ignored or a hidden folder; file:// URIs are percent-decoded."""
+    ws = tmp_path / "ws"
+    deep = ws / "src" / "some_repo" / "description"
+    deep.mkdir(parents=True)
+    (deep / "package.xml").write_text("<package><name>real_pkg</name></package>")
+    inner = deep / "vendored" / "inner_pkg"  # below a package: not a package of the path
+    inner.mkdir(parents=True)
+    (inner / "package.xml").write_text("<package><name>inner_pkg</name></package>")
+    for skipped, marker in (("ignored", "COLCON_IGNORE"), (".hidden", None)):
+        pkg = ws / "src" / skipped / "hidden_pkg"
+        pkg.mkdir(parents=True)
+        (pkg / "package.xml").write_text("<package><name>hidden_pkg</name></package>")
+        if marker:
+            (ws / "src" / skipped / marker).write_text("")
+    path = PackagePath.of(tmp_path, [], {"ROS_PACKAGE_PATH": str(ws)})
+    assert resolve_uri("package://real_pkg/m.stl", tmp_path, path) == deep / "m.stl"
+    for name in ("inner_pkg", "hidden_pkg"):
+        with pytest.raises(ModelPathError, match=f"package '{name}'"):
+            resolve_uri(f"package://{name}/m.stl", tmp_path, path)
+    assert resolve_uri("file:///a%20b/c.stl", tmp_path, path) == Path("/a b/c.stl")
+
+
 def test_meshes_found_through_the_environment(tmp_path: Path) -> None:
     """The URDF copied elsewhere, its package:// meshes found on SRR_PACKAGE_PATH."""
     urdf = tmp_path / "robot.urdf"

@@ -2,23 +2,28 @@
 
 A robot entry's model file is written relative to the scenario file that holds the entry (an
 include's robots: relative to the include). ``package://<pkg>/<path>`` URIs — the form ROS
-tools write in URDF files — are looked up the way ROS 1's ``rospack`` looks them up on
-``ROS_PACKAGE_PATH``, one level deep: in each directory of the package path, in order, the
-package is the directory itself when its name (or its ``package.xml``'s ``<name>``) is
-``<pkg>``, else its subdirectory ``<pkg>``. The package path is the model block's
-``package_paths`` (relative to the same scenario file), then ``SRR_PACKAGE_PATH``, then
-``ROS_PACKAGE_PATH`` (``os.pathsep``-separated). ``file://`` URIs are absolute paths.
+tools write in URDF files — are looked up on the package path, in order: a directory of it
+is the package when its name (or its ``package.xml``'s ``<name>``) is ``<pkg>``, else its
+subdirectory ``<pkg>`` is; failing both in every directory, each directory is crawled as ROS
+1's ``rospack`` crawls ``ROS_PACKAGE_PATH``: the first folder below it (depth first, in name
+order) whose ``package.xml`` names ``<pkg>``, never descending into a package or a folder
+holding ``CATKIN_IGNORE``, ``COLCON_IGNORE`` or ``AMENT_IGNORE``, nor into hidden ones. The
+package path is the model block's ``package_paths`` (relative to the same scenario file), then
+``SRR_PACKAGE_PATH``, then ``ROS_PACKAGE_PATH`` (``os.pathsep``-separated). ``file://`` URIs
+are absolute paths, percent-decoded (``%20`` is a space).
 
 Pure functions of their arguments: the caller passes the environment in.
 """
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import unquote
 
 from harness.errors import ScenarioError
 
@@ -64,13 +69,17 @@ class PackagePath:
         return cls(tuple(dirs))
 
     def find(self, package: str) -> Path | None:
-        """The directory of ``package``, or None."""
+        """The directory of ``package``, or None (see the module doc)."""
         for d in self.dirs:
             if d.is_dir() and (d.name == package or _declared_name(d) == package):
                 return d
             sub = d / package
             if sub.is_dir():
                 return sub
+        for d in self.dirs:
+            found = _crawled(d).get(package)
+            if found is not None:
+                return found
         return None
 
     def describe(self) -> str:
@@ -78,6 +87,29 @@ class PackagePath:
         return f"package path: {shown}" if shown else (
             "the package path is empty: set the model's package_paths, SRR_PACKAGE_PATH or "
             "ROS_PACKAGE_PATH")
+
+
+_IGNORE = ("CATKIN_IGNORE", "COLCON_IGNORE", "AMENT_IGNORE")
+
+
+@functools.lru_cache(maxsize=64)
+def _crawled(root: Path) -> dict[str, Path]:
+    """Every package below ``root`` by its ``package.xml`` name (the first found, depth first
+    in name order); a package's own folders are not searched for more."""
+    found: dict[str, Path] = {}
+    for top, dirs, files in os.walk(root):
+        here = Path(top)
+        if any(name in files for name in _IGNORE):
+            dirs[:] = []
+            continue
+        if "package.xml" in files and here != root:
+            name = _declared_name(here)
+            if name is not None:
+                found.setdefault(name, here)
+            dirs[:] = []
+            continue
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+    return found
 
 
 def _declared_name(directory: Path) -> str | None:
@@ -106,6 +138,6 @@ def resolve_uri(uri: str, base_dir: Path, packages: PackagePath) -> Path:
                                  f"({packages.describe()})")
         return root / rest
     if text.startswith("file://"):
-        return Path(text[len("file://"):])
+        return Path(unquote(text[len("file://"):]))
     path = Path(text)
     return path if path.is_absolute() else base_dir / path
