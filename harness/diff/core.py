@@ -152,6 +152,9 @@ def diff_runs(a: str | Path, b: str | Path, *,
         sa, bag_a, kept = open_baseline(pa)
     else:
         sa, bag_a = open_run(pa)
+    if is_baseline_file(pb):
+        raise SrrError(f"{pb}: a baseline file can only be A, the reference: give it first "
+                       f"(srr diff {pb} RUN_DIR)")
     sb, bag_b = open_run(pb)
     ma = summary_metrics(sa, pa if kept is not None else pa / "summary.json")
     mb = summary_metrics(sb, pb / "summary.json")

@@ -69,3 +69,6 @@ def test_a_baseline_file_without_its_reference_or_with_html_is_refused(
     assert main(["diff", str(BASELINE), str(runs["same"]), "--html", str(tmp_path / "x.html")]) == 2
     assert "--html: shows two run directories" in capsys.readouterr().err
     assert not (tmp_path / "x.html").exists()
+    # B is the run compared: a baseline there is named as such, not as a missing directory
+    assert main(["diff", str(runs["same"]), str(BASELINE)]) == 2
+    assert f"{BASELINE}: a baseline file can only be A" in capsys.readouterr().err
