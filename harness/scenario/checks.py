@@ -284,6 +284,9 @@ def _check_cameras(sc: Scenario, v: Validator) -> None:
                              for i, r in enumerate(sc.robots) if r.enabled}
     for i, cam in enumerate(sc.cameras):
         _check_unique_name(v, cams, "cameras", "camera", i, cam.name)
+        for j, output in enumerate(cam.outputs):
+            if output in cam.outputs[:j]:
+                v.fail(f"cameras[{i}].outputs[{j}]", f"{output!r} is listed twice")
         if cam.camera_prim:
             try:
                 check_prim_path(cam.prim)

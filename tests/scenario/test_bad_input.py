@@ -152,3 +152,11 @@ def test_a_tolerance_for_no_metric_group_is_refused(capsys: pytest.CaptureFixtur
     code, err = _run(capsys, "validate", path, "--set",
                      'scoring.tolerances={"perception.*": {abs: 1}, "*.rms": {rel: 0.1}}')
     assert code == 0, err
+
+
+def test_a_camera_output_listed_twice_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    from tests.conftest import SCENARIOS
+
+    code, err = _run(capsys, "validate", str(SCENARIOS / "dock_nominal.yaml"), "--set",
+                     "cameras.0.outputs=[rgb, depth, rgb]")
+    assert code == 2 and err.endswith("cameras[0].outputs[2]: 'rgb' is listed twice"), err
