@@ -41,7 +41,7 @@ from typing import Any, ClassVar, Literal
 
 import yaml
 import zstandard
-from mcap.exceptions import McapError
+from mcap.exceptions import EndOfFile, InvalidMagic, McapError, RecordLengthLimitExceeded
 from mcap.reader import make_reader
 from mcap.records import Channel, Message, Schema
 from rosbags.rosbag1 import Reader as Rosbag1Reader
@@ -89,6 +89,11 @@ READ_ERRORS: tuple[type[Exception], ...] = (*DATA_ERRORS, OSError)
 DECODE_ERRORS: tuple[type[Exception], ...] = (SerdeError, Ros1TypeError, *DATA_ERRORS)
 
 
+#: What the mcap reader raises for a file that ends early (a run killed mid-write).
+_CUT: tuple[type[Exception], ...] = (InvalidMagic, RecordLengthLimitExceeded, EndOfFile)
+_CUT_WORDS = ("end magic is invalid", "unexpected end", "exceeds limit")
+
+
 @contextmanager
 def reading(file: object, what: str = "cannot read bag") -> Iterator[None]:
     """Translate :data:`READ_ERRORS` raised inside into one
@@ -96,7 +101,13 @@ def reading(file: object, what: str = "cannot read bag") -> Iterator[None]:
     try:
         yield
     except READ_ERRORS as err:
-        raise BagReadError(file, what, reason(err)) from err
+        said = reason(err)
+        if isinstance(err, _CUT) or any(w in str(err).lower() for w in _CUT_WORDS):
+            # what a file cut short reads as, mid-record or at its end (rosbags' own reader
+            # says it in words)
+            said = f"the file is cut short or damaged ({said}); `srr recover` rebuilds a " \
+                   "bag cut short from its complete chunks"
+        raise BagReadError(file, what, said) from err
 
 
 def deserialize(raw: bytes, msgtype: str, encoding: Encoding) -> Any:
