@@ -230,6 +230,9 @@ def _summary_md_options(p: argparse.ArgumentParser) -> None:
 def _check_summary_md(args: argparse.Namespace) -> None:
     if args.summary_link_base is not None and args.summary_md is None:
         raise SrrError("--summary-link-base: only with --summary-md FILE")
+    if args.summary_link_base is not None and not args.summary_link_base.strip():
+        raise SrrError("--summary-link-base: empty; give the URL the reports are served under "
+                       "(or leave the option out: links relative to FILE's folder)")
     out = getattr(args, "out", None)
     if args.summary_md is not None and out is not None and \
             Path(out).resolve() in Path(args.summary_md).resolve().parents:

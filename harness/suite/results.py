@@ -215,7 +215,8 @@ class GroupResult:
         metrics were judged on their own: what the console, the Markdown summary and the page
         point out."""
         b = self.against_baseline
-        return not self.flaky and b is not None and not b.get("digest_matches")
+        return (not self.flaky and self.verdict != "MISMATCH"  # (its metrics: not judged)
+                and b is not None and not b.get("digest_matches"))
 
 
 def _stats(runs: Sequence[RunOutcome]) -> dict[str, dict[str, Any]]:

@@ -183,6 +183,9 @@ def test_bad_summary_options_are_one_line_exit_2_before_anything_runs(
     assert err.count("\n") == 1 and "--summary-md" in err and "does not exist" in err
     assert main(["suite", str(suite), "--summary-link-base", "https://x"]) == 2
     assert "--summary-link-base: only with --summary-md" in capsys.readouterr().err
+    assert main(["suite", str(suite), "--summary-md", str(tmp_path / "pr.md"),
+                 "--summary-link-base", ""]) == 2  # links that would point nowhere
+    assert "--summary-link-base: empty" in capsys.readouterr().err
     assert main(["run", str(suite), "--summary-md", str(tmp_path / "pr.md"),
                  "--repeat", "2"]) == 2
     assert "--summary-md: one run" in capsys.readouterr().err
@@ -198,13 +201,15 @@ def test_bad_summary_options_are_one_line_exit_2_before_anything_runs(
 def test_groups_whose_bytes_are_not_their_baselines_are_listed_folded(tmp_path: Path) -> None:
     """A group whose metrics held but whose recording is not byte for byte its baseline's is
     listed, folded away, with the topics and versions that differ; one whose bytes match,
-    a flaky one (its repeats disagree anyway) and one without a baseline are not."""
+    a flaky one (its repeats disagree anyway), a MISMATCH (its metrics were not judged) and
+    one without a baseline are not."""
     drift = {"digest_matches": False, "topics_differing": ["/cam_rgb", "/cam_depth"],
              "versions_differing": {"gl_renderer": {"baseline": "llvmpipe", "run": "NVIDIA"}}}
     same = {"digest_matches": True, "topics_differing": [], "versions_differing": {}}
     outcomes = [
         replace(_run("camera_scene", 1, 1, "PASS", value=0.96), against_baseline=drift),
         replace(_run("forklift", 1, 1, "PASS", value=0.96), against_baseline=same),
+        replace(_run("other_config", 1, 1, "MISMATCH", value=0.96), against_baseline=drift),
         replace(_run("wobbly", 1, 2, "PASS", value=0.96), against_baseline=drift),
         replace(_run("wobbly", 2, 2, "FAIL", value=0.96, digest="e" * 64),
                 against_baseline=drift),
@@ -221,5 +226,5 @@ def test_groups_whose_bytes_are_not_their_baselines_are_listed_folded(tmp_path: 
     assert by_id["camera_scene"]["against_baseline"] == drift
     assert by_id["no_baseline"]["against_baseline"] is None
     assert [r.to_json()["recording_matches_baseline"] for r in outcomes] == [
-        False, True, False, False, None]
+        False, True, False, False, False, None]
     assert "recorded other bytes" not in suite_markdown(_suite(tmp_path, outcomes[1:2]))
