@@ -24,6 +24,10 @@ def parse_override(text: str) -> tuple[str, Any]:
     key = _INDEX.sub(r".\1", key.strip())
     if not sep or not key:
         raise ScenarioError("--set", text, "expected KEY=VALUE")
+    if key.endswith("+"):  # '+' extends an include's list in a scenario file
+        raise ScenarioError("--set", key, "--set replaces a value (robots=[...]) or one field "
+                            "(robots.0.spawn.position=...); to add to a list, write `robots+:` "
+                            "in a scenario file that includes this one")
     try:
         parsed = yamlio.load(value) if value.strip() else ""
     except yaml.YAMLError as err:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from harness.errors import ScenarioError
 from harness.scenario import (
     DiffDriveControl,
     ForkliftControl,
@@ -57,3 +58,9 @@ def test_resolved_mapping_round_trips(scenarios_dir: Path) -> None:
     sc = load_scenario(scenarios_dir / "forklift_warehouse.yaml")
     again = scenario_from_mapping(scenario_to_mapping(sc))
     assert again == sc
+
+
+def test_extending_with_plus_is_for_scenario_files() -> None:
+    with pytest.raises(ScenarioError, match=r"to add to a list, write `robots\+:` in a "
+                                            "scenario file"):
+        parse_override("robots+=[]")
