@@ -350,6 +350,8 @@ class Ros2Bridge(SystemUnderTest):
                 break
 
     def shutdown(self) -> None:
+        if not hasattr(self, "_started"):  # never set up (an error before the systems under
+            return  # test were): nothing started, nothing to stop
         self._flush()
         stop_processes(self.procs, self.run_dir / "ros2")
         with contextlib.suppress(Exception):

@@ -8,12 +8,13 @@ apart; exit codes and how each ended go to ``<run dir>/ros2/processes.json``."""
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import json
 import os
 import signal
 import subprocess
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -38,6 +39,26 @@ class ExternalProcess:
         return self.proc.poll() is None
 
 
+def _ends_with_us() -> Callable[[], None] | None:
+    """What the child runs before its command: Linux's ``PR_SET_PDEATHSIG`` with SIGTERM, so
+    a node started in a session of its own (Ctrl-C in the terminal does not reach it; srr
+    stops it) still ends when srr is killed with SIGKILL and cannot stop it. The libc call is
+    looked up here, in the parent: the child only calls it. None where ``prctl`` is
+    missing."""
+    try:
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):
+        return None
+    parent = os.getpid()
+
+    def set_up() -> None:
+        prctl(1, int(signal.SIGTERM), 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+        if os.getppid() != parent:  # srr died before the request took effect
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    return set_up
+
+
 def start_processes(specs: Sequence[Ros2ProcessSpec], env: Mapping[str, str],
                     log_dir: Path) -> list[ExternalProcess]:
     log_dir.mkdir(parents=True, exist_ok=True)
@@ -52,7 +73,7 @@ def start_processes(specs: Sequence[Ros2ProcessSpec], env: Mapping[str, str],
         try:
             proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=log,
                                     stderr=subprocess.STDOUT, env={**env, **spec.env},
-                                    start_new_session=True)
+                                    start_new_session=True, preexec_fn=_ends_with_us())
         except OSError as err:
             log.close()
             stop_processes(out, log_dir)

@@ -75,7 +75,7 @@ if TYPE_CHECKING:
     from harness.frames import Frames
 
 __all__ = ["AFTER_THE_LOOP", "Loop", "Progress", "RunResult", "Started", "import_after_the_loop",
-           "prepare", "record"]
+           "prepare", "record", "unprepare"]
 
 #: What a run imports only once it has been recorded, where it is used: scoring's frames and
 #: metrics (pandas, SciPy), the report (Jinja2, its plots). A run starts its loop without them.
@@ -125,13 +125,28 @@ class Loop:
     output: OutputKind = ROS2_OUTPUT  # what the recorder writes (harness.output)
 
 
-def prepare(run_dir: Path) -> None:
+def prepare(run_dir: Path) -> bool:
     """Refuse a run directory another process is writing, one that is not empty, or a path
-    where no folder can be."""
+    where no folder can be; whether the (empty) folder exists already."""
     check_out_folder(run_dir)
     runlock.refuse_if_live(run_dir)
     if run_dir.exists() and any(run_dir.iterdir()):
         raise SrrError(f"--out {run_dir}: directory exists and is not empty")
+    return run_dir.is_dir()
+
+
+def unprepare(run_dir: Path, existed: bool) -> None:
+    """A run that failed before :func:`record` took its directory leaves nothing there (the
+    external ROS 2 processes' logs, written as they start): the folder goes, or is emptied
+    when it was there before (:func:`prepare`'s answer)."""
+    if not existed:
+        shutil.rmtree(run_dir, ignore_errors=True)
+    elif run_dir.is_dir():
+        for child in run_dir.iterdir():
+            if child.is_dir() and not child.is_symlink():
+                shutil.rmtree(child, ignore_errors=True)
+            else:
+                child.unlink(missing_ok=True)
 
 
 def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_ticks: int,

@@ -31,7 +31,15 @@ from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir
 from harness.run.judge import check_baseline
 from harness.run.participants import LiveViewParticipant
-from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
+from harness.run.record import (
+    Loop,
+    Progress,
+    RunResult,
+    Started,
+    prepare,
+    record,
+    unprepare,
+)
 from harness.run.simulate import Notice, ros2_bridge
 from harness.run.summary import RunSummary
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping
@@ -62,6 +70,13 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     src = Path(run_dir)
     runlock.refuse_if_live(src)
     summary = RunSummary.read(src)
+    if summary.recovered or summary.interrupted or summary.stopped:
+        # a replay plays the recording to its end and scores what it ran as a whole run
+        why = ("recovered after its run was killed" if summary.recovered else
+               "interrupted" if summary.interrupted else "stopped early")
+        raise SrrError(f"{src}: its recording was cut short ({why}, {summary.simulated_s:g} "
+                       f"of {summary.duration_s:g} s): a replay would score a shorter run as "
+                       "a whole one; replay a run that finished")
     recorded = load_scenario(src / "scenario.yaml")
     pairs = [parse_override(o) for o in overrides]
     for text in suts:
@@ -89,8 +104,11 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     if playback.output.ros == 1 and live is not None:  # (ros2.enabled: the scenario says)
         raise SrrError(f"{src}: --foxglove: the live view serves ROS 2 messages, and "
                        f"{playback.output.because}")
+    if playback.output.ros == 1 and scenario.ros2.enabled:
+        raise SrrError(f"{src}: --ros2: the live ROS 2 bridge plays ROS 2 messages, and "
+                       f"{playback.output.because}")
     out_dir = Path(out) if out is not None else default_run_dir(scenario, suffix="-replay")
-    prepare(out_dir)  # before the external processes write their logs into it
+    existed = prepare(out_dir)  # before the external processes write their logs into it
     withheld = _recorded_outputs(summary.sut_endpoints, recorded, source)
     rep = Replay(scenario, playback, withheld, source,
                  joined=ros2_bridge(scenario, out_dir, source))
@@ -111,6 +129,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         rep.close()
         for p in participants:
             p.shutdown()
+        unprepare(out_dir, existed)
         raise
     command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
                         *(f"--set {o}" for o in overrides), *(["--ros2"] if ros2 else []),

@@ -24,7 +24,15 @@ from harness.run.facts import default_run_dir, reproduce_command
 from harness.run.graphs import graphs_of
 from harness.run.judge import check_baseline
 from harness.run.participants import LiveViewParticipant, RtspParticipant
-from harness.run.record import Loop, Progress, RunResult, Started, prepare, record
+from harness.run.record import (
+    Loop,
+    Progress,
+    RunResult,
+    Started,
+    prepare,
+    record,
+    unprepare,
+)
 from harness.scenario import Scenario, rate_warnings
 from harness.scoring import check_scoring
 from harness.sim.world_file import map_json
@@ -95,7 +103,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     check_baseline(scenario, baselines)  # and a malformed baseline
     if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
         scenario = dataclasses.replace(scenario, baselines=str(baselines))
-    prepare(run_dir)
+    existed = prepare(run_dir)
     size_note = large_bag_notice(scenario, check_free_space(scenario, run_dir, free_space))
     if size_note is not None and notice is not None:
         notice(size_note)
@@ -116,6 +124,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
                 if live is not None else None)
     except BaseException:
         sim.close()
+        unprepare(run_dir, existed)
         raise
     # the run's own participants (harness.run.participants), shut down in reverse order
     participants: list[Participant] = ([LiveViewParticipant(view, sim.bus)]
@@ -130,6 +139,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         sim.close()
         for p in reversed(participants):
             p.shutdown()
+        unprepare(run_dir, existed)
         raise
     loop = Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
                 sim.srr_gt, command=reproduce_command(source, scenario, run_dir, user_baselines),

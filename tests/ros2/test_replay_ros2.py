@@ -163,3 +163,76 @@ def test_a_bad_ros2_external_is_one_clear_line(nightly: Any, tmp_path: Path, giv
     assert code == 2 and len(err.splitlines()) == 1, err
     assert words in err, err
     assert not out.exists()
+
+
+def test_a_run_refused_after_its_nodes_started_leaves_no_directory(tmp_path: Path) -> None:
+    """The external nodes start (and write their logs into the run directory) before the
+    live view takes its port: a port in use then is refused, exit 2, and the directory goes
+    with the logs (a second try with the same --out is not refused as not empty)."""
+    import socket
+
+    held = socket.socket()
+    held.bind(("127.0.0.1", 0))
+    held.listen()
+    port = held.getsockname()[1]
+    out = tmp_path / "run"
+    try:
+        code = main(["run", str(DOCK), "--duration", "1", "-q", "--out", str(out),
+                     "--foxglove", "--foxglove-port", str(port),
+                     "--set", "systems_under_test.safety_monitor.enabled=false",
+                     "--set", "ros2.enabled=true",
+                     "--set", "ros2.outputs=[{topic: /safety/is_muted, type: "
+                              "std_msgs/msg/Bool, rate_hz: 5}]",
+                     "--set", f"ros2.external=[{{name: safety, cmd: {json.dumps(_cmd())}}}]"])
+    finally:
+        held.close()
+    assert code == 2 and not out.exists()
+
+
+def _running(marker: str) -> list[int]:
+    """Pids of live processes whose command line holds ``marker``."""
+    pids = []
+    for proc in Path("/proc").iterdir():
+        if proc.name.isdigit():
+            try:
+                cmd = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+                state = (proc / "stat").read_text().split(") ", 1)[1][0]
+            except (OSError, IndexError):
+                continue
+            if marker in cmd and state != "Z":
+                pids.append(int(proc.name))
+    return pids
+
+
+def test_a_killed_srr_takes_its_external_nodes_with_it(tmp_path: Path) -> None:
+    """kill -9 of srr, which cannot stop its nodes then: each node (in a session of its own)
+    still ends, by its parent-death signal, instead of running on alone on the domain."""
+    import signal
+    import subprocess
+    import time
+
+    marker = f"--node-of-{tmp_path.name}"  # an argument of this test's node only
+    out = tmp_path / "run"
+    cmd = json.dumps([*_cmd(), marker])
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "harness.cli", "run", str(DOCK), "--duration", "30", "-q",
+         "--out", str(out), "--set", "systems_under_test.safety_monitor.enabled=false",
+         "--set", "ros2.enabled=true",
+         "--set", "ros2.outputs=[{topic: /safety/is_muted, type: std_msgs/msg/Bool, rate_hz: 5}]",
+         "--set", f"ros2.external=[{{name: safety, cmd: {cmd}}}]"],
+        cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while not (out / "bag").is_dir() and time.monotonic() < deadline:  # ticking
+            time.sleep(0.2)
+        assert _running(marker), "the node did not start"
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    deadline = time.monotonic() + 20
+    while _running(marker) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    left = _running(marker)
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"node processes left running: {left}"
