@@ -309,10 +309,10 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
                                           f"{ticks / hz:g} s of simulated time")
                 stop.check()  # a Ctrl-C that code in the tick caught and dropped
     except KeyboardInterrupt:
-        return _Ended(interrupted=True)
+        return _interrupted(loop, recorder, run_dir)
     except RunStopped as err:  # at a tick boundary: what was recorded stays, INVALID
         if stop.requested:  # a Ctrl-C that a plug-in's error (SutRaised) carries
-            return _Ended(interrupted=True)
+            return _interrupted(loop, recorder, run_dir)
         said = str(err)
         if err.details:  # a plug-in's traceback, beside the recording
             write_text_atomic(run_dir / TRACEBACK_NAME, err.details)
@@ -321,7 +321,7 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
                                              f"{loop.ticks() / hz:g} s of simulated time")
     except BaseException:
         if stop.requested:  # a Ctrl-C that became another error where it landed
-            return _Ended(interrupted=True)
+            return _interrupted(loop, recorder, run_dir)
         with contextlib.suppress(Exception):  # the original error is the one to report
             recorder.close()
         shutil.rmtree(run_dir, ignore_errors=True)
@@ -329,6 +329,18 @@ def _tick_loop(scenario: Scenario, loop: Loop, recorder: Any, run_dir: Path, *, 
     finally:
         loop.close()
     return _Ended()
+
+
+def _interrupted(loop: Loop, recorder: Any, run_dir: Path) -> _Ended:
+    """Ctrl-C (or SIGTERM) in the tick loop: the run ends INTERRUPTED with what it recorded;
+    before its first tick (a live view waiting for a client) nothing was: the directory goes
+    and the interrupt goes on (``srr run: interrupted``)."""
+    if loop.ticks() == 0:
+        with contextlib.suppress(Exception):
+            recorder.close()
+        shutil.rmtree(run_dir, ignore_errors=True)
+        raise KeyboardInterrupt
+    return _Ended(interrupted=True)
 
 
 def import_after_the_loop() -> None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import socket
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import pytest
 from mcap.records import Schema
@@ -203,3 +204,35 @@ def test_pacer_sleeps_only_while_ahead_of_the_rate() -> None:
     assert pacer.pace(2_000_000_000) == 0.0
     assert slept == [pytest.approx(0.5)]
     assert Pacer(None).pace(10**12) == 0.0  # no rate: never sleeps
+
+
+@pytest.mark.slow
+def test_a_run_stopped_while_it_waits_for_a_client_leaves_nothing(tmp_path: Path) -> None:
+    """SIGTERM while ``--foxglove-wait`` holds the first tick: nothing was recorded, so, as
+    for any stop before the first tick, exit 130 and no run directory (it once wrote a whole
+    INTERRUPTED run of 0 s)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[2]
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    out = tmp_path / "run"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "harness.cli", "run", str(root / "scenarios" /
+         "forklift_warehouse.yaml"), "--duration", "2", "-q", "--out", str(out), "--foxglove",
+         "--foxglove-port", str(port), "--foxglove-wait", "120"],
+        cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        env={**os.environ, "PYTHONPATH": str(root)})
+    assert proc.stderr is not None
+    for line in proc.stderr:  # the notice comes once the client is waited for
+        if "waiting up to" in line:
+            break
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines()[-1] == "srr run: interrupted", err
+    assert not out.exists()
