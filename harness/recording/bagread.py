@@ -91,6 +91,7 @@ DECODE_ERRORS: tuple[type[Exception], ...] = (SerdeError, Ros1TypeError, *DATA_E
 
 #: What the mcap reader raises for a file that ends early (a run killed mid-write).
 _CUT: tuple[type[Exception], ...] = (InvalidMagic, RecordLengthLimitExceeded, EndOfFile)
+MCAP_MAGIC = b"\x89MCAP0\r\n"
 _CUT_WORDS = ("end magic is invalid", "unexpected end", "exceeds limit")
 
 
@@ -327,6 +328,12 @@ class _Mcap(Recording):
     def __init__(self, path: Path, shown: object = None, what: str = "cannot read bag") -> None:
         super().__init__(path, shown, what)
         with self._read():
+            with self.path.open("rb") as f:  # a file of another kind says so, not a reader's
+                head = f.read(len(MCAP_MAGIC))  # struct error
+            if head != MCAP_MAGIC:
+                raise BagReadError(self.shown, what, "the file is empty" if not head else
+                                   "not an MCAP file (it does not start with MCAP's magic "
+                                   "bytes)")
             self._index = index = McapIndex(self.path)
         self.profile, summary = index.profile, index.summary
         encodings = {c.message_encoding for c in summary.channels.values()}

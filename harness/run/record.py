@@ -215,9 +215,10 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     with _half_written(run_dir):
         scores, frames, topics, sim_s = _score(scenario, loop, recorder, stats, run_dir,
                                                source)
-    if ended.stopped is not None:
+    if ended.stopped is not None:  # the gate that stopped the run first: the cause, then
+        # what came of it (topics that fell short of their rates, ...)
         scores = dataclasses.replace(
-            scores, health=(*scores.health, HealthResult(ended.gate, False, ended.stopped)))
+            scores, health=(HealthResult(ended.gate, False, ended.stopped), *scores.health))
     bdir = baselines_dir(source, baselines, scenario)
     summary = _summarize(scenario, loop, recorder, source=source, scores=scores,
                          topics=topics, sim_s=sim_s, ended=ended, bdir=bdir,

@@ -88,7 +88,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
             raise ScenarioError("--sut", name, f"no system under test named {name.strip()!r} "
                                 f"in {src / 'scenario.yaml'} (names: {names})")
         pairs.append((f"systems_under_test.{name.strip()}.plugin", plugin.strip()))
-    ros2_changes = (["ros2.enabled=true"] if ros2 else []) + [
+    ros2_changes = (["ros2.enabled=true"] if ros2 and not recorded.ros2.enabled else []) + [
         _external_override(load_scenario(src / "scenario.yaml", pairs), text, src)
         for text in externals]
     pairs += [parse_override(o) for o in ros2_changes]

@@ -40,6 +40,20 @@ def test_inspect_refuses_broken_bags(tmp_path: Path, capsys: pytest.CaptureFixtu
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err
     assert str(bag) in err
+    if broken == "truncated":  # said in words, with the way out
+        assert "the file is cut short or damaged" in err and "srr recover" in err, err
+
+
+def test_inspect_names_a_file_that_is_no_mcap_or_empty(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    for content, said in ((b"hello, this is text\n", "not an MCAP file"),
+                          (b"", "the file is empty")):
+        junk = tmp_path / "junk.mcap"
+        junk.write_bytes(content)
+        assert main(["inspect", str(junk)]) == 2
+        assert capsys.readouterr().err.strip().endswith(f"cannot read bag: {said}" +
+                                                        (" (it does not start with MCAP's "
+                                                         "magic bytes)" if content else ""))
 
 
 @pytest.mark.slow
