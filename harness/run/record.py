@@ -135,10 +135,13 @@ def prepare(run_dir: Path) -> bool:
     return run_dir.is_dir()
 
 
-def unprepare(run_dir: Path, existed: bool) -> None:
-    """A run that failed before :func:`record` took its directory leaves nothing there (the
-    external ROS 2 processes' logs, written as they start): the folder goes, or is emptied
-    when it was there before (:func:`prepare`'s answer)."""
+def unprepare(run_dir: Path, existed: bool, err: BaseException) -> None:
+    """A run that failed (``err``) before :func:`record` took its directory leaves nothing
+    there (the external ROS 2 processes' logs, written as they start): the folder goes, or
+    is emptied when it was there before (:func:`prepare`'s answer); unless ``err`` names a
+    file in it (an external node that died before it was ready: its log says why)."""
+    if str(run_dir) in str(err):
+        return
     if not existed:
         shutil.rmtree(run_dir, ignore_errors=True)
     elif run_dir.is_dir():

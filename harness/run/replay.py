@@ -125,11 +125,11 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
                        if e.kind == "pub"}
             participants.append(LiveViewParticipant(
                 LiveView.start(live, topics=topics, notice=notice), rep.bus))
-    except BaseException:
+    except BaseException as err:
         rep.close()
         for p in participants:
             p.shutdown()
-        unprepare(out_dir, existed)
+        unprepare(out_dir, existed, err)
         raise
     command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
                         *(f"--set {o}" for o in overrides), *(["--ros2"] if ros2 else []),

@@ -122,9 +122,9 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         view = (LiveView.start(live, topics={t.topic: t.msgtype for t in plan.topics
                                              if t.kind == "pub"}, notice=notice)
                 if live is not None else None)
-    except BaseException:
+    except BaseException as err:
         sim.close()
-        unprepare(run_dir, existed)
+        unprepare(run_dir, existed, err)
         raise
     # the run's own participants (harness.run.participants), shut down in reverse order
     participants: list[Participant] = ([LiveViewParticipant(view, sim.bus)]
@@ -135,11 +135,11 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
             participants.append(RtspParticipant(hub))
         world_map = (map_json(sim.world.world_file)  # the file's static geometry, for the map
                      if sim.world.world_file is not None else None)
-    except BaseException:
+    except BaseException as err:
         sim.close()
         for p in reversed(participants):
             p.shutdown()
-        unprepare(run_dir, existed)
+        unprepare(run_dir, existed, err)
         raise
     loop = Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
                 sim.srr_gt, command=reproduce_command(source, scenario, run_dir, user_baselines),
