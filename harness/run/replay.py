@@ -31,15 +31,7 @@ from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir
 from harness.run.judge import check_baseline
 from harness.run.participants import LiveViewParticipant
-from harness.run.record import (
-    Loop,
-    Progress,
-    RunResult,
-    Started,
-    prepare,
-    record,
-    unprepare,
-)
+from harness.run.record import Loop, Progress, RunResult, Started, prepare, record, unprepare
 from harness.run.simulate import Notice, ros2_bridge
 from harness.run.summary import RunSummary
 from harness.scenario import Scenario, load_scenario, parse_override, scenario_to_mapping

@@ -24,15 +24,7 @@ from harness.run.facts import default_run_dir, reproduce_command
 from harness.run.graphs import graphs_of
 from harness.run.judge import check_baseline
 from harness.run.participants import LiveViewParticipant, RtspParticipant
-from harness.run.record import (
-    Loop,
-    Progress,
-    RunResult,
-    Started,
-    prepare,
-    record,
-    unprepare,
-)
+from harness.run.record import Loop, Progress, RunResult, Started, prepare, record, unprepare
 from harness.scenario import Scenario, rate_warnings
 from harness.scoring import check_scoring
 from harness.sim.world_file import map_json
