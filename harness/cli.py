@@ -37,7 +37,7 @@ __all__ = ["main"]
 def _stderr() -> Console:
     from rich.console import Console
 
-    return Console(stderr=True, highlight=False, soft_wrap=True)
+    return Console(stderr=True, highlight=False, soft_wrap=True, emoji=False)
 
 
 @cache
@@ -45,7 +45,8 @@ def _stdout() -> Console:
     from rich.console import Console
 
     # Piped output (CI logs) gets wide tables instead of rich's 80-column default.
-    return Console(highlight=False, soft_wrap=True, width=None if sys.stdout.isatty() else 160)
+    return Console(highlight=False, soft_wrap=True, emoji=False,  # ':x:' is text, not ❌
+                   width=None if sys.stdout.isatty() else 160)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -641,6 +642,9 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 def _writable(option: str, path: Path | None) -> None:
     if path is not None and not path.parent.is_dir():
+        above = next((p for p in path.parents if p.exists()), None)
+        if above is not None and not above.is_dir():
+            raise SrrError(f"{option} {path}: {above} is a file, not a folder")
         raise SrrError(f"{option} {path}: directory {path.parent} does not exist")
     if path is not None and path.is_dir():
         raise SrrError(f"{option} {path}: is a directory, expected a file name")

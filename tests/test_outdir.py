@@ -70,3 +70,12 @@ def test_reason_without_a_bless_is_refused(capsys: pytest.CaptureFixture[str]) -
                                                      "--update-baselines")):
         assert main(argv) == 2
         assert capsys.readouterr().err.strip().splitlines()[-1].startswith(said)
+
+
+def test_a_file_option_under_a_file_says_so(tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    assert main(["schema", "--out", str(afile / "x.json")]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"srr schema: --out {afile / 'x.json'}: {afile} is a file, not a folder")

@@ -102,8 +102,11 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     out_dir = Path(out) if out is not None else default_run_dir(scenario, suffix="-replay")
     existed = prepare(out_dir)  # before the external processes write their logs into it
     withheld = _recorded_outputs(summary.sut_endpoints, recorded, source)
-    rep = Replay(scenario, playback, withheld, source,
-                 joined=ros2_bridge(scenario, out_dir, source))
+    try:
+        rep = Replay(scenario, playback, withheld, source,
+                     joined=ros2_bridge(scenario, out_dir, source))
+    except SrrError as err:
+        raise _named_by_flag(err, scenario, source, suts) from None
     participants: list[Participant] = []
     try:
         rep.start()
@@ -144,6 +147,20 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     return record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.ticks or scenario.n_ticks), progress=progress,
                    baselines=baselines, started=started, participants=participants)
+
+
+def _named_by_flag(err: SrrError, scenario: Scenario, source: str,
+                   suts: Sequence[str]) -> SrrError:
+    """``err`` about the plug-in a ``--sut NAME=module:Class`` gave, said of that flag (the
+    loader names the scenario's entry, whose plug-in the flag replaced), else ``err``."""
+    names = [s.name for s in scenario.systems_under_test]
+    for text in suts:
+        name = text.partition("=")[0].strip()
+        if name in names:
+            prefix = f"{source}: systems_under_test[{names.index(name)}].plugin: "
+            if str(err).startswith(prefix):
+                return SrrError(f"--sut {text}: {str(err)[len(prefix):]}")
+    return err
 
 
 def _external_override(scenario: Scenario, text: str, src: Path) -> str:

@@ -65,9 +65,9 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[tuple[str, Any]]) 
 
 
 def _list_index(items: list[Any], part: str) -> int | None:
-    if part.lstrip("-").isdigit():
+    if part.isdigit():  # an index from 0, as error messages count (no Python negatives)
         idx = int(part)
-        return idx if -len(items) <= idx < len(items) else None
+        return idx if idx < len(items) else None
     for i, item in enumerate(items):
         if isinstance(item, dict) and item.get("name") == part:
             return i

@@ -96,7 +96,8 @@ def test_a_run_recorded_before_outputs_were_kept_still_replays(
     (["--set", "duration=5"], "--set: duration: changes the recorded scene"),
     (["--sut", "percepton=x:Y"], "--sut: percepton: no system under test named 'percepton'"),
     (["--sut", "perception"], "--sut: perception: expected NAME=module:Class"),
-    (["--sut", "perception=no_such_module:X"], "cannot import module 'no_such_module'"),
+    (["--sut", "perception=no_such_module:X"],  # said of the flag that named it, verbatim
+     "srr replay: --sut perception=no_such_module:X: cannot import module 'no_such_module'"),
     (["--set", "systems_under_test.perception.params.max_rang=3"], "max_rang: unknown field"),
 ])
 def test_bad_replay_arguments_exit_2(recorded: api.RunResult, tmp_path: Path,

@@ -64,3 +64,11 @@ def test_extending_with_plus_is_for_scenario_files() -> None:
     with pytest.raises(ScenarioError, match=r"to add to a list, write `robots\+:` in a "
                                             "scenario file"):
         parse_override("robots+=[]")
+
+
+def test_a_list_index_counts_from_zero_only(scenarios_dir: Path) -> None:
+    """``robots.-1`` is no item (error messages count items from 0; a Python negative index
+    would quietly pick the last)."""
+    path = scenarios_dir / "forklift_warehouse.yaml"
+    with pytest.raises(ScenarioError, match=r"robots\.-1: no list item with that index or name"):
+        load_scenario(path, [parse_override("robots.-1.name=x")])
