@@ -21,6 +21,7 @@ from harness.blas import one_blas_thread
 from harness.errors import SrrError, shorten
 from harness.interrupt import INTERRUPTED_EXIT, StopRequests
 from harness.live.config import DEFAULT_PORT
+from harness.outdir import file_above
 from harness.summary import recording_note, replay_note
 
 if TYPE_CHECKING:
@@ -642,8 +643,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 def _writable(option: str, path: Path | None) -> None:
     if path is not None and not path.parent.is_dir():
-        above = next((p for p in path.parents if p.exists()), None)
-        if above is not None and not above.is_dir():
+        above = file_above(path)
+        if above is not None:
             raise SrrError(f"{option} {path}: {above} is a file, not a folder")
         raise SrrError(f"{option} {path}: directory {path.parent} does not exist")
     if path is not None and path.is_dir():

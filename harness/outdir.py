@@ -9,7 +9,14 @@ from pathlib import Path
 
 from harness.errors import SrrError
 
-__all__ = ["check_out_folder"]
+__all__ = ["check_out_folder", "file_above"]
+
+
+def file_above(path: Path) -> Path | None:
+    """The nearest existing folder of ``path``'s when it is in fact a file (no folder can be
+    made under it), else None."""
+    above = next((p for p in Path(path).parents if p.exists()), None)
+    return above if above is not None and not above.is_dir() else None
 
 
 def check_out_folder(path: Path, option: str = "--out") -> None:
@@ -19,8 +26,8 @@ def check_out_folder(path: Path, option: str = "--out") -> None:
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise SrrError(f"{option} {path}: is a file, not a folder")
-    above = next((p for p in path.parents if p.exists()), None)
-    if above is not None and not above.is_dir():
+    above = file_above(path)
+    if above is not None:
         raise SrrError(f"{option} {path}: {above} is a file, not a folder")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

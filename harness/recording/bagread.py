@@ -44,6 +44,7 @@ import zstandard
 from mcap.exceptions import EndOfFile, InvalidMagic, McapError, RecordLengthLimitExceeded
 from mcap.reader import make_reader
 from mcap.records import Channel, Message, Schema
+from mcap.writer import MCAP0_MAGIC
 from rosbags.rosbag1 import Reader as Rosbag1Reader
 from rosbags.rosbag1 import ReaderError as Rosbag1ReaderError
 from rosbags.rosbag2 import Reader as Rosbag2Reader
@@ -91,7 +92,6 @@ DECODE_ERRORS: tuple[type[Exception], ...] = (SerdeError, Ros1TypeError, *DATA_E
 
 #: What the mcap reader raises for a file that ends early (a run killed mid-write).
 _CUT: tuple[type[Exception], ...] = (InvalidMagic, RecordLengthLimitExceeded, EndOfFile)
-MCAP_MAGIC = b"\x89MCAP0\r\n"
 _CUT_WORDS = ("end magic is invalid", "unexpected end", "exceeds limit")
 
 
@@ -329,8 +329,8 @@ class _Mcap(Recording):
         super().__init__(path, shown, what)
         with self._read():
             with self.path.open("rb") as f:  # a file of another kind says so, not a reader's
-                head = f.read(len(MCAP_MAGIC))  # struct error
-            if head != MCAP_MAGIC:
+                head = f.read(len(MCAP0_MAGIC))  # struct error
+            if head != MCAP0_MAGIC:
                 raise BagReadError(self.shown, what, "the file is empty" if not head else
                                    "not an MCAP file (it does not start with MCAP's magic "
                                    "bytes)")

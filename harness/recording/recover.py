@@ -35,6 +35,7 @@ import yaml
 from mcap.reader import make_reader
 from mcap.records import Channel, Chunk, Footer, Header, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.writer import MCAP0_MAGIC
 
 from harness import yamlio
 from harness.recording.bagfile import (
@@ -52,7 +53,6 @@ from harness.recording.recorder import TopicStats, digest_update
 
 __all__ = ["RecoveredBag", "locate_mcap", "recover_bag"]
 
-MAGIC = b"\x89MCAP0\r\n"
 _FOOTER_HEAD = bytes([0x02]) + struct.pack("<Q", 20)
 # What the mcap reader raises on bytes that do not parse (short reads, bad lengths, bad text,
 # a chunk that does not decompress); not OSError: a read that fails is not a cut in the file.
@@ -125,21 +125,21 @@ def _check_start(path: Path, size: int) -> None:
     if size == 0:
         raise BagError(f"{path}: empty file (0 bytes): nothing to recover")
     with path.open("rb") as f:
-        head = f.read(len(MAGIC))
-    if head != MAGIC:
-        if MAGIC.startswith(head):
+        head = f.read(len(MCAP0_MAGIC))
+    if head != MCAP0_MAGIC:
+        if MCAP0_MAGIC.startswith(head):
             raise BagError(f"{path}: cut inside the MCAP magic ({size} bytes): nothing to "
                            "recover")
         raise BagError(f"{path}: not an MCAP file (starts with {head!r}, not the MCAP magic)")
 
 
 def _ends_with_footer(path: Path, size: int) -> bool:
-    if size < 2 * len(MAGIC) + 29:
+    if size < 2 * len(MCAP0_MAGIC) + 29:
         return False
     with path.open("rb") as f:
         f.seek(size - 37)
         tail = f.read(37)
-    return tail[-8:] == MAGIC and tail[:9] == _FOOTER_HEAD
+    return tail[-8:] == MCAP0_MAGIC and tail[:9] == _FOOTER_HEAD
 
 
 class _Prefix:

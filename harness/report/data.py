@@ -10,7 +10,6 @@ is what was scored: the expected mute state comes from
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -28,6 +27,7 @@ from harness.metrics.control import robot_poses, route_distance
 from harness.metrics.perception import align_frames, assign
 from harness.metrics.safety import Tripwire, expected_muted
 from harness.recording.bagread import ros1_recording
+from harness.regression import load_baseline
 from harness.scenario import Scenario, load_scenario
 from harness.scoring import scenario_frames, within_area
 from harness.summary import read_summary
@@ -274,11 +274,10 @@ def _blessed_since(base: Mapping[str, Any]) -> bool:
     """Whether the baseline file the run was judged against now holds another recording
     (its ``digest`` is not the one the run's summary recorded of it)."""
     try:
-        now = json.loads(Path(str(base.get("path"))).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False  # gone or unreadable: the reference file says what there is
-    return isinstance(now, dict) and bool(base.get("digest")) and \
-        now.get("digest") != base.get("digest")
+        now = load_baseline(Path(str(base.get("path"))))
+    except SrrError:
+        return False  # unreadable (or gone: None): the reference file says what there is
+    return now is not None and bool(base.get("digest")) and now.digest != base.get("digest")
 
 
 def _reference(data: RunData, scenario: Scenario) -> RunData | None:

@@ -11,17 +11,22 @@ import yaml
 from harness import yamlio
 from harness.errors import ScenarioError
 
-__all__ = ["apply_overrides", "parse_override"]
+__all__ = ["apply_overrides", "dotted", "parse_override"]
 
 
 _INDEX = re.compile(r"\[(-?\d+)\]")
 
 
+def dotted(path: str) -> str:
+    """``workers[0].speed``, as every error message writes a list item, as ``--set`` paths
+    write it: ``workers.0.speed``."""
+    return _INDEX.sub(r".\1", path)
+
+
 def parse_override(text: str) -> tuple[str, Any]:
     """``"robots.forklift.spawn.position=[1, 2, 0]"`` → (path, parsed YAML value)."""
     key, sep, value = text.partition("=")
-    # ``workers[0].speed``, as every error message writes a list item, is ``workers.0.speed``
-    key = _INDEX.sub(r".\1", key.strip())
+    key = dotted(key.strip())
     if not sep or not key:
         raise ScenarioError("--set", text, "expected KEY=VALUE")
     if key.endswith("+"):  # '+' extends an include's list in a scenario file

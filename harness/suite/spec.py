@@ -22,7 +22,6 @@ fragments in it are skipped). Every error names the file and the field.
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,6 +32,7 @@ import yaml
 from harness import yamlio
 from harness.errors import ScenarioError, SrrError
 from harness.scenario import load_scenario, parse_override
+from harness.scenario.overrides import dotted
 from harness.suite.sweep import SweepParam, parse_sweep
 from harness.validation import validate
 
@@ -204,8 +204,8 @@ def _entry(item: str | EntryFile, raw: Any, base: Path, file: str, field: str,
         # a value the entry's set: gave is the suite file's to answer for, wherever the
         # loader found it wrong (an unknown key, a value out of range)
         keys = [parse_override(o)[0] for o in overrides]  # dotted, as the loader got them
-        dotted = re.sub(r"\[(\d+)\]", r".\1", err.field)
-        ours = err.file == "--set" or any(dotted == k or dotted.startswith(f"{k}.")
+        where = dotted(err.field)
+        ours = err.file == "--set" or any(where == k or where.startswith(f"{k}.")
                                           for k in keys)
         if not ours:
             raise
