@@ -156,12 +156,14 @@ def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_tick
            progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
            update_reason: str = "", free_space: FreeSpace = disk_free,
            participants: Sequence[Participant] = (),
-           started: Started | None = None, video: bool = True) -> RunResult:
+           started: Started | None = None, video: bool = True,
+           existed: bool = False) -> RunResult:
     """:func:`write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
     created and locked first (a live owner is refused), and released, its lock file
     removed, however the run ends (``kill -9`` releases the lock too). ``participants``
-    (started) are shut down after that, in reverse order, however the run ends."""
-    existed = run_dir.is_dir()  # made (empty) by the user: a failed run leaves it so
+    (started) are shut down after that, in reverse order, however the run ends.
+    ``existed``: :func:`prepare`'s answer, the (empty) folder was the user's before the run
+    (not one the external ROS 2 processes' logs made since): a failed run leaves it."""
     with contextlib.ExitStack() as owned:
         if existed:
             owned.callback(lambda: run_dir.mkdir(exist_ok=True))

@@ -146,7 +146,8 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
                 output=playback.output, graphs=graphs)
     return record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.ticks or scenario.n_ticks), progress=progress,
-                   baselines=baselines, started=started, participants=participants)
+                   baselines=baselines, started=started, participants=participants,
+                   existed=existed)
 
 
 def _named_by_flag(err: SrrError, scenario: Scenario, source: str,

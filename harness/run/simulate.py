@@ -141,7 +141,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     return record(scenario, loop, source=source, run_dir=run_dir, n_ticks=scenario.n_ticks,
                   progress=progress, baselines=baselines, update_baseline=update_baseline,
                   update_reason=update_reason, free_space=free_space,
-                  participants=participants, started=started, video=video)
+                  participants=participants, started=started, video=video, existed=existed)
 
 
 def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>",
