@@ -37,6 +37,8 @@ from harness.video.errors import StreamError
 __all__ = ["DEFAULT_HOST", "RtspHub", "RtspStream", "StreamConfig"]
 
 DEFAULT_HOST = "127.0.0.1"
+#: Threads serving one port's RTSP clients, at most (each client has one while it is there).
+CLIENT_THREADS = 64
 _LAUNCH = ("( appsrc name=src is-live=true format=time do-timestamp=false "
            "caps=video/x-h264,stream-format=byte-stream,alignment=au "
            "! rtph264pay name=pay0 pt=96 config-interval=-1 )")
@@ -204,6 +206,11 @@ class RtspHub:
                               f"{self._host[config.port]}, not {config.host}")
         if entry is None:
             server = G.GstRtspServer.RTSPServer.new()
+            # A client's DESCRIBE waits for the mount's first keyframe (the SDP carries its
+            # SPS and PPS), which comes only once the run starts; with the server's default
+            # one thread for all its clients, that wait would hold every other client of the
+            # port (other mounts' included) until then.
+            server.get_thread_pool().set_max_threads(CLIENT_THREADS)
             server.set_address(config.host)
             server.set_service(str(config.port))
             try:

@@ -8,6 +8,7 @@ sleep), and the frames stop once the second has what it needs."""
 
 from __future__ import annotations
 
+import socket
 import threading
 from dataclasses import dataclass, field
 
@@ -162,3 +163,28 @@ def test_port_zero_serves_on_the_port_the_system_picked() -> None:
         assert stream.port > 0 and other.port == stream.port
         assert stream.url == f"rtsp://127.0.0.1:{stream.port}/cam"
         assert hub.stream(StreamConfig(0, "/cam")) is stream
+
+
+def _describe(url: str, port: int) -> socket.socket:
+    """Connect and send a DESCRIBE without waiting for its answer (which the server gives only
+    once a keyframe has flowed)."""
+    sock = socket.create_connection(("127.0.0.1", port), timeout=10)
+    sock.sendall(f"DESCRIBE {url} RTSP/1.0\r\nCSeq: 1\r\nAccept: application/sdp\r\n\r\n"
+                 .encode())
+    return sock
+
+
+def test_clients_of_two_mounts_on_one_port_wait_for_the_run_together() -> None:
+    # rtsp.wait_s holds the run until every mount has a client; a client's DESCRIBE waits for
+    # the first keyframe, which only the run makes. With one thread for all of a port's
+    # clients, the first DESCRIBE held the second mount's client until the wait ran out.
+    with RtspHub() as hub:
+        a = hub.stream(StreamConfig(0, "/camA"))
+        b = hub.stream(StreamConfig(0, "/cams/b"))
+        socks = [_describe(s.url, s.port) for s in (a, b)]
+        try:
+            assert hub.wait_for_clients(5.0) == []
+            assert (a.clients, b.clients) == (1, 1)
+        finally:
+            for sock in socks:
+                sock.close()
