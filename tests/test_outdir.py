@@ -79,3 +79,19 @@ def test_a_file_option_under_a_file_says_so(tmp_path: Path,
     assert main(["schema", "--out", str(afile / "x.json")]) == 2
     assert capsys.readouterr().err.strip() == (
         f"srr schema: --out {afile / 'x.json'}: {afile} is a file, not a folder")
+
+
+def test_remove_empty_undoes_only_what_making_a_folder_made(tmp_path: Path) -> None:
+    from harness.outdir import first_missing, remove_empty
+
+    run = tmp_path / "reports" / "scene" / "run1"
+    made = first_missing(run)
+    assert made == tmp_path / "reports"
+    run.mkdir(parents=True)
+    (tmp_path / "reports" / "other").mkdir()  # another run's, made meanwhile
+    remove_empty(run, made)
+    assert not (tmp_path / "reports" / "scene").exists()
+    assert (tmp_path / "reports" / "other").is_dir()  # not empty: stays, and so does reports
+    remove_empty(tmp_path / "elsewhere", made)  # not under what was made: nothing happens
+    assert (tmp_path / "reports").is_dir()
+    assert first_missing(tmp_path) is None

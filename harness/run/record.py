@@ -48,7 +48,7 @@ from harness.errors import RunStopped, SrrError
 from harness.interrupt import INTERRUPTED_EXIT, StopRequests
 from harness.memory import release_free_memory
 from harness.metrics.types import HealthResult
-from harness.outdir import check_out_folder
+from harness.outdir import check_out_folder, first_missing, remove_empty
 from harness.output import ROS2_OUTPUT, OutputKind
 from harness.recording.bagfile import ChunkPolicy
 from harness.regression import baseline_path, save_baseline
@@ -125,25 +125,29 @@ class Loop:
     output: OutputKind = ROS2_OUTPUT  # what the recorder writes (harness.output)
 
 
-def prepare(run_dir: Path) -> bool:
+def prepare(run_dir: Path) -> Path | None:
     """Refuse a run directory another process is writing, one that is not empty, or a path
-    where no folder can be; whether the (empty) folder exists already."""
+    where no folder can be. Returns the folder a failed start must remove: the outermost one
+    that making ``run_dir`` creates (``reports/<scenario>`` for the first run of a scenario),
+    or None when ``run_dir`` is an empty folder already (the user's: a failed start empties
+    it). Nothing is made here."""
     check_out_folder(run_dir)
     runlock.refuse_if_live(run_dir)
     if run_dir.exists() and any(run_dir.iterdir()):
         raise SrrError(f"--out {run_dir}: directory exists and is not empty")
-    return run_dir.is_dir()
+    return first_missing(run_dir)
 
 
-def unprepare(run_dir: Path, existed: bool, err: BaseException) -> None:
+def unprepare(run_dir: Path, made: Path | None, err: BaseException) -> None:
     """A run that failed (``err``) before :func:`record` took its directory leaves nothing
-    there (the external ROS 2 processes' logs, written as they start): the folder goes, or
-    is emptied when it was there before (:func:`prepare`'s answer); unless ``err`` names a
-    file in it (an external node that died before it was ready: its log says why)."""
+    there (the external ROS 2 processes' logs, written as they start): what :func:`prepare`
+    said the run would make goes, or the user's folder is emptied (``made`` None); unless
+    ``err`` names a file in it (an external node that died before it was ready: its log says
+    why)."""
     if str(run_dir) in str(err):
         return
-    if not existed:
-        shutil.rmtree(run_dir, ignore_errors=True)
+    if made is not None:
+        shutil.rmtree(made, ignore_errors=True)
     elif run_dir.is_dir():
         for child in run_dir.iterdir():
             if child.is_dir() and not child.is_symlink():
@@ -157,13 +161,15 @@ def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_tick
            update_reason: str = "", free_space: FreeSpace = disk_free,
            participants: Sequence[Participant] = (),
            started: Started | None = None, video: bool = True,
-           existed: bool = False) -> RunResult:
+           existed: bool = False, made: Path | None = None) -> RunResult:
     """:func:`write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
     created and locked first (a live owner is refused), and released, its lock file
     removed, however the run ends (``kill -9`` releases the lock too). ``participants``
     (started) are shut down after that, in reverse order, however the run ends.
     ``existed``: :func:`prepare`'s answer, the (empty) folder was the user's before the run
-    (not one the external ROS 2 processes' logs made since): a failed run leaves it."""
+    (not one the external ROS 2 processes' logs made since): a failed run leaves it.
+    ``made``: the outermost folder making ``run_dir`` created (:func:`prepare`); a run that
+    fails and removes ``run_dir`` removes the empty folders up to it too."""
     with contextlib.ExitStack() as owned:
         if existed:
             owned.callback(lambda: run_dir.mkdir(exist_ok=True))
@@ -176,10 +182,15 @@ def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_tick
         except BaseException:
             loop.close()  # which write_run does once it runs
             raise
-        return write_run(scenario, loop, source=source, run_dir=run_dir, n_ticks=n_ticks,
-                         progress=progress, baselines=baselines,
-                         update_baseline=update_baseline, update_reason=update_reason,
-                         free_space=free_space, participants=participants, video=video)
+        try:
+            return write_run(scenario, loop, source=source, run_dir=run_dir, n_ticks=n_ticks,
+                             progress=progress, baselines=baselines,
+                             update_baseline=update_baseline, update_reason=update_reason,
+                             free_space=free_space, participants=participants, video=video)
+        except BaseException:
+            if made is not None and not run_dir.exists():
+                remove_empty(run_dir.parent, made)
+            raise
 
 
 @dataclass(frozen=True)
@@ -345,7 +356,8 @@ def _interrupted(loop: Loop, recorder: Any, run_dir: Path) -> _Ended:
         with contextlib.suppress(Exception):
             recorder.close()
         shutil.rmtree(run_dir, ignore_errors=True)
-        raise KeyboardInterrupt
+        raise KeyboardInterrupt(f"before the first tick: nothing was recorded and {run_dir} "
+                                "was removed")
     return _Ended(interrupted=True)
 
 

@@ -100,7 +100,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         raise SrrError(f"{src}: --ros2: the live ROS 2 bridge plays ROS 2 messages, and "
                        f"{playback.output.because}")
     out_dir = Path(out) if out is not None else default_run_dir(scenario, suffix="-replay")
-    existed = prepare(out_dir)  # before the external processes write their logs into it
+    made = prepare(out_dir)  # before the external processes write their logs into it
     withheld = _recorded_outputs(summary.sut_endpoints, recorded, source)
     try:
         rep = Replay(scenario, playback, withheld, source,
@@ -124,7 +124,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         rep.close()
         for p in participants:
             p.shutdown()
-        unprepare(out_dir, existed, err)
+        unprepare(out_dir, made, err)
         raise
     command = " ".join(["srr replay", str(src), *(f"--sut {t}" for t in suts),
                         *(f"--set {o}" for o in overrides), *(["--ros2"] if ros2 else []),
@@ -147,7 +147,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
     return record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.ticks or scenario.n_ticks), progress=progress,
                    baselines=baselines, started=started, participants=participants,
-                   existed=existed)
+                   existed=made is None, made=made)
 
 
 def _named_by_flag(err: SrrError, scenario: Scenario, source: str,

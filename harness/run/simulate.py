@@ -95,7 +95,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     check_baseline(scenario, baselines)  # and a malformed baseline
     if scenario.baselines is not None:  # the run's scenario.yaml names it wherever it is read
         scenario = dataclasses.replace(scenario, baselines=str(baselines))
-    existed = prepare(run_dir)
+    made = prepare(run_dir)
     size_note = large_bag_notice(scenario, check_free_space(scenario, run_dir, free_space))
     if size_note is not None and notice is not None:
         notice(size_note)
@@ -116,7 +116,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
                 if live is not None else None)
     except BaseException as err:
         sim.close()
-        unprepare(run_dir, existed, err)
+        unprepare(run_dir, made, err)
         raise
     # the run's own participants (harness.run.participants), shut down in reverse order
     participants: list[Participant] = ([LiveViewParticipant(view, sim.bus)]
@@ -131,7 +131,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
         sim.close()
         for p in reversed(participants):
             p.shutdown()
-        unprepare(run_dir, existed, err)
+        unprepare(run_dir, made, err)
         raise
     loop = Loop(sim.bus, sim.suts, sim.step_tick, sim.close, lambda: sim.tick_index,
                 sim.srr_gt, command=reproduce_command(source, scenario, run_dir, user_baselines),
@@ -141,7 +141,8 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     return record(scenario, loop, source=source, run_dir=run_dir, n_ticks=scenario.n_ticks,
                   progress=progress, baselines=baselines, update_baseline=update_baseline,
                   update_reason=update_reason, free_space=free_space,
-                  participants=participants, started=started, video=video, existed=existed)
+                  participants=participants, started=started, video=video,
+                  existed=made is None, made=made)
 
 
 def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>",

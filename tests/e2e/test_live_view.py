@@ -148,6 +148,23 @@ def test_a_port_in_use_exits_2_with_one_line(tmp_path: Path,
     assert not (tmp_path / "r").exists()
 
 
+@pytest.mark.parametrize("out", [None, "a/b/r"])
+def test_a_refused_run_leaves_no_folder_behind(out: str | None, tmp_path: Path,
+                                               monkeypatch: pytest.MonkeyPatch,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    # the default run directory (reports/<scenario>/<run id>) or one under folders that do
+    # not exist yet: refused once the scene is built, it left reports/<scenario>/ (or a/b/)
+    monkeypatch.chdir(tmp_path)
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        code = main(["run", str(SCENARIO), *(["--out", out] if out else []), *SHORT,
+                     "--foxglove", "--foxglove-port", str(port)])
+    assert code == 2, capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize(("args", "message"), [
     (["--foxglove", "--foxglove-port", "70000"],
      "srr run: --foxglove-port: must be a port number 0..65535, got 70000"),
