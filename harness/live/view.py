@@ -263,7 +263,8 @@ class LiveView:
             while came and time.monotonic() - self._last_subscribe < SETTLE_S:
                 time.sleep(0.05)
             self._notice("a Foxglove client is connected; running" if came else
-                         f"no Foxglove client after {self.config.wait_s:g} s; running anyway")
+                         f"no Foxglove client subscribed to a topic within "
+                         f"{self.config.wait_s:g} s; running anyway")
         self._pacer.start()
         return came
 

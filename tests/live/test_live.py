@@ -165,7 +165,8 @@ def test_wait_gives_up_after_its_time_and_says_so() -> None:
         assert live.wait_for_client() is False
         assert 0.2 <= time.monotonic() - t0 < 5.0
     assert notices[-2:] == [f"waiting up to 0.2 s for a Foxglove client on {live.url}",
-                            "no Foxglove client after 0.2 s; running anyway"]
+                            "no Foxglove client subscribed to a topic within 0.2 s; "
+                            "running anyway"]
 
 
 def test_a_port_in_use_is_one_clear_error() -> None:
