@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import typing
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -57,9 +57,11 @@ def _refine(cls: type, name: str, raw: Mapping[Any, Any], hinted: Any) -> Any:
     return hinted
 
 
-def validate_dataclass(cls: type[T], raw: Any, file: str, field: str) -> T:
+def validate_dataclass(cls: type[T], raw: Any, file: str | Callable[[str], str],
+                       field: str) -> T:
     """Validate ``raw`` into the frozen dataclass ``cls`` with the scenario rules (used for
-    plug-in parameters); errors name ``file`` and ``field``."""
+    plug-in parameters); errors name ``file`` (or the file it gives for a field path) and
+    ``field``."""
     return validate(cls, raw, file, field, refine=_refine)
 
 
@@ -87,9 +89,10 @@ def load_scenario(path: str | Path,
     data = read_yaml(p, shown)
     data = expand_includes(p, data, origins)
     if overrides:
-        apply_overrides(data, overrides)
         for key, _ in overrides:
             origins.by_key.setdefault(key.split(".", 1)[0], shown)
+        # a value a --set gave is the flag's to answer for, wherever it is found wrong
+        origins.by_key.update(dict.fromkeys(apply_overrides(data, overrides), "--set"))
     sc = scenario_from_mapping(data, shown, origins.by_key)
     return dataclasses.replace(sc, overrides=tuple(overrides)) if overrides else sc
 

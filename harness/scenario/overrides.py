@@ -41,11 +41,15 @@ def parse_override(text: str) -> tuple[str, Any]:
     return key, parsed
 
 
-def apply_overrides(data: dict[str, Any], overrides: Sequence[tuple[str, Any]]) -> None:
-    """Apply dotted-path overrides in place. List items can be addressed by index or ``name``."""
+def apply_overrides(data: dict[str, Any], overrides: Sequence[tuple[str, Any]]) -> list[str]:
+    """Apply dotted-path overrides in place. List items can be addressed by index or ``name``.
+    Returns the field path each override set, as error messages write it
+    (``systems_under_test.teleop.params.rate_hz`` → ``systems_under_test[0].params.rate_hz``)."""
+    fields = []
     for key, value in overrides:
         parts = key.split(".")
         node: Any = data
+        field = ""
         for depth, part in enumerate(parts):
             last = depth == len(parts) - 1
             where = ".".join(parts[: depth + 1])
@@ -53,11 +57,13 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[tuple[str, Any]]) 
                 idx = _list_index(node, part)
                 if idx is None:
                     raise ScenarioError("--set", where, "no list item with that index or name")
+                field += f"[{idx}]"
                 if last:
                     node[idx] = value
                 else:
                     node = node[idx]
             elif isinstance(node, dict):
+                field = f"{field}.{part}" if field else part
                 if last:
                     node[part] = value
                 else:
@@ -67,6 +73,8 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[tuple[str, Any]]) 
             else:
                 raise ScenarioError("--set", where, "cannot set a field inside a "
                                     f"{type(node).__name__}")
+        fields.append(field)
+    return fields
 
 
 def _list_index(items: list[Any], part: str) -> int | None:
