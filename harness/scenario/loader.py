@@ -50,6 +50,37 @@ def _control_type(model: Any) -> type:
         else ForkliftControl
 
 
+_DRIVE_OF_CONTROL: dict[type, str] = {ForkliftControl: "swivel_drive",
+                                       DiffDriveControl: "diff_drive"}
+
+
+def _check_control_fields(data: Mapping[str, Any], v: Validator) -> None:
+    """A robot's ``control:`` field that belongs with the other drive (``joint_names`` on a
+    swivel-drive robot, ``wheelbase`` on a diff-drive one) is refused naming the robot's
+    drive, not as an unknown field."""
+    robots = data.get("robots")
+    for i, robot in enumerate(robots if isinstance(robots, list) else ()):
+        control = robot.get("control") if isinstance(robot, dict) else None
+        if not isinstance(control, dict):
+            continue
+        model = robot.get("model")
+        cls = _control_type(model)
+        ours = [f.name for f in dataclasses.fields(cls)]
+        other = next(c for c in _DRIVE_OF_CONTROL if c is not cls)
+        theirs = {f.name for f in dataclasses.fields(other)} - set(ours)
+        for key in control:
+            if key in theirs:
+                drive = _DRIVE_OF_CONTROL[cls]
+                if isinstance(model, dict):
+                    said = (f"robots[{i}].model.drive is {drive!r}"
+                            + ("" if "drive" in model else " (the default)"))
+                else:
+                    said = f"robots[{i}].model is {model!r}, a {drive} robot"
+                v.fail(f"robots[{i}].control.{key}",
+                       f"belongs with drive {_DRIVE_OF_CONTROL[other]!r}, and {said}; a "
+                       f"{drive} control block takes {', '.join(ours)}")
+
+
 def _refine(cls: type, name: str, raw: Mapping[Any, Any], hinted: Any) -> Any:
     """A robot's ``control:`` is read as the block its ``model`` calls for."""
     if cls is RobotSpec and name == "control":
@@ -74,6 +105,7 @@ def scenario_from_mapping(data: Mapping[str, Any], file: str = "<scenario>",
     v = Validator(orig.file_for, refine=_refine)
     if "format_version" not in data:
         v.fail("format_version", f"required field is missing (use {FORMAT_VERSION})")
+    _check_control_fields(data, v)
     sc = v.dataclass(Scenario, dict(data), "")
     check_semantics(sc, v)
     sc = resolve_names(sc)

@@ -203,7 +203,19 @@ ASCII_STL = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0
     (lambda t: diffbot(sensors={"lidar": {"link": "lidar_lnk"}}), "robots[0].sensors.lidar.link",
      ["srr_diffbot.urdf has no link 'lidar_lnk'", "did you mean 'lidar_link'"]),
     (lambda t: diffbot(control={"joint_names": ["a", "b"], "wheelbase": 1.0}),
-     "robots[0].control.wheelbase", ["unknown field"]),
+     "robots[0].control.wheelbase",  # a field of the other drive: said of the drive
+     ["belongs with drive 'swivel_drive', and robots[0].model.drive is 'diff_drive' (the "
+      "default); a diff_drive control block takes enabled, cmd_vel_topic, joint_names, "]),
+    (lambda t: pallet(control={**PALLET_CONTROL, "joint_names": ["a", "b"]}),
+     "robots[0].control.joint_names",
+     ["belongs with drive 'diff_drive', and robots[0].model.drive is 'swivel_drive'; a "
+      "swivel_drive control block takes enabled, cmd_vel_topic, wheelbase, "]),
+    (lambda t: {"name": "fl", "model": "forklift", "control": {"wheel_distance": 1.0}},
+     "robots[0].control.wheel_distance",
+     ["belongs with drive 'diff_drive', and robots[0].model is 'forklift', a swivel_drive "
+      "robot"]),
+    (lambda t: diffbot(control={**DIFF_CONTROL, "wheelbas": 1.0}),
+     "robots[0].control.wheelbas", ["unknown field"]),  # of neither drive: a typo
     (lambda t: pallet(model={"urdf": "x.urdf"}), "robots[0].model",
      ["exactly one of 'urdf', 'mjcf' and 'xacro'"]),
 ])
