@@ -18,6 +18,7 @@ from typing import Any
 
 from harness.scenario.checks import RATE_TOLERANCE, check_semantics, rate_warnings, sensor_rates
 from harness.scenario.includes import Origins, expand_includes, read_yaml
+from harness.scenario.origins import SET_FLAG
 from harness.scenario.overrides import apply_overrides, parse_override
 from harness.scenario.resolve import graph_name, resolve_names
 from harness.scenario.schema import (
@@ -124,7 +125,7 @@ def load_scenario(path: str | Path,
         for key, _ in overrides:
             origins.by_key.setdefault(key.split(".", 1)[0], shown)
         # a value a --set gave is the flag's to answer for, wherever it is found wrong
-        origins.by_key.update(dict.fromkeys(apply_overrides(data, overrides), "--set"))
+        origins.by_key.update(dict.fromkeys(apply_overrides(data, overrides), SET_FLAG))
     sc = scenario_from_mapping(data, shown, origins.by_key)
     return dataclasses.replace(sc, overrides=tuple(overrides)) if overrides else sc
 

@@ -939,3 +939,9 @@ class Scenario:
         ``--set`` gave, a list item, then a top-level key), else ``default`` (also for a
         graph node's attribute path, ``/World/...``, which no origin names)."""
         return origin_of(self.origins, path) or default
+
+    def source_file(self, path: str, default: str) -> str:
+        """The file the value at field ``path`` was read from, what relative paths in it are
+        relative to: :meth:`file_for`, but for a value a ``--set`` gave the file it was set
+        on (never the flag)."""
+        return origin_of(self.origins, path, files_only=True) or default

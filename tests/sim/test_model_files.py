@@ -389,3 +389,20 @@ def test_a_model_mujoco_cannot_build_names_the_robot_and_its_file(
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"srr validate: {scenario}: robots[0].model: {bare}: MuJoCo cannot "
                           "build the robot from it: Error: mass and inertia"), err
+
+
+def test_a_robot_a_set_gives_finds_its_model_from_the_scenario_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A model path in a value ``--set`` gave is relative to the scenario file it was set
+    on, as one written there, from any directory; an error in it is said of the flag."""
+    shutil.copytree(MODELS / "srr_diffbot", tmp_path / "scene" / "srr_diffbot")
+    path = write(tmp_path / "scene", pallet())
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    bot = diffbot(model={"urdf": "srr_diffbot/urdf/srr_diffbot.urdf", "package_paths": ["."]})
+    sc = load_scenario(path, [("robots.0", bot)])
+    api.validate(sc, source=str(path))  # found beside the scenario, not in the cwd
+    bot["control"]["joint_names"] = ["left_wheel_hing", "right_wheel_hinge"]
+    with pytest.raises(ScenarioError) as info:
+        api.validate(load_scenario(path, [("robots.0", bot)]), source=str(path))
+    assert (info.value.file, info.value.field) == ("--set", "robots[0].control.joint_names[0]")
