@@ -11,15 +11,17 @@ Every error names the file the value came from and the field path inside it
 from __future__ import annotations
 
 import dataclasses
+import json
 import typing
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from harness.errors import ScenarioError
 from harness.scenario.checks import RATE_TOLERANCE, check_semantics, rate_warnings, sensor_rates
 from harness.scenario.includes import Origins, expand_includes, read_yaml
 from harness.scenario.origins import SET_FLAG
-from harness.scenario.overrides import apply_overrides, parse_override
+from harness.scenario.overrides import apply_overrides, parse_override, split_key
 from harness.scenario.resolve import graph_name, resolve_names
 from harness.scenario.schema import (
     FORMAT_VERSION,
@@ -27,6 +29,7 @@ from harness.scenario.schema import (
     ForkliftControl,
     RobotSpec,
     Scenario,
+    ToleranceSpec,
 )
 from harness.validation import Validator, validate
 
@@ -123,11 +126,36 @@ def load_scenario(path: str | Path,
     data = expand_includes(p, data, origins)
     if overrides:
         for key, _ in overrides:
-            origins.by_key.setdefault(key.split(".", 1)[0], shown)
+            origins.by_key.setdefault(split_key(key)[0], shown)
         # a value a --set gave is the flag's to answer for, wherever it is found wrong
         origins.by_key.update(dict.fromkeys(apply_overrides(data, overrides), SET_FLAG))
-    sc = scenario_from_mapping(data, shown, origins.by_key)
+    try:
+        sc = scenario_from_mapping(data, shown, origins.by_key)
+    except ScenarioError as err:
+        hint = _quote_hint(err, overrides)
+        if hint is None:
+            raise
+        raise ScenarioError(err.file, err.field, f"{err.message}; {hint}") from None
     return dataclasses.replace(sc, overrides=tuple(overrides)) if overrides else sc
+
+
+def _quote_hint(err: ScenarioError, overrides: Sequence[tuple[str, Any]]) -> str | None:
+    """For an error in ``scoring.tolerances`` that a ``--set`` split a metric name at its
+    dots for (``scoring.tolerances.perception.iou_mean.abs``): the spelling that keeps the
+    name one key."""
+    if err.file != SET_FLAG or not err.field.startswith("scoring.tolerances."):
+        return None
+    leaves = {f.name for f in dataclasses.fields(ToleranceSpec)}
+    for key, value in overrides:
+        parts = split_key(key)
+        if parts[:2] != ["scoring", "tolerances"]:
+            continue
+        name, leaf = (parts[2:-1], f".{parts[-1]}") if parts[-1] in leaves \
+            else (parts[2:], "")
+        if len(name) > 1:
+            spelt = f'scoring.tolerances."{".".join(name)}"{leaf}={json.dumps(value)}'
+            return f"a metric name with dots is one key: quote it, --set '{spelt}'"
+    return None
 
 
 def scenario_to_mapping(sc: Scenario) -> dict[str, Any]:

@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from harness.cli import main
+from harness.scenario import ToleranceSpec
 from tests.scenario.minimal import GOOD
 
 
@@ -193,3 +194,28 @@ def test_a_bad_value_a_set_gave_is_said_of_the_flag(
                      "systems_under_test.teleop.params.cmd_vel_topic=cmd")
     assert code == 2 and err == (f"srr validate: {own}: systems_under_test[0].params.rate_hz: "
                                  "must be > 0, got 0"), err
+
+
+def test_set_addresses_a_tolerance_of_a_metric_name_with_dots(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """A tolerance's key is a metric name, ``perception.iou_mean``: in quotes it is one key of
+    a ``--set`` path; unquoted, the error says how to write it."""
+    from harness import api
+    from tests.conftest import SCENARIOS
+
+    path = str(SCENARIOS / "dock_nominal.yaml")
+    for key in ('"perception.iou_mean"', "'perception.iou_mean'"):
+        sc = api.load(path, overrides=[f"scoring.tolerances.{key}.abs=0.1",
+                                       f"scoring.tolerances.{key}.rel=0.2"])
+        assert sc.scoring.tolerances["perception.iou_mean"] == ToleranceSpec(abs=0.1, rel=0.2)
+        assert sc.scoring.tolerances["perception.*"] == ToleranceSpec(abs=0.05, rel=0.1)
+    code, err = _run(capsys, "validate", path, "--set",
+                     "scoring.tolerances.perception.iou_mean.abs=0.1")
+    assert code == 2 and err == (
+        "srr validate: --set: scoring.tolerances.perception.iou_mean: unknown field (expected "
+        "abs, rel); a metric name with dots is one key: quote it, --set "
+        "'scoring.tolerances.\"perception.iou_mean\".abs=0.1'"), err
+    for bad, said in (('scoring.tolerances."perception.iou_mean.abs=1', "is not closed"),
+                      ('scoring.tolerances."perception"x.abs=1', "a quoted key is a whole")):
+        code, err = _run(capsys, "validate", path, "--set", bad)
+        assert code == 2 and said in err and len(err.splitlines()) == 1, err
