@@ -2,8 +2,9 @@
 
 Messages are the ``rosbags`` typestore's dataclasses. The walk reports, in field order:
 
-* every numeric or boolean scalar as ``scalar(path, a, b)``; ``path`` is the flattened field
-  path, message sequences indexed (``transforms[0].transform.translation.x``);
+* every numeric or boolean scalar as ``scalar(path, a, b)`` (floats; two booleans as
+  ``bool``, a number 0 or 1 that shows as ``false``/``true``); ``path`` is the flattened
+  field path, message sequences indexed (``transforms[0].transform.translation.x``);
 * every primitive array as ``array(path, a, b)`` with both arrays as float64 (the caller
   indexes elements as ``path[i]``). ``data`` of a ``sensor_msgs/Image`` with a known
   multi-byte encoding (``32FC1`` depth, ``16UC1``) is read as that type, so a depth
@@ -98,6 +99,9 @@ def walk(a: Any, b: Any, visitor: Visitor, path: str = "") -> None:
     if isinstance(a, str) or isinstance(b, str):
         if a != b:
             visitor.mismatch(path, f"{_short(str(a))} vs {_short(str(b))}")
+        return
+    if isinstance(a, (bool, np.bool_)) and isinstance(b, (bool, np.bool_)):
+        visitor.scalar(path, bool(a), bool(b))  # a number (0, 1) that shows as false, true
         return
     if isinstance(a, (bool, int, float, np.number, np.bool_)) and \
             isinstance(b, (bool, int, float, np.number, np.bool_)):

@@ -46,6 +46,10 @@ def _decode(raw: bytes, msgtype: str) -> Any:
 
 
 def _num(v: float) -> str:
+    """A value as a divergence shows it: a boolean as ``false``/``true``, a number to 6
+    significant digits."""
+    if isinstance(v, (bool, np.bool_)):
+        return "true" if v else "false"
     return f"{v:.6g}"
 
 
@@ -181,13 +185,17 @@ class _Topic:
         f.beyond += nb
         self._values += nd
         summary = f"{nd} of {n} values differ, max |Δ| {_num(float(dv[k]))}"
+
+        def pair(i: int) -> str:  # a bool[] field's items as false/true
+            x, y = (bool(a[i]), bool(b[i])) if a.dtype.kind == "b" == b.dtype.kind \
+                else (float(a[i]), float(b[i]))
+            return f"{_num(x)} vs {_num(y)} ({summary})"
+
         first = int(nz[0])
-        self._note(f"{path}[{first}]",
-                   f"{_num(float(a[first]))} vs {_num(float(b[first]))} ({summary})", False)
+        self._note(f"{path}[{first}]", pair(first), False)
         if nb:
             j = int(nz[int(np.argmax(beyond))])
-            self._note(f"{path}[{j}]",
-                       f"{_num(float(a[j]))} vs {_num(float(b[j]))} ({summary})", True)
+            self._note(f"{path}[{j}]", pair(j), True)
 
     def mismatch(self, path: str, detail: str) -> None:
         self.mism[path] = self.mism.get(path, 0) + 1

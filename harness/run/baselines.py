@@ -43,11 +43,12 @@ def baselines_dir(source: str, explicit: Path | None = None,
         return folder
     from_file = bool(source) and not source.startswith("<")
     if scenario is not None and scenario.baselines is not None:
-        origin = scenario.file_for("baselines", source)
+        origin = scenario.source_file("baselines", source)
         base = Path(origin).resolve().parent if not origin.startswith("<") else Path.cwd()
         folder = (base / scenario.baselines).resolve()
         if folder.exists() and not folder.is_dir():
-            raise ScenarioError(origin, "baselines", f"{folder} is not a folder")
+            raise ScenarioError(scenario.file_for("baselines", source), "baselines",
+                                f"{folder} is not a folder")
         return folder
     if not from_file:
         return Path("baselines").resolve()

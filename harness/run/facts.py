@@ -24,6 +24,7 @@ __all__ = [
     "combined_digest",
     "default_run_dir",
     "reproduce_command",
+    "scenario_path",
     "scenario_text",
     "sut_endpoints",
     "topic_table",
@@ -91,14 +92,23 @@ def sut_endpoints(suts: Sequence[tuple[str, Any, SutContext]]) -> dict[str, Any]
     return out
 
 
+def scenario_path(source: str) -> str:
+    """The scenario file ``source`` names, as a run directory records it (``summary.json``'s
+    ``scenario_file``, the command that reproduces the run): absolute, its folder resolved
+    (``..`` and links), so that it means the same file from any directory; the file itself is
+    not followed through a link, since its folder is where its includes and baselines are
+    found. A name that is no file (``<scenario>``) as it is."""
+    path = Path(source)
+    return str(path.parent.resolve() / path.name) if path.is_file() else source
+
+
 def reproduce_command(source: str, scenario: Scenario, run_dir: Path,
                       baselines: Path | None = None) -> str:
     """The ``srr run`` command line that records this run again (into ``run_dir``, once it is
     moved away): the scenario file, seed and duration, every ``--set`` the scenario was
     loaded with (values as JSON, which YAML reads back the same) and ``--baselines`` when
     one was given; paths absolute, so it works from any directory."""
-    file = Path(source).absolute() if Path(source).is_file() else source
-    args = ["srr", "run", str(file), "--seed", str(scenario.seed),
+    args = ["srr", "run", scenario_path(source), "--seed", str(scenario.seed),
             "--duration", f"{scenario.duration:g}"]
     for key, value in scenario.overrides:
         if key not in ("seed", "duration"):  # said above

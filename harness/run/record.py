@@ -57,6 +57,7 @@ from harness.report.junit import junit_cases, write_junit
 from harness.run.baselines import baseline_name, baselines_dir, scene_config
 from harness.run.facts import (
     combined_digest,
+    scenario_path,
     sut_endpoints,
     topic_table,
     versions,
@@ -227,7 +228,8 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
         # The recorder's queue written out and the bag closed before the phase says the loop
         # is over: a run killed while finalizing has its whole recording on disk.
         stats = recorder.close()
-    runmarker.mark(run_dir, "finalizing", scenario_file=source, command=command)
+    runmarker.mark(run_dir, "finalizing", scenario_file=scenario_path(source),
+                   command=command)
     with _half_written(run_dir):
         scores, frames, topics, sim_s = _score(scenario, loop, recorder, stats, run_dir,
                                                source)
@@ -279,7 +281,8 @@ def _open_recorder(scenario: Scenario, loop: Loop, run_dir: Path, *, source: str
                    command: str) -> Any:
     """The in-progress marker, the resolved ``scenario.yaml`` and the action graphs, then the
     recorder (not yet opened) of the loop's output."""
-    runmarker.mark(run_dir, "recording", scenario_file=source, command=command)
+    runmarker.mark(run_dir, "recording", scenario_file=scenario_path(source),
+                   command=command)
     write_scenario(run_dir, scenario)
     if loop.graphs is not None:
         write_graphs(run_dir, loop.graphs)
@@ -394,7 +397,8 @@ def _summarize(scenario: Scenario, loop: Loop, recorder: Any, *, source: str, sc
     noticed = [w for p in (*(sut for _, sut, _ in loop.suts), *participants)
                for w in p.warnings()]
     return RunSummary(
-        scenario=scenario.name, scenario_file=source, seed=scenario.seed, srr_gt=loop.srr_gt,
+        scenario=scenario.name, scenario_file=scenario_path(source), seed=scenario.seed,
+        srr_gt=loop.srr_gt,
         duration_s=scenario.duration, simulated_s=sim_s, ticks=loop.ticks(),
         tick_hz=scenario.physics.tick_hz, interrupted=ended.interrupted,
         stopped=ended.stopped, warnings=(*loop.warnings, *noticed), health=scores.health,

@@ -84,9 +84,12 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         _external_override(load_scenario(src / "scenario.yaml", pairs), text, src)
         for text in externals]
     pairs += [parse_override(o) for o in ros2_changes]
-    scenario = load_scenario(src / "scenario.yaml", pairs)
-    _check_replay_scene(recorded, scenario)
     source = str(summary.scenario_file or src / "scenario.yaml")
+    try:
+        scenario = load_scenario(src / "scenario.yaml", pairs)
+    except SrrError as err:
+        raise _named_by_flag(err, recorded, source, suts) from None
+    _check_replay_scene(recorded, scenario)
     check_scoring(scenario, srr_gt=summary.srr_gt, source=source)
     judged = summary.baselines_dir  # judged against the recorded run's baselines
     baselines = baselines_dir(source, baselines if baselines is not None
@@ -153,12 +156,16 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
 def _named_by_flag(err: SrrError, scenario: Scenario, source: str,
                    suts: Sequence[str]) -> SrrError:
     """``err`` about the plug-in a ``--sut NAME=module:Class`` gave, said of that flag (the
-    loader names the scenario's entry, whose plug-in the flag replaced), else ``err``."""
+    loader names the scenario's entry, whose plug-in the flag replaced, or the ``--set`` the
+    flag stands for), else ``err``."""
     names = [s.name for s in scenario.systems_under_test]
     for text in suts:
         name = text.partition("=")[0].strip()
         if name in names:
-            prefix = f"{source}: systems_under_test[{names.index(name)}].plugin: "
+            field = f"systems_under_test[{names.index(name)}].plugin"
+            if isinstance(err, ScenarioError) and (err.file, err.field) == ("--set", field):
+                return SrrError(f"--sut {text}: {err.message}")
+            prefix = f"{source}: {field}: "
             if str(err).startswith(prefix):
                 return SrrError(f"--sut {text}: {str(err)[len(prefix):]}")
     return err

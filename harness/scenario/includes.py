@@ -10,22 +10,22 @@ import yaml
 
 from harness import yamlio
 from harness.errors import ScenarioError, reason
+from harness.scenario.origins import origin_of
 
 __all__ = ["Origins", "expand_includes", "read_yaml"]
 
 
 class Origins:
     """Which file each top-level key, or each item of a list extended with ``key+``, came from
-    (the scenario file or one of its includes)."""
+    (the scenario file or one of its includes); the loader adds each field a ``--set`` gave
+    (``robots[0].spawn.position``: ``--set``)."""
 
     def __init__(self, default: str) -> None:
         self.default = default
         self.by_key: dict[str, str] = {}
 
     def file_for(self, path: str) -> str:
-        head = path.split(".", 1)[0]
-        return (self.by_key.get(head) or self.by_key.get(head.split("[", 1)[0])
-                or self.default)
+        return origin_of(self.by_key, path) or self.default
 
     def forget(self, key: str) -> None:
         """``key`` is defined anew: drop it and its items' origins."""

@@ -11,14 +11,17 @@ Every error names the file the value came from and the field path inside it
 from __future__ import annotations
 
 import dataclasses
+import json
 import typing
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from harness.errors import ScenarioError
 from harness.scenario.checks import RATE_TOLERANCE, check_semantics, rate_warnings, sensor_rates
 from harness.scenario.includes import Origins, expand_includes, read_yaml
-from harness.scenario.overrides import apply_overrides, parse_override
+from harness.scenario.origins import SET_FLAG
+from harness.scenario.overrides import apply_overrides, parse_override, split_key
 from harness.scenario.resolve import graph_name, resolve_names
 from harness.scenario.schema import (
     FORMAT_VERSION,
@@ -26,6 +29,7 @@ from harness.scenario.schema import (
     ForkliftControl,
     RobotSpec,
     Scenario,
+    ToleranceSpec,
 )
 from harness.validation import Validator, validate
 
@@ -50,6 +54,37 @@ def _control_type(model: Any) -> type:
         else ForkliftControl
 
 
+_DRIVE_OF_CONTROL: dict[type, str] = {ForkliftControl: "swivel_drive",
+                                       DiffDriveControl: "diff_drive"}
+
+
+def _check_control_fields(data: Mapping[str, Any], v: Validator) -> None:
+    """A robot's ``control:`` field that belongs with the other drive (``joint_names`` on a
+    swivel-drive robot, ``wheelbase`` on a diff-drive one) is refused naming the robot's
+    drive, not as an unknown field."""
+    robots = data.get("robots")
+    for i, robot in enumerate(robots if isinstance(robots, list) else ()):
+        control = robot.get("control") if isinstance(robot, dict) else None
+        if not isinstance(control, dict):
+            continue
+        model = robot.get("model")
+        cls = _control_type(model)
+        ours = [f.name for f in dataclasses.fields(cls)]
+        other = next(c for c in _DRIVE_OF_CONTROL if c is not cls)
+        theirs = {f.name for f in dataclasses.fields(other)} - set(ours)
+        for key in control:
+            if key in theirs:
+                drive = _DRIVE_OF_CONTROL[cls]
+                if isinstance(model, dict):
+                    said = (f"robots[{i}].model.drive is {drive!r}"
+                            + ("" if "drive" in model else " (the default)"))
+                else:
+                    said = f"robots[{i}].model is {model!r}, a {drive} robot"
+                v.fail(f"robots[{i}].control.{key}",
+                       f"belongs with drive {_DRIVE_OF_CONTROL[other]!r}, and {said}; a "
+                       f"{drive} control block takes {', '.join(ours)}")
+
+
 def _refine(cls: type, name: str, raw: Mapping[Any, Any], hinted: Any) -> Any:
     """A robot's ``control:`` is read as the block its ``model`` calls for."""
     if cls is RobotSpec and name == "control":
@@ -57,9 +92,11 @@ def _refine(cls: type, name: str, raw: Mapping[Any, Any], hinted: Any) -> Any:
     return hinted
 
 
-def validate_dataclass(cls: type[T], raw: Any, file: str, field: str) -> T:
+def validate_dataclass(cls: type[T], raw: Any, file: str | Callable[[str], str],
+                       field: str) -> T:
     """Validate ``raw`` into the frozen dataclass ``cls`` with the scenario rules (used for
-    plug-in parameters); errors name ``file`` and ``field``."""
+    plug-in parameters); errors name ``file`` (or the file it gives for a field path) and
+    ``field``."""
     return validate(cls, raw, file, field, refine=_refine)
 
 
@@ -72,6 +109,7 @@ def scenario_from_mapping(data: Mapping[str, Any], file: str = "<scenario>",
     v = Validator(orig.file_for, refine=_refine)
     if "format_version" not in data:
         v.fail("format_version", f"required field is missing (use {FORMAT_VERSION})")
+    _check_control_fields(data, v)
     sc = v.dataclass(Scenario, dict(data), "")
     check_semantics(sc, v)
     sc = resolve_names(sc)
@@ -87,11 +125,37 @@ def load_scenario(path: str | Path,
     data = read_yaml(p, shown)
     data = expand_includes(p, data, origins)
     if overrides:
-        apply_overrides(data, overrides)
         for key, _ in overrides:
-            origins.by_key.setdefault(key.split(".", 1)[0], shown)
-    sc = scenario_from_mapping(data, shown, origins.by_key)
+            origins.by_key.setdefault(split_key(key)[0], shown)
+        # a value a --set gave is the flag's to answer for, wherever it is found wrong
+        origins.by_key.update(dict.fromkeys(apply_overrides(data, overrides), SET_FLAG))
+    try:
+        sc = scenario_from_mapping(data, shown, origins.by_key)
+    except ScenarioError as err:
+        hint = _quote_hint(err, overrides)
+        if hint is None:
+            raise
+        raise ScenarioError(err.file, err.field, f"{err.message}; {hint}") from None
     return dataclasses.replace(sc, overrides=tuple(overrides)) if overrides else sc
+
+
+def _quote_hint(err: ScenarioError, overrides: Sequence[tuple[str, Any]]) -> str | None:
+    """For an error in ``scoring.tolerances`` that a ``--set`` split a metric name at its
+    dots for (``scoring.tolerances.perception.iou_mean.abs``): the spelling that keeps the
+    name one key."""
+    if err.file != SET_FLAG or not err.field.startswith("scoring.tolerances."):
+        return None
+    leaves = {f.name for f in dataclasses.fields(ToleranceSpec)}
+    for key, value in overrides:
+        parts = split_key(key)
+        if parts[:2] != ["scoring", "tolerances"]:
+            continue
+        name, leaf = (parts[2:-1], f".{parts[-1]}") if parts[-1] in leaves \
+            else (parts[2:], "")
+        if len(name) > 1:
+            spelt = f'scoring.tolerances."{".".join(name)}"{leaf}={json.dumps(value)}'
+            return f"a metric name with dots is one key: quote it, --set '{spelt}'"
+    return None
 
 
 def scenario_to_mapping(sc: Scenario) -> dict[str, Any]:

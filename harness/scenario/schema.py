@@ -13,6 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from harness.scenario.origins import origin_of
+
 __all__ = [
     "BUILTIN_JOINTS",
     "FORMAT_VERSION",
@@ -889,8 +891,9 @@ class Scenario:
     # Parameters ``srr suite`` sweeps: ``--set`` path → list of values or {from, to, step}
     # (checked by harness.suite.sweep; ``srr run`` runs the scenario as written).
     sweep: dict[str, Any] = field(default_factory=dict)
-    # Which file each top-level key or list item ("robots", "robots[1]") came from, for error
-    # messages after loading. Filled by the loader; not part of the scenario's content.
+    # Which file each top-level key or list item ("robots", "robots[1]") came from, or which
+    # flag each field a --set gave ("robots[0].spawn": "--set"), for error messages after
+    # loading. Filled by the loader; not part of the scenario's content.
     origins: dict[str, str] = field(default_factory=dict, compare=False, repr=False,
                                     metadata={"internal": True})
     # The ``--set`` overrides the loader applied, (dotted path, value) in order: what a run's
@@ -931,8 +934,14 @@ class Scenario:
         raise KeyError(name)
 
     def file_for(self, path: str, default: str) -> str:
-        """The file the value at field ``path`` (``robots[1].odometry``) came from: the most
-        specific entry of ``origins`` (list item, then top-level key), else ``default`` (also
-        for a graph node's attribute path, ``/World/...``, which no origin names)."""
-        head = path.split(".", 1)[0]
-        return self.origins.get(head) or self.origins.get(head.split("[", 1)[0]) or default
+        """The file the value at field ``path`` (``robots[1].odometry``) came from, or
+        ``--set`` where that flag gave it: the most specific entry of ``origins`` (a field a
+        ``--set`` gave, a list item, then a top-level key), else ``default`` (also for a
+        graph node's attribute path, ``/World/...``, which no origin names)."""
+        return origin_of(self.origins, path) or default
+
+    def source_file(self, path: str, default: str) -> str:
+        """The file the value at field ``path`` was read from, what relative paths in it are
+        relative to: :meth:`file_for`, but for a value a ``--set`` gave the file it was set
+        on (never the flag)."""
+        return origin_of(self.origins, path, files_only=True) or default

@@ -166,8 +166,9 @@ def plan_search(cfg: SearchConfig) -> SearchPlan:
             if dim.path.startswith("systems_under_test"):  # plug-in parameters: in set-up
                 try:
                     validate(corner, cfg.scenario_file)
-                except SrrError as err:
-                    raise SrrError(f"--space {dim.path}={v}: {err}") from None
+                except SrrError as err:  # the value is the flag's: said of --space
+                    raise SrrError(f"--space {dim.path}={v}: "
+                                   f"{str(err).removeprefix('--set: ')}") from None
     check_scored(cfg.objective, sc.scoring, cfg.scenario_file)
     warnings = tuple(validate(sc, cfg.scenario_file))
     cameras = sc.camera_count

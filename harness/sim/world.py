@@ -244,8 +244,9 @@ def _assemble(scenario: Scenario, prims: PrimTable, source: str, environ: Mappin
         x, y, z = robot.spawn.position
         quat = quat_wxyz_from_rpy_deg_mj(robot.spawn.rpy_deg)
         field = f"robots[{i}]"
-        file = scenario.file_for(field, source)
-        where = ModelSource(file, field, Path(file).parent, environ)
+        where = ModelSource(scenario.file_for(field, source), field,
+                            Path(scenario.source_file(field, source)).parent, environ,
+                            origin=lambda path: scenario.file_for(path, source))
         height = float(z) if robot.model_file is not None else 0.0
         build = add_robot(spec, robot, (float(x), float(y), height), quat, prims, where)
         assets.update(build.assets)
@@ -334,9 +335,10 @@ class World:
         env = os.environ if environ is None else environ
         loaded = None
         if scenario.world.model is not None:
-            file = scenario.file_for("world", source)
-            loaded = load_world_file(scenario.world.model,
-                                     ModelSource(file, "world", Path(file).parent, env))
+            loaded = load_world_file(scenario.world.model, ModelSource(
+                scenario.file_for("world", source), "world",
+                Path(scenario.source_file("world", source)).parent, env,
+                origin=lambda path: scenario.file_for(path, source)))
         try:
             spec, builds = _assemble(scenario, prims, source, env, loaded)
             add_workers(spec, workers, prims)

@@ -48,7 +48,10 @@ class SutContext:
     Relative topics resolve in ``namespace``, then ``remap`` rules apply (ROS 2 style: both
     sides resolve in the namespace). ``robot`` is the robot the plug-in is bound to (None:
     none); :meth:`frame` gives that robot's frame ids. ``endpoints`` records every topic the
-    plug-in advertised or subscribed, for the wiring checks."""
+    plug-in advertised or subscribed, for the wiring checks. ``field`` prefixes the plug-in's
+    errors (``scenario.yaml: systems_under_test[0]``); ``path`` is its entry's field path in
+    ``scenario`` and ``source`` the scenario file, so that an error in a parameter names the
+    file or the ``--set`` flag that gave it (empty for a participant no entry declares)."""
 
     name: str
     params: Mapping[str, Any]
@@ -60,15 +63,18 @@ class SutContext:
     remap: Mapping[str, str] = dataclasses.field(default_factory=dict)
     robot: RobotSpec | None = None
     endpoints: list[Endpoint] = dataclasses.field(default_factory=list)
+    path: str = ""
+    source: str = "<scenario>"
 
     @classmethod
-    def for_spec(cls, spec: SutSpec, scenario: Scenario, bus: Bus, field: str) -> SutContext:
+    def for_spec(cls, spec: SutSpec, scenario: Scenario, bus: Bus, field: str, *,
+                 path: str = "", source: str = "<scenario>") -> SutContext:
         """The context of ``spec``: its parameters, namespace, remapping and bound robot."""
         robot = next((r for r in scenario.robots if r.name == spec.robot), None) \
             if spec.robot else None
         return cls(name=spec.name, params=spec.params, scenario=scenario, seed=scenario.seed,
                    field=field, bus=bus, namespace=spec.namespace or "", remap=spec.remap,
-                   robot=robot)
+                   robot=robot, path=path, source=source)
 
     def rng(self) -> np.random.Generator:
         """A generator seeded from the scenario seed and the plug-in's name."""
@@ -126,11 +132,20 @@ class SystemUnderTest(Participant):
 
 
 def sut_params(cls: type[Any], ctx: SutContext) -> Any:
-    """Validate ``ctx.params`` into the plug-in's frozen parameter dataclass."""
+    """Validate ``ctx.params`` into the plug-in's frozen parameter dataclass. An error names
+    the file or the ``--set`` flag that gave the parameter (``--set:
+    systems_under_test[0].params.bogus: unknown field``)."""
+    if not ctx.path:  # no entry of the scenario: named by ctx.field alone
+        try:
+            return validate_dataclass(cls, dict(ctx.params), "<scenario>", f"{ctx.field}.params")
+        except ScenarioError as err:
+            raise PluginError(f"{err.field}: {err.message}") from err
     try:
-        return validate_dataclass(cls, dict(ctx.params), "<scenario>", f"{ctx.field}.params")
+        return validate_dataclass(cls, dict(ctx.params),
+                                  lambda path: ctx.scenario.file_for(path, ctx.source),
+                                  f"{ctx.path}.params")
     except ScenarioError as err:
-        raise PluginError(f"{err.field}: {err.message}") from err
+        raise PluginError(str(err)) from err
 
 
 def import_project_module(name: str) -> ModuleType:
@@ -178,9 +193,10 @@ def load_suts(scenario: Scenario, bus: Bus, source: str = "<scenario>"
     for i, spec in enumerate(scenario.systems_under_test):
         if not spec.enabled:
             continue
-        where = f"{source}: systems_under_test[{i}]"
+        path = f"systems_under_test[{i}]"
+        where = f"{source}: {path}"
         out.append((spec.name, load_sut(spec, where),
-                    SutContext.for_spec(spec, scenario, bus, where)))
+                    SutContext.for_spec(spec, scenario, bus, where, path=path, source=source)))
     return out
 
 

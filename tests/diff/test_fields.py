@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -95,3 +96,26 @@ def test_depth_images_compare_in_metres_not_bytes() -> None:
     walk(_image(rgb, "rgb8"), _image(rgb, "rgb8"), rec)
     ((path, va, _),) = rec.arrays
     assert path == "data" and va.dtype == np.uint8 and va.size == 18
+
+
+def test_a_boolean_field_that_differs_shows_as_false_vs_true(tmp_path: Path) -> None:
+    """``srr diff`` of a std_msgs/Bool (or any bool field): ``false vs true``, not ``0 vs 1``."""
+    from harness.bus import Bus
+    from harness.diff.topics import diff_bags
+    from harness.recording import Recorder
+
+    for name, values in (("a", [False, False]), ("b", [False, True])):
+        now = [0]
+        bus = Bus(lambda now=now: now[0])
+        rec = Recorder(tmp_path / name)
+        rec.open(bus.qos)
+        bus.add_tap(rec)
+        for i, value in enumerate(values):
+            now[0] = i * 1000
+            bus.publish("/safety/alarm", "std_msgs/msg/Bool", make("std_msgs/msg/Bool",
+                                                                    data=value))
+        rec.close()
+    (alarm,) = diff_bags(tmp_path / "a", tmp_path / "b")
+    assert alarm.first is not None
+    assert (alarm.first.index, alarm.first.path, alarm.first.detail) == (1, "data",
+                                                                         "false vs true")

@@ -225,19 +225,19 @@ def clocks(tmp_path: Path) -> Path:
 
 
 @pytest.mark.parametrize(("sets", "expected"), [
-    (["graphs.Ros2Clock.enabled=true"],
-     "graphs[1]: mixes ROS 1 and ROS 2 bridge nodes (/World/Ros1ClockGraph/PublishClock is "
+    (["graphs.Ros2Clock.enabled=true"],  # the whole graph: said of the file; the rest, --set
+     "FILE: graphs[1]: mixes ROS 1 and ROS 2 bridge nodes (/World/Ros1ClockGraph/PublishClock is "
      "omni.isaac.ros_bridge.ROS1PublishClock, /World/Ros2ClockGraph/PublishClock is "
      "isaacsim.ros2.bridge.ROS2PublishClock)"),
     (["systems_under_test=[{name: v, plugin: 'tests.recording.ros1_plugins:Velocity'}]"],
-     "systems_under_test[0]: systems_under_test[0] (v) publishes /velocity as "
+     "--set: systems_under_test[0]: systems_under_test[0] (v) publishes /velocity as "
      "geometry_msgs/msg/VelocityStamped, which has no ROS 1 counterpart"),
-    (["output.ros=true"], "output.ros: expected one of 1, 2, got True"),
-    (["output.ros=2", "output.format=bag"], "output.format: bag is a ROS 1 bag"),
-    (["output.format=bag", "recording.compression=zstd"], "recording.compression: a ROS 1 "
+    (["output.ros=true"], "--set: output.ros: expected one of 1, 2, got True"),
+    (["output.ros=2", "output.format=bag"], "--set: output.format: bag is a ROS 1 bag"),
+    (["output.format=bag", "recording.compression=zstd"], "--set: recording.compression: a ROS 1 "
      "bag compresses its chunks with lz4"),
-    (["output.ros=1", "ros2.enabled=true"], "ros2.enabled: the live ROS 2 bridge needs ROS 2 "
-     "output"),
+    (["output.ros=1", "ros2.enabled=true"], "--set: ros2.enabled: the live ROS 2 bridge needs "
+     "ROS 2 output"),
 ])
 @pytest.mark.parametrize("command", ["validate", "run"])
 def test_bad_output_is_one_line_exit_2(srr: Callable[..., Done], clocks: Path, tmp_path: Path,
@@ -246,7 +246,7 @@ def test_bad_output_is_one_line_exit_2(srr: Callable[..., Done], clocks: Path, t
     done = srr(command, str(clocks), *(a for s in sets for a in ("--set", s)), *extra)
     assert done.returncode == 2, done.stdout + done.stderr
     assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
-    assert f"srr {command}: {clocks}: {expected}" in done.stderr
+    assert f"srr {command}: {expected.replace('FILE', str(clocks))}" in done.stderr
     assert not (tmp_path / "out").exists()
 
 

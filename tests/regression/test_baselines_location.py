@@ -194,3 +194,15 @@ def test_a_suite_rebless_rewrites_only_the_baselines_that_change(
     assert (tmp_path / "baselines" / "hall.json").read_bytes() == files["hall"]
     yard = json.loads((tmp_path / "baselines" / "yard.json").read_text())
     assert yard["reason"] == "longer" and yard["config"]["duration"] == 0.5
+
+
+def test_a_baselines_field_a_set_gives_is_relative_to_the_scenario_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``--set baselines=DIR`` is relative to the scenario file it is set on, as the field
+    written there is, not to the working directory (``--baselines`` is)."""
+    from harness.run.baselines import baselines_dir
+
+    src = scene_copy(tmp_path)
+    monkeypatch.chdir(tmp_path / "a")
+    sc = api.load(src, overrides=["baselines=kept"])
+    assert baselines_dir(str(src), None, sc) == tmp_path / "scene" / "kept"

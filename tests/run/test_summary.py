@@ -170,3 +170,33 @@ def test_the_command_reproduces_the_run_from_anywhere(
     assert main([*argv[1:], "-q", "--no-video"]) in (0, 1)
     again = json.loads((tmp_path / "first" / "summary.json").read_text())
     assert again["digest"] == first["digest"] and again["command"] == first["command"]
+
+
+def test_a_run_and_its_replay_record_the_scenario_file_absolute(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """``scenario_file`` in ``summary.json`` names the file from anywhere, however the
+    command named it; a replay's is the recorded run's file, and a parameter its ``--set``
+    got wrong is said of the flag, not of that file."""
+    import os
+
+    from harness.cli import main
+
+    scenario = ROOT / "scenarios" / "turtlebot3_urdf.yaml"
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", os.path.relpath(scenario), "--duration", "1", "-q", "--no-video",
+                 "--out", "run"]) in (0, 1)  # UNSCORED: nothing to score
+    assert json.loads((tmp_path / "run" / SUMMARY_NAME).read_text())["scenario_file"] == \
+        str(scenario)
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    capsys.readouterr()
+    assert main(["replay", "../run", "-q", "--out", "bad", "--set",
+                 "systems_under_test.teleop.params.bogus=1"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "srr replay: --set: systems_under_test[0].params.bogus: unknown field (expected "
+        "segments, rate_hz, cmd_vel_topic)")
+    assert not (tmp_path / "elsewhere" / "bad").exists()
+    assert main(["replay", "../run", "-q", "--out", "again"]) in (0, 1)
+    assert json.loads((tmp_path / "elsewhere" / "again" / SUMMARY_NAME).read_text())[
+        "scenario_file"] == str(scenario)

@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from harness.cli import main
+from harness.scenario import ToleranceSpec
 from tests.scenario.minimal import GOOD
 
 
@@ -160,3 +161,61 @@ def test_a_camera_output_listed_twice_is_refused(capsys: pytest.CaptureFixture[s
     code, err = _run(capsys, "validate", str(SCENARIOS / "dock_nominal.yaml"), "--set",
                      "cameras.0.outputs=[rgb, depth, rgb]")
     assert code == 2 and err.endswith("cameras[0].outputs[2]: 'rgb' is listed twice"), err
+
+
+@pytest.mark.parametrize(("override", "said"), [
+    ("systems_under_test.teleop.params.bogus=1",
+     "--set: systems_under_test[0].params.bogus: unknown field (expected segments, rate_hz, "
+     "cmd_vel_topic)"),
+    ("systems_under_test.0.params.rate_hz=0",
+     "--set: systems_under_test[0].params.rate_hz: must be > 0, got 0"),
+    ("robots.turtlebot3.spawn.bogus=1",
+     "--set: robots[0].spawn.bogus: unknown field (expected position, rpy_deg)"),
+    ("seed=x", "--set: seed: expected an integer, got 'x'"),
+])
+def test_a_bad_value_a_set_gave_is_said_of_the_flag(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], override: str, said: str) -> None:
+    """A value ``--set`` gave is the flag's, not the scenario file's, wherever it is found
+    wrong: as it is read, or as a plug-in reads its parameters in set-up."""
+    from tests.conftest import SCENARIOS
+
+    path = str(SCENARIOS / "turtlebot3_urdf.yaml")
+    for argv in (["validate", path, "--set", override],
+                 ["run", path, "--set", override, "--out", str(tmp_path / "r")]):
+        code, err = _run(capsys, *argv)
+        assert code == 2 and err == f"srr {argv[0]}: {said}", err
+    assert not (tmp_path / "r").exists()
+    # beside it, a parameter the file gave is still the file's
+    own = tmp_path / "s.yaml"
+    own.write_text(GOOD + "systems_under_test:\n  - name: teleop\n"
+                   "    plugin: harness.sut.teleop:ScriptedTeleop\n"
+                   "    params: {rate_hz: 0, segments: [{duration: 1, linear: 0.2}]}\n")
+    code, err = _run(capsys, "validate", str(own), "--set",
+                     "systems_under_test.teleop.params.cmd_vel_topic=cmd")
+    assert code == 2 and err == (f"srr validate: {own}: systems_under_test[0].params.rate_hz: "
+                                 "must be > 0, got 0"), err
+
+
+def test_set_addresses_a_tolerance_of_a_metric_name_with_dots(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """A tolerance's key is a metric name, ``perception.iou_mean``: in quotes it is one key of
+    a ``--set`` path; unquoted, the error says how to write it."""
+    from harness import api
+    from tests.conftest import SCENARIOS
+
+    path = str(SCENARIOS / "dock_nominal.yaml")
+    for key in ('"perception.iou_mean"', "'perception.iou_mean'"):
+        sc = api.load(path, overrides=[f"scoring.tolerances.{key}.abs=0.1",
+                                       f"scoring.tolerances.{key}.rel=0.2"])
+        assert sc.scoring.tolerances["perception.iou_mean"] == ToleranceSpec(abs=0.1, rel=0.2)
+        assert sc.scoring.tolerances["perception.*"] == ToleranceSpec(abs=0.05, rel=0.1)
+    code, err = _run(capsys, "validate", path, "--set",
+                     "scoring.tolerances.perception.iou_mean.abs=0.1")
+    assert code == 2 and err == (
+        "srr validate: --set: scoring.tolerances.perception.iou_mean: unknown field (expected "
+        "abs, rel); a metric name with dots is one key: quote it, --set "
+        "'scoring.tolerances.\"perception.iou_mean\".abs=0.1'"), err
+    for bad, said in (('scoring.tolerances."perception.iou_mean.abs=1', "is not closed"),
+                      ('scoring.tolerances."perception"x.abs=1', "a quoted key is a whole")):
+        code, err = _run(capsys, "validate", path, "--set", bad)
+        assert code == 2 and said in err and len(err.splitlines()) == 1, err

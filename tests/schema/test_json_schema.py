@@ -88,7 +88,8 @@ BROKEN: list[tuple[str, Any, str]] = [
     ("physics.tick_rate", 60, "unknown field"),
     ("dureation", 10, "unknown field"),
     ("robots.0.spawn.position", [1.0, 2.0], "expected a list of 3 values"),
-    ("robots.0.control.wheelbase", 1.2, "unknown field"),  # a forklift's, on a TurtleBot3
+    ("robots.0.control.wheelbase", 1.2,  # a forklift's, on a TurtleBot3
+     "belongs with drive 'swivel_drive', and robots\\[0\\].model is 'turtlebot3_waffle_pi'"),
     ("robots.0.control.wheel_radius", -0.1, "must be > 0"),
     ("render.overlap", "yes", "expected one of"),
     ("format_version", 2, "unsupported version"),
@@ -136,7 +137,8 @@ def test_control_block_follows_the_model(validators: dict[str, Draft202012Valida
         scenario_from_mapping({"format_version": 1, "name": "x", "robots": [robot]})
     wrong = {**swivel, "control": {"wheel_distance": 0.3}}
     assert _errors(v, {"robots": [wrong]})
-    with pytest.raises(ScenarioError, match="unknown field"):
+    with pytest.raises(ScenarioError, match="belongs with drive 'diff_drive', and "
+                       r"robots\[0\].model.drive is 'swivel_drive'"):
         scenario_from_mapping({"format_version": 1, "name": "x", "robots": [wrong]})
 
 

@@ -203,7 +203,19 @@ ASCII_STL = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0
     (lambda t: diffbot(sensors={"lidar": {"link": "lidar_lnk"}}), "robots[0].sensors.lidar.link",
      ["srr_diffbot.urdf has no link 'lidar_lnk'", "did you mean 'lidar_link'"]),
     (lambda t: diffbot(control={"joint_names": ["a", "b"], "wheelbase": 1.0}),
-     "robots[0].control.wheelbase", ["unknown field"]),
+     "robots[0].control.wheelbase",  # a field of the other drive: said of the drive
+     ["belongs with drive 'swivel_drive', and robots[0].model.drive is 'diff_drive' (the "
+      "default); a diff_drive control block takes enabled, cmd_vel_topic, joint_names, "]),
+    (lambda t: pallet(control={**PALLET_CONTROL, "joint_names": ["a", "b"]}),
+     "robots[0].control.joint_names",
+     ["belongs with drive 'diff_drive', and robots[0].model.drive is 'swivel_drive'; a "
+      "swivel_drive control block takes enabled, cmd_vel_topic, wheelbase, "]),
+    (lambda t: {"name": "fl", "model": "forklift", "control": {"wheel_distance": 1.0}},
+     "robots[0].control.wheel_distance",
+     ["belongs with drive 'diff_drive', and robots[0].model is 'forklift', a swivel_drive "
+      "robot"]),
+    (lambda t: diffbot(control={**DIFF_CONTROL, "wheelbas": 1.0}),
+     "robots[0].control.wheelbas", ["unknown field"]),  # of neither drive: a typo
     (lambda t: pallet(model={"urdf": "x.urdf"}), "robots[0].model",
      ["exactly one of 'urdf', 'mjcf' and 'xacro'"]),
 ])
@@ -377,3 +389,20 @@ def test_a_model_mujoco_cannot_build_names_the_robot_and_its_file(
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"srr validate: {scenario}: robots[0].model: {bare}: MuJoCo cannot "
                           "build the robot from it: Error: mass and inertia"), err
+
+
+def test_a_robot_a_set_gives_finds_its_model_from_the_scenario_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A model path in a value ``--set`` gave is relative to the scenario file it was set
+    on, as one written there, from any directory; an error in it is said of the flag."""
+    shutil.copytree(MODELS / "srr_diffbot", tmp_path / "scene" / "srr_diffbot")
+    path = write(tmp_path / "scene", pallet())
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    bot = diffbot(model={"urdf": "srr_diffbot/urdf/srr_diffbot.urdf", "package_paths": ["."]})
+    sc = load_scenario(path, [("robots.0", bot)])
+    api.validate(sc, source=str(path))  # found beside the scenario, not in the cwd
+    bot["control"]["joint_names"] = ["left_wheel_hing", "right_wheel_hinge"]
+    with pytest.raises(ScenarioError) as info:
+        api.validate(load_scenario(path, [("robots.0", bot)]), source=str(path))
+    assert (info.value.file, info.value.field) == ("--set", "robots[0].control.joint_names[0]")

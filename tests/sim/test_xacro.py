@@ -225,3 +225,28 @@ def test_srr_runs_a_xacro_robot_and_records_its_digest(tmp_path: Path) -> None:
     assert summary["scene_files"]["robots[0].model"] == digest(path)
     xs = [msg.pose.pose.position.x for topic, _, _, msg in decoded(out) if topic == "/odom"]
     assert xs and xs[-1] > 0.1  # driven forward by the teleop through its wheel joints
+
+
+def test_an_argument_the_file_does_not_declare_is_refused(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A misspelt arg was accepted and its value never used (the file's default was); it is
+    refused naming the arg's field, the xacro file and the args the file declares."""
+    root = tree(tmp_path)
+    path = write(tmp_path, root, model={"args": {"wheel_radus": 0.1}})
+    err = error_of(path)
+    assert (err.file, err.field) == (str(path), "robots[0].model.args.wheel_radus")
+    assert err.message == (f"{root / 'urdf' / 'xbot.urdf.xacro'}: declares no argument "
+                           "'wheel_radus' (did you mean 'wheel_radius'?); its arguments: "
+                           "wheel_radius, with_lidar")
+    assert main(["validate", str(path)]) == 2
+    said = capsys.readouterr().err.strip()
+    assert "\n" not in said and said.startswith(
+        f"srr validate: {path}: robots[0].model.args.wheel_radus: ")
+    # one declared in a branch xacro did not take, or only read with $(arg ...), is the file's
+    main_file = root / "urdf" / "xbot.urdf.xacro"
+    main_file.write_text(main_file.read_text().replace(
+        '<xacro:property name="track" value="0.26"/>',
+        '<xacro:property name="track" value="0.26"/>\n'
+        '<xacro:if value="false"><xacro:arg name="lidar_range" default="5"/></xacro:if>\n'
+        '<xacro:if value="${\'$(arg colour)\' == \'red\'}"/>'))
+    build(write(tmp_path, root, model={"args": {"lidar_range": 8, "colour": "red"}}))

@@ -260,7 +260,7 @@ def add_model_robot(spec: mujoco.MjSpec, robot: RobotSpec,
     try:
         loaded = load_model_file(path, model.kind, packages, model.xacro_args)
     except ModelFileError as err:
-        raise src.error(f"model.{model.kind}", f"{shown}: {err}") from err
+        raise src.error(f"model.{err.field or model.kind}", f"{shown}: {err}") from err
     # A robot whose control graph is off is parked: its joints need no role and no drive.
     roles = _roles(control, shown, src) if control.enabled else []
     _check_roles(roles, loaded, shown, src)

@@ -41,7 +41,12 @@ import mujoco
 
 from harness.sim.robots.common import ActuatorMode
 from harness.sim.robots.paths import ModelPathError, PackagePath, resolve_uri
-from harness.sim.robots.xacro_file import XacroError, XacroInputs, expand_xacro
+from harness.sim.robots.xacro_file import (
+    UnknownXacroArg,
+    XacroError,
+    XacroInputs,
+    expand_xacro,
+)
 
 __all__ = ["JointInfo", "LoadedModel", "ModelFileError", "ModelKind", "ParsedModel",
            "file_digest",
@@ -59,7 +64,12 @@ _JOINT_KINDS = {
 
 
 class ModelFileError(Exception):
-    """A model file that cannot be used; the message is one line."""
+    """A model file that cannot be used; the message is one line. ``field``: the field of
+    the model block it is about, where that is not the file's (``args.wheel_radus``)."""
+
+    def __init__(self, message: str, field: str = "") -> None:
+        self.field = field
+        super().__init__(message)
 
 
 @dataclass(frozen=True)
@@ -159,7 +169,8 @@ def _parse(path: Path, kind: ModelKind, packages: PackagePath,
             try:
                 expanded = expand_xacro(path, args, packages)
             except XacroError as err:
-                raise ModelFileError(str(err)) from err
+                field = f"args.{err.name}" if isinstance(err, UnknownXacroArg) else ""
+                raise ModelFileError(str(err), field) from err
             inputs = expanded.inputs
             text, urdf_types = _read_urdf(path, packages, expanded.text)
             spec = mujoco.MjSpec.from_string(text)

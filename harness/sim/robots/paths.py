@@ -20,7 +20,7 @@ from __future__ import annotations
 import functools
 import os
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import unquote
@@ -34,15 +34,20 @@ __all__ = ["ENV_VARS", "ModelPathError", "ModelSource", "PackagePath", "resolve_
 class ModelSource:
     """Where a model file was named: the scenario file (as shown to the user), the field of
     the entry that names it (``robots[1]``, ``world``), the directory its relative paths
-    start from, and the environment (for ``SRR_PACKAGE_PATH`` / ``ROS_PACKAGE_PATH``)."""
+    start from, and the environment (for ``SRR_PACKAGE_PATH`` / ``ROS_PACKAGE_PATH``).
+    ``origin``: the file (or ``--set``) that gave a field inside the entry, for errors about
+    it (default: ``scenario_file``)."""
 
     scenario_file: str
     field: str
     base_dir: Path
     environ: Mapping[str, str]
+    origin: Callable[[str], str] | None = None
 
     def error(self, sub: str, message: str) -> ScenarioError:
-        return ScenarioError(self.scenario_file, f"{self.field}.{sub}", message)
+        field = f"{self.field}.{sub}"
+        file = self.origin(field) if self.origin is not None else self.scenario_file
+        return ScenarioError(file, field, message)
 
 #: Environment variables that extend the package path, in lookup order.
 ENV_VARS = ("SRR_PACKAGE_PATH", "ROS_PACKAGE_PATH")

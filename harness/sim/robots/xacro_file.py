@@ -18,7 +18,7 @@ from __future__ import annotations
 import re
 import threading
 import xml.parsers.expat
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,14 +28,66 @@ import xacro
 from xacro import substitution_args
 
 from harness.sim.robots.paths import PackagePath
+from harness.validation import close_match
 
-__all__ = ["Expanded", "XacroError", "XacroInputs", "expand_xacro"]
+__all__ = ["Expanded", "UnknownXacroArg", "XacroError", "XacroInputs", "expand_xacro"]
 
 _LOCK = threading.Lock()
 
 
 class XacroError(Exception):
     """A xacro file that cannot be expanded; the message is one line."""
+
+
+class UnknownXacroArg(XacroError):
+    """An argument given (``args``) that the file neither declares (``<xacro:arg>``) nor
+    reads (``$(arg NAME)``): a typo, whose value xacro would silently never use."""
+
+    def __init__(self, name: str, message: str) -> None:
+        self.name = name
+        super().__init__(message)
+
+
+class _ArgTable(dict[str, str]):
+    """xacro's table of arguments, noting every name xacro looks up in it: an
+    ``<xacro:arg>`` it evaluates (to set its default) and a ``$(arg NAME)`` it substitutes."""
+
+    def __init__(self, given: Mapping[str, str]) -> None:
+        super().__init__(given)
+        self.looked_up: set[str] = set()
+
+    def __contains__(self, key: object) -> bool:
+        if isinstance(key, str):
+            self.looked_up.add(key)
+        return super().__contains__(key)
+
+    def __getitem__(self, key: str) -> str:
+        self.looked_up.add(key)
+        return super().__getitem__(key)
+
+
+def _declared(files: Iterable[Path]) -> set[str]:
+    """The names of the ``<xacro:arg>`` elements in ``files``, as xacro parses them (also
+    those in a branch the expansion did not take)."""
+    names: set[str] = set()
+    for file in files:
+        try:
+            doc: Any = xacro.parse(file.read_text(encoding="utf-8"))
+        except (OSError, ValueError, xml.parsers.expat.ExpatError):  # a YAML file xacro read
+            continue
+        names |= {str(el.getAttribute("name")) for el in doc.getElementsByTagName("xacro:arg")}
+    return names
+
+
+def _check_args(args: Mapping[str, str], table: _ArgTable, files: Iterable[Path]) -> None:
+    """Refuse the first of ``args`` the file neither declares nor reads."""
+    known = table.looked_up | _declared(files)
+    for name in args:
+        if name not in known:
+            close = close_match(name, dict.fromkeys(known))
+            hint = f" (did you mean {close!r}?)" if close else ""
+            raise UnknownXacroArg(name, f"declares no argument {name!r}{hint}; its arguments: "
+                                  f"{', '.join(sorted(known)) or 'none'}")
 
 
 @dataclass(frozen=True)
@@ -110,7 +162,8 @@ def _missing_arg(err: BaseException) -> str | None:
 
 def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> Expanded:
     """Run xacro on ``path`` with ``args`` (``$(arg name)``); ``$(find pkg)`` is looked up in
-    ``packages``. Raises :class:`XacroError`."""
+    ``packages``. Raises :class:`XacroError` (:class:`UnknownXacroArg` for an argument of
+    ``args`` the file neither declares nor reads)."""
     if not path.exists():
         raise XacroError("file not found")
     if not path.is_file():
@@ -128,8 +181,9 @@ def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> 
 
     with _LOCK, _find_hook(find):
         xacro.all_includes = []
+        table = _ArgTable(args)
         try:
-            doc: Any = xacro.process_file(str(main), mappings=dict(args), verbosity=0)
+            doc: Any = xacro.process_file(str(main), mappings=table, verbosity=0)
             text = str(doc.toxml())
         except xml.parsers.expat.ExpatError as err:
             where = xacro.filestack[-1] if xacro.filestack else main
@@ -152,6 +206,7 @@ def expand_xacro(path: Path, args: Mapping[str, str], packages: PackagePath) -> 
             raise XacroError(f"xacro cannot expand it: {_one_line(_describe(err))}{shown}") \
                 from err
         read = [Path(f).resolve() for f in xacro.all_includes]
+        _check_args(args, table, [main, *read])
     files: list[Path] = []
     for file in read:
         if file != main and file not in files and file.is_file():
