@@ -6,6 +6,7 @@ bad input is one line, exit 2, and leaves no file."""
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
@@ -142,6 +143,29 @@ def test_a_dock_run_reads_back_in_rerun(dock: Path, tmp_path: Path) -> None:
     # a file Rerun reads as one recording of srr, named after the run
     (entry,) = rerun_chunk.RrdReader(rrd).recordings()
     assert "srr" in repr(entry)
+
+
+def test_two_exports_of_a_run_hold_the_same_data_and_another_run_does_not(
+        lidar: Path, tmp_path: Path) -> None:
+    """Rerun's own comparison (``rerun rrd compare``, from the rerun-sdk wheel) of two exports
+    of one run: equal; of another run's (another seed): not. The bytes differ (Rerun's chunk
+    and row ids come from the wall clock), which the docs say."""
+    rerun_cli = shutil.which("rerun", path=str(Path(sys.executable).parent))
+    if rerun_cli is None:
+        pytest.skip("the rerun command of rerun-sdk is not installed beside this Python")
+    other = _run(tmp_path, "diffbot_urdf", "1", "--seed", "99")
+    files = [tmp_path / f"{name}.rrd" for name in ("a", "b", "other")]
+    for run, rrd in zip((lidar, lidar, other), files, strict=True):
+        api.export_rerun(run, rrd)
+
+    def compare(x: Path, y: Path) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([rerun_cli, "rrd", "compare", str(x), str(y)],
+                              capture_output=True, text=True, timeout=120,
+                              env={**os.environ, "RERUN_ANALYTICS": "0"})
+
+    same = compare(files[0], files[1])
+    assert same.returncode == 0, same.stdout + same.stderr
+    assert compare(files[0], files[2]).returncode != 0
 
 
 def test_a_lidar_scan_is_3d_points_in_its_frame(lidar: Path, tmp_path: Path) -> None:
