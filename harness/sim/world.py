@@ -51,6 +51,7 @@ from harness.sim.render import apply_render_settings
 from harness.sim.robots import ActuatorMode, ModelSource, RobotBuild, add_robot
 from harness.sim.robots.model_file import file_digest
 from harness.sim.sensors import MountedSensors, add_robot_sensors
+from harness.sim.spawns import check_spawns, robot_spawn
 from harness.sim.warehouse import (
     FLOOR_MARGIN,
     add_ground,
@@ -77,8 +78,6 @@ _NEAR_CLIP_M = 0.03
 _GROUND_PREFIX = "srr-ground/"  # srr's ground, sky and sun under a world file ('-': no robot)
 _MIN_GROUND = 5.0  # m: the smallest half extent of the ground srr adds under a world file
 _MIN_TOP = 1.0  # m
-_PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)
-_SPAWN_DEPTH = 0.01  # m: a robot deeper than this in a world file's static geom is refused
 _MIN_OFFSCREEN = (640, 480)
 
 Vec3 = tuple[float, float, float]
@@ -272,30 +271,6 @@ def _robot_of_element(scenario: Scenario, message: str) -> tuple[int, Any] | Non
     return None
 
 
-def _check_spawns(world: World, loaded: LoadedWorld, source: str) -> None:
-    """No robot starts inside a static geom of the world file: the contacts at the spawn
-    state (after ``mj_forward``) between a robot and such a geom (planes aside) must not be
-    deeper than ``_SPAWN_DEPTH``."""
-    m, d = world.model, world.data
-    sc = world.scenario
-    static = {int(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, n)): n for n in loaded.static}
-    owner = {b: name for name in world.robot_names() for b in world.robot_body_ids(name)}
-    for c in d.contact[:d.ncon]:
-        if c.dist >= -_SPAWN_DEPTH:
-            continue
-        for mine, other in ((int(c.geom1), int(c.geom2)), (int(c.geom2), int(c.geom1))):
-            robot = owner.get(int(m.geom_bodyid[mine]))
-            name = static.get(other)
-            if robot is None or name is None or int(m.geom_type[other]) == _PLANE:
-                continue
-            i = sc.robot_index(robot)
-            x, y, _ = sc.robots[i].spawn.position
-            raise ScenarioError(
-                sc.file_for(f"robots[{i}]", source), f"robots[{i}].spawn.position",
-                f"robot {robot} at ({x:g}, {y:g}) starts inside {loaded.geoms.get(name, name)!r}"
-                f" of {loaded.shown} ({-c.dist:.3f} m deep): move it to free floor")
-
-
 class World:
     """A compiled MuJoCo world plus the prim and robot tables; build it with :meth:`build`."""
 
@@ -363,8 +338,9 @@ class World:
             files["world.model"] = file_digest(loaded.path, loaded.assets)
         world = cls(scenario, model, data, resolved, types.MappingProxyType(robots),
                     WorkerDriver(model, workers), loaded, files)
-        if loaded is not None:
-            _check_spawns(world, loaded, source)
+        owner = {b: name for name in world.robot_names() for b in world.robot_body_ids(name)}
+        check_spawns(model, data, owner, robot_spawn(scenario, source),
+                     None if loaded is None else loaded.describe_static)
         return world
 
     # ------------------------------------------------------------------ world file

@@ -95,6 +95,11 @@ class LoadedWorld:
     def shown(self) -> str:
         return str(self.path)
 
+    def describe_static(self, geom: str) -> str | None:
+        """How an error calls the scene's geom ``geom`` when it is one of this file's static
+        ones (``'pillar' of worlds/hall.xml``), else None."""
+        return f"{self.geoms.get(geom, geom)!r} of {self.shown}" if geom in self.static else None
+
 
 def _style_urdf(spec: mujoco.MjSpec) -> None:
     """URDF visual geoms into the static world's group; collision geoms hidden beside them."""

@@ -348,7 +348,7 @@ SHELF = {"model": {"mjcf": "shelf.xml"}}
      "robots[0].articulation_prim", ["/World/Environment overlaps /World/Environment"]),
     (SHELF, [{"name": "tb", "model": "turtlebot3_waffle_pi",
               "spawn": {"position": [4.05, 0.0, 0.0]}}], "robots[0].spawn.position",
-     ["robot tb at (4.05, 0) starts inside 'wall_east' of", "shelf.xml", "m deep"]),
+     ["robot tb at (4.05, 0, 0) starts inside 'wall_east' of", "shelf.xml", "m deep"]),
     (SHELF, [{"name": "tb", "model": "turtlebot3_waffle_pi",
               "spawn": {"position": [0.0, 1.6, 0.0]}}], "robots[0].spawn.position",
      ["starts inside 'shelf_1_plinth'"]),

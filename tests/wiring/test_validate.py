@@ -71,7 +71,7 @@ CASES = {
     # two robots in one namespace publish one odometry topic
     "two_publishers": (
         scenario(robot(FORKLIFT, "a", extra="    namespace: ''\n"),
-                 robot(FORKLIFT, "b", y=5, extra="    namespace: ''\n"),
+                 robot(FORKLIFT, "b", y=3, extra="    namespace: ''\n"),
                  rest="systems_under_test:\n  - {name: t, plugin: 'harness.sut.teleop:"
                       "ScriptedTeleop', params: {segments: [{duration: 1, linear: 0.1}]}}\n"),
         "robots[1].odometry.odom_topic",
@@ -79,14 +79,14 @@ CASES = {
     # two robots' graphs publish the same child frame (no frame prefixes)
     "same_child_frame": (
         scenario(robot(FORKLIFT, "a", extra="    frame_prefix: ''\n"),
-                 robot(FORKLIFT, "b", y=5, extra="    frame_prefix: ''\n"),
+                 robot(FORKLIFT, "b", y=3, extra="    frame_prefix: ''\n"),
                  suts=drive("a", "b")),
         "robots[1].odometry.base_frame",
         ["TF: frame 'base_link'", "2 sources", "robots[0].odometry.base_frame"]),
     # a forklift and a TurtleBot3 without prefixes: base_link gets two parents
     "two_parents": (
         scenario(robot(FORKLIFT, "lift", extra="    frame_prefix: ''\n"),
-                 robot(TB3, "tb3", y=5, extra="    frame_prefix: ''\n"),
+                 robot(TB3, "tb3", y=3, extra="    frame_prefix: ''\n"),
                  suts=drive("lift", "tb3")),
         "robots[1].tf_tree",
         ["TF: frame 'base_link' has 2 parents", "'odom' from robots[0].odometry.base_frame",
@@ -108,15 +108,15 @@ CASES = {
         "robots[0].frame_prefix", ["contains whitespace"]),
     "one_prim": (
         scenario(robot(FORKLIFT, "a", extra="    articulation_prim: /World/lift\n"),
-                 robot(FORKLIFT, "b", y=5, extra="    articulation_prim: /World/lift\n")),
+                 robot(FORKLIFT, "b", y=3, extra="    articulation_prim: /World/lift\n")),
         "robots[1].articulation_prim", ["/World/lift is also the prim of robots[0] (a)"]),
     "prim_inside_prim": (
         scenario(robot(FORKLIFT, "a", extra="    articulation_prim: /World/lift\n"),
-                 robot(FORKLIFT, "b", y=5, extra="    articulation_prim: /World/lift/b\n")),
+                 robot(FORKLIFT, "b", y=3, extra="    articulation_prim: /World/lift/b\n")),
         "robots[1].articulation_prim", ["/World/lift/b lies inside /World/lift"]),
     # the story of issue 8: a second forklift, one unbound driver publishing /cmd_vel
     "unfed_cmd_vel": (
-        scenario(robot(FORKLIFT, "forklift"), robot(FORKLIFT, "forklift_b", y=5),
+        scenario(robot(FORKLIFT, "forklift"), robot(FORKLIFT, "forklift_b", y=3),
                  rest="systems_under_test:\n  - {name: t, plugin: 'harness.sut.teleop:"
                       "ScriptedTeleop', params: {segments: [{duration: 1, linear: 0.1}]}}\n"),
         "robots[0].control.cmd_vel_topic",
@@ -124,7 +124,7 @@ CASES = {
          "`robot: forklift`", "`control: {enabled: false}`"]),
     # scoring reads a topic nothing publishes (the driver moved into the robot's namespace)
     "scoring_reference": (
-        scenario(robot(FORKLIFT, "forklift"), robot(FORKLIFT, "forklift_b", y=5),
+        scenario(robot(FORKLIFT, "forklift"), robot(FORKLIFT, "forklift_b", y=3),
                  suts=drive("forklift", "forklift_b"),
                  rest="scoring: {health: {sut_outputs: {/cmd_vel: 0.5}}}\n"),
         "scoring.health.sut_outputs./cmd_vel",
@@ -170,7 +170,7 @@ def test_an_error_in_an_included_file_names_that_file(tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str]) -> None:
     (tmp_path / "fleet.yaml").write_text(
         "robots:\n" + robot(FORKLIFT, "a", extra="    frame_prefix: ''\n")
-        + robot(FORKLIFT, "b", y=5, extra="    frame_prefix: ''\n"))
+        + robot(FORKLIFT, "b", y=3, extra="    frame_prefix: ''\n"))
     code, _, err = run_cli(capsys, tmp_path, HEAD + "include: [fleet.yaml]\n"
                            "systems_under_test:\n" + drive("a", "b"))
     assert code == 2
