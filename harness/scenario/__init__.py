@@ -2,6 +2,7 @@
 
 from harness.scenario.loader import (
     apply_overrides,
+    frame_warnings,
     load_scenario,
     parse_override,
     rate_warnings,
@@ -14,6 +15,7 @@ from harness.scenario.schema import __all__ as _schema_all
 
 __all__ = [
     "apply_overrides",
+    "frame_warnings",
     "load_scenario",
     "parse_override",
     "rate_warnings",

@@ -31,8 +31,8 @@ from harness.scenario.schema import (
 from harness.scenario.specs import ZONES, SignalContext, SpecError, parse_formula
 from harness.validation import Validator, close_match, join
 
-__all__ = ["H264_PRESETS", "RATE_TOLERANCE", "check_semantics", "rate_warnings", "sensor_rates",
-           "spec_context"]
+__all__ = ["H264_PRESETS", "RATE_TOLERANCE", "check_semantics", "frame_warnings",
+           "rate_warnings", "sensor_rates", "spec_context"]
 
 
 def _check_polygon(v: Validator, field: str, points: Sequence[Sequence[float]]) -> None:
@@ -126,6 +126,25 @@ def rate_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     :data:`RATE_TOLERANCE`; more is refused) from the rate it asks for."""
     return tuple(f"{sc.file_for(field, source)}: {field}: {_rate_message(sc, asked, real)}"
                  for field, asked, real in sensor_rates(sc) if abs(real - asked) > 1e-9)
+
+
+def frame_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """One warning per robot camera stamped in its link's own frame (``frame_id`` equal to
+    ``link``): its images are then in the link's axes (+X forward), not the optical frame
+    (+Z forward, +X right, +Y down) that ROS image consumers assume and that srr adds under
+    the link for any other ``frame_id``."""
+    out = []
+    for i, robot in enumerate(sc.robots):
+        cam = robot.sensors.camera
+        if robot.enabled and cam is not None and cam.enabled and cam.graph \
+                and cam.frame_id == cam.link:
+            field = f"robots[{i}].sensors.camera.frame_id"
+            out.append(f"{sc.file_for(field, source)}: {field}: {cam.frame_id!r} is the "
+                       "camera link's own frame (+X forward), so its images are not in an "
+                       "optical frame (+Z forward) as ROS image consumers assume; give another "
+                       f"name (e.g. {cam.link}_optical) and srr publishes that optical frame "
+                       "under the link")
+    return tuple(out)
 
 
 def _check_output(sc: Scenario, v: Validator) -> None:

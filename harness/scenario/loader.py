@@ -18,7 +18,13 @@ from pathlib import Path
 from typing import Any
 
 from harness.errors import ScenarioError
-from harness.scenario.checks import RATE_TOLERANCE, check_semantics, rate_warnings, sensor_rates
+from harness.scenario.checks import (
+    RATE_TOLERANCE,
+    check_semantics,
+    frame_warnings,
+    rate_warnings,
+    sensor_rates,
+)
 from harness.scenario.includes import Origins, expand_includes, read_yaml
 from harness.scenario.origins import SET_FLAG
 from harness.scenario.overrides import apply_overrides, parse_override, split_key
@@ -33,9 +39,20 @@ from harness.scenario.schema import (
 )
 from harness.validation import Validator, validate
 
-__all__ = ["RATE_TOLERANCE", "apply_overrides", "graph_name", "load_scenario", "parse_override",
-           "rate_warnings", "resolve_names", "scenario_from_mapping", "scenario_to_mapping",
-           "sensor_rates", "validate_dataclass"]
+__all__ = [
+    "RATE_TOLERANCE",
+    "apply_overrides",
+    "frame_warnings",
+    "graph_name",
+    "load_scenario",
+    "parse_override",
+    "rate_warnings",
+    "resolve_names",
+    "scenario_from_mapping",
+    "scenario_to_mapping",
+    "sensor_rates",
+    "validate_dataclass",
+]
 
 T = typing.TypeVar("T")
 

@@ -33,10 +33,12 @@ _WALL = re.compile(r"^warehouse/wall_([a-z]+)_")
 def check_spawns(model: mujoco.MjModel, data: mujoco.MjData, owner: Mapping[int, str],
                  robot_field: Callable[[str], tuple[str, str, tuple[float, ...]]],
                  describe: Callable[[str], str | None] | None = None) -> None:
-    """Refuse the first robot that starts inside the floor, a fixed geom or another robot
-    (:class:`ScenarioError`). ``owner``: body id → robot name for every robot's bodies;
+    """Refuse the robot that starts deepest inside the floor, a fixed geom or another robot
+    (:class:`ScenarioError`). ``owner``: body id → robot name for every robot's bodies, in
+    the scenario's order of robots;
     ``robot_field(name)``: (file, field, spawn position) to name in the error;
     ``describe(geom name)``: what to call a fixed geom (None: by its name)."""
+    order = {name: i for i, name in enumerate(dict.fromkeys(owner.values()))}
     deepest: dict[tuple[str, int | str], float] = {}
     for c in data.contact[:data.ncon]:
         if c.dist >= -SPAWN_DEPTH:
@@ -44,13 +46,14 @@ def check_spawns(model: mujoco.MjModel, data: mujoco.MjData, owner: Mapping[int,
         g1, g2 = int(c.geom1), int(c.geom2)
         r1, r2 = owner.get(int(model.geom_bodyid[g1])), owner.get(int(model.geom_bodyid[g2]))
         if r1 is not None and r2 is not None:
-            if r1 != r2:  # the later robot of the pair is the one to move
-                key: tuple[str, int | str] = (max(r1, r2), min(r1, r2))
+            if r1 != r2:  # the later robot of the pair (in the scenario) is the one to move
+                first, later = sorted((r1, r2), key=order.__getitem__)
+                key: tuple[str, int | str] = (later, first)
                 deepest[key] = min(deepest.get(key, 0.0), float(c.dist))
             continue
-        for robot, other in ((r1, g2), (r2, g1)):
-            if robot is not None and _fixed(model, other):
-                key = (robot, other)
+        for mine, geom in ((r1, g2), (r2, g1)):
+            if mine is not None and _fixed(model, geom):
+                key = (mine, geom)
                 deepest[key] = min(deepest.get(key, 0.0), float(c.dist))
     if not deepest:
         return

@@ -269,3 +269,17 @@ def test_a_large_bag_is_announced_by_validate_and_before_a_run(
     assert "srr run: the bag will be up to about 2.0 GB for 45 s" in err, err
     assert "systems_under_test[0].params.rate_hz" in err, err
     assert not (tmp_path / "run" / "bag").exists()
+
+
+def test_a_robot_camera_stamped_in_its_link_frame_is_warned_about(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    # frame_id == link: the images are in the link's axes (+X forward), not an optical frame
+    room = Path(__file__).resolve().parents[2] / "scenarios" / "turtlebot3_room.yaml"
+    assert main(["validate", str(room)]) == 0
+    assert "optical" not in capsys.readouterr().err
+    assert main(["validate", str(room), "--set",
+                 "robots.0.sensors.camera.frame_id=camera_link"]) == 0
+    err = capsys.readouterr().err
+    assert ("warning: --set: robots[0].sensors.camera.frame_id: 'camera_link' is the camera "
+            "link's own frame (+X forward)") in err
+    assert "camera_link_optical" in err

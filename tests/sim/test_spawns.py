@@ -52,3 +52,4 @@ def test_every_bundled_robot_starts_in_free_space(capsys: pytest.CaptureFixture[
     # wheels resting on the floor touch it at 0 m: the bundled scenes pass as they are
     for scenario in (TURTLEBOT, TWO, WAREHOUSE, SCENARIOS / "dock_worker_crossing.yaml"):
         assert main(["validate", str(scenario)]) == 0, capsys.readouterr().err
+
