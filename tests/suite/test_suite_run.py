@@ -193,8 +193,11 @@ scenarios:
     assert [r["timings"]["gl_contexts"] for r in crossing] == [1, 1, 1]
     assert all(80 < r["peak_rss_mb"] < 4000 for r in runs.values())
     assert len({runs[f"counter#{k}"]["digest"] for k in (1, 2, 3)}) == 1
-    (fresh,) = api.suite([suite], executor="local", jobs=1, out=tmp_path / "fresh",
-                         fork=False).summary["runs"][:1]
+    alone = tmp_path / "alone.yaml"  # the crossing's run in a fresh process, nothing else
+    alone.write_text(f"scenarios:\n  - {{path: {CROSSING}, name: crossing, set: "
+                     "{duration: 1.0}}\n", encoding="utf-8")
+    (fresh,) = api.suite([alone], executor="local", jobs=1, out=tmp_path / "fresh",
+                         fork=False).summary["runs"]
     assert fresh["id"] == "crossing#1" and fresh["digest"] is not None
     sha = {r["id"]: hashlib.sha256((tmp_path / "ray" / r["run_dir"] / "bag" / "bag.mcap")
                                    .read_bytes()).hexdigest() for r in crossing}
