@@ -240,6 +240,47 @@ def test_bad_models_name_scenario_field_and_model_file(tmp_path: Path, make: Any
     assert "\n" not in str(err)
 
 
+#: URDF mistakes MuJoCo reads without a word or words vaguely: (text of srr_diffbot.urdf,
+#: what it becomes, what the message says after ``scene.yaml: robots[0].model.urdf: ...``).
+URDF_MISTAKES = [
+    ('<child link="caster_link"/>', '<child link="castor_link"/>',
+     "joint 'caster_joint': child link 'castor_link' does not exist (did you mean "
+     "'caster_link'?)"),
+    ('<parent link="base_footprint"/>', '<parent link="chassis"/>',
+     "joint 'base_joint': parent link 'chassis' does not exist"),
+    ('<child link="lidar_link"/>', "", "joint 'lidar_joint' has no <child link=\"...\"/>"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "words"), URDF_MISTAKES)
+def test_urdf_mistakes_are_named_before_mujoco_reads_the_file(tmp_path: Path, old: str,
+                                                              new: str, words: str) -> None:
+    text = DIFFBOT.read_text()
+    assert old in text
+    (tmp_path / "bot.urdf").write_text(text.replace(old, new))
+    path = write(tmp_path, diffbot(model={"urdf": "bot.urdf"}))
+    err = error_of(path)
+    assert (err.file, err.field) == (str(path), "robots[0].model.urdf")
+    assert err.message == f"{tmp_path / 'bot.urdf'}: {words}"
+
+
+@pytest.mark.parametrize("command", ["validate", "run"])
+def test_a_urdf_joint_to_a_missing_link_is_one_line_and_exit_2(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str) -> None:
+    """Before: MuJoCo's ``XML Error: URDF joint parent or child missing; Element 'joint',
+    line 31``, naming neither the joint nor the link."""
+    (tmp_path / "bot.urdf").write_text(DIFFBOT.read_text().replace(
+        '<child link="caster_link"/>', '<child link="castor_link"/>'))
+    path = write(tmp_path, diffbot(model={"urdf": "bot.urdf"}))
+    extra = ["--out", str(tmp_path / "out"), "-q"] if command == "run" else []
+    assert main([command, str(path), *extra]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"srr {command}: {path}: robots[0].model.urdf: {tmp_path / 'bot.urdf'}: "
+                   "joint 'caster_joint': child link 'castor_link' does not exist (did you "
+                   "mean 'caster_link'?)")
+    assert not (tmp_path / "out").exists()
+
+
 def test_srr_validate_answers_a_bad_joint_with_one_line_and_exit_2(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = write(tmp_path, diffbot(control={**DIFF_CONTROL,

@@ -47,6 +47,7 @@ from harness.sim.robots.xacro_file import (
     XacroInputs,
     expand_xacro,
 )
+from harness.validation import close_match
 
 __all__ = ["JointInfo", "LoadedModel", "ModelFileError", "ModelKind", "ParsedModel",
            "file_digest",
@@ -134,6 +135,7 @@ def _read_urdf(path: Path, packages: PackagePath,
                              "expected <robot>)")
     types_ = {j.get("name", ""): j.get("type", "") for j in root.iter("joint")
               if j.get("name") and j.get("type")}
+    _check_joint_links(root)
     for mesh in root.iter("mesh"):
         uri = mesh.get("filename")
         if not uri:
@@ -154,6 +156,24 @@ def _read_urdf(path: Path, packages: PackagePath,
     for key, value in _URDF_COMPILER.items():
         compiler.set(key, value)
     return ET.tostring(root, encoding="unicode"), types_
+
+
+def _check_joint_links(root: ET.Element) -> None:
+    """Every joint of the URDF joins two links it has: MuJoCo says only "URDF joint parent or
+    child missing" and a line number."""
+    links = {link.get("name", ""): None for link in root.findall("link")}
+    for joint in root.findall("joint"):  # not a <transmission>'s joints
+        name = joint.get("name", "")
+        for end in ("parent", "child"):
+            element = joint.find(end)
+            link = element.get("link") if element is not None else None
+            if not link:
+                raise ModelFileError(f"joint {name!r} has no <{end} link=\"...\"/>")
+            if link not in links:
+                close = close_match(link, links)
+                hint = f" (did you mean {close!r}?)" if close else ""
+                raise ModelFileError(f"joint {name!r}: {end} link {link!r} does not exist"
+                                     f"{hint}")
 
 
 def _parse(path: Path, kind: ModelKind, packages: PackagePath,
