@@ -4,6 +4,7 @@ and a TurtleBot3 described by a URDF driving exactly like the built-in one."""
 
 from __future__ import annotations
 
+import json
 import math
 import shutil
 from pathlib import Path
@@ -249,6 +250,14 @@ URDF_MISTAKES = [
     ('<parent link="base_footprint"/>', '<parent link="chassis"/>',
      "joint 'base_joint': parent link 'chassis' does not exist"),
     ('<child link="lidar_link"/>', "", "joint 'lidar_joint' has no <child link=\"...\"/>"),
+    # MuJoCo made a negative mass 0 kg and took NaN; a negative inertia it refused vaguely
+    ('<mass value="2.0"/>', '<mass value="-5.0"/>',
+     "link 'base_link': mass -5.0 is negative (MuJoCo would make it 0 kg)"),
+    ('<mass value="2.0"/>', '<mass value="nan"/>', "link 'base_link': mass 'nan' is not a "
+     "finite number"),
+    ('<mass value="0.01"/>', '<mass value="0.01 kg"/>', "link 'caster_link': mass '0.01 kg' "
+     "is not a number"),
+    ('ixx="0.00913"', 'ixx="-0.00913"', "link 'base_link': inertia ixx -0.00913 is negative"),
 ]
 
 
@@ -279,6 +288,31 @@ def test_a_urdf_joint_to_a_missing_link_is_one_line_and_exit_2(
                    "joint 'caster_joint': child link 'castor_link' does not exist (did you "
                    "mean 'caster_link'?)")
     assert not (tmp_path / "out").exists()
+
+
+def test_a_link_that_collides_but_weighs_nothing_is_a_warning(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The chassis at 0 kg: MuJoCo builds a robot of the wheels' and caster's 0.21 kg without
+    a word. URDF allows a mass of 0 (frame links), so srr warns (``srr validate``, the run's
+    summary) instead of refusing; a 0 kg link without collision geometry is not warned of."""
+    (tmp_path / "bot.urdf").write_text(DIFFBOT.read_text().replace(
+        '<mass value="2.0"/>', '<mass value="0"/>').replace(
+        '<link name="lidar_link">',
+        '<link name="lidar_link"><inertial><mass value="0"/><inertia ixx="0" ixy="0" '
+        'ixz="0" iyy="0" iyz="0" izz="0"/></inertial>'))
+    path = write(tmp_path, diffbot(model={"urdf": "bot.urdf"}))
+    path.write_text(yaml.safe_dump({**yaml.safe_load(path.read_text()),
+                                    "scoring": {"record_only": True}}))
+    warning = (f"{path}: robots[0].model.urdf: {tmp_path / 'bot.urdf'}: link 'base_link' has "
+               "collision geometry but a mass of 0 kg (its <inertial>), so the whole robot "
+               "weighs 0.21 kg; give the link its mass")
+    warnings = api.validate(load_scenario(path), source=str(path))
+    assert [w for w in warnings if "weighs" in w] == [warning]
+    assert main(["validate", str(path)]) == 0
+    assert f"warning: {warning}" in capsys.readouterr().err
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    assert warning in json.loads((out / "summary.json").read_text())["warnings"]
 
 
 def test_srr_validate_answers_a_bad_joint_with_one_line_and_exit_2(

@@ -29,6 +29,7 @@ field.
 from __future__ import annotations
 
 import hashlib
+import math
 import re
 import types
 import xml.etree.ElementTree as ET
@@ -97,7 +98,8 @@ class LoadedModel:
     root first. ``actuators``: joint → (actuator name, servo mode or None for another kind)
     for the actuators the file puts on single joints. ``joint_inertia``: each 1-dof joint's
     inertia at the reference pose (kg·m²). ``kind`` is the format MuJoCo read (a xacro
-    file's is ``urdf``); ``xacro``: what a xacro file's expansion read."""
+    file's is ``urdf``); ``xacro``: what a xacro file's expansion read. ``warnings``: what
+    is odd about the model without making it unusable (one line each)."""
 
     path: Path
     kind: Literal["urdf", "mjcf"]
@@ -111,6 +113,7 @@ class LoadedModel:
     mass: float
     joint_inertia: Mapping[str, float]
     xacro: XacroInputs | None = None
+    warnings: tuple[str, ...] = ()
 
 
 def one_line(err: BaseException) -> str:
@@ -120,10 +123,20 @@ def one_line(err: BaseException) -> str:
     return text if len(text) <= 300 else text[:297] + "..."
 
 
-def _read_urdf(path: Path, packages: PackagePath,
-               text: str | None = None) -> tuple[str, dict[str, str]]:
-    """The URDF text prepared for MuJoCo, and its joints' URDF types. ``text``: the URDF
-    (a xacro file's expansion) when it is not ``path``'s content."""
+@dataclass(frozen=True)
+class _PreparedUrdf:
+    """A URDF as MuJoCo is to read it: ``text``; ``joint_types``: its joints' URDF types by
+    joint name; ``massless``: the links with collision geometry whose ``<inertial>`` gives
+    them a mass of 0 kg."""
+
+    text: str
+    joint_types: dict[str, str]
+    massless: tuple[str, ...]
+
+
+def _read_urdf(path: Path, packages: PackagePath, text: str | None = None) -> _PreparedUrdf:
+    """The URDF prepared for MuJoCo. ``text``: the URDF (a xacro file's expansion) when it
+    is not ``path``'s content."""
     try:
         root = ET.fromstring(path.read_bytes() if text is None else text)
     except ET.ParseError as err:
@@ -136,6 +149,7 @@ def _read_urdf(path: Path, packages: PackagePath,
     types_ = {j.get("name", ""): j.get("type", "") for j in root.iter("joint")
               if j.get("name") and j.get("type")}
     _check_joint_links(root)
+    massless = _check_inertials(root)
     for mesh in root.iter("mesh"):
         uri = mesh.get("filename")
         if not uri:
@@ -155,7 +169,7 @@ def _read_urdf(path: Path, packages: PackagePath,
         compiler = ET.SubElement(ext, "compiler")
     for key, value in _URDF_COMPILER.items():
         compiler.set(key, value)
-    return ET.tostring(root, encoding="unicode"), types_
+    return _PreparedUrdf(ET.tostring(root, encoding="unicode"), types_, massless)
 
 
 def _check_joint_links(root: ET.Element) -> None:
@@ -176,13 +190,51 @@ def _check_joint_links(root: ET.Element) -> None:
                                      f"{hint}")
 
 
-def _parse(path: Path, kind: ModelKind, packages: PackagePath,
-           args: Mapping[str, str]) -> tuple[mujoco.MjSpec, dict[str, str], XacroInputs | None]:
+def _inertial_value(link: str, what: str, raw: str) -> float:
+    """``raw``, the value of a link's mass or inertia diagonal entry (``what``), as a number
+    that can be one: finite, 0 or more."""
+    try:
+        value = float(raw)
+    except ValueError:
+        raise ModelFileError(f"link {link!r}: {what} {raw!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ModelFileError(f"link {link!r}: {what} {raw!r} is not a finite number")
+    if value < 0:
+        hint = " (MuJoCo would make it 0 kg)" if what == "mass" else ""
+        raise ModelFileError(f"link {link!r}: {what} {raw} is negative{hint}")
+    return value
+
+
+def _check_inertials(root: ET.Element) -> tuple[str, ...]:
+    """Refuse a link's mass or inertia diagonal that is negative or not a finite number
+    (MuJoCo makes a negative mass 0 kg without a word, and takes NaN and infinity); return
+    the links with collision geometry whose mass is 0 kg."""
+    massless: list[str] = []
+    for link in root.findall("link"):
+        name = link.get("name", "")
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        mass = inertial.find("mass")
+        raw = mass.get("value") if mass is not None else None
+        if raw is not None and _inertial_value(name, "mass", raw) == 0 \
+                and link.find("collision") is not None:
+            massless.append(name)
+        inertia = inertial.find("inertia")
+        for key in ("ixx", "iyy", "izz"):
+            raw = inertia.get(key) if inertia is not None else None
+            if raw is not None:
+                _inertial_value(name, f"inertia {key}", raw)
+    return tuple(massless)
+
+
+def _parse(path: Path, kind: ModelKind, packages: PackagePath, args: Mapping[str, str],
+           ) -> tuple[mujoco.MjSpec, _PreparedUrdf | None, XacroInputs | None]:
     if not path.exists():
         raise ModelFileError("file not found")
     if not path.is_file():
         raise ModelFileError("is not a file")
-    urdf_types: dict[str, str] = {}
+    urdf: _PreparedUrdf | None = None
     inputs: XacroInputs | None = None
     try:
         if kind == "xacro":
@@ -192,17 +244,17 @@ def _parse(path: Path, kind: ModelKind, packages: PackagePath,
                 field = f"args.{err.name}" if isinstance(err, UnknownXacroArg) else ""
                 raise ModelFileError(str(err), field) from err
             inputs = expanded.inputs
-            text, urdf_types = _read_urdf(path, packages, expanded.text)
-            spec = mujoco.MjSpec.from_string(text)
+            urdf = _read_urdf(path, packages, expanded.text)
+            spec = mujoco.MjSpec.from_string(urdf.text)
         elif kind == "urdf":
-            text, urdf_types = _read_urdf(path, packages)
-            spec = mujoco.MjSpec.from_string(text)
+            urdf = _read_urdf(path, packages)
+            spec = mujoco.MjSpec.from_string(urdf.text)
         else:
             spec = mujoco.MjSpec.from_file(str(path))
     except ValueError as err:
         shown = "the URDF xacro made of it" if kind == "xacro" else f"it as {kind.upper()}"
         raise ModelFileError(f"MuJoCo cannot read {shown}: {one_line(err)}") from err
-    return spec, urdf_types, inputs
+    return spec, urdf, inputs
 
 
 #: The file each in-memory asset name was read from (names are content hashes), so that
@@ -277,7 +329,8 @@ class ParsedModel:
     """A model file as MuJoCo reads it, not yet checked: ``spec`` (fresh) names its asset
     files by the keys of ``assets`` (their bytes, in memory); ``urdf_types``: a URDF's joint
     types by joint name (empty for MJCF); ``xacro``: what a xacro file's expansion read
-    (None for another kind)."""
+    (None for another kind); ``massless``: a URDF's links with collision geometry whose
+    ``<inertial>`` gives them a mass of 0 kg."""
 
     path: Path
     kind: ModelKind
@@ -285,6 +338,7 @@ class ParsedModel:
     assets: Mapping[str, bytes]
     urdf_types: Mapping[str, str]
     xacro: XacroInputs | None = None
+    massless: tuple[str, ...] = ()
 
 
 def read_model_file(path: Path, kind: ModelKind, packages: PackagePath,
@@ -292,10 +346,11 @@ def read_model_file(path: Path, kind: ModelKind, packages: PackagePath,
     """Parse ``path`` (a URDF prepared as the module says; a xacro file expanded with
     ``args`` first) and bring its asset files into memory; what the model is for (a robot,
     a world) is the caller's to check."""
-    spec, urdf_types, inputs = _parse(path, kind, packages, args or {})
+    spec, urdf, inputs = _parse(path, kind, packages, args or {})
     assets = _take_assets(spec, path, packages)
     return ParsedModel(path, kind, spec, types.MappingProxyType(assets),
-                       types.MappingProxyType(urdf_types), inputs)
+                       types.MappingProxyType(urdf.joint_types if urdf else {}), inputs,
+                       urdf.massless if urdf else ())
 
 
 def load_model_file(path: Path, kind: ModelKind, packages: PackagePath,
@@ -352,12 +407,18 @@ def load_model_file(path: Path, kind: ModelKind, packages: PackagePath,
         aname = name(mujoco.mjtObj.mjOBJ_ACTUATOR, a)
         if jname and jname not in actuators:
             actuators[jname] = (aname, _servo_mode(model, a))
+    mass = float(model.body_mass[1:].sum())
+    # URDF allows a mass of 0 (a frame-only link); one that collides is a part of the robot
+    # left weightless, which changes how it drives, pushes and is pushed: said, not refused.
+    warnings = tuple(f"link {link!r} has collision geometry but a mass of 0 kg (its "
+                     f"<inertial>), so the whole robot weighs {mass:.3g} kg; give the link "
+                     "its mass" for link in parsed.massless)
     return LoadedModel(
         path=path, kind="mjcf" if kind == "mjcf" else "urdf", xacro=parsed.xacro, spec=spec,
         assets=types.MappingProxyType(assets),
         root=tops[0].name, links=tuple(links), link_parents=types.MappingProxyType(parents),
         joints=types.MappingProxyType(joints), actuators=types.MappingProxyType(actuators),
-        mass=float(model.body_mass[1:].sum()), joint_inertia=types.MappingProxyType(inertia))
+        mass=mass, joint_inertia=types.MappingProxyType(inertia), warnings=warnings)
 
 
 def included_files(path: Path) -> list[tuple[str, Path]]:

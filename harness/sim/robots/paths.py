@@ -49,6 +49,11 @@ class ModelSource:
         file = self.origin(field) if self.origin is not None else self.scenario_file
         return ScenarioError(file, field, message)
 
+    def warning(self, sub: str, message: str) -> str:
+        """The ``file: field: message`` line of a warning about ``sub``, as :meth:`error`
+        would name it."""
+        return str(self.error(sub, message))
+
 #: Environment variables that extend the package path, in lookup order.
 ENV_VARS = ("SRR_PACKAGE_PATH", "ROS_PACKAGE_PATH")
 _PACKAGE_NAME = re.compile(r"<name>\s*([^<\s]+)\s*</name>")
