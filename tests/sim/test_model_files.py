@@ -290,6 +290,23 @@ def test_a_urdf_joint_to_a_missing_link_is_one_line_and_exit_2(
     assert not (tmp_path / "out").exists()
 
 
+def test_a_binary_stl_with_more_faces_than_mujoco_reads_is_named(tmp_path: Path) -> None:
+    """MuJoCo said ``stl_decoder: number of faces should be between 1 and 200000 in STL file
+    '...'; perhaps this is an ASCII file?`` of a good binary file that is only too big."""
+    faces = 200_001
+    (tmp_path / "meshes").mkdir()
+    (tmp_path / "meshes" / "big.stl").write_bytes(
+        b"\0" * 80 + faces.to_bytes(4, "little") + b"\0" * (50 * faces))
+    (tmp_path / "bot.urdf").write_text(DIFFBOT.read_text().replace(
+        "package://srr_diffbot/meshes/chassis.stl", "meshes/big.stl"))
+    path = write(tmp_path, diffbot(model={"urdf": "bot.urdf"}))
+    err = error_of(path)
+    assert (err.file, err.field) == (str(path), "robots[0].model.urdf")
+    assert err.message == (f"{tmp_path / 'bot.urdf'}: mesh 'meshes/big.stl' has 200001 "
+                           "faces, more than the 200000 MuJoCo reads; decimate it (e.g. with "
+                           "Blender or meshlab)")
+
+
 def test_a_link_that_collides_but_weighs_nothing_is_a_warning(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """The chassis at 0 kg: MuJoCo builds a robot of the wheels' and caster's 0.21 kg without

@@ -18,7 +18,9 @@ module prepares what it reads and checks that the result stands on its own:
   file's ``meshdir``/``texturedir``.
 * Every asset file is read once into memory and named by its content hash, so the world's
   spec compiles from memory (several robots from one file, or files from several
-  directories, never clash) and the meshes are those MuJoCo loads: STL (binary), OBJ, MSH.
+  directories, never clash) and the meshes are those MuJoCo loads: STL (binary, at most
+  200000 faces: a bigger one is refused naming the file, where MuJoCo would suggest it is
+  ASCII), OBJ, MSH.
 * The model is compiled alone once: a file MuJoCo refuses is reported against the model file,
   before the world is built. Its robot must be one tree under a single top-level body.
 
@@ -277,6 +279,21 @@ def _named(message: str) -> str:
     return _ASSET_NAME.sub(lambda m: _ASSET_FILES.get(m.group(0), m.group(0)), message)
 
 
+#: The most faces MuJoCo reads from a binary STL file: its ``stl_decoder`` refuses more as
+#: "perhaps this is an ASCII file?".
+_STL_MAX_FACES = 200_000
+
+
+def _stl_faces(data: bytes) -> int | None:
+    """The number of faces a binary STL file's header gives, when the file's size agrees with
+    it (an ASCII or a truncated file's does not: MuJoCo's own message fits those), else
+    None."""
+    if len(data) < 84:
+        return None
+    faces = int.from_bytes(data[80:84], "little")
+    return faces if len(data) == 84 + 50 * faces else None
+
+
 def _take_assets(spec: mujoco.MjSpec, path: Path, packages: PackagePath) -> dict[str, bytes]:
     """Read every asset file into memory and point the spec at it by content hash."""
     base = Path(spec.modelfiledir) if spec.modelfiledir else path.parent
@@ -295,6 +312,12 @@ def _take_assets(spec: mujoco.MjSpec, path: Path, packages: PackagePath) -> dict
                 data = file.read_bytes()
             except OSError:
                 raise ModelFileError(f"{what} {item.file!r}: file not found ({file})") from None
+            faces = _stl_faces(data) if file.suffix.lower() == ".stl" else None
+            if faces is not None and faces > _STL_MAX_FACES:
+                raise ModelFileError(
+                    f"{what} {_shown(file, path.parent)!r} has {faces} faces, more than the "
+                    f"{_STL_MAX_FACES} MuJoCo reads; decimate it (e.g. with Blender or "
+                    "meshlab)")
             key = f"srr-{hashlib.sha256(data).hexdigest()[:20]}{file.suffix.lower()}"
             assets[key] = data
             _ASSET_FILES[key] = _shown(file, path.parent)
