@@ -149,6 +149,26 @@ def test_paths_are_relative_to_the_file_that_holds_the_robot(tmp_path: Path) -> 
         err.message
 
 
+def test_urdf_mesh_paths_are_relative_to_the_urdf_file(tmp_path: Path) -> None:
+    """``../meshes/chassis.stl`` in ``desc/urdf/bot.urdf`` is ``desc/meshes/chassis.stl``,
+    wherever the scenario is; the path from the scenario file is not found (the docs said
+    mesh paths were relative to the scenario file)."""
+    (tmp_path / "desc" / "urdf").mkdir(parents=True)
+    (tmp_path / "desc" / "meshes").mkdir()
+    shutil.copy(MODELS / "srr_diffbot" / "meshes" / "chassis.stl", tmp_path / "desc" / "meshes")
+    urdf = tmp_path / "desc" / "urdf" / "bot.urdf"
+    chassis = "package://srr_diffbot/meshes/chassis.stl"
+    urdf.write_text(DIFFBOT.read_text().replace(chassis, "../meshes/chassis.stl"))
+    path = write(tmp_path, diffbot(model={"urdf": "desc/urdf/bot.urdf",
+                                          "package_paths": [str(MODELS)]}))
+    world = World.build(load_scenario(path), str(path))
+    assert "bot/chassis" in [world.model.mesh(i).name for i in range(world.model.nmesh)]
+    urdf.write_text(DIFFBOT.read_text().replace(chassis, "desc/meshes/chassis.stl"))
+    err = error_of(path)
+    assert err.message == (f"{urdf}: mesh 'desc/meshes/chassis.stl': file not found "
+                           f"({tmp_path / 'desc' / 'urdf' / 'desc' / 'meshes' / 'chassis.stl'})")
+
+
 # ------------------------------------------------------------------ bad input
 
 ASCII_STL = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n" \

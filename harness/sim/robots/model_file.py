@@ -7,10 +7,11 @@ robot's checks.
 MuJoCo parses both formats itself (``mujoco.MjSpec.from_string`` / ``from_file``); this
 module prepares what it reads and checks that the result stands on its own:
 
-* URDF: ``package://`` and relative mesh URIs are resolved (:mod:`.paths`) and written back
-  as absolute paths, and the ``<mujoco><compiler>`` extension is set so that visual geoms are
-  kept (MuJoCo drops them from URDF by default), links joined by fixed joints stay separate
-  bodies (each link keeps its name, for TF and sensor mounts) and paths are not stripped.
+* URDF: ``package://`` and relative mesh URIs (relative to the URDF file's directory, not
+  the scenario file's) are resolved (:mod:`.paths`) and written back as absolute paths, and
+  the ``<mujoco><compiler>`` extension is set so that visual geoms are kept (MuJoCo drops
+  them from URDF by default), links joined by fixed joints stay separate bodies (each link
+  keeps its name, for TF and sensor mounts) and paths are not stripped.
   URDF joint types are read from the XML too, since a fixed joint leaves no MuJoCo joint.
 * xacro: expanded to URDF by the ``xacro`` package (:mod:`.xacro_file`), then read as a URDF
   whose relative paths start from the ``.xacro`` file's directory.
