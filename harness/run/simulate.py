@@ -108,8 +108,8 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
             raise SrrError(f"--foxglove: the live view serves ROS 2 messages, and this run "
                            f"records ROS 1 ({output.because})")
         plan = sim.plan()
-        warnings = [*rate_warnings(scenario, source), *frame_warnings(scenario, source),
-                    *check_wiring(plan, scenario, source),
+        warnings = [*sim.world.warnings, *rate_warnings(scenario, source),
+                    *frame_warnings(scenario, source), *check_wiring(plan, scenario, source),
                     *check_output_topics(output, plan.topics, scenario, source)]
         # After the plan, so the server advertises every topic the run will publish at once.
         view = (LiveView.start(live, topics={t.topic: t.msgtype for t in plan.topics
@@ -270,8 +270,8 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         plan = sim.plan()
         size_note = large_bag_notice(scenario)
-        return (*rate_warnings(scenario, source), *frame_warnings(scenario, source),
-                *check_wiring(plan, scenario, source),
+        return (*sim.world.warnings, *rate_warnings(scenario, source),
+                *frame_warnings(scenario, source), *check_wiring(plan, scenario, source),
                 *check_output_topics(output, plan.topics, scenario, source), *busy,
                 *([f"{source}: {size_note}"] if size_note else []))
     finally:

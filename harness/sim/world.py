@@ -278,10 +278,14 @@ class World:
                  prims: Mapping[str, PrimRef], robots: Mapping[str, RobotInfo],
                  workers: WorkerDriver | None = None,
                  world_file: LoadedWorld | None = None,
-                 scene_files: Mapping[str, str] | None = None) -> None:
+                 scene_files: Mapping[str, str] | None = None,
+                 warnings: tuple[str, ...] = ()) -> None:
         self._scenario = scenario
         self._world_file = world_file
         self.scene_files: Mapping[str, str] = types.MappingProxyType(dict(scene_files or {}))
+        #: ``file: field: message`` lines about the robots' model files that do not stop a
+        #: run (a link that collides but weighs nothing).
+        self.warnings = warnings
         self._model = model
         self._data = data
         self._prims = prims
@@ -337,7 +341,8 @@ class World:
         if loaded is not None:
             files["world.model"] = file_digest(loaded.path, loaded.assets)
         world = cls(scenario, model, data, resolved, types.MappingProxyType(robots),
-                    WorkerDriver(model, workers), loaded, files)
+                    WorkerDriver(model, workers), loaded, files,
+                    tuple(w for b, _ in builds for w in b.warnings))
         owner = {b: name for name in world.robot_names() for b in world.robot_body_ids(name)}
         check_spawns(model, data, owner, robot_spawn(scenario, source),
                      None if loaded is None else loaded.describe_static)

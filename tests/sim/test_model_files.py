@@ -4,6 +4,7 @@ and a TurtleBot3 described by a URDF driving exactly like the built-in one."""
 
 from __future__ import annotations
 
+import json
 import math
 import shutil
 from pathlib import Path
@@ -148,6 +149,26 @@ def test_paths_are_relative_to_the_file_that_holds_the_robot(tmp_path: Path) -> 
         err.message
 
 
+def test_urdf_mesh_paths_are_relative_to_the_urdf_file(tmp_path: Path) -> None:
+    """``../meshes/chassis.stl`` in ``desc/urdf/bot.urdf`` is ``desc/meshes/chassis.stl``,
+    wherever the scenario is; the path from the scenario file is not found (the docs said
+    mesh paths were relative to the scenario file)."""
+    (tmp_path / "desc" / "urdf").mkdir(parents=True)
+    (tmp_path / "desc" / "meshes").mkdir()
+    shutil.copy(MODELS / "srr_diffbot" / "meshes" / "chassis.stl", tmp_path / "desc" / "meshes")
+    urdf = tmp_path / "desc" / "urdf" / "bot.urdf"
+    chassis = "package://srr_diffbot/meshes/chassis.stl"
+    urdf.write_text(DIFFBOT.read_text().replace(chassis, "../meshes/chassis.stl"))
+    path = write(tmp_path, diffbot(model={"urdf": "desc/urdf/bot.urdf",
+                                          "package_paths": [str(MODELS)]}))
+    world = World.build(load_scenario(path), str(path))
+    assert "bot/chassis" in [world.model.mesh(i).name for i in range(world.model.nmesh)]
+    urdf.write_text(DIFFBOT.read_text().replace(chassis, "desc/meshes/chassis.stl"))
+    err = error_of(path)
+    assert err.message == (f"{urdf}: mesh 'desc/meshes/chassis.stl': file not found "
+                           f"({tmp_path / 'desc' / 'urdf' / 'desc' / 'meshes' / 'chassis.stl'})")
+
+
 # ------------------------------------------------------------------ bad input
 
 ASCII_STL = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n" \
@@ -238,6 +259,97 @@ def test_bad_models_name_scenario_field_and_model_file(tmp_path: Path, make: Any
     for word in words:
         assert word in err.message
     assert "\n" not in str(err)
+
+
+#: URDF mistakes MuJoCo reads without a word or words vaguely: (text of srr_diffbot.urdf,
+#: what it becomes, what the message says after ``scene.yaml: robots[0].model.urdf: ...``).
+URDF_MISTAKES = [
+    ('<child link="caster_link"/>', '<child link="castor_link"/>',
+     "joint 'caster_joint': child link 'castor_link' does not exist (did you mean "
+     "'caster_link'?)"),
+    ('<parent link="base_footprint"/>', '<parent link="chassis"/>',
+     "joint 'base_joint': parent link 'chassis' does not exist"),
+    ('<child link="lidar_link"/>', "", "joint 'lidar_joint' has no <child link=\"...\"/>"),
+    # MuJoCo made a negative mass 0 kg and took NaN; a negative inertia it refused vaguely
+    ('<mass value="2.0"/>', '<mass value="-5.0"/>',
+     "link 'base_link': mass -5.0 is negative (MuJoCo would make it 0 kg)"),
+    ('<mass value="2.0"/>', '<mass value="nan"/>', "link 'base_link': mass 'nan' is not a "
+     "finite number"),
+    ('<mass value="0.01"/>', '<mass value="0.01 kg"/>', "link 'caster_link': mass '0.01 kg' "
+     "is not a number"),
+    ('ixx="0.00913"', 'ixx="-0.00913"', "link 'base_link': inertia ixx -0.00913 is negative"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "words"), URDF_MISTAKES)
+def test_urdf_mistakes_are_named_before_mujoco_reads_the_file(tmp_path: Path, old: str,
+                                                              new: str, words: str) -> None:
+    text = DIFFBOT.read_text()
+    assert old in text
+    (tmp_path / "bot.urdf").write_text(text.replace(old, new))
+    path = write(tmp_path, diffbot(model={"urdf": "bot.urdf"}))
+    err = error_of(path)
+    assert (err.file, err.field) == (str(path), "robots[0].model.urdf")
+    assert err.message == f"{tmp_path / 'bot.urdf'}: {words}"
+
+
+@pytest.mark.parametrize("command", ["validate", "run"])
+def test_a_urdf_joint_to_a_missing_link_is_one_line_and_exit_2(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str) -> None:
+    """Before: MuJoCo's ``XML Error: URDF joint parent or child missing; Element 'joint',
+    line 31``, naming neither the joint nor the link."""
+    (tmp_path / "bot.urdf").write_text(DIFFBOT.read_text().replace(
+        '<child link="caster_link"/>', '<child link="castor_link"/>'))
+    path = write(tmp_path, diffbot(model={"urdf": "bot.urdf"}))
+    extra = ["--out", str(tmp_path / "out"), "-q"] if command == "run" else []
+    assert main([command, str(path), *extra]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"srr {command}: {path}: robots[0].model.urdf: {tmp_path / 'bot.urdf'}: "
+                   "joint 'caster_joint': child link 'castor_link' does not exist (did you "
+                   "mean 'caster_link'?)")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_binary_stl_with_more_faces_than_mujoco_reads_is_named(tmp_path: Path) -> None:
+    """MuJoCo said ``stl_decoder: number of faces should be between 1 and 200000 in STL file
+    '...'; perhaps this is an ASCII file?`` of a good binary file that is only too big."""
+    faces = 200_001
+    (tmp_path / "meshes").mkdir()
+    (tmp_path / "meshes" / "big.stl").write_bytes(
+        b"\0" * 80 + faces.to_bytes(4, "little") + b"\0" * (50 * faces))
+    (tmp_path / "bot.urdf").write_text(DIFFBOT.read_text().replace(
+        "package://srr_diffbot/meshes/chassis.stl", "meshes/big.stl"))
+    path = write(tmp_path, diffbot(model={"urdf": "bot.urdf"}))
+    err = error_of(path)
+    assert (err.file, err.field) == (str(path), "robots[0].model.urdf")
+    assert err.message == (f"{tmp_path / 'bot.urdf'}: mesh 'meshes/big.stl' has 200001 "
+                           "faces, more than the 200000 MuJoCo reads; decimate it (e.g. with "
+                           "Blender or meshlab)")
+
+
+def test_a_link_that_collides_but_weighs_nothing_is_a_warning(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The chassis at 0 kg: MuJoCo builds a robot of the wheels' and caster's 0.21 kg without
+    a word. URDF allows a mass of 0 (frame links), so srr warns (``srr validate``, the run's
+    summary) instead of refusing; a 0 kg link without collision geometry is not warned of."""
+    (tmp_path / "bot.urdf").write_text(DIFFBOT.read_text().replace(
+        '<mass value="2.0"/>', '<mass value="0"/>').replace(
+        '<link name="lidar_link">',
+        '<link name="lidar_link"><inertial><mass value="0"/><inertia ixx="0" ixy="0" '
+        'ixz="0" iyy="0" iyz="0" izz="0"/></inertial>'))
+    path = write(tmp_path, diffbot(model={"urdf": "bot.urdf"}))
+    path.write_text(yaml.safe_dump({**yaml.safe_load(path.read_text()),
+                                    "scoring": {"record_only": True}}))
+    warning = (f"{path}: robots[0].model.urdf: {tmp_path / 'bot.urdf'}: link 'base_link' has "
+               "collision geometry but a mass of 0 kg (its <inertial>), so the whole robot "
+               "weighs 0.21 kg; give the link its mass")
+    warnings = api.validate(load_scenario(path), source=str(path))
+    assert [w for w in warnings if "weighs" in w] == [warning]
+    assert main(["validate", str(path)]) == 0
+    assert f"warning: {warning}" in capsys.readouterr().err
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    assert warning in json.loads((out / "summary.json").read_text())["warnings"]
 
 
 def test_srr_validate_answers_a_bad_joint_with_one_line_and_exit_2(

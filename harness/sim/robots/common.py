@@ -62,6 +62,8 @@ class RobotBuild:
     uses (robots from model files; the world's spec compiles from memory).
     ``file_digest``: for a robot from a model file, the SHA-256 of the file and of every
     mesh and texture it uses, so a changed model makes a run another configuration.
+    ``warnings``: ``file: field: message`` lines about the robot's model that do not stop
+    the run (``srr validate`` prints them; a run's summary keeps them).
     """
 
     name: str
@@ -76,6 +78,7 @@ class RobotBuild:
     links: Mapping[str, tuple[str, str]]
     assets: Mapping[str, bytes] = field(default_factory=lambda: types.MappingProxyType({}))
     file_digest: str | None = None
+    warnings: tuple[str, ...] = ()
 
 
 def add_visual_geom(body: mujoco.MjsBody, name: str, gtype: mujoco.mjtGeom,

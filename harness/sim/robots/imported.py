@@ -310,4 +310,6 @@ def add_model_robot(spec: mujoco.MjSpec, robot: RobotSpec,
         base_prim=f"{prim}/{loaded.root}", robot_front=ROBOT_FRONT,
         default_base_frame=loaded.root, joints=types.MappingProxyType(joints),
         actuators=types.MappingProxyType(actuators), links=types.MappingProxyType(links),
-        assets=loaded.assets, file_digest=file_digest(path, loaded.assets, loaded.xacro))
+        assets=loaded.assets, file_digest=file_digest(path, loaded.assets, loaded.xacro),
+        warnings=tuple(src.warning(f"model.{model.kind}", f"{shown}: {w}")
+                       for w in loaded.warnings))

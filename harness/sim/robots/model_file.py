@@ -7,10 +7,11 @@ robot's checks.
 MuJoCo parses both formats itself (``mujoco.MjSpec.from_string`` / ``from_file``); this
 module prepares what it reads and checks that the result stands on its own:
 
-* URDF: ``package://`` and relative mesh URIs are resolved (:mod:`.paths`) and written back
-  as absolute paths, and the ``<mujoco><compiler>`` extension is set so that visual geoms are
-  kept (MuJoCo drops them from URDF by default), links joined by fixed joints stay separate
-  bodies (each link keeps its name, for TF and sensor mounts) and paths are not stripped.
+* URDF: ``package://`` and relative mesh URIs (relative to the URDF file's directory, not
+  the scenario file's) are resolved (:mod:`.paths`) and written back as absolute paths, and
+  the ``<mujoco><compiler>`` extension is set so that visual geoms are kept (MuJoCo drops
+  them from URDF by default), links joined by fixed joints stay separate bodies (each link
+  keeps its name, for TF and sensor mounts) and paths are not stripped.
   URDF joint types are read from the XML too, since a fixed joint leaves no MuJoCo joint.
 * xacro: expanded to URDF by the ``xacro`` package (:mod:`.xacro_file`), then read as a URDF
   whose relative paths start from the ``.xacro`` file's directory.
@@ -18,7 +19,9 @@ module prepares what it reads and checks that the result stands on its own:
   file's ``meshdir``/``texturedir``.
 * Every asset file is read once into memory and named by its content hash, so the world's
   spec compiles from memory (several robots from one file, or files from several
-  directories, never clash) and the meshes are those MuJoCo loads: STL (binary), OBJ, MSH.
+  directories, never clash) and the meshes are those MuJoCo loads: STL (binary, at most
+  200000 faces: a bigger one is refused naming the file, where MuJoCo would suggest it is
+  ASCII), OBJ, MSH.
 * The model is compiled alone once: a file MuJoCo refuses is reported against the model file,
   before the world is built. Its robot must be one tree under a single top-level body.
 
@@ -29,6 +32,7 @@ field.
 from __future__ import annotations
 
 import hashlib
+import math
 import re
 import types
 import xml.etree.ElementTree as ET
@@ -47,6 +51,7 @@ from harness.sim.robots.xacro_file import (
     XacroInputs,
     expand_xacro,
 )
+from harness.validation import close_match
 
 __all__ = ["JointInfo", "LoadedModel", "ModelFileError", "ModelKind", "ParsedModel",
            "file_digest",
@@ -96,7 +101,8 @@ class LoadedModel:
     root first. ``actuators``: joint → (actuator name, servo mode or None for another kind)
     for the actuators the file puts on single joints. ``joint_inertia``: each 1-dof joint's
     inertia at the reference pose (kg·m²). ``kind`` is the format MuJoCo read (a xacro
-    file's is ``urdf``); ``xacro``: what a xacro file's expansion read."""
+    file's is ``urdf``); ``xacro``: what a xacro file's expansion read. ``warnings``: what
+    is odd about the model without making it unusable (one line each)."""
 
     path: Path
     kind: Literal["urdf", "mjcf"]
@@ -110,6 +116,7 @@ class LoadedModel:
     mass: float
     joint_inertia: Mapping[str, float]
     xacro: XacroInputs | None = None
+    warnings: tuple[str, ...] = ()
 
 
 def one_line(err: BaseException) -> str:
@@ -119,10 +126,20 @@ def one_line(err: BaseException) -> str:
     return text if len(text) <= 300 else text[:297] + "..."
 
 
-def _read_urdf(path: Path, packages: PackagePath,
-               text: str | None = None) -> tuple[str, dict[str, str]]:
-    """The URDF text prepared for MuJoCo, and its joints' URDF types. ``text``: the URDF
-    (a xacro file's expansion) when it is not ``path``'s content."""
+@dataclass(frozen=True)
+class _PreparedUrdf:
+    """A URDF as MuJoCo is to read it: ``text``; ``joint_types``: its joints' URDF types by
+    joint name; ``massless``: the links with collision geometry whose ``<inertial>`` gives
+    them a mass of 0 kg."""
+
+    text: str
+    joint_types: dict[str, str]
+    massless: tuple[str, ...]
+
+
+def _read_urdf(path: Path, packages: PackagePath, text: str | None = None) -> _PreparedUrdf:
+    """The URDF prepared for MuJoCo. ``text``: the URDF (a xacro file's expansion) when it
+    is not ``path``'s content."""
     try:
         root = ET.fromstring(path.read_bytes() if text is None else text)
     except ET.ParseError as err:
@@ -134,6 +151,8 @@ def _read_urdf(path: Path, packages: PackagePath,
                              "expected <robot>)")
     types_ = {j.get("name", ""): j.get("type", "") for j in root.iter("joint")
               if j.get("name") and j.get("type")}
+    _check_joint_links(root)
+    massless = _check_inertials(root)
     for mesh in root.iter("mesh"):
         uri = mesh.get("filename")
         if not uri:
@@ -153,16 +172,72 @@ def _read_urdf(path: Path, packages: PackagePath,
         compiler = ET.SubElement(ext, "compiler")
     for key, value in _URDF_COMPILER.items():
         compiler.set(key, value)
-    return ET.tostring(root, encoding="unicode"), types_
+    return _PreparedUrdf(ET.tostring(root, encoding="unicode"), types_, massless)
 
 
-def _parse(path: Path, kind: ModelKind, packages: PackagePath,
-           args: Mapping[str, str]) -> tuple[mujoco.MjSpec, dict[str, str], XacroInputs | None]:
+def _check_joint_links(root: ET.Element) -> None:
+    """Every joint of the URDF joins two links it has: MuJoCo says only "URDF joint parent or
+    child missing" and a line number."""
+    links = {link.get("name", ""): None for link in root.findall("link")}
+    for joint in root.findall("joint"):  # not a <transmission>'s joints
+        name = joint.get("name", "")
+        for end in ("parent", "child"):
+            element = joint.find(end)
+            link = element.get("link") if element is not None else None
+            if not link:
+                raise ModelFileError(f"joint {name!r} has no <{end} link=\"...\"/>")
+            if link not in links:
+                close = close_match(link, links)
+                hint = f" (did you mean {close!r}?)" if close else ""
+                raise ModelFileError(f"joint {name!r}: {end} link {link!r} does not exist"
+                                     f"{hint}")
+
+
+def _inertial_value(link: str, what: str, raw: str) -> float:
+    """``raw``, the value of a link's mass or inertia diagonal entry (``what``), as a number
+    that can be one: finite, 0 or more."""
+    try:
+        value = float(raw)
+    except ValueError:
+        raise ModelFileError(f"link {link!r}: {what} {raw!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ModelFileError(f"link {link!r}: {what} {raw!r} is not a finite number")
+    if value < 0:
+        hint = " (MuJoCo would make it 0 kg)" if what == "mass" else ""
+        raise ModelFileError(f"link {link!r}: {what} {raw} is negative{hint}")
+    return value
+
+
+def _check_inertials(root: ET.Element) -> tuple[str, ...]:
+    """Refuse a link's mass or inertia diagonal that is negative or not a finite number
+    (MuJoCo makes a negative mass 0 kg without a word, and takes NaN and infinity); return
+    the links with collision geometry whose mass is 0 kg."""
+    massless: list[str] = []
+    for link in root.findall("link"):
+        name = link.get("name", "")
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        mass = inertial.find("mass")
+        raw = mass.get("value") if mass is not None else None
+        if raw is not None and _inertial_value(name, "mass", raw) == 0 \
+                and link.find("collision") is not None:
+            massless.append(name)
+        inertia = inertial.find("inertia")
+        for key in ("ixx", "iyy", "izz"):
+            raw = inertia.get(key) if inertia is not None else None
+            if raw is not None:
+                _inertial_value(name, f"inertia {key}", raw)
+    return tuple(massless)
+
+
+def _parse(path: Path, kind: ModelKind, packages: PackagePath, args: Mapping[str, str],
+           ) -> tuple[mujoco.MjSpec, _PreparedUrdf | None, XacroInputs | None]:
     if not path.exists():
         raise ModelFileError("file not found")
     if not path.is_file():
         raise ModelFileError("is not a file")
-    urdf_types: dict[str, str] = {}
+    urdf: _PreparedUrdf | None = None
     inputs: XacroInputs | None = None
     try:
         if kind == "xacro":
@@ -172,17 +247,17 @@ def _parse(path: Path, kind: ModelKind, packages: PackagePath,
                 field = f"args.{err.name}" if isinstance(err, UnknownXacroArg) else ""
                 raise ModelFileError(str(err), field) from err
             inputs = expanded.inputs
-            text, urdf_types = _read_urdf(path, packages, expanded.text)
-            spec = mujoco.MjSpec.from_string(text)
+            urdf = _read_urdf(path, packages, expanded.text)
+            spec = mujoco.MjSpec.from_string(urdf.text)
         elif kind == "urdf":
-            text, urdf_types = _read_urdf(path, packages)
-            spec = mujoco.MjSpec.from_string(text)
+            urdf = _read_urdf(path, packages)
+            spec = mujoco.MjSpec.from_string(urdf.text)
         else:
             spec = mujoco.MjSpec.from_file(str(path))
     except ValueError as err:
         shown = "the URDF xacro made of it" if kind == "xacro" else f"it as {kind.upper()}"
         raise ModelFileError(f"MuJoCo cannot read {shown}: {one_line(err)}") from err
-    return spec, urdf_types, inputs
+    return spec, urdf, inputs
 
 
 #: The file each in-memory asset name was read from (names are content hashes), so that
@@ -205,6 +280,21 @@ def _named(message: str) -> str:
     return _ASSET_NAME.sub(lambda m: _ASSET_FILES.get(m.group(0), m.group(0)), message)
 
 
+#: The most faces MuJoCo reads from a binary STL file: its ``stl_decoder`` refuses more as
+#: "perhaps this is an ASCII file?".
+_STL_MAX_FACES = 200_000
+
+
+def _stl_faces(data: bytes) -> int | None:
+    """The number of faces a binary STL file's header gives, when the file's size agrees with
+    it (an ASCII or a truncated file's does not: MuJoCo's own message fits those), else
+    None."""
+    if len(data) < 84:
+        return None
+    faces = int.from_bytes(data[80:84], "little")
+    return faces if len(data) == 84 + 50 * faces else None
+
+
 def _take_assets(spec: mujoco.MjSpec, path: Path, packages: PackagePath) -> dict[str, bytes]:
     """Read every asset file into memory and point the spec at it by content hash."""
     base = Path(spec.modelfiledir) if spec.modelfiledir else path.parent
@@ -223,6 +313,12 @@ def _take_assets(spec: mujoco.MjSpec, path: Path, packages: PackagePath) -> dict
                 data = file.read_bytes()
             except OSError:
                 raise ModelFileError(f"{what} {item.file!r}: file not found ({file})") from None
+            faces = _stl_faces(data) if file.suffix.lower() == ".stl" else None
+            if faces is not None and faces > _STL_MAX_FACES:
+                raise ModelFileError(
+                    f"{what} {_shown(file, path.parent)!r} has {faces} faces, more than the "
+                    f"{_STL_MAX_FACES} MuJoCo reads; decimate it (e.g. with Blender or "
+                    "meshlab)")
             key = f"srr-{hashlib.sha256(data).hexdigest()[:20]}{file.suffix.lower()}"
             assets[key] = data
             _ASSET_FILES[key] = _shown(file, path.parent)
@@ -257,7 +353,8 @@ class ParsedModel:
     """A model file as MuJoCo reads it, not yet checked: ``spec`` (fresh) names its asset
     files by the keys of ``assets`` (their bytes, in memory); ``urdf_types``: a URDF's joint
     types by joint name (empty for MJCF); ``xacro``: what a xacro file's expansion read
-    (None for another kind)."""
+    (None for another kind); ``massless``: a URDF's links with collision geometry whose
+    ``<inertial>`` gives them a mass of 0 kg."""
 
     path: Path
     kind: ModelKind
@@ -265,6 +362,7 @@ class ParsedModel:
     assets: Mapping[str, bytes]
     urdf_types: Mapping[str, str]
     xacro: XacroInputs | None = None
+    massless: tuple[str, ...] = ()
 
 
 def read_model_file(path: Path, kind: ModelKind, packages: PackagePath,
@@ -272,10 +370,11 @@ def read_model_file(path: Path, kind: ModelKind, packages: PackagePath,
     """Parse ``path`` (a URDF prepared as the module says; a xacro file expanded with
     ``args`` first) and bring its asset files into memory; what the model is for (a robot,
     a world) is the caller's to check."""
-    spec, urdf_types, inputs = _parse(path, kind, packages, args or {})
+    spec, urdf, inputs = _parse(path, kind, packages, args or {})
     assets = _take_assets(spec, path, packages)
     return ParsedModel(path, kind, spec, types.MappingProxyType(assets),
-                       types.MappingProxyType(urdf_types), inputs)
+                       types.MappingProxyType(urdf.joint_types if urdf else {}), inputs,
+                       urdf.massless if urdf else ())
 
 
 def load_model_file(path: Path, kind: ModelKind, packages: PackagePath,
@@ -332,12 +431,18 @@ def load_model_file(path: Path, kind: ModelKind, packages: PackagePath,
         aname = name(mujoco.mjtObj.mjOBJ_ACTUATOR, a)
         if jname and jname not in actuators:
             actuators[jname] = (aname, _servo_mode(model, a))
+    mass = float(model.body_mass[1:].sum())
+    # URDF allows a mass of 0 (a frame-only link); one that collides is a part of the robot
+    # left weightless, which changes how it drives, pushes and is pushed: said, not refused.
+    warnings = tuple(f"link {link!r} has collision geometry but a mass of 0 kg (its "
+                     f"<inertial>), so the whole robot weighs {mass:.3g} kg; give the link "
+                     "its mass" for link in parsed.massless)
     return LoadedModel(
         path=path, kind="mjcf" if kind == "mjcf" else "urdf", xacro=parsed.xacro, spec=spec,
         assets=types.MappingProxyType(assets),
         root=tops[0].name, links=tuple(links), link_parents=types.MappingProxyType(parents),
         joints=types.MappingProxyType(joints), actuators=types.MappingProxyType(actuators),
-        mass=float(model.body_mass[1:].sum()), joint_inertia=types.MappingProxyType(inertia))
+        mass=mass, joint_inertia=types.MappingProxyType(inertia), warnings=warnings)
 
 
 def included_files(path: Path) -> list[tuple[str, Path]]:

@@ -1,16 +1,18 @@
 """Where a model file and the files it names are: relative paths and ``package://`` URIs.
 
 A robot entry's model file is written relative to the scenario file that holds the entry (an
-include's robots: relative to the include). ``package://<pkg>/<path>`` URIs — the form ROS
-tools write in URDF files — are looked up on the package path, in order: a directory of it
-is the package when its name (or its ``package.xml``'s ``<name>``) is ``<pkg>``, else its
-subdirectory ``<pkg>`` is; failing both in every directory, each directory is crawled as ROS
-1's ``rospack`` crawls ``ROS_PACKAGE_PATH``: the first folder below it (depth first, in name
-order) whose ``package.xml`` names ``<pkg>``, never descending into a package or a folder
-holding ``CATKIN_IGNORE``, ``COLCON_IGNORE`` or ``AMENT_IGNORE``, nor into hidden ones. The
-package path is the model block's ``package_paths`` (relative to the same scenario file), then
-``SRR_PACKAGE_PATH``, then ``ROS_PACKAGE_PATH`` (``os.pathsep``-separated). ``file://`` URIs
-are absolute paths, percent-decoded (``%20`` is a space).
+include's robots: relative to the include); the files a model file names (a URDF's meshes) are
+relative to the model file's directory (:mod:`.model_file` passes it as ``base_dir``).
+``package://<pkg>/<path>`` URIs — the form ROS tools write in URDF files — are looked up on the
+package path, in order: a directory of it is the package when its name (or its
+``package.xml``'s ``<name>``) is ``<pkg>``, else its subdirectory ``<pkg>`` is; failing both in
+every directory, each directory is crawled as ROS 1's ``rospack`` crawls ``ROS_PACKAGE_PATH``:
+the first folder below it (depth first, in name order) whose ``package.xml`` names ``<pkg>``,
+never descending into a package or a folder holding ``CATKIN_IGNORE``, ``COLCON_IGNORE`` or
+``AMENT_IGNORE``, nor into hidden ones. The package path is the model block's ``package_paths``
+(relative to the same scenario file), then ``SRR_PACKAGE_PATH``, then ``ROS_PACKAGE_PATH``
+(``os.pathsep``-separated). ``file://`` URIs are absolute paths, percent-decoded (``%20`` is a
+space).
 
 Pure functions of their arguments: the caller passes the environment in.
 """
@@ -48,6 +50,11 @@ class ModelSource:
         field = f"{self.field}.{sub}"
         file = self.origin(field) if self.origin is not None else self.scenario_file
         return ScenarioError(file, field, message)
+
+    def warning(self, sub: str, message: str) -> str:
+        """The ``file: field: message`` line of a warning about ``sub``, as :meth:`error`
+        would name it."""
+        return str(self.error(sub, message))
 
 #: Environment variables that extend the package path, in lookup order.
 ENV_VARS = ("SRR_PACKAGE_PATH", "ROS_PACKAGE_PATH")
