@@ -12,6 +12,7 @@ whoever reads it.
 
 from __future__ import annotations
 
+import difflib
 import struct
 from collections.abc import Sequence
 from typing import Any, NamedTuple
@@ -28,6 +29,7 @@ __all__ = [
     "TYPESTORE",
     "OdometryPose",
     "Pose",
+    "UnknownMessageType",
     "clock",
     "clock_packer",
     "deserialize",
@@ -38,6 +40,7 @@ __all__ = [
     "odometry_packer",
     "odometry_pose",
     "quaternion_xyzw",
+    "require_msgtype",
     "serialize",
     "split_ns",
     "tf_message",
@@ -83,6 +86,26 @@ def msg_type(name: str) -> Any:
         return TYPESTORE.types[name]
     except KeyError:
         raise KeyError(f"unknown ROS 2 message type {name!r}") from None
+
+
+class UnknownMessageType(ValueError):
+    """A message type name the typestore does not know (what srr can neither serialize nor
+    record); its message suggests the closest known name."""
+
+
+def require_msgtype(name: str) -> str:
+    """``name`` when it is a message type the typestore knows (``pkg/msg/Name``, as the bus
+    and the recording spell it); else :class:`UnknownMessageType`, its message suggesting
+    the closest known name (``did you mean 'geometry_msgs/msg/Twist'?``)."""
+    if isinstance(name, str) and name in TYPESTORE.fielddefs:
+        return name
+    near = (difflib.get_close_matches(name, list(TYPESTORE.fielddefs), n=1, cutoff=0.6)
+            if isinstance(name, str) else [])
+    if isinstance(name, str) and not near and "/msg/" not in name and name.count("/") == 1:
+        full = name.replace("/", "/msg/")  # pkg/Name, as ROS 1 and rosidl spell it
+        near = [full] if full in TYPESTORE.fielddefs else []
+    hint = f"; did you mean {near[0]!r}?" if near else " (expected pkg/msg/Name)"
+    raise UnknownMessageType(f"unknown message type {name!r}{hint}")
 
 
 _NUMPY_DTYPES = {
