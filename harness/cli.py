@@ -700,6 +700,11 @@ _STATUS_STYLE = {"differs": "bold red", "only_in_a": "bold red", "only_in_b": "b
                  "improved": "green"}
 
 
+def _count(n: int | None) -> str:
+    """A count for a table; None (not counted: a topic compared by its digest only) is —."""
+    return "—" if n is None else str(n)
+
+
 def _print_diff(r: DiffResult) -> None:
     from rich.table import Table
 
@@ -716,7 +721,7 @@ def _print_diff(r: DiffResult) -> None:
         d = t.first_beyond or t.first
         where = "" if d is None else f"#{d.index} @{d.t_ns / 1e9:.3f} s {d.path}"
         table.add_row(t.name, t.msgtype.replace("/msg/", "/"), str(t.count_a), str(t.count_b),
-                      t.status, str(t.messages_differ), where,
+                      t.status, _count(t.messages_differ), where,
                       style=_STATUS_STYLE.get(t.status, ""))
     _stdout().print(table)
     fields = [(t, f) for t in r.topics for f in t.fields]
