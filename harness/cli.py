@@ -124,7 +124,8 @@ def _parser() -> argparse.ArgumentParser:
     _add_live_args(rp)
 
     val = sub.add_parser("validate", help="check a scenario file without running it (or a "
-                         "suite file, or a folder of scenarios: every entry and sweep point)")
+                         "suite file: every entry and sweep point; or every scenario and suite "
+                         "file of a folder)")
     val.add_argument("scenario", type=Path)
     val.add_argument("--set", dest="overrides", action="append", default=[])
 
@@ -501,44 +502,87 @@ def _cmd_ros2(args: argparse.Namespace) -> int:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from harness import api
     from harness.suite.spec import is_suite_path
 
-    if is_suite_path(args.scenario):
-        return _validate_suite(args)
-    sc = api.load(args.scenario, overrides=args.overrides)
-    warnings = api.validate(sc, source=str(args.scenario))
-    if sc.sweep and not args.overrides:  # its own sweep: every point, as srr suite would
-        api.plan_suite([args.scenario])
+    path: Path = args.scenario
+    if path.is_dir():
+        return _validate_folder(path, args.overrides)
+    if is_suite_path(path):
+        return _validate_suite(path, args.overrides)
+    return _validate_scenario(path, args.overrides)
+
+
+def _validate_scenario(path: Path, overrides: Sequence[str]) -> int:
+    from harness import api
+
+    sc = api.load(path, overrides=overrides)
+    warnings = api.validate(sc, source=str(path))
+    if sc.sweep and not overrides:  # its own sweep: every point, as srr suite would
+        api.plan_suite([path])
     for w in warnings:
         _stderr().print(f"srr validate: warning: {w}", markup=False)
     robots = ", ".join(
         f"{r.name} ({r.model_name}{', namespace /' + r.ns.strip('/') if r.ns else ''})"
         for r in sc.robots if r.enabled) or "none"
-    _stdout().print(f"{args.scenario}: ok — {sc.name}, {sc.duration:g} s, seed {sc.seed}, "
+    _stdout().print(f"{path}: ok — {sc.name}, {sc.duration:g} s, seed {sc.seed}, "
                     f"robots: {robots}" + (f", {len(warnings)} warning(s)" if warnings else ""),
                     markup=False)
     return 0
 
 
-def _validate_suite(args: argparse.Namespace) -> int:
-    """``srr validate SUITE.yaml`` (or a folder): what ``srr suite`` checks before its first
-    run, every entry and sweep point, and nothing run."""
+def _validate_suite(path: Path, overrides: Sequence[str]) -> int:
+    """``srr validate SUITE.yaml``: what ``srr suite`` checks before its first run, every
+    entry and sweep point, and nothing run."""
     from harness import api
 
-    if args.overrides:
-        raise SrrError(f"--set: {args.scenario} is a suite; a suite changes its scenarios "
+    if overrides:
+        raise SrrError(f"--set: {path} is a suite; a suite changes its scenarios "
                        "with `set:` in its entries")
-    plan = api.plan_suite([args.scenario])
+    plan = api.plan_suite([path])
     for w in plan.warnings:
         _stderr().print(f"srr validate: warning: {w}", markup=False)
     groups = len({r.group for r in plan.runs})
-    what = "a folder of" if args.scenario.is_dir() else f"suite {plan.spec.name}:"
-    _stdout().print(f"{args.scenario}: ok — {what} {len(plan.spec.entries)} scenario entries, "
-                    f"{groups} groups, {len(plan.runs)} runs"
+    _stdout().print(f"{path}: ok — suite {plan.spec.name}: {len(plan.spec.entries)} scenario "
+                    f"entries, {groups} groups, {len(plan.runs)} runs"
                     + (f", {len(plan.warnings)} warning(s)" if plan.warnings else ""),
                     markup=False)
     return 0
+
+
+def _validate_folder(folder: Path, overrides: Sequence[str]) -> int:
+    """``srr validate FOLDER``: every scenario and suite file in it checked as ``srr validate
+    FILE`` checks it, one line per file (``srr validate: ERROR`` for a bad one), then that
+    its scenarios' names are unique, as ``srr suite FOLDER`` needs, and a summary line. Exit
+    2 when any file failed."""
+    from harness.suite.spec import folder_files, is_suite_path, load_suite
+
+    if overrides:
+        raise SrrError(f"--set: {folder} is a folder; validate one scenario file to change it "
+                       "with --set")
+    files = folder_files(folder)
+    failed = 0
+    for path in files:
+        try:
+            (_validate_suite if is_suite_path(path) else _validate_scenario)(path, ())
+        except SrrError as err:
+            failed += 1
+            _stderr().print(f"srr validate: {_one_line(err)}", markup=False)
+    if not failed:
+        try:  # what only the folder as a whole can get wrong: two scenarios of one name
+            load_suite([folder])
+        except SrrError as err:
+            failed += 1
+            _stderr().print(f"srr validate: {_one_line(err)}", markup=False)
+    if failed:
+        _stdout().print(f"{folder}: {failed} of {len(files)} file(s) failed", markup=False)
+        return 2
+    _stdout().print(f"{folder}: ok — {len(files)} file(s)", markup=False)
+    return 0
+
+
+def _one_line(err: BaseException) -> str:
+    """An error's message on one line, as :func:`main` prints it."""
+    return shorten(" ".join(part.strip() for part in str(err).splitlines() if part.strip()))
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
@@ -656,6 +700,11 @@ _STATUS_STYLE = {"differs": "bold red", "only_in_a": "bold red", "only_in_b": "b
                  "improved": "green"}
 
 
+def _count(n: int | None) -> str:
+    """A count for a table; None (not counted: a topic compared by its digest only) is —."""
+    return "—" if n is None else str(n)
+
+
 def _print_diff(r: DiffResult) -> None:
     from rich.table import Table
 
@@ -672,7 +721,7 @@ def _print_diff(r: DiffResult) -> None:
         d = t.first_beyond or t.first
         where = "" if d is None else f"#{d.index} @{d.t_ns / 1e9:.3f} s {d.path}"
         table.add_row(t.name, t.msgtype.replace("/msg/", "/"), str(t.count_a), str(t.count_b),
-                      t.status, str(t.messages_differ), where,
+                      t.status, _count(t.messages_differ), where,
                       style=_STATUS_STYLE.get(t.status, ""))
     _stdout().print(table)
     fields = [(t, f) for t in r.topics for f in t.fields]
@@ -930,9 +979,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _interrupted(args.command)
         if not isinstance(err, SrrError):
             raise
-        one_line = shorten(" ".join(part.strip() for part in str(err).splitlines()
-                                    if part.strip()))
-        _stderr().print(f"srr {args.command}: {one_line}", markup=False)
+        _stderr().print(f"srr {args.command}: {_one_line(err)}", markup=False)
         return err.exit_code
 
 

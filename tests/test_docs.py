@@ -173,6 +173,27 @@ def test_scenario_in_docs_validates(where: str, text: str, files: dict[str, str]
     assert code == 0, f"{where}: srr validate exited {code}: {out.err.strip()}"
 
 
+def test_the_plugin_pages_refusal_is_what_its_command_prints(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """The page on systems under test quotes what its ``srr validate ... --set`` command
+    prints; run it on the page's own creep.py and creep.yaml. (It quoted the scenario file
+    where srr names the ``--set`` flag that gave the value.)"""
+    text = (DOCS / "howto" / "systems-under-test.md").read_text(encoding="utf-8")
+    files = {m.group(1): block for block in _blocks(text, "python")
+             if (m := re.match(r"# file: (\w+\.py)\n", block))}
+    (scenario,) = [b for b in _blocks(text, "yaml") if re.search(r"^name: creep$", b, re.M)]
+    (tmp_path / "creep.yaml").write_text(scenario, encoding="utf-8")
+    (tmp_path / "creep.py").write_text(files["creep.py"], encoding="utf-8")
+    found = re.search(r"`(srr validate creep\.yaml [^`]*)` prints\s+`(srr validate: [^`]*)`",
+                      text)
+    assert found, "the page no longer quotes a refused parameter"
+    command, quoted = found.group(1), " ".join(found.group(2).split())
+    monkeypatch.chdir(tmp_path)
+    assert main(shlex.split(command)[1:]) == 2
+    assert " ".join(capsys.readouterr().err.split()) == quoted
+
+
 def fragment_blocks() -> list[tuple[str, str]]:
     """(page:index, text) of every yaml block that is not a whole scenario nor skipped."""
     found = []

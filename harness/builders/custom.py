@@ -20,7 +20,9 @@ other paths too (seed 000 uses ``/ActionGraph``). It reaches the robots through
 Everything that goes wrong — the module does not import, the function is missing, it raises,
 its graph collides — is a :class:`~harness.errors.ScenarioError` naming the scenario file and
 ``graphs[i].builder`` (or ``graphs[i].name``), so ``srr run`` and ``srr validate`` exit 2
-with one line.
+with one line. Its nodes are annotated with the entry (:class:`NodeOrigin` ``node``), so the
+wiring checks before the first tick (a prim that does not exist, a bad topic) name
+``graphs[i]`` too.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import Any
 
-from harness.builders.base import BuildContext
+from harness.builders.base import BuildContext, NodeOrigin
 from harness.errors import ScenarioError, reason
 from harness.graph import GraphStage
 from harness.graph.errors import GraphError
@@ -239,6 +241,8 @@ def build_custom(bc: BuildContext, taken: dict[str, str]) -> list[str]:
                 stage.delete_graph(graph.path)
             stage.adopt(graph)
             taken[graph.path] = f"{field} ({name})"
+            for node in graph.nodes:  # wiring errors name the entry before the node
+                bc.origins[node.path] = NodeOrigin(field, node=node.path)
             bc.custom_graphs[graph.path] = field
             paths.append(graph.path)
     return paths

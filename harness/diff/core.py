@@ -82,7 +82,8 @@ def open_baseline(path: Path) -> tuple[dict[str, Any], Path, frozenset[str]]:
 def _by_digest(topics: Sequence[TopicDiff], recorded: Mapping[str, Any],
                kept: frozenset[str]) -> tuple[TopicDiff, ...]:
     """A baseline's topics that its reference recording leaves out, compared by the digest
-    and count the baseline holds: identical, or differs (no message to point at)."""
+    and count the baseline holds: identical, or differs (no message to point at, no messages
+    counted: ``messages_differ`` is None)."""
     out = {t.name: t for t in topics}
     for name, entry in recorded.items():
         if name in kept:
@@ -92,14 +93,14 @@ def _by_digest(topics: Sequence[TopicDiff], recorded: Mapping[str, Any],
         if t is None:  # in the baseline, not in the run
             out[name] = TopicDiff(
                 name=name, type_a=str(entry.get("type")), type_b=None, count_a=count,
-                count_b=0, sha256_a=sha, sha256_b=None, status="only_in_a", messages_differ=0,
+                count_b=0, sha256_a=sha, sha256_b=None, status="only_in_a", messages_differ=None,
                 first=None, first_beyond=None, fields=(), mismatches=(), time_shifts=0,
                 worst=None, tolerances=())
             continue
         same = t.sha256_b == sha and t.count_b == count
         out[name] = dataclasses.replace(  # no messages of A's to pair: no divergence to show
             t, type_a=str(entry.get("type")), count_a=count, sha256_a=sha,
-            status="identical" if same else "differs", messages_differ=0, first=None,
+            status="identical" if same else "differs", messages_differ=None, first=None,
             first_beyond=None, fields=(), mismatches=(), time_shifts=0, worst=None)
     return tuple(out[n] for n in sorted(out))
 
@@ -166,7 +167,7 @@ def diff_runs(a: str | Path, b: str | Path, *,
         sa = dict(sa, topics={k: v for k, v in recorded.items() if k in kept})
         notes.append(f"A is the baseline {pa}: its reference recording keeps {len(kept)} of "
                      f"its {len(recorded)} topics; the others are compared by their digests "
-                     "only")
+                     "only (no messages counted: — in the differ column)")
     for t in tols:
         if not any(glob_match(td.name, t.topic) for td in topics):
             notes.append(f"--tolerance {t.spec!r} matches no topic of either run")

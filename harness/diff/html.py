@@ -201,7 +201,8 @@ def _topic_row(t: TopicDiff) -> dict[str, Any]:
     largest = "" if worst is None else f"{worst.path}: {worst.max_abs:.4g} (RMS {worst.rms:.3g})"
     return {"name": t.name, "type": t.msgtype, "count_a": t.count_a, "count_b": t.count_b,
             "status": t.status, "status_text": _STATUS_TEXT[t.status],
-            "differ": t.messages_differ, "first": first, "largest": largest}
+            "differ": "—" if t.messages_differ is None else t.messages_differ,
+            "first": first, "largest": largest}
 
 
 def _run_info(r: Any, data: RunData | None) -> list[tuple[str, str]]:

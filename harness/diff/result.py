@@ -91,7 +91,9 @@ class Worst:
 class TopicDiff:
     """One topic of either run. ``sha256_*`` are recomputed from the bags (log time and
     payload, as the recorder digests them); ``messages_differ`` counts aligned pairs (by
-    index) whose log time or payload differ; ``first`` is the first difference of any kind,
+    index) whose log time or payload differ, None for a topic compared by its digest only (a
+    baseline's topic its reference recording does not keep: no messages of A's to pair);
+    ``first`` is the first difference of any kind,
     ``first_beyond`` the first one no tolerance covers."""
 
     name: str
@@ -102,7 +104,7 @@ class TopicDiff:
     sha256_a: str | None
     sha256_b: str | None
     status: TopicStatus
-    messages_differ: int
+    messages_differ: int | None
     first: Divergence | None
     first_beyond: Divergence | None
     fields: tuple[FieldDiff, ...]

@@ -23,11 +23,13 @@ from rosbags.typesys.store import Typestore
 
 from harness.serde.cdr import CDR_HEADER, Packer, Serializer
 from harness.serde.pieces import Piece
+from harness.validation import close_match
 
 __all__ = [
     "TYPESTORE",
     "OdometryPose",
     "Pose",
+    "UnknownMessageType",
     "clock",
     "clock_packer",
     "deserialize",
@@ -38,6 +40,7 @@ __all__ = [
     "odometry_packer",
     "odometry_pose",
     "quaternion_xyzw",
+    "require_msgtype",
     "serialize",
     "split_ns",
     "tf_message",
@@ -83,6 +86,25 @@ def msg_type(name: str) -> Any:
         return TYPESTORE.types[name]
     except KeyError:
         raise KeyError(f"unknown ROS 2 message type {name!r}") from None
+
+
+class UnknownMessageType(ValueError):
+    """A message type name the typestore does not know (what srr can neither serialize nor
+    record); its message suggests the closest known name."""
+
+
+def require_msgtype(name: str) -> str:
+    """``name`` when it is a message type the typestore knows (``pkg/msg/Name``, as the bus
+    and the recording spell it); else :class:`UnknownMessageType`, its message suggesting
+    the closest known name (``did you mean 'geometry_msgs/msg/Twist'?``)."""
+    if isinstance(name, str) and name in TYPESTORE.fielddefs:
+        return name
+    near = close_match(name, TYPESTORE.fielddefs) if isinstance(name, str) else None
+    if isinstance(name, str) and not near and "/msg/" not in name and name.count("/") == 1:
+        full = name.replace("/", "/msg/")  # pkg/Name, as ROS 1 and rosidl spell it
+        near = full if full in TYPESTORE.fielddefs else None
+    hint = f"; did you mean {near!r}?" if near else " (expected pkg/msg/Name)"
+    raise UnknownMessageType(f"unknown message type {name!r}{hint}")
 
 
 _NUMPY_DTYPES = {

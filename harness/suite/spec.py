@@ -98,6 +98,30 @@ def _is_scenario(data: Any) -> bool:
     return isinstance(data, Mapping) and "name" in data and not is_suite_file(data)
 
 
+def _yaml_files(folder: Path) -> list[Path]:
+    return sorted(p for p in (*folder.glob("*.yaml"), *folder.glob("*.yml")) if p.is_file())
+
+
+def folder_files(folder: Path) -> tuple[Path, ...]:
+    """The files of ``folder`` that ``srr validate FOLDER`` checks one by one: its scenario
+    and suite files (``*.yaml``, ``*.yml``, sorted), and those that cannot be read or parsed
+    (their check names the problem); fragments that scenarios include (no ``name:``, no
+    ``scenarios:``) are left out. None: :class:`~harness.errors.SrrError`."""
+    found = []
+    for p in _yaml_files(folder):
+        try:
+            data = _read(p)
+        except SrrError:
+            found.append(p)
+            continue
+        if _is_scenario(data) or is_suite_file(data):
+            found.append(p)
+    if not found:
+        raise SrrError(f"{folder}: the folder holds no scenario or suite files (*.yaml with a "
+                       "`name:` or a `scenarios:` list)")
+    return tuple(found)
+
+
 #: More repeats of one scenario than this is a typo (and would not fit in memory as runs).
 MAX_REPEAT = 1000
 #: The ranges of a suite file's ``repeat`` and ``timeout`` (seconds), as field metadata
@@ -271,8 +295,7 @@ def load_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
     for given in paths:
         path = Path(given)
         if path.is_dir():
-            files = sorted(p for p in (*path.glob("*.yaml"), *path.glob("*.yml")) if p.is_file())
-            found = [p for p in files if _is_scenario(_read(p))]
+            found = [p for p in _yaml_files(path) if _is_scenario(_read(p))]
             if not found:
                 raise SrrError(f"{path}: the folder holds no scenario files (*.yaml with a "
                                "`name:`)")

@@ -33,6 +33,7 @@ from harness.bus import Bus, Envelope, Publisher, Qos, TopicNameError, remap_top
 from harness.bus.endpoints import Endpoint
 from harness.errors import ScenarioError, SrrError, reason
 from harness.scenario import RobotSpec, Scenario, SutSpec, validate_dataclass
+from harness.serde.messages import UnknownMessageType, require_msgtype
 from harness.sut.errors import PluginError, SutRaised
 from harness.sut.participant import Participant, as_participant, is_plugin
 
@@ -93,6 +94,11 @@ class SutContext:
 
     def _declare(self, kind: Literal["pub", "sub"], name: str, msgtype: str) -> str:
         topic = self.topic(name)
+        try:
+            require_msgtype(msgtype)
+        except UnknownMessageType as err:
+            call = "publisher" if kind == "pub" else "subscribe"
+            raise PluginError(f"{self.field}: {call}({name!r}, {msgtype!r}): {err}") from err
         self.endpoints.append(Endpoint(kind, name, msgtype, self.namespace, input=name,
                                        rules=tuple(self.remap.items())))
         return topic

@@ -31,12 +31,18 @@ __all__ = ["NodeOrigin", "Plan", "PlannedEdge", "PlannedTopic", "plan_wiring"]
 @dataclass(frozen=True)
 class NodeOrigin:
     """Which scenario field a node was built from (``robots[1].odometry``) and, per input,
-    which sub-field set it (``topicName`` → ``odom_topic``), so wiring errors name fields."""
+    which sub-field set it (``topicName`` → ``odom_topic``), so wiring errors name fields.
+    ``node``: the path of a node a ``graphs:`` entry built (``field`` is ``graphs[i]``),
+    whose inputs are named by their attribute path after the entry
+    (``graphs[0]: /World/TeleopGraph/Pub.inputs:topicName``)."""
 
     field: str
     inputs: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    node: str = ""
 
     def field_for(self, input_name: str) -> str:
+        if self.node:
+            return f"{self.field}: {self.node}.inputs:{input_name}"
         sub = self.inputs.get(input_name)
         return f"{self.field}.{sub}" if sub else self.field
 
@@ -81,6 +87,19 @@ def _fail(sc: Scenario, source: str, field: str, message: str) -> ScenarioError:
     return ScenarioError(sc.file_for(field, source), field, message)
 
 
+def _check_prims(node: Node, world: Any) -> None:
+    """Every prim path set on an unconnected ``target`` input of ``node`` is a prim of
+    ``world``: what the node would refuse at the first tick (its initialize or compute)."""
+    fed = {c.dst_attr for c in node.connections if c.dst_node == node.name}
+    for attr in node.input_attrs():
+        full = f"inputs:{attr.name}"
+        if attr.type != "target" or full in fed:
+            continue
+        for prim in node.graph.get_value(node.name, full) or ():
+            if prim and not world.has_prim(str(prim)):
+                raise GraphError(f"{node.path}.{full}: prim {str(prim)!r} does not exist")
+
+
 def _graph_items(stage: GraphStage, origins: Mapping[str, NodeOrigin], sc: Scenario,
                  source: str, world: Any) -> tuple[list[PlannedTopic], list[PlannedEdge]]:
     topics: list[PlannedTopic] = []
@@ -93,6 +112,8 @@ def _graph_items(stage: GraphStage, origins: Mapping[str, NodeOrigin], sc: Scena
                 return node.graph.get_value(node.name, f"inputs:{name}")
 
             try:
+                if world is not None:
+                    _check_prims(node, world)
                 declared = [*node.impl.endpoints(value),
                             *(node.impl.world_edges(value, world) if world is not None else ())]
             except TopicNameError as err:

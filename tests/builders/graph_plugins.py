@@ -37,3 +37,16 @@ def raises(ctx: Any) -> None:
 
 def unknown_node(ctx: Any) -> None:
     og.Controller.create_node(ctx.graph_path + "/Pub", "isaacsim.ros2.bridge.ROS2PublishClok")
+
+
+def missing_prim(ctx: Any) -> None:
+    """A node of type ``params.type`` whose ``params.input`` names a prim the world lacks
+    (the camera graph a user builds with a typo in its camera's path)."""
+    node_type, name = ctx.params["type"], ctx.params["input"]
+    og.Controller.edit(ctx.graph_config, {
+        og.Controller.Keys.CREATE_NODES: [
+            ("OnPlaybackTick", "omni.graph.action.OnPlaybackTick"), ("Node", node_type)],
+        og.Controller.Keys.CONNECT: [("OnPlaybackTick.outputs:tick", "Node.inputs:execIn")],
+        og.Controller.Keys.SET_VALUES: [(f"Node.inputs:{name}",
+                                         [ctx.robot.prim + "/no_such_camera"])],
+    })

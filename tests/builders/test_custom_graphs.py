@@ -98,3 +98,24 @@ def test_bad_builder_is_one_line_exit_2(tmp_path: Path, capsys: pytest.CaptureFi
         err = capsys.readouterr().err.strip()
         assert err.startswith(f"srr {command}: {path}: {field}: ") and words in err, err
         assert len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize(("node_type", "input_name"), [
+    ("isaacsim.core.nodes.IsaacCreateRenderProduct", "cameraPrim"),
+    ("isaacsim.ros2.bridge.ROS2PublishTransformTree", "targetPrims"),
+    ("isaacsim.core.nodes.IsaacComputeOdometry", "chassisPrim"),
+])
+def test_a_prim_that_does_not_exist_is_refused_by_validate_as_by_run(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], node_type: str,
+        input_name: str) -> None:
+    # validate said ok and run stopped at its first tick, naming neither file nor entry
+    path = write(tmp_path, f"  - {{builder: '{P}:missing_prim', name: Cam, params: "
+                           f"{{type: {node_type}, input: {input_name}}}}}\n")
+    out = tmp_path / "out"
+    for command in ("validate", "run"):
+        extra = ["--out", str(out)] if command == "run" else []
+        assert main([command, str(path), *extra]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err == (f"srr {command}: {path}: graphs[0]: /World/CamGraph/Node.inputs:"
+                       f"{input_name}: prim '/World/tb/no_such_camera' does not exist"), err
+        assert not out.exists()

@@ -47,6 +47,7 @@ def test_a_run_that_drives_otherwise_diverges_from_the_baseline_on_cmd_vel(
     # /tf is not in the reference: compared by digest, nothing to point at
     (tf,) = [t for t in result["topics"] if t["name"] == "/tf"]
     assert tf["first"] is None and tf["count_a"] == tf["count_b"] == 2100
+    assert tf["messages_differ"] is None  # not counted (— in the table), not 0
 
 
 def test_a_run_that_records_the_baseline_is_identical_to_it(

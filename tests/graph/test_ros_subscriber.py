@@ -113,6 +113,11 @@ def test_bad_types_are_refused_naming_the_node() -> None:
     with pytest.raises(GraphError, match=r"/G/Sub: unknown message type 'std_msgs/msg/Nope'"):
         tick(stage, ctx)
     stage = GraphStage()
+    make(stage, "std_msgs", "Boool")  # a typo: the closest known type is suggested
+    with pytest.raises(GraphError, match=r"'std_msgs/msg/Boool'; did you mean "
+                                         r"'std_msgs/msg/Bool'\?"):
+        tick(stage, ctx)
+    stage = GraphStage()
     make(stage, "std_msgs", "Bool")
     with stage:
         Controller.create_attribute("/G/Sub.outputs:data", "double")

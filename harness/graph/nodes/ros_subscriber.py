@@ -31,7 +31,7 @@ from harness.bus.endpoints import Endpoint, TfEdge
 from harness.graph import Attr, GraphStage, Node, NodeType, register
 from harness.graph.errors import GraphError
 from harness.graph.nodes.ros_bridge import BRIDGE_INPUTS, topic_of
-from harness.serde.messages import TYPESTORE
+from harness.serde.messages import TYPESTORE, UnknownMessageType, require_msgtype
 
 __all__ = ["MessageField", "Subscriber", "define_message_outputs", "message_fields"]
 
@@ -81,9 +81,10 @@ def _msgtype(package: str, subfolder: str, name: str, where: str) -> str:
         raise GraphError(f"{where}: set inputs:messagePackage and inputs:messageName "
                          "(e.g. std_msgs / Bool)")
     msgtype = f"{package}/{subfolder or 'msg'}/{name}"
-    if msgtype not in TYPESTORE.fielddefs:
-        raise GraphError(f"{where}: unknown message type {msgtype!r}")
-    return msgtype
+    try:
+        return require_msgtype(msgtype)
+    except UnknownMessageType as err:
+        raise GraphError(f"{where}: {err}") from err
 
 
 def define_message_outputs(node: Node) -> tuple[str, ...]:
