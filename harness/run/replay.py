@@ -165,9 +165,9 @@ def _named_by_flag(err: SrrError, scenario: Scenario, source: str,
             field = f"systems_under_test[{names.index(name)}].plugin"
             if isinstance(err, ScenarioError) and (err.file, err.field) == ("--set", field):
                 return SrrError(f"--sut {text}: {err.message}")
-            prefix = f"{source}: {field}: "
-            if str(err).startswith(prefix):
-                return SrrError(f"--sut {text}: {str(err)[len(prefix):]}")
+            for prefix in (f"{source}: {field}: ", f"--set: {field}: "):
+                if str(err).startswith(prefix):
+                    return SrrError(f"--sut {text}: {str(err)[len(prefix):]}")
     return err
 
 

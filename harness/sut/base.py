@@ -201,7 +201,9 @@ def load_suts(scenario: Scenario, bus: Bus, source: str = "<scenario>"
             continue
         path = f"systems_under_test[{i}]"
         where = f"{source}: {path}"
-        out.append((spec.name, load_sut(spec, where),
+        # the plug-in's file or the --set that gave it answers for an import error
+        plugin_from = f"{scenario.file_for(f'{path}.plugin', source)}: {path}"
+        out.append((spec.name, load_sut(spec, plugin_from),
                     SutContext.for_spec(spec, scenario, bus, where, path=path, source=source)))
     return out
 

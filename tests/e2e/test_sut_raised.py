@@ -86,7 +86,7 @@ def test_a_plug_in_that_cannot_be_imported_or_made_is_one_line(
         "    def __init__(self, x):\n"
         "        self.x = x\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    field = f"{SCENARIO}: systems_under_test[0].plugin"
+    field = "--set: systems_under_test[0].plugin"  # the flag gave the plug-in
     for plugin, said in (
             ("srr_bad_syntax:X", f"{field}: cannot import module 'srr_bad_syntax': "
                                  "SyntaxError: invalid syntax"),
