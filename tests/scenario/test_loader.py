@@ -72,3 +72,12 @@ def test_a_list_index_counts_from_zero_only(scenarios_dir: Path) -> None:
     path = scenarios_dir / "forklift_warehouse.yaml"
     with pytest.raises(ScenarioError, match=r"robots\.-1: no list item with that index or name"):
         load_scenario(path, [parse_override("robots.-1.name=x")])
+
+
+def test_api_load_takes_one_override_as_a_string_too() -> None:
+    # a str is a sequence of one-character strings: "seed=3" was read as "s", "e", ...
+    from harness import api
+
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
+    assert api.load(path, overrides="seed=3").seed == 3
+    assert api.load(path, overrides=["seed=4"]).seed == 4
