@@ -973,14 +973,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         with stop.installed():
             return COMMANDS[args.command](args)
     except KeyboardInterrupt as err:  # its text, if any, says what was left where
-        return _interrupted(args.command, str(err))
+        return _interrupted(_command_name(args), str(err))
     except Exception as err:
         if stop.requested:  # an interrupt that became this error where it landed
-            return _interrupted(args.command)
+            return _interrupted(_command_name(args))
         if not isinstance(err, SrrError):
             raise
-        _stderr().print(f"srr {args.command}: {_one_line(err)}", markup=False)
+        _stderr().print(f"srr {_command_name(args)}: {_one_line(err)}", markup=False)
         return err.exit_code
+
+
+def _command_name(args: argparse.Namespace) -> str:
+    """The command as typed, with its subcommand where it has one (``baseline bless``)."""
+    sub = getattr(args, f"{args.command}_command", None)
+    return f"{args.command} {sub}" if sub else str(args.command)
 
 
 def _interrupted(command: str, note: str = "") -> int:

@@ -122,8 +122,8 @@ def test_blessing_an_invalid_run_is_refused_as_bad_input(
     err = capsys.readouterr().err
     assert code == 2
     line = " ".join(err.split())
-    assert line.startswith(f"srr baseline: {tmp_path / 'bad'}: not blessed: the run is INVALID "
-                           "(health topic_rate:/clock:")
+    assert line.startswith(f"srr baseline bless: {tmp_path / 'bad'}: not blessed: the run is "
+                           "INVALID (health topic_rate:/clock:")
     assert not (tmp_path / "bl").exists()
 
 

@@ -190,5 +190,5 @@ def test_srr_ros2_setup_without_a_compiler_exits_2_with_one_line(
     monkeypatch.setenv("CXX", "/nonexistent/c++")
     assert main(["ros2", "setup", "--cache", str(tmp_path / "cache")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("srr ros2: missing a C and C++ compiler")
+    assert err.count("\n") == 1 and err.startswith("srr ros2 setup: missing a C and C++ compiler")
     assert not (tmp_path / "cache").exists()
