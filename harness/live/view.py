@@ -247,8 +247,9 @@ class LiveView:
     def wait_for_client(self) -> bool:
         """With ``wait_s``, hold until a client subscribes to a topic (Foxglove does as soon as
         a panel shows one) or ``wait_s`` passes; True when one came. Starts the pacing clock."""
-        came = True
-        if self.config.wait_s is not None:
+        came = self._client.is_set()
+        if self.config.wait_s:  # (0: run at once, as without --foxglove-wait)
+            came = True
             if not self._client.is_set():
                 self._notice(f"waiting up to {self.config.wait_s:g} s for a Foxglove client "
                              f"on {self.url}")

@@ -177,7 +177,7 @@ def _serve_streams(sim: Simulation, scenario: Scenario, source: str,
         urls.append(hub.stream(StreamConfig(cam.port, cam.mount, spec.host, where)).url)
     say = notice or (lambda _text: None)
     say(f"rtsp: serving {', '.join(urls)}")
-    if spec.wait_s is not None:
+    if spec.wait_s:  # (0: start at once, as without a wait)
         say(f"rtsp: waiting up to {spec.wait_s:g} s for a client on every stream")
         missing = hub.wait_for_clients(spec.wait_s)
         if missing:

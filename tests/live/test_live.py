@@ -169,6 +169,14 @@ def test_wait_gives_up_after_its_time_and_says_so() -> None:
                             "running anyway"]
 
 
+def test_a_wait_of_zero_is_no_wait_and_says_nothing() -> None:
+    # it said "waiting up to 0 s for a Foxglove client", then that none came
+    notices: list[str] = []
+    with LiveView.start(LiveConfig(port=0, wait_s=0.0), notice=notices.append) as live:
+        assert live.wait_for_client() is False
+    assert not [n for n in notices if "waiting" in n or "no Foxglove client" in n], notices
+
+
 def test_a_port_in_use_is_one_clear_error() -> None:
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))
