@@ -11,8 +11,9 @@ half-written ``.mcap``. The file's length is measured once, before it is read, a
 after it is read: a file that something still appends to cannot make the two passes disagree.
 
 What is refused (:class:`~harness.recording.errors.BagError`, nothing written): an empty
-file, a file that is not MCAP, one cut inside its header, and a file that is corrupt rather
-than cut short
+file, a file that is not MCAP, one cut inside its header, one cut before its first chunk was
+complete (:class:`~harness.recording.errors.NothingRecorded`: no message to recover), and a
+file that is corrupt rather than cut short
 — a chunk that fails its CRC with readable chunks after it, or any damage in a file that ends
 with a footer (it was finished, so the damage did not come from a crash). A file that is
 whole is reported as valid and left alone (``metadata.yaml`` is rewritten only if it is
@@ -49,7 +50,7 @@ from harness.recording.bagfile import (
     write_metadata,
 )
 from harness.recording.bagread import DATA_ERRORS, mcap_profile, ros1_recording
-from harness.recording.errors import BagError
+from harness.recording.errors import BagError, NothingRecorded
 from harness.recording.mcapread import lz4_failure
 from harness.recording.recorder import TopicStats, digest_update
 from harness.recording.verify import check_read_back
@@ -373,6 +374,8 @@ def recover_bag(path: str | Path, *, recorded: Mapping[str, Any] | None = None) 
     except OSError as err:
         raise BagError(f"{mcap}: cannot read: {err.strerror or err}") from err
     stats = {t.meta.name: t.stats() for t in scan.channels.values()}
+    if not scan.finished and not any(t.count for t in scan.channels.values()):
+        raise NothingRecorded(mcap, size)  # nothing written: an empty bag is no recording
     if scan.finished:
         if recorded is not None:
             check_read_back(mcap, recorded, {n: (t.count, t.sha256) for n, t in stats.items()

@@ -14,7 +14,7 @@ from harness import runlock, runmarker
 from harness.atomic import write_json_atomic
 from harness.errors import SrrError
 from harness.metrics.types import HealthResult
-from harness.recording.errors import BagError
+from harness.recording.errors import BagError, NothingRecorded
 from harness.recording.recover import RecoveredBag, recover_bag
 from harness.recording.verify import check_read_back
 from harness.report.junit import junit_cases, write_junit
@@ -134,7 +134,15 @@ def _recover(p: Path, run_dir: Path | None) -> RecoverResult:
     scenario = load_scenario(run_dir / "scenario.yaml") if run_dir is not None else None
     finished, unreadable = (None, None) if run_dir is None else _finished_summary(run_dir)
     recorded = _digests(finished)
-    bag = recover_bag(p, recorded=recorded)
+    try:
+        bag = recover_bag(p, recorded=recorded)
+    except NothingRecorded as err:
+        if run_dir is None or (run_dir / SUMMARY_NAME).is_file():
+            raise
+        raise NothingRecorded(err.mcap, err.size, (
+            f"{run_dir}: nothing was recorded: the run was killed before its first chunk was "
+            f"written ({Path(err.mcap).name}: {err.size} bytes, no complete chunk); nothing to "
+            "recover, the run directory can be deleted")) from err
     if run_dir is None or scenario is None:
         return RecoverResult(bag, None, None, None)
     phase = None if marker is None else str(marker.get("phase", "unknown"))

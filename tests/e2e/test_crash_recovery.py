@@ -119,6 +119,13 @@ def test_kill_then_recover(reference: Path, tmp_path: Path, capsys: pytest.Captu
     complete = [c for c in chunks if c.chunk_start_offset + c.chunk_length <= len(on_disk)]
     if moment == "mid-run":
         assert 0.35 * len(chunks) <= len(complete) < len(chunks)
+    if not complete:  # killed before its first chunk was written: nothing was recorded
+        assert moment == "early"
+        assert main(["recover", str(out)]) == 2
+        assert "nothing was recorded" in capsys.readouterr().err
+        assert (out / "bag" / "bag.mcap").read_bytes() == on_disk
+        assert not (out / "summary.json").exists() and runmarker.read(out) is not None
+        return
 
     assert main(["recover", str(out)]) == 0
     printed = capsys.readouterr().out
@@ -373,3 +380,25 @@ def test_recover_refuses_a_whole_bag_that_is_not_what_the_summary_counts(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "/odom: does not match summary.json" in err, err
     assert {p.name: p.read_bytes() for p in run.rglob("*") if p.is_file()} == before
+
+
+def test_recover_refuses_a_run_killed_before_its_first_chunk(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Killed before its first chunk was written, the bag holds the MCAP header only: nothing
+    was recorded, and recover says so (it wrote an empty bag and a summary, exit 0)."""
+    run = _copy(finished_run, tmp_path)
+    for name in ("summary.json", "junit.xml", "report.html", "bag/metadata.yaml"):
+        (run / name).unlink()
+    mcap = run / "bag" / "bag.mcap"
+    with mcap.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    os.truncate(mcap, summary.chunk_indexes[0].chunk_start_offset)
+    runmarker.mark(run, "recording", command="srr run x.yaml")
+    before = {p: p.read_bytes() for p in run.rglob("*") if p.is_file()}
+    assert main(["recover", str(run)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"srr recover: {run}: nothing was recorded: the run was killed before its "
+                   f"first chunk was written (bag.mcap: {mcap.stat().st_size} bytes, no "
+                   "complete chunk); nothing to recover, the run directory can be deleted\n")
+    assert {p: p.read_bytes() for p in run.rglob("*") if p.is_file()} == before
