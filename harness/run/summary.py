@@ -16,7 +16,6 @@ from harness.metrics.types import HealthResult
 from harness.summary import (
     SCHEMA_VERSION,
     SUMMARY_NAME,
-    SummaryFile,
     check_summary,
     read_summary,
 )
@@ -99,15 +98,6 @@ class BaselineRef:
                        str(name): {"baseline": str(v.get("baseline", "")),
                                    "run": str(v.get("run", ""))}
                        for name, v in (data.get("versions_differing") or {}).items()})
-
-
-@dataclass(frozen=True)
-class _RunSummaryFile(SummaryFile):
-    """The keys :meth:`RunSummary.from_json` converts beyond those :func:`read_summary`
-    checks."""
-
-    exit_code: int = 3
-    schema_version: int = SCHEMA_VERSION
 
 
 @dataclass(frozen=True)
@@ -199,7 +189,7 @@ class RunSummary:
         """A summary from its mapping, checked as :func:`read_summary` checks it (``path``
         names it in errors): :class:`SrrError` when malformed or of a newer version."""
         where = Path(path)
-        check_summary(data, where, _RunSummaryFile)
+        check_summary(data, where)
         known = {f.name for f in dataclasses.fields(cls)} | {"schema_version"}
         baseline = data.get("baseline")
         return cls(

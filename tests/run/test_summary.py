@@ -78,22 +78,51 @@ def test_keys_it_does_not_know_are_kept(tmp_path: Path) -> None:
     assert s.to_json() == data | {"schema_version": 1}
 
 
-@pytest.mark.parametrize(("field", "value", "message"), [
+MALFORMED = [
     ("schema_version", 2, r"schema_version: 2 is newer than this srr reads"),
+    ("schema_version", "1", r"schema_version: expected an integer, got '1'"),
     ("reasons", "one reason", r"reasons: expected a list"),
-    ("exit_code", "1", r"exit_code: expected an integer"),
+    ("exit_code", "1", r"exit_code: expected an integer, got '1'"),
+    ("exit_code", 0.5, r"exit_code: expected an integer, got 0.5"),
     ("seed", "7", r"seed: expected an integer"),
-])
+    ("metrics", [{"name": "m", "value": 1.0, "unit": "m", "direction": "sideways"}],
+     r"metrics\[0\]\.direction: expected one of 'lower', 'higher', 'none', got 'sideways'"),
+]
+
+
+@pytest.mark.parametrize(("field", "value", "message"), MALFORMED)
 def test_a_malformed_or_newer_summary_names_the_file_and_field(
         tmp_path: Path, field: str, value: object, message: str) -> None:
+    """The one check of a summary (:func:`check_summary`): what ``srr diff``, ``report``, the
+    suite (:func:`read_summary`) and ``replay``, ``baseline bless`` (:meth:`RunSummary.read`)
+    read. ``schema_version`` or ``exit_code`` as a string passed the first and not the
+    second."""
     data = json.loads((DATA / "replay" / SUMMARY_NAME).read_text())
     data[field] = value
     (tmp_path / SUMMARY_NAME).write_text(json.dumps(data))
-    with pytest.raises(SrrError, match=rf"^{tmp_path / SUMMARY_NAME}: {message}"):
-        RunSummary.read(tmp_path)
-    if field == "schema_version":  # what srr diff, report and the suite read: refused too
+    for read in (read_summary, RunSummary.read):
         with pytest.raises(SrrError, match=rf"^{tmp_path / SUMMARY_NAME}: {message}"):
-            read_summary(tmp_path)
+            read(tmp_path)
+
+
+@pytest.mark.parametrize(("field", "value"), [("schema_version", "1"), ("exit_code", "0")])
+def test_every_command_refuses_a_mistyped_summary_in_the_same_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], field: str, value: str) -> None:
+    from harness.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(DATA / "replay", run)
+    data = json.loads((run / SUMMARY_NAME).read_text())
+    data[field] = value
+    (run / SUMMARY_NAME).write_text(json.dumps(data))
+    want = f"{run / SUMMARY_NAME}: {field}: expected an integer, got {value!r}"
+    for argv in (["report", str(run)], ["diff", str(run), str(run)],
+                 ["replay", str(run), "--out", str(tmp_path / "out"), "-q"],
+                 ["baseline", "bless", str(run), "--reason", "r", "--baselines",
+                  str(tmp_path / "b")]):
+        assert main(argv) == 2, argv
+        assert capsys.readouterr().err == f"srr {argv[0]}: {want}\n", argv
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
 
 
 def _drop_sha(d: dict[str, Any]) -> str:
