@@ -100,6 +100,15 @@ class BaselineRef:
                        for name, v in (data.get("versions_differing") or {}).items()})
 
 
+def _json_shaped(value: Any) -> Any:
+    """``value`` as JSON holds it: every tuple a list, every mapping a dict (recursively)."""
+    if isinstance(value, Mapping):
+        return {k: _json_shaped(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_shaped(v) for v in value]
+    return value
+
+
 @dataclass(frozen=True)
 class RunSummary:
     """A run's ``summary.json``, typed: what ran (scenario, seed, simulated time), how it
@@ -154,7 +163,9 @@ class RunSummary:
 
     def to_json(self) -> dict[str, Any]:
         """The mapping ``summary.json`` holds (written with sorted keys), ``schema_version``
-        included."""
+        included: JSON-shaped (lists, not tuples; dicts, not other mappings), so that it
+        equals what ``json.load`` reads back from the file (a metric's ``windows`` were
+        tuples in memory and lists on disk)."""
         out: dict[str, Any] = {
             "schema_version": SCHEMA_VERSION, "scenario": self.scenario,
             "scenario_file": self.scenario_file, "seed": self.seed,
@@ -182,7 +193,8 @@ class RunSummary:
                 "reasons": list(self.reasons),
                 "baseline": None if self.baseline is None else self.baseline.to_json(),
                 "comparison": [dict(c) for c in self.comparison]}
-        return out | dict(self.more)
+        plain: dict[str, Any] = _json_shaped(out | dict(self.more))
+        return plain
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any], path: Path | str = SUMMARY_NAME) -> RunSummary:

@@ -6,6 +6,7 @@ line naming the file and the field."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import shutil
@@ -159,12 +160,33 @@ def test_a_malformed_summary_names_the_field_inside_a_row(
             read(tmp_path)
 
 
+def test_the_summary_in_memory_is_what_json_reads_back() -> None:
+    """``RunResult.summary`` (``to_json``) equals ``json.load`` of the file: a metric's
+    ``windows`` (tuples in :class:`MetricResult`) are lists, as on disk (they were ``()``
+    in memory and ``[]`` in the file)."""
+    from harness.metrics.types import HealthResult, MetricResult
+
+    base = RunSummary.read(DATA / "run")
+    metric = MetricResult("safety.match_rate", 80.0, "%", "higher", "safety", "detail",
+                          ((1.0, 2.5), (3.0, 4.0)), "NEAR")
+    s = dataclasses.replace(base, metrics=(dataclasses.asdict(metric),
+                                           dataclasses.asdict(dataclasses.replace(
+                                               metric, name="m", windows=()))),
+                            health=(HealthResult("g", True, "ok"),), reasons=("a", "b"),
+                            graphs=(("a", "b"),))
+    data = s.to_json()
+    assert data == json.loads(json.dumps(data))
+    assert data["metrics"][0]["windows"] == [[1.0, 2.5], [3.0, 4.0]]
+    assert data["metrics"][1]["windows"] == [] and data["graphs"] == [["a", "b"]]
+
+
 @pytest.mark.slow
 def test_a_fresh_run_writes_the_summary_its_result_holds(tmp_path: Path) -> None:
     path = ROOT / "scenarios" / "forklift_warehouse.yaml"
     res = api.run_scenario(api.load(path, duration=0.5), source=str(path), out=tmp_path / "r")
     on_disk = RunSummary.read(res.run_dir)
-    assert on_disk.to_json() == json.loads(json.dumps(res.summary))
+    assert res.summary == json.loads((res.run_dir / SUMMARY_NAME).read_text())
+    assert on_disk.to_json() == res.summary
     assert (on_disk.topics, on_disk.health, on_disk.verdict) == (
         res.run_summary.topics, res.run_summary.health, res.verdict)
     copy = tmp_path / "copy"
