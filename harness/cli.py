@@ -657,10 +657,16 @@ def _cmd_recover(args: argparse.Namespace) -> int:
         _stdout().print(f"{bag.mcap.name} was complete ({kept} messages)", markup=False)
     if res.summary is not None and res.run_dir is not None:
         _stdout().print(f"{res.run_dir / 'summary.json'}: recovered, verdict "
-                        f"{res.summary['verdict']} (killed while "
-                        f"{res.phase or 'running'}; not scored)", markup=False)
+                        f"{res.summary['verdict']} ({res.cause}; not scored)", markup=False)
+        for name, kept_as in res.replaced.items():
+            _stdout().print(f"the {name} it replaces is kept as {kept_as.name}", markup=False)
+        if "report.html" in res.replaced:
+            _stdout().print(f"`srr report {res.run_dir}` renders the recovered run's report",
+                            markup=False)
     elif res.run_dir is not None:
-        _stdout().print(f"{res.run_dir}: the run had finished; its summary is kept",
+        holds = (" and its bag holds every message its summary counts" if res.kept
+                 and bag.status == "rebuilt" else "")
+        _stdout().print(f"{res.run_dir}: the run had finished{holds}; its summary is kept",
                         markup=False)
     return 0
 

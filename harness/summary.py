@@ -14,7 +14,7 @@ import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from harness import runmarker
 from harness.errors import SrrError
@@ -52,13 +52,13 @@ _MISSING = "missing (not an srr run summary)"
 
 @dataclass(frozen=True)
 class MetricRow:
-    """One of ``metrics``: the metric's name, value (None: not measured), unit and direction
-    (further keys are not checked)."""
+    """One of ``metrics``: the metric's name, value (None: not measured), unit and which
+    direction is better (further keys are not checked)."""
 
     name: str
     value: float | None
     unit: str
-    direction: str
+    direction: Literal["lower", "higher", "none"]
 
 
 @dataclass(frozen=True)
@@ -161,6 +161,8 @@ class SummaryFile:
     graphs: tuple[str, ...] = ()
     versions: dict[str, str] = field(default_factory=dict)
     scene_files: dict[str, str] | None = None
+    exit_code: int = 3
+    schema_version: int = SCHEMA_VERSION
 
 
 def replay_note(summary: Mapping[str, Any]) -> str | None:
@@ -242,12 +244,13 @@ def read_summary(run_dir: str | Path) -> dict[str, Any]:
     return checked
 
 
-def check_summary(data: Any, path: Path, model: type[SummaryFile] = SummaryFile) -> None:
+def check_summary(data: Any, path: Path) -> None:
     """:class:`SrrError` naming ``path`` and the field when ``data`` is not a run summary
-    (read as ``model``: :class:`SummaryFile` or a dataclass that extends it)."""
+    (read as :class:`SummaryFile`) or is of a newer ``schema_version``: the one check of a
+    summary, for every command and for :meth:`harness.run.summary.RunSummary.from_json`."""
     if not isinstance(data, dict):
         raise SrrError(f"{path}: expected a JSON object, got {type(data).__name__}")
-    validate(model, data, str(path), unknown="ignore", missing=_MISSING, yaml=False)
+    validate(SummaryFile, data, str(path), unknown="ignore", missing=_MISSING, yaml=False)
     version = data.get("schema_version", 1)
     if isinstance(version, int) and version > SCHEMA_VERSION:  # (its type: checked above)
         raise fail(path, "schema_version", f"{version} is newer than this srr reads "

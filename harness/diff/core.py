@@ -157,8 +157,8 @@ def diff_runs(a: str | Path, b: str | Path, *,
         raise SrrError(f"{pb}: a baseline file can only be A, the reference: give it first "
                        f"(srr diff {pb} RUN_DIR)")
     sb, bag_b = open_run(pb)
-    ma = summary_metrics(sa, pa if kept is not None else pa / "summary.json")
-    mb = summary_metrics(sb, pb / "summary.json")
+    ma = summary_metrics(sa)
+    mb = summary_metrics(sb)
     topics = diff_bags(bag_a, bag_b, tols)
     notes: list[str] = []
     if kept is not None:

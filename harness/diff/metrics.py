@@ -5,11 +5,9 @@ order (regressed first)."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any, Literal, cast
 
 from harness.diff.result import MetricDelta
-from harness.errors import SrrError
 from harness.metrics.types import MetricResult
 from harness.regression import Baseline, BaselineMetric, compare
 from harness.scenario.schema import ToleranceSpec
@@ -20,27 +18,16 @@ _GROUPS = ("control", "perception", "safety", "health", "spec")
 Group = Literal["control", "perception", "safety", "health", "spec"]
 
 
-def summary_metrics(summary: Mapping[str, Any], source: Path) -> list[MetricResult]:
-    """The ``metrics`` of a ``summary.json`` as typed results; :class:`SrrError` naming the
-    file and the entry when one is malformed."""
-    raw = summary.get("metrics", [])
-    if not isinstance(raw, list):
-        raise SrrError(f"{source}: metrics: expected a list, got {type(raw).__name__}")
+def summary_metrics(summary: Mapping[str, Any]) -> list[MetricResult]:
+    """The ``metrics`` of a summary as typed results. The summary was checked where it was read
+    (:func:`harness.summary.read_summary`, or :func:`harness.regression.load_baseline` for a
+    baseline file): its entries have a name, a number or null, a unit and a direction."""
     out = []
-    for i, m in enumerate(raw):
-        where = f"{source}: metrics[{i}]"
-        if not isinstance(m, dict) or not isinstance(m.get("name"), str):
-            raise SrrError(f"{where}.name: missing (not an srr metric)")
+    for m in summary.get("metrics", []):
         v = m.get("value")
-        if isinstance(v, bool) or not (v is None or isinstance(v, (int, float))):
-            raise SrrError(f"{where}.value: expected a number or null, got {v!r}")
-        direction = m.get("direction", "none")
-        if direction not in ("lower", "higher", "none"):
-            raise SrrError(f"{where}.direction: expected lower, higher or none, got "
-                           f"{direction!r}")
         group = m.get("group") if m.get("group") in _GROUPS else m["name"].split(".")[0]
         out.append(MetricResult(m["name"], None if v is None else float(v),
-                                str(m.get("unit", "")), direction,
+                                str(m.get("unit", "")), m.get("direction", "none"),
                                 cast(Group, group if group in _GROUPS else "health")))
     return out
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from harness.errors import SrrError
 
-__all__ = ["BagError", "BagReadError"]
+__all__ = ["BagError", "BagReadError", "NothingRecorded"]
 
 
 class BagError(SrrError):
@@ -23,3 +23,16 @@ class BagReadError(BagError):
         self.what = what
         self.why = why
         super().__init__(f"{file}: {what}: {why}")
+
+
+class NothingRecorded(BagError):
+    """An MCAP file cut short before its first chunk was complete: it holds no message, so
+    there is nothing to recover (``srr recover`` refuses it rather than write an empty bag).
+    ``mcap``: the file; ``size``: its length in bytes; ``message``: what to say instead of the
+    default line."""
+
+    def __init__(self, mcap: object, size: int, message: str | None = None) -> None:
+        self.mcap = str(mcap)
+        self.size = size
+        super().__init__(message or f"{mcap}: nothing was recorded: no complete chunk ({size} "
+                         "bytes, cut before its first chunk was written); nothing to recover")

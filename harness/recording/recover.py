@@ -11,12 +11,15 @@ half-written ``.mcap``. The file's length is measured once, before it is read, a
 after it is read: a file that something still appends to cannot make the two passes disagree.
 
 What is refused (:class:`~harness.recording.errors.BagError`, nothing written): an empty
-file, a file that is not MCAP, one cut inside its header, and a file that is corrupt rather
-than cut short
+file, a file that is not MCAP, one cut inside its header, one cut before its first chunk was
+complete (:class:`~harness.recording.errors.NothingRecorded`: no message to recover), and a
+file that is corrupt rather than cut short
 — a chunk that fails its CRC with readable chunks after it, or any damage in a file that ends
 with a footer (it was finished, so the damage did not come from a crash). A file that is
 whole is reported as valid and left alone (``metadata.yaml`` is rewritten only if it is
-missing or disagrees with the file).
+missing or disagrees with the file); given the per-topic counts and digests a run's summary
+recorded, a whole file that does not hold them is refused, nothing written (the summary belongs
+to another recording, which recover cannot make consistent).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ import os
 import shutil
 import struct
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, BinaryIO, Literal
@@ -47,9 +50,10 @@ from harness.recording.bagfile import (
     write_metadata,
 )
 from harness.recording.bagread import DATA_ERRORS, mcap_profile, ros1_recording
-from harness.recording.errors import BagError
+from harness.recording.errors import BagError, NothingRecorded
 from harness.recording.mcapread import lz4_failure
 from harness.recording.recorder import TopicStats, digest_update
+from harness.recording.verify import check_read_back
 
 __all__ = ["RecoveredBag", "locate_mcap", "recover_bag"]
 
@@ -356,10 +360,12 @@ def _refuse_ros1(p: Path) -> None:
                            "cut short)")
 
 
-def recover_bag(path: str | Path) -> RecoveredBag:
+def recover_bag(path: str | Path, *, recorded: Mapping[str, Any] | None = None) -> RecoveredBag:
     """Check a bag and, if its MCAP file was cut short, rebuild it from its complete chunks
     (see the module docstring). Raises :class:`BagError` for what cannot be recovered,
-    among it a ROS 1 recording (its own tools rebuild a ``.bag``: ``rosbag reindex``)."""
+    among it a ROS 1 recording (its own tools rebuild a ``.bag``: ``rosbag reindex``), and,
+    when ``recorded`` (a finished run's summary ``topics``, each with its ``count`` and
+    ``sha256``) is given, a whole file that does not hold what it says (nothing written)."""
     _refuse_ros1(Path(path))
     bag_dir, mcap = locate_mcap(path)
     try:
@@ -368,7 +374,12 @@ def recover_bag(path: str | Path) -> RecoveredBag:
     except OSError as err:
         raise BagError(f"{mcap}: cannot read: {err.strerror or err}") from err
     stats = {t.meta.name: t.stats() for t in scan.channels.values()}
+    if not scan.finished and not any(t.count for t in scan.channels.values()):
+        raise NothingRecorded(mcap, size)  # nothing written: an empty bag is no recording
     if scan.finished:
+        if recorded is not None:
+            check_read_back(mcap, recorded, {n: (t.count, t.sha256) for n, t in stats.items()
+                                             if t.count})
         if _metadata_agrees(bag_dir, mcap, scan):
             return RecoveredBag(bag_dir, mcap, "valid", stats, scan.chunks, 0)
         write_metadata(bag_dir, _metadata_of(mcap.name, list(scan.channels.values())))

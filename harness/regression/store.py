@@ -19,12 +19,16 @@ from typing import Any
 
 from harness.atomic import write_json_atomic
 from harness.errors import ScenarioError, SrrError
+from harness.metrics.types import Direction
 from harness.regression.reference import reference_path, write_reference
 from harness.validation import validate
 
 __all__ = ["BASELINE_VERSION", "Baseline", "BaselineError", "BaselineMetric", "baseline_path",
            "load_baseline", "same_substance", "save_baseline"]
 
+#: The version of the baseline format srr writes (as ``format_version``) and reads. A
+#: baseline without the key is version 1; one of a newer version is refused wherever a
+#: baseline is read, as a summary of a newer ``schema_version`` is.
 BASELINE_VERSION = 1
 
 
@@ -34,9 +38,12 @@ class BaselineError(SrrError):
 
 @dataclass(frozen=True)
 class BaselineMetric:
+    """One of ``metrics``: the blessed value (None: not measured), unit and which direction
+    is better (``lower``, ``higher`` or ``none``)."""
+
     value: float | None
     unit: str
-    direction: str
+    direction: Direction
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -71,7 +78,9 @@ def baseline_path(scenario: str, root: Path = Path("baselines")) -> Path:
 
 
 def load_baseline(path: Path) -> Baseline | None:
-    """The baseline at ``path``, or None if there is none; malformed files raise."""
+    """The baseline at ``path``, or None if there is none; a malformed file, or one of a
+    newer ``format_version``, raises :class:`BaselineError` naming the file and the field
+    (``metrics.<name>.direction``): the one check of a baseline file, for every command."""
     if not path.exists():
         return None
     try:
@@ -82,10 +91,15 @@ def load_baseline(path: Path) -> Baseline | None:
         raise BaselineError(f"{path}: not a valid baseline: expected a JSON object, got "
                             f"{type(data).__name__}")
     try:
-        return validate(Baseline, data, str(path), unknown="ignore", yaml=False)
+        base = validate(Baseline, data, str(path), unknown="ignore", yaml=False)
     except ScenarioError as err:
         raise BaselineError(f"{path}: not a valid baseline: {err.field}: {err.message}") \
             from err
+    if base.format_version > BASELINE_VERSION:
+        raise BaselineError(f"{path}: not a valid baseline: format_version: "
+                            f"{base.format_version} is newer than this srr reads (up to "
+                            f"{BASELINE_VERSION}); use a newer srr")
+    return base
 
 
 def who() -> str:

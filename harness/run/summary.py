@@ -16,7 +16,6 @@ from harness.metrics.types import HealthResult
 from harness.summary import (
     SCHEMA_VERSION,
     SUMMARY_NAME,
-    SummaryFile,
     check_summary,
     read_summary,
 )
@@ -101,13 +100,13 @@ class BaselineRef:
                        for name, v in (data.get("versions_differing") or {}).items()})
 
 
-@dataclass(frozen=True)
-class _RunSummaryFile(SummaryFile):
-    """The keys :meth:`RunSummary.from_json` converts beyond those :func:`read_summary`
-    checks."""
-
-    exit_code: int = 3
-    schema_version: int = SCHEMA_VERSION
+def _json_shaped(value: Any) -> Any:
+    """``value`` as JSON holds it: every tuple a list, every mapping a dict (recursively)."""
+    if isinstance(value, Mapping):
+        return {k: _json_shaped(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_shaped(v) for v in value]
+    return value
 
 
 @dataclass(frozen=True)
@@ -164,7 +163,9 @@ class RunSummary:
 
     def to_json(self) -> dict[str, Any]:
         """The mapping ``summary.json`` holds (written with sorted keys), ``schema_version``
-        included."""
+        included: JSON-shaped (lists, not tuples; dicts, not other mappings), so that it
+        equals what ``json.load`` reads back from the file (a metric's ``windows`` were
+        tuples in memory and lists on disk)."""
         out: dict[str, Any] = {
             "schema_version": SCHEMA_VERSION, "scenario": self.scenario,
             "scenario_file": self.scenario_file, "seed": self.seed,
@@ -192,14 +193,15 @@ class RunSummary:
                 "reasons": list(self.reasons),
                 "baseline": None if self.baseline is None else self.baseline.to_json(),
                 "comparison": [dict(c) for c in self.comparison]}
-        return out | dict(self.more)
+        plain: dict[str, Any] = _json_shaped(out | dict(self.more))
+        return plain
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any], path: Path | str = SUMMARY_NAME) -> RunSummary:
         """A summary from its mapping, checked as :func:`read_summary` checks it (``path``
         names it in errors): :class:`SrrError` when malformed or of a newer version."""
         where = Path(path)
-        check_summary(data, where, _RunSummaryFile)
+        check_summary(data, where)
         known = {f.name for f in dataclasses.fields(cls)} | {"schema_version"}
         baseline = data.get("baseline")
         return cls(

@@ -6,11 +6,11 @@ killed at its timeout or on Ctrl-C, or — on Ray — been cancelled before it e
 
 * a run directory that still holds ``incomplete.json`` is recovered (``srr recover``: the bag
   from its complete chunks, a summary marked recovered, its report);
-* a run that left no summary — stopped or dead before its first tick, before it wrote
-  anything, or with nothing that could be recovered — gets its directory written here: the
-  resolved ``scenario.yaml``, a ``summary.json`` with verdict INVALID (INTERRUPTED when the
-  worker was stopped by Ctrl-C or SIGTERM), no topics and no scores, whose reason says what
-  happened, and ``junit.xml``.
+* a run that left no summary — stopped or dead before its first tick, before its first chunk
+  was written (``srr recover`` refuses a bag that holds no message), or with nothing that
+  could be recovered — gets its directory written here: the resolved ``scenario.yaml``, a
+  ``summary.json`` with verdict INVALID (INTERRUPTED when the worker was stopped by Ctrl-C or
+  SIGTERM), no topics and no scores, whose reason says what happened, and ``junit.xml``.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from harness import runmarker
 from harness.errors import SrrError
 from harness.interrupt import INTERRUPTED_EXIT
 from harness.metrics.types import HealthResult
+from harness.recording.errors import NothingRecorded
 from harness.report.junit import junit_cases, write_junit
 from harness.run.facts import combined_digest, reproduce_command, versions, write_scenario
 from harness.run.loading import load
@@ -78,6 +79,9 @@ def settle(run_path: Path, spec: RunSpec, problem: str, *, interrupted: bool = F
         if (run_path / SUMMARY_NAME).is_file():
             return Settled(note)
         what = "it ended before its first tick: nothing was recorded"
+    except NothingRecorded as err:
+        what = (f"it ended before its first chunk was written: nothing was recorded "
+                f"({Path(err.mcap).name}: {err.size} bytes)")
     except SrrError as err:
         what = f"what it recorded could not be recovered ({err})"
     try:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -118,6 +119,13 @@ def test_kill_then_recover(reference: Path, tmp_path: Path, capsys: pytest.Captu
     complete = [c for c in chunks if c.chunk_start_offset + c.chunk_length <= len(on_disk)]
     if moment == "mid-run":
         assert 0.35 * len(chunks) <= len(complete) < len(chunks)
+    if not complete:  # killed before its first chunk was written: nothing was recorded
+        assert moment == "early"
+        assert main(["recover", str(out)]) == 2
+        assert "nothing was recorded" in capsys.readouterr().err
+        assert (out / "bag" / "bag.mcap").read_bytes() == on_disk
+        assert not (out / "summary.json").exists() and runmarker.read(out) is not None
+        return
 
     assert main(["recover", str(out)]) == 0
     printed = capsys.readouterr().out
@@ -255,3 +263,142 @@ def test_a_ctrl_c_while_the_report_renders_leaves_a_complete_run(
     assert json.loads((out / "summary.json").read_text())["verdict"] != "INTERRUPTED"
     monkeypatch.undo()
     assert main(["report", str(out)]) == 0 and (out / "report.html").is_file()
+
+
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A finished 2 s run (two chunks) with its summary and report."""
+    sc = api.load(SCENARIO, duration=2.0)
+    return api.run_scenario(sc, source=str(SCENARIO),
+                            out=tmp_path_factory.mktemp("finished") / "r").run_dir
+
+
+def _copy(run: Path, tmp_path: Path) -> Path:
+    out = tmp_path / "run"
+    shutil.copytree(run, out)
+    return out
+
+
+@pytest.mark.parametrize("damage", ["missing", "unreadable", "wrong types"])
+def test_recover_on_a_finished_run_with_a_damaged_metadata_yaml_keeps_its_summary(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        damage: str) -> None:
+    """Only ``metadata.yaml`` is rewritten: the MCAP file is whole and holds what the
+    summary counts, so the verdict and metrics stay (they became INVALID "killed")."""
+    run = _copy(finished_run, tmp_path)
+    meta = run / "bag" / "metadata.yaml"
+    good_meta = meta.read_text()
+    if damage == "missing":
+        meta.unlink()
+    elif damage == "unreadable":
+        meta.write_text("rosbag2_bagfile_information: [\n")
+    else:
+        meta.write_text("rosbag2_bagfile_information:\n  version: nine\n  storage_identifier: 5\n"
+                        "  topics_with_message_count: {}\n")
+    before = {p.name: p.read_bytes() for p in run.iterdir() if p.is_file()}
+    assert main(["recover", str(run)]) == 0
+    out = capsys.readouterr().out
+    assert "rewrote metadata.yaml" in out
+    assert out.strip().endswith(f"{run}: the run had finished; its summary is kept")
+    assert meta.read_text() == good_meta
+    assert {p.name: p.read_bytes() for p in run.iterdir() if p.is_file()} == before
+    assert sorted(p.name for p in (run / "bag").iterdir()) == ["bag.mcap", "metadata.yaml"]
+
+
+def test_recover_on_a_finished_run_whose_bag_was_cut_keeps_the_replaced_summary(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The bag lost messages: the summary (its scores) no longer holds for it and is
+    replaced by a recovered one, but kept beside it, and the report that showed it is set
+    aside too (the page never contradicts the summary)."""
+    run = _copy(finished_run, tmp_path)
+    mcap = run / "bag" / "bag.mcap"
+    old_summary = (run / "summary.json").read_bytes()
+    old_report = (run / "report.html").read_bytes()
+    os.truncate(mcap, mcap.stat().st_size * 2 // 3)
+    assert main(["recover", str(run)]) == 0
+    out = capsys.readouterr().out
+    assert (f"{run / 'summary.json'}: recovered, verdict INVALID (its bag was damaged after "
+            "the run finished; not scored)") in out
+    assert "the summary.json it replaces is kept as summary.json.replaced" in out
+    assert "the report.html it replaces is kept as report.html.replaced" in out
+    assert f"`srr report {run}` renders the recovered run's report" in out
+    assert (run / "summary.json.replaced").read_bytes() == old_summary
+    assert (run / "report.html.replaced").read_bytes() == old_report
+    assert not (run / "report.html").exists()
+    s = json.loads((run / "summary.json").read_text())
+    assert s["recovered"] and s["verdict"] == "INVALID"
+    detail = s["health"][0]["detail"]
+    assert detail.startswith("the run had finished, but its bag was cut short or damaged")
+    assert "killed" not in detail and "summary.json.replaced" in detail
+    assert main(["report", str(run)]) == 0
+    assert "INVALID" in (run / "report.html").read_text()
+    capsys.readouterr()
+    assert main(["recover", str(run)]) == 0  # the recovered summary holds for its bag
+    assert "nothing to recover" in capsys.readouterr().out
+    assert json.loads((run / "summary.json").read_text()) == s
+
+
+def test_recover_never_overwrites_a_replaced_summary(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    run = _copy(finished_run, tmp_path)
+    (run / "summary.json.replaced").write_text("an earlier one")
+    old_summary = (run / "summary.json").read_bytes()
+    mcap = run / "bag" / "bag.mcap"
+    os.truncate(mcap, mcap.stat().st_size * 2 // 3)
+    assert main(["recover", str(run)]) == 0
+    assert "kept as summary.json.replaced.2" in capsys.readouterr().out
+    assert (run / "summary.json.replaced").read_text() == "an earlier one"
+    assert (run / "summary.json.replaced.2").read_bytes() == old_summary
+
+
+def test_recover_on_a_finished_run_whose_bag_lost_only_its_footer_keeps_its_summary(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Cut inside its footer, the file is rebuilt with every chunk: every message the summary
+    counts is still there (same digests), so its verdict and scores stand."""
+    run = _copy(finished_run, tmp_path)
+    mcap = run / "bag" / "bag.mcap"
+    old_summary = (run / "summary.json").read_bytes()
+    os.truncate(mcap, mcap.stat().st_size - 10)
+    assert main(["recover", str(run)]) == 0
+    out = capsys.readouterr().out
+    assert "rebuilt bag.mcap from 2 complete chunks" in out
+    assert out.strip().endswith(f"{run}: the run had finished and its bag holds every message "
+                                "its summary counts; its summary is kept")
+    assert (run / "summary.json").read_bytes() == old_summary
+    assert not (run / "summary.json.replaced").exists() and (run / "report.html").is_file()
+
+
+def test_recover_refuses_a_whole_bag_that_is_not_what_the_summary_counts(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    run = _copy(finished_run, tmp_path)
+    (run / "bag" / "metadata.yaml").unlink()
+    s = json.loads((run / "summary.json").read_text())
+    s["topics"]["/odom"]["count"] += 1
+    (run / "summary.json").write_text(json.dumps(s))
+    before = {p.name: p.read_bytes() for p in run.rglob("*") if p.is_file()}
+    assert main(["recover", str(run)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "/odom: does not match summary.json" in err, err
+    assert {p.name: p.read_bytes() for p in run.rglob("*") if p.is_file()} == before
+
+
+def test_recover_refuses_a_run_killed_before_its_first_chunk(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Killed before its first chunk was written, the bag holds the MCAP header only: nothing
+    was recorded, and recover says so (it wrote an empty bag and a summary, exit 0)."""
+    run = _copy(finished_run, tmp_path)
+    for name in ("summary.json", "junit.xml", "report.html", "bag/metadata.yaml"):
+        (run / name).unlink()
+    mcap = run / "bag" / "bag.mcap"
+    with mcap.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    os.truncate(mcap, summary.chunk_indexes[0].chunk_start_offset)
+    runmarker.mark(run, "recording", command="srr run x.yaml")
+    before = {p: p.read_bytes() for p in run.rglob("*") if p.is_file()}
+    assert main(["recover", str(run)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"srr recover: {run}: nothing was recorded: the run was killed before its "
+                   f"first chunk was written (bag.mcap: {mcap.stat().st_size} bytes, no "
+                   "complete chunk); nothing to recover, the run directory can be deleted\n")
+    assert {p: p.read_bytes() for p in run.rglob("*") if p.is_file()} == before

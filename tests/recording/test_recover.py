@@ -18,7 +18,7 @@ from harness.bus import TRANSIENT_LOCAL, Bus
 from harness.cli import main
 from harness.recording import Recorder
 from harness.recording.bagfile import ChunkPolicy
-from harness.recording.errors import BagError
+from harness.recording.errors import BagError, NothingRecorded
 from harness.recording.recorder import digest_update
 from harness.recording.recover import recover_bag
 from harness.serde.messages import clock, header, make, tf_message, transform_stamped
@@ -101,8 +101,14 @@ def test_every_cut_keeps_exactly_the_complete_chunks(small_bag: Path, tmp_path: 
         bag = tmp_path / f"cut{cut}"
         bag.mkdir()
         (bag / "bag.mcap").write_bytes(data[:cut])
-        res = recover_bag(bag)
         complete = [c for c in chunks if c.chunk_start_offset + c.chunk_length <= cut]
+        if not complete:  # no message on disk: nothing to recover, nothing written
+            with pytest.raises(NothingRecorded, match="nothing was recorded: no complete chunk"):
+                recover_bag(bag)
+            assert [p.name for p in bag.iterdir()] == ["bag.mcap"], cut
+            shutil.rmtree(bag)
+            continue
+        res = recover_bag(bag)
         assert res.status == "rebuilt" and res.chunks == len(complete), cut
         n = sum(1 for _, t, _ in everything if complete and t <= complete[-1].message_end_time)
         got = raw(bag / "bag.mcap")
@@ -110,9 +116,8 @@ def test_every_cut_keeps_exactly_the_complete_chunks(small_bag: Path, tmp_path: 
         assert decoded_count(bag / "bag.mcap") == n
         assert (bag / "bag.mcap.damaged").read_bytes() == data[:cut]
         assert sum(t.count for t in res.topics.values()) == n
-        if complete:
-            meta = (bag / "metadata.yaml").read_text()
-            assert f"message_count: {n}\n" in meta
+        meta = (bag / "metadata.yaml").read_text()
+        assert f"message_count: {n}\n" in meta
         shutil.rmtree(bag)
 
 
@@ -164,8 +169,18 @@ def _flip_in_chunk(data: bytes, path: Path) -> bytes:
     return bytes(out)
 
 
+def _first_chunk(path: Path) -> tuple[int, int]:
+    """(start, end) offsets of the file's first chunk."""
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    c = summary.chunk_indexes[0]
+    return c.chunk_start_offset, c.chunk_start_offset + c.chunk_length
+
+
 @pytest.mark.parametrize("kind", ["empty", "not-mcap", "cut-in-magic", "cut-in-header",
-                                  "bit-flip", "bit-flip-cut", "bit-flip-summary"])
+                                  "header-only", "cut-in-first-chunk", "bit-flip",
+                                  "bit-flip-cut", "bit-flip-summary"])
 def test_hostile_files_exit_2_with_one_line_and_nothing_written(
         small_bag: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str) -> None:
     src = small_bag / "bag.mcap"
@@ -175,6 +190,8 @@ def test_hostile_files_exit_2_with_one_line_and_nothing_written(
         "not-mcap": b"rosbag2_bagfile_information:\n  version: 9\n" * 20,
         "cut-in-magic": data[:5],
         "cut-in-header": data[:20],
+        "header-only": data[:_first_chunk(src)[0]],  # killed before its first chunk closed
+        "cut-in-first-chunk": data[:_first_chunk(src)[1] - 1],
         "bit-flip": _flip_in_chunk(data, src),  # a finished file with a bad chunk
         "bit-flip-cut": _flip_in_chunk(data, src)[: len(data) * 3 // 4],  # valid chunks after
         "bit-flip-summary": data[:-60] + bytes([data[-60] ^ 0x01]) + data[-59:],
@@ -188,6 +205,8 @@ def test_hostile_files_exit_2_with_one_line_and_nothing_written(
     assert str(bag / "bag.mcap") in err
     assert sorted(p.name for p in bag.iterdir()) == ["bag.mcap"]
     assert (bag / "bag.mcap").read_bytes() == content
+    if kind in ("header-only", "cut-in-first-chunk"):  # an empty bag would be no recording
+        assert "nothing was recorded: no complete chunk" in err, err
     with pytest.raises(BagError):
         recover_bag(bag)
 

@@ -6,6 +6,7 @@ line naming the file and the field."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import shutil
@@ -78,22 +79,51 @@ def test_keys_it_does_not_know_are_kept(tmp_path: Path) -> None:
     assert s.to_json() == data | {"schema_version": 1}
 
 
-@pytest.mark.parametrize(("field", "value", "message"), [
+MALFORMED = [
     ("schema_version", 2, r"schema_version: 2 is newer than this srr reads"),
+    ("schema_version", "1", r"schema_version: expected an integer, got '1'"),
     ("reasons", "one reason", r"reasons: expected a list"),
-    ("exit_code", "1", r"exit_code: expected an integer"),
+    ("exit_code", "1", r"exit_code: expected an integer, got '1'"),
+    ("exit_code", 0.5, r"exit_code: expected an integer, got 0.5"),
     ("seed", "7", r"seed: expected an integer"),
-])
+    ("metrics", [{"name": "m", "value": 1.0, "unit": "m", "direction": "sideways"}],
+     r"metrics\[0\]\.direction: expected one of 'lower', 'higher', 'none', got 'sideways'"),
+]
+
+
+@pytest.mark.parametrize(("field", "value", "message"), MALFORMED)
 def test_a_malformed_or_newer_summary_names_the_file_and_field(
         tmp_path: Path, field: str, value: object, message: str) -> None:
+    """The one check of a summary (:func:`check_summary`): what ``srr diff``, ``report``, the
+    suite (:func:`read_summary`) and ``replay``, ``baseline bless`` (:meth:`RunSummary.read`)
+    read. ``schema_version`` or ``exit_code`` as a string passed the first and not the
+    second."""
     data = json.loads((DATA / "replay" / SUMMARY_NAME).read_text())
     data[field] = value
     (tmp_path / SUMMARY_NAME).write_text(json.dumps(data))
-    with pytest.raises(SrrError, match=rf"^{tmp_path / SUMMARY_NAME}: {message}"):
-        RunSummary.read(tmp_path)
-    if field == "schema_version":  # what srr diff, report and the suite read: refused too
+    for read in (read_summary, RunSummary.read):
         with pytest.raises(SrrError, match=rf"^{tmp_path / SUMMARY_NAME}: {message}"):
-            read_summary(tmp_path)
+            read(tmp_path)
+
+
+@pytest.mark.parametrize(("field", "value"), [("schema_version", "1"), ("exit_code", "0")])
+def test_every_command_refuses_a_mistyped_summary_in_the_same_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], field: str, value: str) -> None:
+    from harness.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(DATA / "replay", run)
+    data = json.loads((run / SUMMARY_NAME).read_text())
+    data[field] = value
+    (run / SUMMARY_NAME).write_text(json.dumps(data))
+    want = f"{run / SUMMARY_NAME}: {field}: expected an integer, got {value!r}"
+    for argv in (["report", str(run)], ["diff", str(run), str(run)],
+                 ["replay", str(run), "--out", str(tmp_path / "out"), "-q"],
+                 ["baseline", "bless", str(run), "--reason", "r", "--baselines",
+                  str(tmp_path / "b")]):
+        assert main(argv) == 2, argv
+        assert capsys.readouterr().err == f"srr {argv[0]}: {want}\n", argv
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
 
 
 def _drop_sha(d: dict[str, Any]) -> str:
@@ -130,12 +160,33 @@ def test_a_malformed_summary_names_the_field_inside_a_row(
             read(tmp_path)
 
 
+def test_the_summary_in_memory_is_what_json_reads_back() -> None:
+    """``RunResult.summary`` (``to_json``) equals ``json.load`` of the file: a metric's
+    ``windows`` (tuples in :class:`MetricResult`) are lists, as on disk (they were ``()``
+    in memory and ``[]`` in the file)."""
+    from harness.metrics.types import HealthResult, MetricResult
+
+    base = RunSummary.read(DATA / "run")
+    metric = MetricResult("safety.match_rate", 80.0, "%", "higher", "safety", "detail",
+                          ((1.0, 2.5), (3.0, 4.0)), "NEAR")
+    s = dataclasses.replace(base, metrics=(dataclasses.asdict(metric),
+                                           dataclasses.asdict(dataclasses.replace(
+                                               metric, name="m", windows=()))),
+                            health=(HealthResult("g", True, "ok"),), reasons=("a", "b"),
+                            graphs=(("a", "b"),))
+    data = s.to_json()
+    assert data == json.loads(json.dumps(data))
+    assert data["metrics"][0]["windows"] == [[1.0, 2.5], [3.0, 4.0]]
+    assert data["metrics"][1]["windows"] == [] and data["graphs"] == [["a", "b"]]
+
+
 @pytest.mark.slow
 def test_a_fresh_run_writes_the_summary_its_result_holds(tmp_path: Path) -> None:
     path = ROOT / "scenarios" / "forklift_warehouse.yaml"
     res = api.run_scenario(api.load(path, duration=0.5), source=str(path), out=tmp_path / "r")
     on_disk = RunSummary.read(res.run_dir)
-    assert on_disk.to_json() == json.loads(json.dumps(res.summary))
+    assert res.summary == json.loads((res.run_dir / SUMMARY_NAME).read_text())
+    assert on_disk.to_json() == res.summary
     assert (on_disk.topics, on_disk.health, on_disk.verdict) == (
         res.run_summary.topics, res.run_summary.health, res.verdict)
     copy = tmp_path / "copy"

@@ -3,11 +3,13 @@ nothing there at all, or a recording that cannot be recovered."""
 
 from __future__ import annotations
 
+import io
 import json
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from mcap.writer import Writer
 
 from harness import api, runmarker
 from harness.suite.plan import RunSpec
@@ -127,3 +129,17 @@ def test_a_worker_stopped_after_its_loop_keeps_its_recording(
     assert "recorded messages were recovered" in " ".join(out.reasons)
     summary = read_summary(tmp_path / spec.run_dir)
     assert summary["recovered"] and sum(t["count"] for t in summary["topics"].values()) > 0
+
+
+def test_a_run_killed_before_its_first_chunk_recorded_nothing(tmp_path: Path) -> None:
+    run = tmp_path / "r1"
+    (run / "bag").mkdir(parents=True)
+    header = io.BytesIO()
+    Writer(header).start(profile="ros2", library="srr")  # the MCAP header, no chunk
+    (run / "bag" / "bag.mcap").write_bytes(header.getvalue())
+    runmarker.mark(run, "recording", scenario_file=str(FORKLIFT), command="srr run ...")
+    settled = settle(run, _spec(), "the worker crashed: killed by signal SIGKILL")
+    assert settled.written, settled
+    assert "it ended before its first chunk was written: nothing was recorded (bag.mcap: " \
+        in str(settled.note), settled
+    assert json.loads((run / "summary.json").read_text())["topics"] == {}
