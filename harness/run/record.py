@@ -141,14 +141,18 @@ def prepare(run_dir: Path) -> Path | None:
 
 def unprepare(run_dir: Path, made: Path | None, err: BaseException) -> None:
     """A run that failed (``err``) before :func:`record` took its directory leaves nothing
-    there (the external ROS 2 processes' logs, written as they start): what :func:`prepare`
-    said the run would make goes, or the user's folder is emptied (``made`` None); unless
+    there (the external ROS 2 processes' logs, written as they start): the run directory
+    goes, and so do the folders :func:`prepare` said making it would make while they are
+    empty (a suite's other runs make theirs beside it), or the user's folder is emptied
+    (``made`` None); unless
     ``err`` names a file in it (an external node that died before it was ready: its log says
     why)."""
     if str(run_dir) in str(err):
         return
-    if made is not None:
-        shutil.rmtree(made, ignore_errors=True)
+    if made is not None:  # the run's folder, then the folders made for it while empty:
+        # other runs (a suite's) may have made theirs beside it in the meantime
+        shutil.rmtree(run_dir, ignore_errors=True)
+        remove_empty(run_dir.parent, made)
     elif run_dir.is_dir():
         for child in run_dir.iterdir():
             if child.is_dir() and not child.is_symlink():
