@@ -375,9 +375,10 @@ def open_recording(path: str | Path, *, shown: object = None, what: str = "canno
     holding a ROS 1 recording. What is wrong with the file, when it is opened or while its
     messages are read, is raised as one :class:`~harness.recording.errors.BagReadError` line
     ``<shown>: <what>: <reason>`` (``shown``: the path as the user named it; default the
-    file read); a ``path`` that holds none of these is one too (``metadata.yaml: missing``)."""
+    file read); a ``path`` that holds none of these, or a bag directory that does not exist,
+    is one too (``metadata.yaml: missing``)."""
     p = Path(path)
-    if p.is_dir():
+    if p.is_dir() or (not p.exists() and p.suffix not in (".bag", ".mcap")):
         if (p / "metadata.yaml").exists():
             return _Rosbag2(p, shown, what)
         found = ros1_recording(p)

@@ -1,0 +1,93 @@
+"""A run whose bag was damaged after it finished, as a user's probe damaged one: every command
+that reads the bag (``inspect``, ``diff``, ``report``, ``baseline bless``, ``replay``,
+``export``) refuses it alike, in one line naming the file and what is wrong, exit 2, writing
+nothing, through the one verification they share (:mod:`harness.recording.verify`)."""
+
+from __future__ import annotations
+
+import hashlib
+import shutil
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from harness import api
+from harness.cli import main
+from harness.recording.mcapread import McapIndex
+from tests.conftest import SCENARIOS
+
+pytestmark = pytest.mark.slow
+
+FW = SCENARIOS / "forklift_warehouse.yaml"
+COMMANDS = ["inspect", "diff", "report", "bless", "replay", "export"]
+
+
+@pytest.fixture(scope="module")
+def good(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A finished 2 s run of the forklift warehouse: an MCAP file of two chunks."""
+    out = tmp_path_factory.mktemp("damaged") / "good"
+    api.run_scenario(api.load(FW, duration=2), source=str(FW), out=out)
+    return out
+
+
+def _flip(mcap: Path, offset: int, n: int = 4) -> None:
+    with mcap.open("r+b") as f:
+        f.seek(offset)
+        b = f.read(n)
+        f.seek(offset)
+        f.write(bytes(x ^ 0xFF for x in b))
+
+
+def damaged(good: Path, tmp: Path, damage: Callable[[Path], None]) -> Path:
+    run = tmp / "run"
+    shutil.copytree(good, run)
+    damage(run / "bag" / "bag.mcap")
+    return run
+
+
+def _tree(run: Path) -> dict[str, str]:
+    return {str(p.relative_to(run)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(run.rglob("*")) if p.is_file()}
+
+
+def refusal(good: Path, run: Path, tmp: Path, command: str,
+            capsys: pytest.CaptureFixture[str]) -> str:
+    """What ``command`` says of the damaged ``run``: exit 2, one line, nothing written, the
+    run left as it was."""
+    if command == "export":
+        pytest.importorskip("rerun")
+    out, baselines, rrd = tmp / "out", tmp / "baselines", tmp / "x.rrd"
+    argv = {"inspect": ["inspect", str(run)], "diff": ["diff", str(good), str(run)],
+            "report": ["report", str(run), "--no-video"],
+            "bless": ["baseline", "bless", str(run), "--reason", "r", "--baselines",
+                      str(baselines)],
+            "replay": ["replay", str(run), "--out", str(out), "-q"],
+            "export": ["export", str(run), "--rerun", str(rrd)]}[command]
+    before = _tree(run)
+    code = main(argv)
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, (code, err)
+    assert err.startswith(f"srr {argv[0]}: ") and "Traceback" not in err, err
+    assert not out.exists() and not baselines.exists() and not rrd.exists()
+    assert not list(tmp.glob(".*.partial"))
+    assert _tree(run) == before
+    return err
+
+
+def _chunks(mcap: Path) -> list[tuple[int, int]]:
+    return [(c.chunk_start_offset, c.chunk_length) for c in sorted(
+        McapIndex(mcap).summary.chunk_indexes, key=lambda c: c.chunk_start_offset)]
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_a_chunk_that_fails_its_crc_is_refused_by_every_command(
+        good: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str) -> None:
+    # 4 bytes flipped inside the second chunk's messages: only its CRC tells
+    def damage(mcap: Path) -> None:
+        start, length = _chunks(mcap)[1]
+        _flip(mcap, start + length // 2)
+
+    run = damaged(good, tmp_path, damage)
+    err = refusal(good, run, tmp_path, command, capsys)
+    assert str(run) in err and err.endswith(": cannot read bag: Chunk checksum mismatch."), err
