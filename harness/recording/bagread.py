@@ -36,7 +36,7 @@ import struct
 from collections.abc import Collection, Iterator
 from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import Any, ClassVar, Literal
 
 import yaml
@@ -55,7 +55,7 @@ from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 from harness import yamlio
 from harness.errors import reason
 from harness.recording.errors import BagReadError
-from harness.recording.mcapread import McapIndex, guarded, lz4_failure
+from harness.recording.mcapread import McapIndex, check_index, guarded, lz4_failure
 from harness.serde.messages import TYPESTORE
 from harness.serde.ros1 import Ros1TypeError, deserialize_ros1, ros2_type, to_ros2
 
@@ -236,6 +236,7 @@ class _Rosbags(Recording):
         super().__init__(path, shown, what)
         self.profile = "ros2" if self.encoding == "cdr" else "ros1"
         with self._read():
+            self._check()
             self._reader = self._open(path)
             try:
                 self._reader.open()
@@ -249,6 +250,10 @@ class _Rosbags(Recording):
 
     def _connection(self, c: Any) -> Connection:
         raise NotImplementedError
+
+    def _check(self) -> None:
+        """What the file holds beyond what rosbags' reader checks, raised as
+        :data:`READ_ERRORS` (before the reader parses it: the precise reason first)."""
 
     def _quirk(self, err: Exception) -> Exception:
         """``err``, one of :attr:`_quirks` raised by rosbags' reader itself, as the
@@ -281,6 +286,12 @@ class _Rosbag2(_Rosbags):
     # rosbags' MCAP storage: KeyError for a channel's QoS profile missing a key, or a
     # schema it does not list; lz4's RuntimeError for a chunk that does not decompress
     _quirks = (KeyError, RuntimeError)
+
+    def _check(self) -> None:
+        # rosbags reads an MCAP file's summary without its CRC, and its chunks through it
+        for file in _named_files(self.path):
+            if file.suffix == ".mcap":
+                check_index(file)
 
     def _quirk(self, err: Exception) -> Exception:
         if isinstance(err, RuntimeError) and not lz4_failure(err):
@@ -409,16 +420,24 @@ def open_indexed(path: str | Path, *, shown: object = None, what: str = "cannot 
     return open_recording(p, shown=shown, what=what)
 
 
-def _one_mcap(bag_dir: Path) -> Path | None:
-    """The one ``.mcap`` file a rosbag2 directory's ``metadata.yaml`` names, if it names one
-    that exists (None for anything else, unreadable metadata included)."""
+def _named_files(bag_dir: Path) -> list[Path]:
+    """The files a rosbag2 directory's ``metadata.yaml`` names, where rosbags looks for them
+    (none for unreadable metadata)."""
     try:
         meta = yamlio.load((bag_dir / "metadata.yaml").read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, yaml.YAMLError):
-        return None
+        return []
     info = meta.get("rosbag2_bagfile_information") if isinstance(meta, dict) else None
     files = info.get("relative_file_paths") if isinstance(info, dict) else None
-    if not isinstance(files, list) or len(files) != 1:
+    if not isinstance(files, list):
+        return []
+    return [bag_dir / PurePath(str(f)).name for f in files]
+
+
+def _one_mcap(bag_dir: Path) -> Path | None:
+    """The one ``.mcap`` file a rosbag2 directory's ``metadata.yaml`` names, if it names one
+    that exists (None for anything else, unreadable metadata included)."""
+    files = _named_files(bag_dir)
+    if len(files) != 1:
         return None
-    file = bag_dir / str(files[0])
-    return file if file.suffix == ".mcap" and file.is_file() else None
+    return files[0] if files[0].suffix == ".mcap" and files[0].is_file() else None

@@ -91,3 +91,47 @@ def test_a_chunk_that_fails_its_crc_is_refused_by_every_command(
     run = damaged(good, tmp_path, damage)
     err = refusal(good, run, tmp_path, command, capsys)
     assert str(run) in err and err.endswith(": cannot read bag: Chunk checksum mismatch."), err
+
+
+def _summary_middle(mcap: Path) -> int:
+    data = mcap.read_bytes()
+    footer = len(data) - 8 - 29
+    start = int.from_bytes(data[footer + 9:footer + 17], "little")
+    return (start + footer) // 2
+
+
+# (a byte or four flipped where no reader looked, what every command says)
+INDEX_DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
+    "summary": (lambda m: _flip(m, _summary_middle(m)),
+                "cannot read bag: the summary section fails its CRC check"),
+    "footer": (lambda m: _flip(m, m.stat().st_size - 20),
+               "cannot read bag: the summary section fails its CRC check"),
+    "chunk length": (lambda m: _flip(m, _chunks(m)[1][0] + 1, 1),
+                     "cannot read bag: chunk at byte {}: the file's record there is not the "
+                     "Chunk of {} bytes its chunk index says"),
+}
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("where", list(INDEX_DAMAGE))
+def test_a_summary_or_chunk_index_that_disagrees_with_the_file_is_refused_by_every_command(
+        good: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], where: str,
+        command: str) -> None:
+    damage, words = INDEX_DAMAGE[where]
+    start, length = _chunks(good / "bag" / "bag.mcap")[1]
+    run = damaged(good, tmp_path, damage)
+    err = refusal(good, run, tmp_path, command, capsys)
+    assert str(run) in err and err.endswith(words.format(start, length)), err
+
+
+@pytest.mark.parametrize("where", list(INDEX_DAMAGE))
+def test_recover_refuses_what_the_readers_refuse(good: Path, tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str],
+                                                 where: str) -> None:
+    run = damaged(good, tmp_path, INDEX_DAMAGE[where][0])
+    before = _tree(run)
+    code = main(["recover", str(run)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "corrupt" in err, err
+    assert err.endswith("not recovered"), err
+    assert _tree(run) == before
