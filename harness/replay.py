@@ -38,7 +38,6 @@ from harness.output import ROS2_OUTPUT, OutputKind
 from harness.recording.bagread import (
     DECODE_ERRORS,
     deserialize,
-    mcap_records,
     open_recording,
     reading,
     ros1_recording,
@@ -149,13 +148,9 @@ class Playback:
 
     def _messages(self) -> Iterator[tuple[str, int, bytes]]:
         """(topic, log time, payload) in file order (a .bag: in time order)."""
-        if self.file.suffix == ".bag":
-            with open_recording(self.file, what="cannot read recording") as rec:
-                for conn, t, raw in rec.messages():
-                    yield conn.topic, t, raw
-            return
-        for _schema, channel, message in mcap_records(self.file, what="cannot read recording"):
-            yield channel.topic, message.log_time, message.data
+        with open_recording(self.file, what="cannot read recording") as rec:
+            for conn, t, raw in rec.messages():
+                yield conn.topic, t, raw
 
     def by_time(self) -> Iterator[tuple[int, list[tuple[str, str, bytes]]]]:
         """(log time, [(topic, type, raw bytes), ...]) in file order, one group per log

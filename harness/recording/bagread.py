@@ -44,7 +44,6 @@ import zstandard
 from mcap.exceptions import EndOfFile, InvalidMagic, McapError, RecordLengthLimitExceeded
 from mcap.reader import make_reader
 from mcap.records import Channel, Message, Schema
-from mcap.writer import MCAP0_MAGIC
 from rosbags.rosbag1 import Reader as Rosbag1Reader
 from rosbags.rosbag1 import ReaderError as Rosbag1ReaderError
 from rosbags.rosbag2 import Reader as Rosbag2Reader
@@ -55,7 +54,7 @@ from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 from harness import yamlio
 from harness.errors import reason
 from harness.recording.errors import BagReadError
-from harness.recording.mcapread import McapIndex, check_index, guarded, lz4_failure
+from harness.recording.mcapread import McapIndex, check_index, check_start, guarded, lz4_failure
 from harness.serde.messages import TYPESTORE
 from harness.serde.ros1 import Ros1TypeError, deserialize_ros1, ros2_type, to_ros2
 
@@ -290,8 +289,12 @@ class _Rosbag2(_Rosbags):
     def _check(self) -> None:
         # rosbags reads an MCAP file's summary without its CRC, and its chunks through it
         for file in _named_files(self.path):
-            if file.suffix == ".mcap":
-                check_index(file)
+            if file.suffix == ".mcap" and file.is_file():  # (rosbags names a missing one)
+                try:
+                    check_start(file)
+                    check_index(file)
+                except ValueError as err:
+                    raise ValueError(f"{file.name}: {err}") from err
 
     def _quirk(self, err: Exception) -> Exception:
         if isinstance(err, RuntimeError) and not lz4_failure(err):
@@ -338,13 +341,7 @@ class _Mcap(Recording):
 
     def __init__(self, path: Path, shown: object = None, what: str = "cannot read bag") -> None:
         super().__init__(path, shown, what)
-        with self._read():
-            with self.path.open("rb") as f:  # a file of another kind says so, not a reader's
-                head = f.read(len(MCAP0_MAGIC))  # struct error
-            if head != MCAP0_MAGIC:
-                raise BagReadError(self.shown, what, "the file is empty" if not head else
-                                   "not an MCAP file (it does not start with MCAP's magic "
-                                   "bytes)")
+        with self._read():  # a file empty, cut in its header or of another kind says so
             self._index = index = McapIndex(self.path)
         self.profile, summary = index.profile, index.summary
         encodings = {c.message_encoding for c in summary.channels.values()}

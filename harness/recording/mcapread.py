@@ -41,7 +41,7 @@ from mcap.records import ChunkIndex
 from mcap.summary import Summary
 from mcap.writer import MCAP0_MAGIC
 
-__all__ = ["McapIndex", "check_index", "guarded", "lz4_failure"]
+__all__ = ["McapIndex", "check_index", "check_start", "guarded", "lz4_failure"]
 
 T = TypeVar("T")
 
@@ -55,7 +55,7 @@ _MESSAGE = struct.Struct("<H4xQ")  # Message: channel id, (sequence), log time
 _MESSAGE_SIZE = 2 + 4 + 8 + 8  # channel id, sequence, log time, publish time
 _INDEX_HEAD = struct.Struct("<HI")  # MessageIndex: channel id, length of its (time, offset)s
 _MESSAGE_OP, _MESSAGE_INDEX_OP = 0x05, 0x07
-_FOOTER_OP, _CHUNK_OP, _CHUNK_INDEX_OP = 0x02, 0x06, 0x08
+_HEADER_OP, _FOOTER_OP, _CHUNK_OP, _CHUNK_INDEX_OP = 0x01, 0x02, 0x06, 0x08
 # Footer: opcode, length, summary start, summary offset start, summary CRC; then the magic
 _FOOTER = struct.Struct("<BQQQI")
 _CHUNK_INDEX_HEAD = struct.Struct("<QQQQ")  # start and end times, chunk start, chunk length
@@ -89,6 +89,28 @@ def guarded(records: Iterable[T]) -> Iterator[T]:
                 raise
             raise ValueError(str(err)) from err
         yield item
+
+
+def check_start(path: Path, size: int | None = None) -> None:
+    """``ValueError`` saying why a file is no MCAP file's beginning: empty, cut short inside
+    MCAP's magic bytes or its header record (nothing in it to read or recover), or another
+    kind of file. ``size``: the file's length as the caller measured it (default: now)."""
+    with Path(path).open("rb") as f:
+        if size is None:
+            size = os.fstat(f.fileno()).st_size
+        head = f.read(min(size, len(MCAP0_MAGIC) + 9))
+    magic = head[:len(MCAP0_MAGIC)]
+    if not head:
+        raise ValueError("the file is empty")
+    if magic != MCAP0_MAGIC:
+        if MCAP0_MAGIC.startswith(magic):
+            raise ValueError(f"the file is cut short inside MCAP's magic bytes ({size} bytes)")
+        raise ValueError("not an MCAP file (it does not start with MCAP's magic bytes)")
+    if len(head) > len(MCAP0_MAGIC) and head[len(MCAP0_MAGIC)] != _HEADER_OP:
+        raise ValueError("not an MCAP file (no header record after MCAP's magic bytes)")
+    if len(head) < len(MCAP0_MAGIC) + 9 or \
+            size < len(head) + _REC_HEAD.unpack_from(head, len(MCAP0_MAGIC))[1]:
+        raise ValueError(f"the file is cut short inside its MCAP header ({size} bytes)")
 
 
 def check_index(path: Path, size: int | None = None) -> None:
@@ -138,6 +160,7 @@ class McapIndex:
 
     def __init__(self, path: Path) -> None:
         self.path = Path(path)
+        check_start(self.path)
         check_index(self.path)
         with self.path.open("rb") as f:
             reader = make_reader(f)

@@ -47,7 +47,7 @@ from harness.recording.bagfile import (
 )
 from harness.recording.bagread import DATA_ERRORS, mcap_profile, ros1_recording
 from harness.recording.errors import BagError
-from harness.recording.mcapread import check_index, lz4_failure
+from harness.recording.mcapread import check_index, check_start, lz4_failure
 from harness.recording.recorder import TopicStats, digest_update
 
 __all__ = ["RecoveredBag", "locate_mcap", "recover_bag"]
@@ -121,15 +121,10 @@ def locate_mcap(path: str | Path) -> tuple[Path, Path]:
 
 
 def _check_start(path: Path, size: int) -> None:
-    if size == 0:
-        raise BagError(f"{path}: empty file (0 bytes): nothing to recover")
-    with path.open("rb") as f:
-        head = f.read(len(MCAP0_MAGIC))
-    if head != MCAP0_MAGIC:
-        if MCAP0_MAGIC.startswith(head):
-            raise BagError(f"{path}: cut inside the MCAP magic ({size} bytes): nothing to "
-                           "recover")
-        raise BagError(f"{path}: not an MCAP file (starts with {head!r}, not the MCAP magic)")
+    try:
+        check_start(path, size)  # what every reader says of such a file
+    except ValueError as err:
+        raise BagError(f"{path}: {err}: nothing to recover") from err
 
 
 def _ends_with_footer(path: Path, size: int) -> bool:

@@ -6,6 +6,7 @@ nothing, through the one verification they share (:mod:`harness.recording.verify
 from __future__ import annotations
 
 import hashlib
+import os
 import shutil
 from collections.abc import Callable
 from pathlib import Path
@@ -14,7 +15,9 @@ import pytest
 
 from harness import api
 from harness.cli import main
+from harness.recording.errors import BagError
 from harness.recording.mcapread import McapIndex
+from harness.replay import Playback
 from tests.conftest import SCENARIOS
 
 pytestmark = pytest.mark.slow
@@ -103,12 +106,12 @@ def _summary_middle(mcap: Path) -> int:
 # (a byte or four flipped where no reader looked, what every command says)
 INDEX_DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
     "summary": (lambda m: _flip(m, _summary_middle(m)),
-                "cannot read bag: the summary section fails its CRC check"),
+                "cannot read bag: bag.mcap: the summary section fails its CRC check"),
     "footer": (lambda m: _flip(m, m.stat().st_size - 20),
-               "cannot read bag: the summary section fails its CRC check"),
+               "cannot read bag: bag.mcap: the summary section fails its CRC check"),
     "chunk length": (lambda m: _flip(m, _chunks(m)[1][0] + 1, 1),
-                     "cannot read bag: chunk at byte {}: the file's record there is not the "
-                     "Chunk of {} bytes its chunk index says"),
+                     "cannot read bag: bag.mcap: chunk at byte {}: the file's record there "
+                     "is not the Chunk of {} bytes its chunk index says"),
 }
 
 
@@ -135,3 +138,45 @@ def test_recover_refuses_what_the_readers_refuse(good: Path, tmp_path: Path,
     assert code == 2 and len(err.splitlines()) == 1 and "corrupt" in err, err
     assert err.endswith("not recovered"), err
     assert _tree(run) == before
+
+
+def _cut(n: int) -> Callable[[Path], None]:
+    return lambda m: os.truncate(m, n)
+
+
+# (a file no reader can start on, what every command says: neither names `srr recover`,
+# which has nothing to rebuild from)
+START_DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
+    "empty": (_cut(0), "the file is empty"),
+    "cut in magic": (_cut(5), "the file is cut short inside MCAP's magic bytes (5 bytes)"),
+    "cut in header": (_cut(30), "the file is cut short inside its MCAP header (30 bytes)"),
+    "not mcap": (lambda m: m.write_text("hello world, this is not mcap\n" * 10),
+                 "not an MCAP file (it does not start with MCAP's magic bytes)"),
+}
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("case", list(START_DAMAGE))
+def test_a_file_cut_in_its_header_or_not_mcap_is_named_alike_by_every_command(
+        good: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], case: str,
+        command: str) -> None:
+    damage, words = START_DAMAGE[case]
+    run = damaged(good, tmp_path, damage)
+    err = refusal(good, run, tmp_path, command, capsys)
+    assert str(run) in err and err.endswith(f"cannot read bag: bag.mcap: {words}"), err
+    assert "srr recover" not in err, err
+
+
+@pytest.mark.parametrize("case", list(START_DAMAGE))
+def test_replay_reads_its_recording_through_the_one_reader(
+        good: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], case: str) -> None:
+    """Playback itself (what a summary without digests leaves to it) and recover say it
+    too."""
+    damage, words = START_DAMAGE[case]
+    run = damaged(good, tmp_path, damage)
+    with pytest.raises(BagError) as info:
+        list(Playback(run / "bag").by_time())
+    assert str(info.value) == f"{run / 'bag' / 'bag.mcap'}: cannot read recording: {words}"
+    assert main(["recover", str(run)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith(f"bag.mcap: {words}: nothing to recover"), err

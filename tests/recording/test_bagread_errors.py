@@ -66,7 +66,7 @@ READERS: list[tuple[str, Any, str, Callable[[Path], object]]] = [
     ("scoring and the report (MCAP index)", mcapread.McapIndex, "_chunked", load_frames),
     ("inspect (rosbags)", rosbags.rosbag2.Reader, "messages", inspect_bag),
     ("diff (rosbags)", rosbags.rosbag2.Reader, "messages", _drain_stream),
-    ("replay (mcap)", mcap.reader.SeekingReader, "iter_messages", _replay),
+    ("replay (MCAP index)", mcapread.McapIndex, "_chunked", _replay),
     ("bless's reference recording (mcap)", mcap.reader.SeekingReader, "iter_messages",
      lambda b: write_reference(b, b.parent / "ref.mcap")),
 ]
