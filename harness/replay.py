@@ -41,6 +41,7 @@ from harness.recording.bagread import (
     open_recording,
     reading,
     ros1_recording,
+    rosbag2_metadata,
 )
 from harness.recording.errors import BagError
 from harness.scenario import Scenario
@@ -122,9 +123,8 @@ class Playback:
         if not (self.bag_dir / "metadata.yaml").is_file():
             raise BagError(f"{self.bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
         meta_file = self.bag_dir / "metadata.yaml"
+        info = rosbag2_metadata(self.bag_dir)  # each field's type checked, as every reader does
         with reading(meta_file, "not a rosbag2 metadata file"):
-            info = _key(yamlio.load(meta_file.read_text(encoding="utf-8")),
-                        "rosbag2_bagfile_information")
             self.topics = {}
             for entry in _items(info, "topics_with_message_count"):
                 t = _key(entry, "topic_metadata")

@@ -65,7 +65,7 @@ except ImportError:
 
 __all__ = ["DATA_ERRORS", "DECODE_ERRORS", "READ_ERRORS", "Connection", "Encoding",
            "Recording", "deserialize", "mcap_profile", "mcap_records", "open_indexed",
-           "open_recording", "reading", "ros1_recording"]
+           "open_recording", "reading", "ros1_recording", "rosbag2_metadata"]
 
 Encoding = Literal["cdr", "ros1"]
 
@@ -108,6 +108,85 @@ def reading(file: object, what: str = "cannot read bag") -> Iterator[None]:
             said = f"the file is cut short or damaged ({said}); `srr recover` rebuilds a " \
                    "bag cut short from its complete chunks"
         raise BagReadError(file, what, said) from err
+
+
+_META = "not a rosbag2 metadata file"
+# rosbag2_bagfile_information: key → (type, what it must be, required); what rosbags reads
+_INFO_FIELDS: dict[str, tuple[type | tuple[type, ...], str, bool]] = {
+    "version": (int, "an integer", True),
+    "storage_identifier": (str, "a string", True),
+    "relative_file_paths": (list, "a list", True),
+    "compression_format": ((str, type(None)), "a string", False),
+    "compression_mode": ((str, type(None)), "a string", False),
+    "message_count": (int, "an integer", True),
+    "duration": (dict, "a mapping", True),
+    "starting_time": (dict, "a mapping", True),
+    "topics_with_message_count": (list, "a list", True),
+    "files": (list, "a list", False),
+}
+_TOPIC_FIELDS: dict[str, tuple[type | tuple[type, ...], str, bool]] = {
+    "name": (str, "a string", True),
+    "type": (str, "a string", True),
+    "serialization_format": (str, "a string", True),
+    "offered_qos_profiles": ((list, str), "a list", False),
+    "type_description_hash": (str, "a string", False),
+}
+
+
+def _fields(node: dict[str, Any], where: str,
+            fields: dict[str, tuple[type | tuple[type, ...], str, bool]]) -> str | None:
+    """The first of ``fields`` that ``node`` lacks or holds as another type, said as
+    ``<where>.<key>: ...``; None when all are right."""
+    for key, (kind, said, required) in fields.items():
+        if key not in node:
+            if required:
+                return f"{where}.{key}: missing"
+            continue
+        value = node[key]
+        if not isinstance(value, kind) or (isinstance(value, bool) and kind is int):
+            return f"{where}.{key}: {value!r} is not {said}"
+    return None
+
+
+def rosbag2_metadata(bag_dir: Path) -> dict[str, Any]:
+    """The ``rosbag2_bagfile_information`` mapping of a rosbag2 directory's ``metadata.yaml``,
+    each field rosbags reads checked for its type first: a :class:`BagReadError` naming the
+    file and the field (``.../metadata.yaml: not a rosbag2 metadata file:
+    rosbag2_bagfile_information.version: 'nine' is not an integer``), not rosbags'
+    ``Invalid bag metadata: '>' not supported between instances of 'str' and 'int'``."""
+    file = Path(bag_dir) / "metadata.yaml"
+    with reading(file, _META):
+        meta = yamlio.load(file.read_text(encoding="utf-8"))
+    top = "rosbag2_bagfile_information"
+    info = meta.get(top) if isinstance(meta, dict) else None
+    problem = f"{top}: missing" if not isinstance(meta, dict) or top not in meta else \
+        f"{top}: {info!r} is not a mapping" if not isinstance(info, dict) else \
+        _fields(info, top, _INFO_FIELDS)
+    if problem is None:
+        assert isinstance(info, dict)
+        for name, key in (("duration", "nanoseconds"),
+                          ("starting_time", "nanoseconds_since_epoch")):
+            problem = problem or _fields(info[name], f"{top}.{name}",
+                                         {key: (int, "an integer", True)})
+        for i, entry in enumerate(info["topics_with_message_count"]):
+            where = f"{top}.topics_with_message_count[{i}]"
+            if problem is not None:
+                break
+            if not isinstance(entry, dict):
+                problem = f"{where}: {entry!r} is not a mapping"
+                break
+            t = entry.get("topic_metadata")
+            problem = _fields(entry, where, {"topic_metadata": (dict, "a mapping", True),
+                                             "message_count": (int, "an integer", True)}) \
+                or (_fields(t, f"{where}.topic_metadata", _TOPIC_FIELDS)
+                    if isinstance(t, dict) else None)
+        for i, path in enumerate(info["relative_file_paths"]):
+            if problem is None and not isinstance(path, str):
+                problem = f"{top}.relative_file_paths[{i}]: {path!r} is not a string"
+    if problem is not None:
+        raise BagReadError(file, _META, problem)
+    assert isinstance(info, dict)
+    return info
 
 
 def deserialize(raw: bytes, msgtype: str, encoding: Encoding) -> Any:
@@ -287,6 +366,8 @@ class _Rosbag2(_Rosbags):
     _quirks = (KeyError, RuntimeError)
 
     def _check(self) -> None:
+        # rosbags compares and indexes metadata.yaml's fields without checking their types
+        rosbag2_metadata(self.path)
         # rosbags reads an MCAP file's summary without its CRC, and its chunks through it
         for file in _named_files(self.path):
             if file.suffix == ".mcap" and file.is_file():  # (rosbags names a missing one)

@@ -180,3 +180,17 @@ def test_replay_reads_its_recording_through_the_one_reader(
     assert main(["recover", str(run)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.endswith(f"bag.mcap: {words}: nothing to recover"), err
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_metadata_of_the_wrong_types_is_named_by_file_and_field(
+        good: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str) -> None:
+    def damage(mcap: Path) -> None:
+        (mcap.parent / "metadata.yaml").write_text(
+            "rosbag2_bagfile_information:\n  version: nine\n  storage_identifier: 5\n"
+            "  topics_with_message_count: {}\n")
+
+    run = damaged(good, tmp_path, damage)
+    err = refusal(good, run, tmp_path, command, capsys)
+    assert err.endswith(f"{run / 'bag' / 'metadata.yaml'}: not a rosbag2 metadata file: "
+                        "rosbag2_bagfile_information.version: 'nine' is not an integer"), err
