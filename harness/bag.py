@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from harness import yamlio
+from harness import runlock, yamlio
 from harness.recording.bagread import open_recording, reading, ros1_recording
 from harness.recording.errors import BagError
 
@@ -38,8 +38,13 @@ def inspect_bag(path: str | Path) -> BagInfo:
     and list its topics, counting messages by reading every record (so truncation is
     noticed). ``storage`` is ``mcap`` for ROS 2, ``rosbag1`` or ``mcap (ros1)`` for ROS 1;
     types as recorded (``sensor_msgs/Image`` in a ROS 1 recording), latched ROS 1 topics as
-    ``transient_local``. Raises :class:`~harness.recording.errors.BagError`."""
+    ``transient_local``. Raises :class:`~harness.recording.errors.BagError`, and
+    :class:`~harness.errors.RunInUseError` for a run still being written (its lock is held,
+    :mod:`harness.runlock`), as every command that reads a run does."""
     p = Path(path)
+    base = p.parent if p.is_file() else p
+    for cand in (base, base.parent):  # a run directory, or its bag/, being written
+        runlock.refuse_if_live(cand)
     if (p / "bag").is_dir() and not (p / "metadata.yaml").exists():
         p = p / "bag"  # a run directory: its recording, finished or not
     if not p.exists():

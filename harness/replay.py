@@ -38,10 +38,10 @@ from harness.output import ROS2_OUTPUT, OutputKind
 from harness.recording.bagread import (
     DECODE_ERRORS,
     deserialize,
-    mcap_records,
     open_recording,
     reading,
     ros1_recording,
+    rosbag2_metadata,
 )
 from harness.recording.errors import BagError
 from harness.scenario import Scenario
@@ -123,9 +123,8 @@ class Playback:
         if not (self.bag_dir / "metadata.yaml").is_file():
             raise BagError(f"{self.bag_dir}: metadata.yaml: missing (not a rosbag2 directory)")
         meta_file = self.bag_dir / "metadata.yaml"
+        info = rosbag2_metadata(self.bag_dir)  # each field's type checked, as every reader does
         with reading(meta_file, "not a rosbag2 metadata file"):
-            info = _key(yamlio.load(meta_file.read_text(encoding="utf-8")),
-                        "rosbag2_bagfile_information")
             self.topics = {}
             for entry in _items(info, "topics_with_message_count"):
                 t = _key(entry, "topic_metadata")
@@ -149,13 +148,9 @@ class Playback:
 
     def _messages(self) -> Iterator[tuple[str, int, bytes]]:
         """(topic, log time, payload) in file order (a .bag: in time order)."""
-        if self.file.suffix == ".bag":
-            with open_recording(self.file, what="cannot read recording") as rec:
-                for conn, t, raw in rec.messages():
-                    yield conn.topic, t, raw
-            return
-        for _schema, channel, message in mcap_records(self.file, what="cannot read recording"):
-            yield channel.topic, message.log_time, message.data
+        with open_recording(self.file, what="cannot read recording") as rec:
+            for conn, t, raw in rec.messages():
+                yield conn.topic, t, raw
 
     def by_time(self) -> Iterator[tuple[int, list[tuple[str, str, bytes]]]]:
         """(log time, [(topic, type, raw bytes), ...]) in file order, one group per log

@@ -87,3 +87,20 @@ def test_no_directory_or_no_lock_file_means_no_owner(tmp_path: Path) -> None:
     (tmp_path / "file").write_text("not a directory")
     runlock.refuse_if_live(tmp_path / "file")
 
+
+
+def test_inspect_refuses_a_run_being_written_as_every_command_does(
+        holder: tuple[Path, subprocess.Popen[str]], capsys: pytest.CaptureFixture[str]) -> None:
+    """``srr inspect`` said ``metadata.yaml: missing (the recording did not finish; srr recover
+    rebuilds the bag)`` of a live run, where the others name its owner."""
+    from harness.cli import main
+
+    run, proc = holder
+    (run / "bag").mkdir()
+    (run / "bag" / "bag.mcap").write_bytes(b"\x89MCAP0\r\n")  # being written
+    for target in (run, run / "bag", run / "bag" / "bag.mcap"):
+        assert main(["inspect", str(target)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err == (f"srr inspect: {run} is being written by pid {proc.pid} on "
+                       f"{socket.gethostname()}; wait until it ends or stop it "
+                       f"(kill {proc.pid}), then try again"), err

@@ -44,6 +44,7 @@ from harness import runlock
 from harness.errors import SrrError, reason
 from harness.recording.bagread import DECODE_ERRORS, Connection, Recording, open_indexed
 from harness.recording.errors import BagError
+from harness.recording.verify import verify_recording
 from harness.summary import read_summary
 
 __all__ = ["TIMELINE", "RerunExport", "export_rerun", "rerun_module"]
@@ -436,7 +437,8 @@ def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:
     """Write the finished run ``run_dir`` (its bag and ``summary.json``) to the Rerun
     recording ``out`` (``.rrd``), replaced only once complete. :class:`SrrError` (exit 2) for
     a directory that is not a finished run, a run still being written, a bag that does not
-    read, an ``out`` that cannot be written, or rerun-sdk missing."""
+    read back whole or does not match the summary (:func:`~harness.recording.verify.
+    verify_recording`), an ``out`` that cannot be written, or rerun-sdk missing."""
     run = Path(run_dir)
     target = Path(out)
     rr = rerun_module()
@@ -447,6 +449,7 @@ def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:
     if target.is_dir() or not target.parent.is_dir():
         raise SrrError(f"--rerun {target}: " + ("is a directory" if target.is_dir() else
                                                f"directory {target.parent} does not exist"))
+    verify_recording(run, summary)  # the bag read back is the summary's, its CRCs checked
     tmp = target.with_name(f".{target.name}.partial")
     try:
         result = _write(rr, run, summary, tmp)

@@ -36,7 +36,7 @@ import struct
 from collections.abc import Collection, Iterator
 from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import Any, ClassVar, Literal
 
 import yaml
@@ -44,7 +44,6 @@ import zstandard
 from mcap.exceptions import EndOfFile, InvalidMagic, McapError, RecordLengthLimitExceeded
 from mcap.reader import make_reader
 from mcap.records import Channel, Message, Schema
-from mcap.writer import MCAP0_MAGIC
 from rosbags.rosbag1 import Reader as Rosbag1Reader
 from rosbags.rosbag1 import ReaderError as Rosbag1ReaderError
 from rosbags.rosbag2 import Reader as Rosbag2Reader
@@ -55,7 +54,7 @@ from rosbags.typesys.msg import denormalize_msgtype, normalize_msgtype
 from harness import yamlio
 from harness.errors import reason
 from harness.recording.errors import BagReadError
-from harness.recording.mcapread import McapIndex, guarded, lz4_failure
+from harness.recording.mcapread import McapIndex, check_index, check_start, guarded, lz4_failure
 from harness.serde.messages import TYPESTORE
 from harness.serde.ros1 import Ros1TypeError, deserialize_ros1, ros2_type, to_ros2
 
@@ -66,7 +65,7 @@ except ImportError:
 
 __all__ = ["DATA_ERRORS", "DECODE_ERRORS", "READ_ERRORS", "Connection", "Encoding",
            "Recording", "deserialize", "mcap_profile", "mcap_records", "open_indexed",
-           "open_recording", "reading", "ros1_recording"]
+           "open_recording", "reading", "ros1_recording", "rosbag2_metadata"]
 
 Encoding = Literal["cdr", "ros1"]
 
@@ -109,6 +108,85 @@ def reading(file: object, what: str = "cannot read bag") -> Iterator[None]:
             said = f"the file is cut short or damaged ({said}); `srr recover` rebuilds a " \
                    "bag cut short from its complete chunks"
         raise BagReadError(file, what, said) from err
+
+
+_META = "not a rosbag2 metadata file"
+# rosbag2_bagfile_information: key → (type, what it must be, required); what rosbags reads
+_INFO_FIELDS: dict[str, tuple[type | tuple[type, ...], str, bool]] = {
+    "version": (int, "an integer", True),
+    "storage_identifier": (str, "a string", True),
+    "relative_file_paths": (list, "a list", True),
+    "compression_format": ((str, type(None)), "a string", False),
+    "compression_mode": ((str, type(None)), "a string", False),
+    "message_count": (int, "an integer", True),
+    "duration": (dict, "a mapping", True),
+    "starting_time": (dict, "a mapping", True),
+    "topics_with_message_count": (list, "a list", True),
+    "files": (list, "a list", False),
+}
+_TOPIC_FIELDS: dict[str, tuple[type | tuple[type, ...], str, bool]] = {
+    "name": (str, "a string", True),
+    "type": (str, "a string", True),
+    "serialization_format": (str, "a string", True),
+    "offered_qos_profiles": ((list, str), "a list", False),
+    "type_description_hash": (str, "a string", False),
+}
+
+
+def _fields(node: dict[str, Any], where: str,
+            fields: dict[str, tuple[type | tuple[type, ...], str, bool]]) -> str | None:
+    """The first of ``fields`` that ``node`` lacks or holds as another type, said as
+    ``<where>.<key>: ...``; None when all are right."""
+    for key, (kind, said, required) in fields.items():
+        if key not in node:
+            if required:
+                return f"{where}.{key}: missing"
+            continue
+        value = node[key]
+        if not isinstance(value, kind) or (isinstance(value, bool) and kind is int):
+            return f"{where}.{key}: {value!r} is not {said}"
+    return None
+
+
+def rosbag2_metadata(bag_dir: Path) -> dict[str, Any]:
+    """The ``rosbag2_bagfile_information`` mapping of a rosbag2 directory's ``metadata.yaml``,
+    each field rosbags reads checked for its type first: a :class:`BagReadError` naming the
+    file and the field (``.../metadata.yaml: not a rosbag2 metadata file:
+    rosbag2_bagfile_information.version: 'nine' is not an integer``), not rosbags'
+    ``Invalid bag metadata: '>' not supported between instances of 'str' and 'int'``."""
+    file = Path(bag_dir) / "metadata.yaml"
+    with reading(file, _META):
+        meta = yamlio.load(file.read_text(encoding="utf-8"))
+    top = "rosbag2_bagfile_information"
+    info = meta.get(top) if isinstance(meta, dict) else None
+    problem = f"{top}: missing" if not isinstance(meta, dict) or top not in meta else \
+        f"{top}: {info!r} is not a mapping" if not isinstance(info, dict) else \
+        _fields(info, top, _INFO_FIELDS)
+    if problem is None:
+        assert isinstance(info, dict)
+        for name, key in (("duration", "nanoseconds"),
+                          ("starting_time", "nanoseconds_since_epoch")):
+            problem = problem or _fields(info[name], f"{top}.{name}",
+                                         {key: (int, "an integer", True)})
+        for i, entry in enumerate(info["topics_with_message_count"]):
+            where = f"{top}.topics_with_message_count[{i}]"
+            if problem is not None:
+                break
+            if not isinstance(entry, dict):
+                problem = f"{where}: {entry!r} is not a mapping"
+                break
+            t = entry.get("topic_metadata")
+            problem = _fields(entry, where, {"topic_metadata": (dict, "a mapping", True),
+                                             "message_count": (int, "an integer", True)}) \
+                or (_fields(t, f"{where}.topic_metadata", _TOPIC_FIELDS)
+                    if isinstance(t, dict) else None)
+        for i, path in enumerate(info["relative_file_paths"]):
+            if problem is None and not isinstance(path, str):
+                problem = f"{top}.relative_file_paths[{i}]: {path!r} is not a string"
+    if problem is not None:
+        raise BagReadError(file, _META, problem)
+    assert isinstance(info, dict)
+    return info
 
 
 def deserialize(raw: bytes, msgtype: str, encoding: Encoding) -> Any:
@@ -236,6 +314,7 @@ class _Rosbags(Recording):
         super().__init__(path, shown, what)
         self.profile = "ros2" if self.encoding == "cdr" else "ros1"
         with self._read():
+            self._check()
             self._reader = self._open(path)
             try:
                 self._reader.open()
@@ -249,6 +328,10 @@ class _Rosbags(Recording):
 
     def _connection(self, c: Any) -> Connection:
         raise NotImplementedError
+
+    def _check(self) -> None:
+        """What the file holds beyond what rosbags' reader checks, raised as
+        :data:`READ_ERRORS` (before the reader parses it: the precise reason first)."""
 
     def _quirk(self, err: Exception) -> Exception:
         """``err``, one of :attr:`_quirks` raised by rosbags' reader itself, as the
@@ -281,6 +364,18 @@ class _Rosbag2(_Rosbags):
     # rosbags' MCAP storage: KeyError for a channel's QoS profile missing a key, or a
     # schema it does not list; lz4's RuntimeError for a chunk that does not decompress
     _quirks = (KeyError, RuntimeError)
+
+    def _check(self) -> None:
+        # rosbags compares and indexes metadata.yaml's fields without checking their types
+        rosbag2_metadata(self.path)
+        # rosbags reads an MCAP file's summary without its CRC, and its chunks through it
+        for file in _named_files(self.path):
+            if file.suffix == ".mcap" and file.is_file():  # (rosbags names a missing one)
+                try:
+                    check_start(file)
+                    check_index(file)
+                except ValueError as err:
+                    raise ValueError(f"{file.name}: {err}") from err
 
     def _quirk(self, err: Exception) -> Exception:
         if isinstance(err, RuntimeError) and not lz4_failure(err):
@@ -327,13 +422,7 @@ class _Mcap(Recording):
 
     def __init__(self, path: Path, shown: object = None, what: str = "cannot read bag") -> None:
         super().__init__(path, shown, what)
-        with self._read():
-            with self.path.open("rb") as f:  # a file of another kind says so, not a reader's
-                head = f.read(len(MCAP0_MAGIC))  # struct error
-            if head != MCAP0_MAGIC:
-                raise BagReadError(self.shown, what, "the file is empty" if not head else
-                                   "not an MCAP file (it does not start with MCAP's magic "
-                                   "bytes)")
+        with self._read():  # a file empty, cut in its header or of another kind says so
             self._index = index = McapIndex(self.path)
         self.profile, summary = index.profile, index.summary
         encodings = {c.message_encoding for c in summary.channels.values()}
@@ -375,9 +464,10 @@ def open_recording(path: str | Path, *, shown: object = None, what: str = "canno
     holding a ROS 1 recording. What is wrong with the file, when it is opened or while its
     messages are read, is raised as one :class:`~harness.recording.errors.BagReadError` line
     ``<shown>: <what>: <reason>`` (``shown``: the path as the user named it; default the
-    file read); a ``path`` that holds none of these is one too (``metadata.yaml: missing``)."""
+    file read); a ``path`` that holds none of these, or a bag directory that does not exist,
+    is one too (``metadata.yaml: missing``)."""
     p = Path(path)
-    if p.is_dir():
+    if p.is_dir() or (not p.exists() and p.suffix not in (".bag", ".mcap")):
         if (p / "metadata.yaml").exists():
             return _Rosbag2(p, shown, what)
         found = ros1_recording(p)
@@ -408,16 +498,24 @@ def open_indexed(path: str | Path, *, shown: object = None, what: str = "cannot 
     return open_recording(p, shown=shown, what=what)
 
 
-def _one_mcap(bag_dir: Path) -> Path | None:
-    """The one ``.mcap`` file a rosbag2 directory's ``metadata.yaml`` names, if it names one
-    that exists (None for anything else, unreadable metadata included)."""
+def _named_files(bag_dir: Path) -> list[Path]:
+    """The files a rosbag2 directory's ``metadata.yaml`` names, where rosbags looks for them
+    (none for unreadable metadata)."""
     try:
         meta = yamlio.load((bag_dir / "metadata.yaml").read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, yaml.YAMLError):
-        return None
+        return []
     info = meta.get("rosbag2_bagfile_information") if isinstance(meta, dict) else None
     files = info.get("relative_file_paths") if isinstance(info, dict) else None
-    if not isinstance(files, list) or len(files) != 1:
+    if not isinstance(files, list):
+        return []
+    return [bag_dir / PurePath(str(f)).name for f in files]
+
+
+def _one_mcap(bag_dir: Path) -> Path | None:
+    """The one ``.mcap`` file a rosbag2 directory's ``metadata.yaml`` names, if it names one
+    that exists (None for anything else, unreadable metadata included)."""
+    files = _named_files(bag_dir)
+    if len(files) != 1:
         return None
-    file = bag_dir / str(files[0])
-    return file if file.suffix == ".mcap" and file.is_file() else None
+    return files[0] if files[0].suffix == ".mcap" and files[0].is_file() else None

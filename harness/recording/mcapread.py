@@ -17,7 +17,9 @@ whose records or message index do not agree with its chunk index, a message on a
 summary does not list, a chunk that does not decompress), the ``mcap`` library's errors, the
 zstd decompressor's, ``struct.error`` or ``OSError``: :mod:`harness.recording.bagread` turns these
 into one :class:`~harness.recording.errors.BagReadError` line naming the file.
-Chunk CRCs are not checked: that would cost 5 % of scoring's time (rosbags' reader, which
+The summary section's CRC, and that each chunk index points at a Chunk record of its length,
+are checked when the file is opened (:func:`check_index`, cheap: the summary and 9 bytes a
+chunk). Chunk CRCs are not checked: that would cost 5 % of scoring's time (rosbags' reader, which
 ``srr inspect`` and ``srr diff`` use for a rosbag2 directory, checks them).
 """
 
@@ -26,6 +28,7 @@ from __future__ import annotations
 import inspect
 import os
 import struct
+import zlib
 from collections.abc import Callable, Collection, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import TypeVar, cast
@@ -36,8 +39,9 @@ import zstandard
 from mcap.reader import SeekingReader, make_reader
 from mcap.records import ChunkIndex
 from mcap.summary import Summary
+from mcap.writer import MCAP0_MAGIC
 
-__all__ = ["McapIndex", "guarded", "lz4_failure"]
+__all__ = ["McapIndex", "check_index", "check_start", "guarded", "lz4_failure"]
 
 T = TypeVar("T")
 
@@ -51,6 +55,10 @@ _MESSAGE = struct.Struct("<H4xQ")  # Message: channel id, (sequence), log time
 _MESSAGE_SIZE = 2 + 4 + 8 + 8  # channel id, sequence, log time, publish time
 _INDEX_HEAD = struct.Struct("<HI")  # MessageIndex: channel id, length of its (time, offset)s
 _MESSAGE_OP, _MESSAGE_INDEX_OP = 0x05, 0x07
+_HEADER_OP, _FOOTER_OP, _CHUNK_OP, _CHUNK_INDEX_OP = 0x01, 0x02, 0x06, 0x08
+# Footer: opcode, length, summary start, summary offset start, summary CRC; then the magic
+_FOOTER = struct.Struct("<BQQQI")
+_CHUNK_INDEX_HEAD = struct.Struct("<QQQQ")  # start and end times, chunk start, chunk length
 _NEVER, _FOREVER = -1, 2**63
 
 
@@ -83,6 +91,67 @@ def guarded(records: Iterable[T]) -> Iterator[T]:
         yield item
 
 
+def check_start(path: Path, size: int | None = None) -> None:
+    """``ValueError`` saying why a file is no MCAP file's beginning: empty, cut short inside
+    MCAP's magic bytes or its header record (nothing in it to read or recover), or another
+    kind of file. ``size``: the file's length as the caller measured it (default: now)."""
+    with Path(path).open("rb") as f:
+        if size is None:
+            size = os.fstat(f.fileno()).st_size
+        head = f.read(min(size, len(MCAP0_MAGIC) + 9))
+    magic = head[:len(MCAP0_MAGIC)]
+    if not head:
+        raise ValueError("the file is empty")
+    if magic != MCAP0_MAGIC:
+        if MCAP0_MAGIC.startswith(magic):
+            raise ValueError(f"the file is cut short inside MCAP's magic bytes ({size} bytes)")
+        raise ValueError("not an MCAP file (it does not start with MCAP's magic bytes)")
+    if len(head) > len(MCAP0_MAGIC) and head[len(MCAP0_MAGIC)] != _HEADER_OP:
+        raise ValueError("not an MCAP file (no header record after MCAP's magic bytes)")
+    if len(head) < len(MCAP0_MAGIC) + 9 or \
+            size < len(head) + _REC_HEAD.unpack_from(head, len(MCAP0_MAGIC))[1]:
+        raise ValueError(f"the file is cut short inside its MCAP header ({size} bytes)")
+
+
+def check_index(path: Path, size: int | None = None) -> None:
+    """``ValueError`` when a finished MCAP file (one that ends with its footer and magic) does
+    not agree with its own index: its summary section and footer fail their CRC (when the
+    writer kept one), or a chunk index does not point at a Chunk record of its length in the
+    data section. What no reader notices by itself (each reads the summary, and the chunks
+    through it, without its CRC), and what ``srr recover`` refuses a file for. ``size``: the
+    file's length as the caller measured it (default: now). A file without a footer is not
+    checked: the readers say what is wrong with it."""
+    with Path(path).open("rb") as f:
+        fd = f.fileno()
+        if size is None:
+            size = os.fstat(fd).st_size
+        end = len(MCAP0_MAGIC) + _FOOTER.size + len(MCAP0_MAGIC)
+        if size < end:
+            return
+        tail = os.pread(fd, _FOOTER.size + len(MCAP0_MAGIC), size - _FOOTER.size - len(MCAP0_MAGIC))
+        if tail[-len(MCAP0_MAGIC):] != MCAP0_MAGIC or tail[0] != _FOOTER_OP:
+            return
+        _op, _length, summary_start, _offsets, crc = _FOOTER.unpack_from(tail)
+        footer_start = size - _FOOTER.size - len(MCAP0_MAGIC)
+        if summary_start and not len(MCAP0_MAGIC) <= summary_start <= footer_start:
+            raise ValueError(f"the footer puts the summary section at byte {summary_start}, "
+                             f"outside the file ({size} bytes)")
+        summary = os.pread(fd, footer_start - summary_start, summary_start) \
+            if summary_start else b""
+        if crc and zlib.crc32(tail[:_FOOTER.size - 4], zlib.crc32(summary)) != crc:
+            raise ValueError("the summary section fails its CRC check")
+        pos = 0
+        while pos + 9 <= len(summary):
+            op, length = _REC_HEAD.unpack_from(summary, pos)
+            if op == _CHUNK_INDEX_OP:
+                *_, start, chunk_length = _CHUNK_INDEX_HEAD.unpack_from(summary, pos + 9)
+                head = os.pread(fd, 9, start) if start < footer_start else b""
+                if len(head) < 9 or _REC_HEAD.unpack(head) != (_CHUNK_OP, chunk_length - 9):
+                    raise ValueError(f"chunk at byte {start}: the file's record there is not "
+                                     f"the Chunk of {chunk_length} bytes its chunk index says")
+            pos += 9 + length
+
+
 class McapIndex:
     """A finished MCAP file's summary (``profile``, ``summary``: channels, schemas,
     statistics) and its messages read through the chunk and message indexes. Raises
@@ -91,6 +160,8 @@ class McapIndex:
 
     def __init__(self, path: Path) -> None:
         self.path = Path(path)
+        check_start(self.path)
+        check_index(self.path)
         with self.path.open("rb") as f:
             reader = make_reader(f)
             self.profile = str(reader.get_header().profile)

@@ -28,7 +28,6 @@ import hashlib
 import os
 import shutil
 import struct
-import zlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -51,7 +50,7 @@ from harness.recording.bagfile import (
 )
 from harness.recording.bagread import DATA_ERRORS, mcap_profile, ros1_recording
 from harness.recording.errors import BagError, NothingRecorded
-from harness.recording.mcapread import lz4_failure
+from harness.recording.mcapread import check_index, check_start, lz4_failure
 from harness.recording.recorder import TopicStats, digest_update
 from harness.recording.verify import check_read_back
 
@@ -126,15 +125,10 @@ def locate_mcap(path: str | Path) -> tuple[Path, Path]:
 
 
 def _check_start(path: Path, size: int) -> None:
-    if size == 0:
-        raise BagError(f"{path}: empty file (0 bytes): nothing to recover")
-    with path.open("rb") as f:
-        head = f.read(len(MCAP0_MAGIC))
-    if head != MCAP0_MAGIC:
-        if MCAP0_MAGIC.startswith(head):
-            raise BagError(f"{path}: cut inside the MCAP magic ({size} bytes): nothing to "
-                           "recover")
-        raise BagError(f"{path}: not an MCAP file (starts with {head!r}, not the MCAP magic)")
+    try:
+        check_start(path, size)  # what every reader says of such a file
+    except ValueError as err:
+        raise BagError(f"{path}: {err}: nothing to recover") from err
 
 
 def _ends_with_footer(path: Path, size: int) -> bool:
@@ -249,15 +243,12 @@ def _describe(err: BaseException) -> str:
 
 def _check_summary(path: Path, scan: _Scan, size: int) -> None:
     """A finished file's summary must pass its CRC (when it has one) and its index must agree
-    with what was read from the chunks."""
-    with path.open("rb") as f:
-        f.seek(size - 37)
-        summary_start, _, crc = struct.unpack("<QQI", f.read(37)[9:29])
-        if crc and summary_start:
-            f.seek(summary_start)
-            if zlib.crc32(f.read(size - 8 - 4 - summary_start)) != crc:
-                raise BagError(f"{path}: corrupt: the summary section fails its CRC check; "
-                               "not recovered")
+    with its chunks (:func:`~harness.recording.mcapread.check_index`, as every reader checks)
+    and with what was read from them."""
+    try:
+        check_index(path, size)  # what every reader checks of a finished file
+    except ValueError as err:
+        raise BagError(f"{path}: corrupt: {err}; not recovered") from err
     total = sum(t.count for t in scan.channels.values())
     try:
         with path.open("rb") as f:

@@ -2,7 +2,7 @@
 message count and the SHA-256 the recorder kept (:func:`~harness.recording.recorder.
 digest_update`: log time, length, payload). A damaged or truncated MCAP can still parse, and a
 run directory's bag can be swapped for another; a command that trusts a run (``srr baseline
-bless``, ``srr report``, ``srr diff``) checks it first."""
+bless``, ``srr report``, ``srr diff``, ``srr replay``, ``srr export``) checks it first."""
 
 from __future__ import annotations
 

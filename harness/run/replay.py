@@ -24,6 +24,7 @@ from harness.diskspace import check_free_space, disk_free
 from harness.errors import ScenarioError, SrrError
 from harness.live.config import LiveConfig
 from harness.live.view import LiveView
+from harness.recording.verify import verify_recording
 from harness.regression import comparable_config, config_differences
 from harness.replay import Playback, Replay
 from harness.report.graphs import read_graphs
@@ -69,6 +70,9 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
         raise SrrError(f"{src}: its recording was cut short ({why}, {summary.simulated_s:g} "
                        f"of {summary.duration_s:g} s): a replay would score a shorter run as "
                        "a whole one; replay a run that finished")
+    # the recording played back is the one the summary describes, every chunk's CRC checked:
+    # the verification `srr diff`, `srr report` and `srr baseline bless` do
+    verify_recording(src, summary.to_json())
     recorded = load_scenario(src / "scenario.yaml")
     pairs = [parse_override(o) for o in overrides]
     for text in suts:

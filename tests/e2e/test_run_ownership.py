@@ -97,7 +97,7 @@ def test_a_live_run_is_refused_by_every_reader_then_recovered_once_killed(
     baselines = tmp_path / "baselines"
     commands = [
         ["recover", str(out)], ["recover", str(out / "bag")], ["recover", str(bag)],
-        ["report", str(out)],
+        ["report", str(out)], ["inspect", str(out)], ["inspect", str(out / "bag")],
         ["replay", str(out), "--out", str(tmp_path / "replayed"), "-q"],
         ["diff", str(finished), str(out)], ["diff", str(out), str(finished)],
         ["baseline", "bless", str(out), "--reason", "r", "--baselines", str(baselines)],

@@ -66,7 +66,7 @@ READERS: list[tuple[str, Any, str, Callable[[Path], object]]] = [
     ("scoring and the report (MCAP index)", mcapread.McapIndex, "_chunked", load_frames),
     ("inspect (rosbags)", rosbags.rosbag2.Reader, "messages", inspect_bag),
     ("diff (rosbags)", rosbags.rosbag2.Reader, "messages", _drain_stream),
-    ("replay (mcap)", mcap.reader.SeekingReader, "iter_messages", _replay),
+    ("replay (MCAP index)", mcapread.McapIndex, "_chunked", _replay),
     ("bless's reference recording (mcap)", mcap.reader.SeekingReader, "iter_messages",
      lambda b: write_reference(b, b.parent / "ref.mcap")),
 ]
@@ -220,3 +220,34 @@ def test_replay_refuses_a_malformed_metadata_structure_in_one_line(
     meta_file.write_text(yaml.safe_dump(meta))
     with pytest.raises(BagError, match=rf"^{meta_file}: not a rosbag2 metadata file: "):
         Playback(copy)
+
+
+@pytest.mark.parametrize(("edit", "said"), [
+    (lambda info: info.update(version="nine"), "version: 'nine' is not an integer"),
+    (lambda info: info.update(storage_identifier=5), "storage_identifier: 5 is not a string"),
+    (lambda info: info.pop("message_count"), "message_count: missing"),
+    (lambda info: info["duration"].update(nanoseconds="long"),
+     "duration.nanoseconds: 'long' is not an integer"),
+    (lambda info: info["topics_with_message_count"][1].update(message_count=True),
+     "topics_with_message_count[1].message_count: True is not an integer"),
+    (lambda info: info["topics_with_message_count"][0]["topic_metadata"].update(type=[1]),
+     "topics_with_message_count[0].topic_metadata.type: [1] is not a string"),
+    (lambda info: info.update(relative_file_paths=[7]), "relative_file_paths[0]: 7 is not a "
+     "string"),
+], ids=["version", "storage", "no-count", "duration", "topic-count", "topic-type", "path"])
+def test_metadata_of_the_wrong_types_names_the_file_and_field(
+        bag: Path, tmp_path: Path, edit: Callable[[dict[str, Any]], None], said: str) -> None:
+    """Every reader of a rosbag2 directory (rosbags' for inspect, diff and the read-back,
+    replay's) says which field of which file, not rosbags' ``Invalid bag metadata: '>' not
+    supported between instances of 'str' and 'int'``."""
+    copy = tmp_path / "bag"
+    shutil.copytree(bag, copy)
+    meta_file = copy / "metadata.yaml"
+    meta = yaml.safe_load(meta_file.read_text())
+    edit(meta["rosbag2_bagfile_information"])
+    meta_file.write_text(yaml.safe_dump(meta))
+    want = (f"{meta_file}: not a rosbag2 metadata file: rosbag2_bagfile_information.{said}")
+    for read in (open_recording, inspect_bag, Playback):
+        with pytest.raises(BagReadError) as info:
+            read(copy)
+        assert str(info.value) == want
