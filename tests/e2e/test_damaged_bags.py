@@ -71,7 +71,8 @@ def refusal(good: Path, run: Path, tmp: Path, command: str,
     code = main(argv)
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1, (code, err)
-    assert err.startswith(f"srr {argv[0]}: ") and "Traceback" not in err, err
+    said = " ".join(argv[:2]) if argv[0] == "baseline" else argv[0]  # srr baseline bless:
+    assert err.startswith(f"srr {said}: ") and "Traceback" not in err, err
     assert not out.exists() and not baselines.exists() and not rrd.exists()
     assert not list(tmp.glob(".*.partial"))
     assert _tree(run) == before
