@@ -3,7 +3,7 @@
 Set up (before the first tick): take a ROS_DOMAIN_ID (:mod:`harness.ros2.domain`), start the
 external processes (:mod:`harness.ros2.processes`) with ``use_sim_time``, create an rclpy node
 in a context of its own and a raw subscription for every declared output, and wait until the
-external nodes are there (``ready_topic``, or each output has a publisher).
+external nodes are there (each output, and ``ready_topic`` when set, has a publisher).
 
 Every tick: each message published on the bus is also published on the ROS 2 graph from its
 CDR bytes (a bus tap, at publish time: the graphs' sensor output and ``/clock`` of the tick go

@@ -808,7 +808,7 @@ class Ros2OutputSpec:
 class Ros2ProcessSpec:
     """An external process that runs the nodes under test (``ros2.external``): started in
     its own process group with the run's ROS_DOMAIN_ID before the first tick, waited for
-    until ``ready_topic`` has a publisher (or each output has one), stopped at the end
+    until each output (and ``ready_topic``, when set) has a publisher, stopped at the end
     (SIGINT, then SIGTERM, then SIGKILL). ``use_sim_time`` appends
     ``--ros-args -p use_sim_time:=true`` to ``cmd``."""
 

@@ -147,7 +147,8 @@ def test_a_dock_run_reads_back_in_rerun(dock: Path, tmp_path: Path) -> None:
 
 def test_two_exports_of_a_run_hold_the_same_data_and_another_run_does_not(
         lidar: Path, tmp_path: Path) -> None:
-    """Rerun's own comparison (``rerun rrd compare``, from the rerun-sdk wheel) of two exports
+    """Rerun's own comparison (``rerun rrd compare --unordered``, from the rerun-sdk wheel;
+    Rerun may cut the data into chunks differently each time) of two exports
     of one run: equal; of another run's (another seed): not. The bytes differ (Rerun's chunk
     and row ids come from the wall clock), which the docs say."""
     rerun_cli = shutil.which("rerun", path=str(Path(sys.executable).parent))
@@ -159,7 +160,7 @@ def test_two_exports_of_a_run_hold_the_same_data_and_another_run_does_not(
         api.export_rerun(run, rrd)
 
     def compare(x: Path, y: Path) -> subprocess.CompletedProcess[str]:
-        return subprocess.run([rerun_cli, "rrd", "compare", str(x), str(y)],
+        return subprocess.run([rerun_cli, "rrd", "compare", "--unordered", str(x), str(y)],
                               capture_output=True, text=True, timeout=120,
                               env={**os.environ, "RERUN_ANALYTICS": "0"})
 
