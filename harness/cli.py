@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 from harness import __version__
 from harness.blas import one_blas_thread
 from harness.errors import SrrError, shorten
+from harness.glbackend import gl_failure
 from harness.interrupt import INTERRUPTED_EXIT, StopRequests
 from harness.live.config import DEFAULT_PORT
 from harness.outdir import file_above
@@ -984,7 +985,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if stop.requested:  # an interrupt that became this error where it landed
             return _interrupted(_command_name(args))
         if not isinstance(err, SrrError):
-            raise
+            err = gl_failure(err) or err  # MUJOCO_GL's library missing: what to install
+            if not isinstance(err, SrrError):
+                raise
         _stderr().print(f"srr {_command_name(args)}: {_one_line(err)}", markup=False)
         return err.exit_code
 
