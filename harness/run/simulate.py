@@ -25,7 +25,7 @@ from harness.run.graphs import graphs_of
 from harness.run.judge import check_baseline
 from harness.run.participants import LiveViewParticipant, RtspParticipant
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record, unprepare
-from harness.scenario import Scenario, frame_warnings, rate_warnings
+from harness.scenario import Scenario, rate_warnings, robot_warnings
 from harness.scoring import check_scoring
 from harness.sim.world_file import map_json
 from harness.sut.participant import Participant
@@ -109,7 +109,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
                            f"records ROS 1 ({output.because})")
         plan = sim.plan()
         warnings = [*sim.world.warnings, *rate_warnings(scenario, source),
-                    *frame_warnings(scenario, source), *check_wiring(plan, scenario, source),
+                    *robot_warnings(scenario, source), *check_wiring(plan, scenario, source),
                     *check_output_topics(output, plan.topics, scenario, source)]
         # After the plan, so the server advertises every topic the run will publish at once.
         view = (LiveView.start(live, topics={t.topic: t.msgtype for t in plan.topics
@@ -271,7 +271,7 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
         plan = sim.plan()
         size_note = large_bag_notice(scenario)
         return (*sim.world.warnings, *rate_warnings(scenario, source),
-                *frame_warnings(scenario, source), *check_wiring(plan, scenario, source),
+                *robot_warnings(scenario, source), *check_wiring(plan, scenario, source),
                 *check_output_topics(output, plan.topics, scenario, source), *busy,
                 *([f"{source}: {size_note}"] if size_note else []))
     finally:

@@ -2,10 +2,10 @@
 
 from harness.scenario.loader import (
     apply_overrides,
-    frame_warnings,
     load_scenario,
     parse_override,
     rate_warnings,
+    robot_warnings,
     scenario_from_mapping,
     scenario_to_mapping,
     validate_dataclass,
@@ -15,7 +15,7 @@ from harness.scenario.schema import __all__ as _schema_all
 
 __all__ = [
     "apply_overrides",
-    "frame_warnings",
+    "robot_warnings",
     "load_scenario",
     "parse_override",
     "rate_warnings",

@@ -31,8 +31,15 @@ from harness.scenario.schema import (
 from harness.scenario.specs import ZONES, SignalContext, SpecError, parse_formula
 from harness.validation import Validator, close_match, join
 
-__all__ = ["H264_PRESETS", "RATE_TOLERANCE", "check_semantics", "frame_warnings",
-           "rate_warnings", "sensor_rates", "spec_context"]
+__all__ = [
+    "H264_PRESETS",
+    "RATE_TOLERANCE",
+    "check_semantics",
+    "rate_warnings",
+    "robot_warnings",
+    "sensor_rates",
+    "spec_context",
+]
 
 
 def _check_polygon(v: Validator, field: str, points: Sequence[Sequence[float]]) -> None:
@@ -128,13 +135,21 @@ def rate_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
                  for field, asked, real in sensor_rates(sc) if abs(real - asked) > 1e-9)
 
 
-def frame_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
-    """One warning per robot camera stamped in its link's own frame (``frame_id`` equal to
+def robot_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """Warnings about robots that run, but not as their block reads: a built-in model
+    spawned with a height (it stands on the floor; only a model file's robot is placed at
+    its ``z``), and a robot camera stamped in its link's own frame (``frame_id`` equal to
     ``link``): its images are then in the link's axes (+X forward), not the optical frame
     (+Z forward, +X right, +Y down) that ROS image consumers assume and that srr adds under
     the link for any other ``frame_id``."""
     out = []
     for i, robot in enumerate(sc.robots):
+        z = robot.spawn.position[2]
+        if robot.enabled and robot.model_file is None and z != 0:
+            field = f"robots[{i}].spawn.position"
+            out.append(f"{sc.file_for(field, source)}: {field}: z {z:g} is not used: the "
+                       f"built-in model {robot.model_name!r} stands on the floor (only a "
+                       "robot from a model file is placed at its z)")
         cam = robot.sensors.camera
         if robot.enabled and cam is not None and cam.enabled and cam.graph \
                 and cam.frame_id == cam.link:

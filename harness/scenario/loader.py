@@ -21,8 +21,8 @@ from harness.errors import ScenarioError
 from harness.scenario.checks import (
     RATE_TOLERANCE,
     check_semantics,
-    frame_warnings,
     rate_warnings,
+    robot_warnings,
     sensor_rates,
 )
 from harness.scenario.includes import Origins, expand_includes, read_yaml
@@ -42,12 +42,12 @@ from harness.validation import Validator, validate
 __all__ = [
     "RATE_TOLERANCE",
     "apply_overrides",
-    "frame_warnings",
     "graph_name",
     "load_scenario",
     "parse_override",
     "rate_warnings",
     "resolve_names",
+    "robot_warnings",
     "scenario_from_mapping",
     "scenario_to_mapping",
     "sensor_rates",

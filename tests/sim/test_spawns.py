@@ -53,3 +53,12 @@ def test_every_bundled_robot_starts_in_free_space(capsys: pytest.CaptureFixture[
     for scenario in (TURTLEBOT, TWO, WAREHOUSE, SCENARIOS / "dock_worker_crossing.yaml"):
         assert main(["validate", str(scenario)]) == 0, capsys.readouterr().err
 
+
+def test_a_built_in_model_spawned_with_a_height_is_warned_about(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    # it stands on the floor whatever z says: the value was silently unused
+    assert main(["validate", str(WAREHOUSE), "--set",
+                 "robots.forklift.spawn.position=[-12,-3,-1.0]"]) == 0
+    err = capsys.readouterr().err
+    assert ("warning: --set: robots[0].spawn.position: z -1 is not used: the built-in model "
+            "'forklift' stands on the floor") in err
