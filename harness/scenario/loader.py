@@ -158,7 +158,7 @@ def load_scenario(path: str | Path,
 
 def _quote_hint(err: ScenarioError, overrides: Sequence[tuple[str, Any]]) -> str | None:
     """For an error in ``scoring.tolerances`` that a ``--set`` split a metric name at its
-    dots for (``scoring.tolerances.perception.iou_mean.abs``): the spelling that keeps the
+    dots for (``scoring.tolerances.perception.position_error.p95.abs``): the spelling that keeps the
     name one key."""
     if err.file != SET_FLAG or not err.field.startswith("scoring.tolerances."):
         return None

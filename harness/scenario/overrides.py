@@ -27,8 +27,8 @@ def dotted(path: str) -> str:
 
 def split_key(key: str) -> list[str]:
     """The keys of a ``--set`` path, split at its dots; a key in quotes is one key, dots and
-    all: ``scoring.tolerances."perception.iou_mean".abs`` → ``scoring``, ``tolerances``,
-    ``perception.iou_mean``, ``abs``."""
+    all: ``scoring.tolerances."perception.position_error.p95".abs`` → ``scoring``, ``tolerances``,
+    ``perception.position_error.p95``, ``abs``."""
     parts: list[str] = []
     i = 0
     while i <= len(key):

@@ -198,24 +198,24 @@ def test_a_bad_value_a_set_gave_is_said_of_the_flag(
 
 def test_set_addresses_a_tolerance_of_a_metric_name_with_dots(
         capsys: pytest.CaptureFixture[str]) -> None:
-    """A tolerance's key is a metric name, ``perception.iou_mean``: in quotes it is one key of
-    a ``--set`` path; unquoted, the error says how to write it."""
+    """A tolerance's key is a metric name, ``perception.position_error.p95``: in quotes it is
+    one key of a ``--set`` path; unquoted, the error says how to write it."""
     from harness import api
     from tests.conftest import SCENARIOS
 
     path = str(SCENARIOS / "dock_nominal.yaml")
-    for key in ('"perception.iou_mean"', "'perception.iou_mean'"):
+    metric = "perception.position_error.p95"
+    for key in (f'"{metric}"', f"'{metric}'"):
         sc = api.load(path, overrides=[f"scoring.tolerances.{key}.abs=0.1",
                                        f"scoring.tolerances.{key}.rel=0.2"])
-        assert sc.scoring.tolerances["perception.iou_mean"] == ToleranceSpec(abs=0.1, rel=0.2)
+        assert sc.scoring.tolerances[metric] == ToleranceSpec(abs=0.1, rel=0.2)
         assert sc.scoring.tolerances["perception.*"] == ToleranceSpec(abs=0.05, rel=0.1)
-    code, err = _run(capsys, "validate", path, "--set",
-                     "scoring.tolerances.perception.iou_mean.abs=0.1")
+    code, err = _run(capsys, "validate", path, "--set", f"scoring.tolerances.{metric}.abs=0.1")
     assert code == 2 and err == (
-        "srr validate: --set: scoring.tolerances.perception.iou_mean: unknown field (expected "
-        "abs, rel); a metric name with dots is one key: quote it, --set "
-        "'scoring.tolerances.\"perception.iou_mean\".abs=0.1'"), err
-    for bad, said in (('scoring.tolerances."perception.iou_mean.abs=1', "is not closed"),
+        "srr validate: --set: scoring.tolerances.perception.position_error: unknown field "
+        "(expected abs, rel); a metric name with dots is one key: quote it, --set "
+        f"'scoring.tolerances.\"{metric}\".abs=0.1'"), err
+    for bad, said in ((f'scoring.tolerances."{metric}.abs=1', "is not closed"),
                       ('scoring.tolerances."perception"x.abs=1', "a quoted key is a whole")):
         code, err = _run(capsys, "validate", path, "--set", bad)
         assert code == 2 and said in err and len(err.splitlines()) == 1, err
