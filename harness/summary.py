@@ -199,7 +199,9 @@ def recording_note(summary: Mapping[str, Any], *, most: int = 4) -> str | None:
     topics = [str(t) for t in b.get("topics_differing") or ()]
     if topics:
         shown = ", ".join(topics[:most]) + (", …" if len(topics) > most else "")
-        total = f" of {len(summary['topics'])}" if summary.get("topics") else ""
+        # of the topics either side recorded: one only the baseline has differs too
+        both = set(summary.get("topics") or ()) | set(topics)
+        total = f" of {len(both)}" if summary.get("topics") else ""
         note += f" in {len(topics)}{total} topics ({shown})"
     versions = versions_note(b)
     if versions:

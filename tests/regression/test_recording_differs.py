@@ -48,7 +48,7 @@ def test_topics_and_versions_that_differ() -> None:
 
 
 def test_the_note_names_the_topics_and_versions() -> None:
-    topics = {f"/t{i}": {} for i in range(16)}
+    topics = {t: {} for t in ("/a", "/b", "/c", "/d", "/e", *(f"/t{i}" for i in range(11)))}
     assert recording_note({"topics": topics}) is None  # no baseline
     assert recording_note({"topics": topics, "baseline": {"digest_matches": True}}) == \
         "recording identical to the baseline's"
@@ -58,6 +58,11 @@ def test_the_note_names_the_topics_and_versions() -> None:
                                "gl": {"baseline": "", "run": "llvmpipe"}}}})
     assert note == ("recording differs from the baseline's in 5 of 16 topics "
                     "(/a, /b, /c, /d, …); versions differ: numpy 2.4.6 → 2.5.2, gl — → llvmpipe")
+    # a topic only the baseline recorded differs too, and counts among the topics: it said
+    # "in 17 of 16 topics"
+    note = recording_note({"topics": topics, "baseline": {
+        "digest_matches": False, "topics_differing": ["/a", "/ghost"]}})
+    assert note == "recording differs from the baseline's in 2 of 17 topics (/a, /ghost)"
     # a baseline from before per-topic digests: the verdict on the bytes alone
     assert recording_note({"topics": topics, "baseline": {"digest_matches": False}}) == \
         "recording differs from the baseline's"
@@ -89,14 +94,14 @@ def test_a_run_says_which_topics_differ_from_its_baseline(
     assert b["digest_matches"] is False and b["topics_differing"] == ["/ghost", "/odom"]
     numpy = edited_run["versions"]["numpy"]
     assert b["versions_differing"] == {"numpy": {"baseline": "1.0.0", "run": numpy}}
-    line = ("recording differs from the baseline's in 2 of 6 topics (/ghost, /odom); "
+    line = ("recording differs from the baseline's in 2 of 7 topics (/ghost, /odom); "
             f"versions differ: numpy 1.0.0 → {numpy}")
     assert line in out.splitlines()
     where = f"  where: srr diff {bdir / 'forklift_warehouse.json'} {tmp_path / 'edited'}"
     assert out.splitlines()[out.splitlines().index(line) + 1] == where
     assert line in (tmp_path / "edited.md").read_text()
     page = (tmp_path / "edited" / "report.html").read_text()
-    assert "recording differs from the baseline&#39;s in 2 of 6 topics" in page
+    assert "recording differs from the baseline&#39;s in 2 of 7 topics" in page
     assert (f'<dt>versions differing (baseline → run)</dt><dd class="mono">numpy 1.0.0 → '
             f'{numpy}</dd>') in page
     marks = dict(re.findall(r'<tr data-topic="([^"]+)">.*?<td class="vs-baseline">(\w+)</td>',
