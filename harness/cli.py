@@ -179,7 +179,9 @@ def _parser() -> argparse.ArgumentParser:
                          "baseline it changes (recording, metrics, configuration, versions); "
                          "baselines that already hold the same are left as they are")
     su.add_argument("--reason", default=None, help="why (with --update-baselines)")
-    su.add_argument("--quiet", "-q", action="store_true", help="no live lines")
+    su.add_argument("--quiet", "-q", action="store_true",
+                    help="no live status display (a line per finished run and the summary "
+                         "still print)")
     _summary_md_options(su)
 
     _search_parser(sub)
