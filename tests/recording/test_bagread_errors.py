@@ -212,12 +212,7 @@ def test_replay_refuses_malformed_qos_in_metadata_in_one_line(
 ], ids=["count-not-a-list", "files-not-a-list", "entry-not-a-mapping", "no-topic-metadata"])
 def test_replay_refuses_a_malformed_metadata_structure_in_one_line(
         bag: Path, tmp_path: Path, edit: Callable[[dict[str, Any]], None]) -> None:
-    copy = tmp_path / "bag"
-    shutil.copytree(bag, copy)
-    meta_file = copy / "metadata.yaml"
-    meta = yaml.safe_load(meta_file.read_text())
-    edit(meta["rosbag2_bagfile_information"])
-    meta_file.write_text(yaml.safe_dump(meta))
+    copy, meta_file = _with_metadata_edited(bag, tmp_path, edit)
     with pytest.raises(BagError, match=rf"^{meta_file}: not a rosbag2 metadata file: "):
         Playback(copy)
 
@@ -240,14 +235,21 @@ def test_metadata_of_the_wrong_types_names_the_file_and_field(
     """Every reader of a rosbag2 directory (rosbags' for inspect, diff and the read-back,
     replay's) says which field of which file, not rosbags' ``Invalid bag metadata: '>' not
     supported between instances of 'str' and 'int'``."""
+    copy, meta_file = _with_metadata_edited(bag, tmp_path, edit)
+    want = (f"{meta_file}: not a rosbag2 metadata file: rosbag2_bagfile_information.{said}")
+    for read in (open_recording, inspect_bag, Playback):
+        with pytest.raises(BagReadError) as info:
+            read(copy)
+        assert str(info.value) == want
+
+
+def _with_metadata_edited(bag: Path, tmp_path: Path,
+                          edit: Callable[[dict[str, Any]], None]) -> tuple[Path, Path]:
+    """A copy of ``bag`` whose ``metadata.yaml`` ``edit`` changed: (the copy, its file)."""
     copy = tmp_path / "bag"
     shutil.copytree(bag, copy)
     meta_file = copy / "metadata.yaml"
     meta = yaml.safe_load(meta_file.read_text())
     edit(meta["rosbag2_bagfile_information"])
     meta_file.write_text(yaml.safe_dump(meta))
-    want = (f"{meta_file}: not a rosbag2 metadata file: rosbag2_bagfile_information.{said}")
-    for read in (open_recording, inspect_bag, Playback):
-        with pytest.raises(BagReadError) as info:
-            read(copy)
-        assert str(info.value) == want
+    return copy, meta_file
