@@ -108,7 +108,7 @@ def test_a_live_run_is_refused_by_every_reader_then_recovered_once_killed(
         captured = capsys.readouterr()
         err = captured.err.strip()
         assert len(err.splitlines()) == 1 and "Traceback" not in err, err
-        assert err == (f"srr {argv[0]}: {out} is "
+        assert err == (f"srr {_said(argv)}: {out} is "
                        f"being written by pid {proc.pid} on {host}; wait until it ends or "
                        f"stop it (kill {proc.pid}), then try again"), err
         assert captured.out == ""
@@ -139,3 +139,8 @@ def test_a_replay_names_its_run_directory_first(finished: Path, tmp_path: Path,
     lines = capsys.readouterr().out.strip().splitlines()
     assert lines[0] == f"run directory: {out}" and lines[-1] == str(out)
     assert not (out / runlock.LOCK).exists() and not (finished / runlock.LOCK).exists()
+
+
+def _said(argv: list[str]) -> str:
+    """The command as srr names it in an error: ``baseline bless``, ``diff``, ..."""
+    return " ".join(argv[:2]) if argv[0] == "baseline" else argv[0]

@@ -122,7 +122,7 @@ def test_every_command_refuses_a_mistyped_summary_in_the_same_line(
                  ["baseline", "bless", str(run), "--reason", "r", "--baselines",
                   str(tmp_path / "b")]):
         assert main(argv) == 2, argv
-        assert capsys.readouterr().err == f"srr {argv[0]}: {want}\n", argv
+        assert capsys.readouterr().err == f"srr {_said(argv)}: {want}\n", argv
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
 
 
@@ -251,3 +251,8 @@ def test_a_run_and_its_replay_record_the_scenario_file_absolute(
     assert main(["replay", "../run", "-q", "--out", "again"]) in (0, 1)
     assert json.loads((tmp_path / "elsewhere" / "again" / SUMMARY_NAME).read_text())[
         "scenario_file"] == str(scenario)
+
+
+def _said(argv: list[str]) -> str:
+    """The command as srr names it in an error: ``baseline bless``, ``diff``, ..."""
+    return " ".join(argv[:2]) if argv[0] == "baseline" else argv[0]
