@@ -39,7 +39,6 @@ from mcap.records import Channel, Chunk, Footer, Header, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import MCAP0_MAGIC
 
-from harness import yamlio
 from harness.recording.bagfile import (
     ChunkPolicy,
     McapBagWriter,
@@ -48,7 +47,12 @@ from harness.recording.bagfile import (
     dump_metadata,
     write_metadata,
 )
-from harness.recording.bagread import DATA_ERRORS, mcap_profile, ros1_recording
+from harness.recording.bagread import (
+    DATA_ERRORS,
+    mcap_profile,
+    ros1_recording,
+    rosbag2_metadata,
+)
 from harness.recording.errors import BagError, NothingRecorded
 from harness.recording.mcapread import check_index, check_start, lz4_failure
 from harness.recording.recorder import TopicStats, digest_update
@@ -301,14 +305,15 @@ def _collect(on_message: Callable[[int, _Topic, Message], None] | None = None
 
 
 def _metadata_agrees(bag_dir: Path, mcap: Path, scan: _Scan) -> bool:
+    """Whether ``metadata.yaml`` reads as every reader reads it (its fields' types checked:
+    :func:`~harness.recording.bagread.rosbag2_metadata`) and counts what the MCAP file holds."""
     try:
-        meta = yamlio.load((bag_dir / "metadata.yaml").read_text(encoding="utf-8"))
-        info = meta["rosbag2_bagfile_information"]
+        info = rosbag2_metadata(bag_dir)
         counts = {t["topic_metadata"]["name"]: int(t["message_count"])
                   for t in info["topics_with_message_count"]}
         return bool(info["relative_file_paths"] == [mcap.name]
                     and counts == {t.meta.name: t.count for t in scan.channels.values()})
-    except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError):
+    except (BagError, OSError, yaml.YAMLError, KeyError, TypeError, ValueError):
         return False
 
 

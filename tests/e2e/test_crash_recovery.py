@@ -279,7 +279,7 @@ def _copy(run: Path, tmp_path: Path) -> Path:
     return out
 
 
-@pytest.mark.parametrize("damage", ["missing", "unreadable", "wrong types"])
+@pytest.mark.parametrize("damage", ["missing", "unreadable", "wrong types", "one wrong type"])
 def test_recover_on_a_finished_run_with_a_damaged_metadata_yaml_keeps_its_summary(
         finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
         damage: str) -> None:
@@ -292,6 +292,9 @@ def test_recover_on_a_finished_run_with_a_damaged_metadata_yaml_keeps_its_summar
         meta.unlink()
     elif damage == "unreadable":
         meta.write_text("rosbag2_bagfile_information: [\n")
+    elif damage == "one wrong type":  # the counts agree; every reader refuses the version
+        meta.write_text(good_meta.replace("version: 9", "version: nine", 1))
+        assert meta.read_text() != good_meta
     else:
         meta.write_text("rosbag2_bagfile_information:\n  version: nine\n  storage_identifier: 5\n"
                         "  topics_with_message_count: {}\n")
