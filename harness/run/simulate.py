@@ -35,6 +35,7 @@ __all__ = [
     "ROS2_BRIDGE",
     "Notice",
     "RepeatResult",
+    "check_scene",
     "check_suts",
     "check_video",
     "ros2_bridge",
@@ -254,6 +255,15 @@ def check_suts(scenario: Scenario, source: str = "<scenario>") -> None:
         for _, sut, _ in suts:
             with contextlib.suppress(Exception):  # one not set up may not shut down
                 sut.shutdown()
+
+
+def check_scene(scenario: Scenario, source: str = "<scenario>") -> None:
+    """Build ``scenario``'s world alone (no graphs, no systems under test): the part of
+    :func:`validate` that a sweep point moving a robot or changing the world differs in
+    (where things are, robots in free space, model files)."""
+    from harness.sim import World
+
+    World.build(scenario, source)
 
 
 def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:

@@ -14,13 +14,13 @@ from harness.errors import SrrError
 from harness.outdir import check_out_folder
 from harness.run.baselines import baselines_dir, bless_if_changed
 from harness.run.loading import load
-from harness.run.simulate import check_suts, validate
+from harness.run.simulate import check_scene, check_suts, validate
 from harness.scenario import load_scenario, parse_override
 from harness.suite.events import Executor, Listener
 from harness.suite.outputs import FORMAT, write_outputs
 from harness.suite.plan import RunSpec, plan_runs
 from harness.suite.results import GROUP_ORDER, GroupResult, group_runs, suite_exit_code
-from harness.suite.spec import SuiteSpec, load_suite
+from harness.suite.spec import Entry, SuiteSpec, load_suite
 from harness.suite.sweep import expand
 from harness.suite.timeline import run_timings, suite_timeline
 
@@ -71,15 +71,39 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
     for entry in spec.entries:
         first, *others = expand(entry.sweep)
         pairs = [parse_override(o) for o in entry.overrides + first.overrides()]
-        sc = load_scenario(entry.scenario_file, pairs)
-        warnings += [f"{entry.name}: {w}" for w in validate(sc, entry.scenario_file)]
-        for point in others:  # what the points differ in: their systems under test's set-up
+        try:
+            sc = load_scenario(entry.scenario_file, pairs)
+            warnings += [f"{entry.name}: {w}" for w in validate(sc, entry.scenario_file)]
+        except SrrError as err:
+            raise _of_entry(err, entry, first.label if entry.sweep else None) from None
+        for point in others:  # what the points differ in: their systems under test's set-up,
+            # and the scene where the sweep moves a robot or changes the world
             pairs = [parse_override(o) for o in entry.overrides + point.overrides()]
             try:
-                check_suts(load_scenario(entry.scenario_file, pairs), entry.scenario_file)
+                sc = load_scenario(entry.scenario_file, pairs)
+                check_suts(sc, entry.scenario_file)
+                if any(path.split(".", 1)[0] in _SCENE_KEYS for path, _ in point.params):
+                    check_scene(sc, entry.scenario_file)
             except SrrError as err:
-                raise SrrError(f"{entry.name}[{point.label}]: {err}") from None
+                raise _of_entry(err, entry, point.label) from None
     return SuitePlan(spec, runs, tuple(warnings), time.monotonic() - t0)
+
+
+#: Top-level scenario keys whose sweep changes the scene each point builds (robots' models
+#: and spawn poses, the world): those points' worlds are built before the first run.
+_SCENE_KEYS = ("robots", "world")
+
+
+def _of_entry(err: SrrError, entry: Entry, label: str | None) -> SrrError:
+    """``err`` about an entry's scenario (at sweep point ``label``), said of the entry: a
+    value its ``set:`` or sweep gave, which the loader names as ``--set``'s, is the suite
+    file's entry's (``suite.yaml: scenarios[0] [x=1]: robots[0].spawn.position: ...``)."""
+    text = str(err)
+    given = text.startswith("--set: ")
+    if not given and label is None:
+        return err  # the scenario file's own problem, named by it
+    at = entry.declared_in + (f" [{label}]" if label else "")
+    return SrrError(f"{at}: {text.removeprefix('--set: ')}")
 
 
 def _sweeps(groups: Sequence[GroupResult]) -> list[dict[str, Any]]:

@@ -270,3 +270,26 @@ def test_a_bad_set_value_is_the_suite_files(tmp_path: Path, value: str, said: st
     with pytest.raises(ScenarioError) as err:
         load_suite([suite])
     assert str(err.value) == f"{suite}: scenarios[0].set: {said}"
+
+
+@pytest.mark.parametrize("order", [[-12, -6], [-6, -12]])
+def test_every_sweep_point_that_moves_a_robot_is_checked_in_its_scene(
+        tmp_path: Path, order: list[int]) -> None:
+    """A sweep over a robot's spawn: the point in a shelf is refused before anything runs,
+    whichever place it has (only the first point's world was built: later ones became INVALID
+    runs), and the error names the suite file's entry and the point, not ``--set``."""
+    forklift = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
+    suite = tmp_path / "mix.yaml"
+    suite.write_text(f"""
+suite: mix
+scenarios:
+  - path: {forklift}
+    set: {{duration: 2, robots.0.spawn.position: [-12, -6, 0]}}
+    sweep: {{robots.0.spawn.position.0: {order}}}
+""", encoding="utf-8")
+    with pytest.raises(SrrError) as info:
+        plan_suite([suite])
+    said = str(info.value)
+    assert said.startswith(f"{suite}: scenarios[0] [position.0=-6]: robots[0].spawn.position: "
+                           "robot forklift at (-6, -6, 0) starts inside shelf 2"), said
+    assert "--set" not in said
