@@ -14,7 +14,7 @@ first, then plan order); metrics are sorted by name. The text is capped
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -161,6 +161,19 @@ def _passing(groups: Sequence[GroupResult], base: str) -> list[str]:
             *table(["verdict", "group", "repeats", "reports"], rows), "", "</details>", ""]
 
 
+def _blessed(blessed: Any) -> list[str]:
+    """What ``--update-baselines`` did, after the verdicts it came after (a group judged
+    against no baseline, then blessed, still says "no baseline")."""
+    if not isinstance(blessed, Mapping):
+        return []
+    written, unchanged = blessed.get("written") or [], blessed.get("unchanged") or []
+    lines = [f"**Baselines blessed** (`--update-baselines`, reason: "
+             f"{cell(blessed.get('reason', ''))}): {len(written)} written, {len(unchanged)} "
+             "unchanged; the verdicts above were judged before.", ""]
+    lines += [f"- {code(Path(p).name)}" for p in written]
+    return [*lines, ""] if written else lines
+
+
 def suite_markdown(result: SuiteResult, *, link_base: str = "",
                    limit: int = COMMENT_LIMIT) -> str:
     """The summary of ``result`` as Markdown of at most ``limit`` bytes; report, log and
@@ -169,6 +182,7 @@ def suite_markdown(result: SuiteResult, *, link_base: str = "",
     lines = [*_headline(result)]
     if result.summary.get("interrupted"):
         lines += ["The suite was interrupted: the runs not finished are not judged.", ""]
+    lines += _blessed(result.summary.get("baselines_blessed"))
     lines += [*_not_passing(groups, link_base), *_regressed(groups),
               *_flaky(groups, link_base), *_broken(groups, link_base),
               *_other_bytes(groups, link_base), *_passing(groups, link_base)]

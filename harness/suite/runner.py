@@ -180,6 +180,10 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
                 path, written = bless_if_changed(out_dir / g.runs[0].run_dir, bless_reason,
                                                  baselines=here)
                 (blessed if written else unchanged).append(path)
+        # what the groups' reasons ("no baseline at ...") said before: the baselines now
+        summary["baselines_blessed"] = {"reason": bless_reason,
+                                        "written": [str(p) for p in blessed],
+                                        "unchanged": [str(p) for p in unchanged]}
     summary = write_outputs(out_dir, summary, ranked)
     return SuiteResult(out_dir, verdict, code, summary, tuple(ranked), tuple(blessed),
                        tuple(unchanged))

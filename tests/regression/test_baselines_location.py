@@ -138,9 +138,18 @@ def test_a_suite_blesses_beside_the_scenario_file(tmp_path: Path,
         "world: {size: [30.0, 20.0], shelves: [], dock: {enabled: false}}\n")
     monkeypatch.chdir(tmp_path / "a")
     assert main(["suite", str(Path("..") / "scene" / "hall.yaml"), "--jobs", "1", "-q",
-                 "--out", "suite", "--update-baselines", "--reason", "kept bags"]) == 1
-    assert (tmp_path / "scene" / "baselines" / "hall.json").is_file()
+                 "--out", "suite", "--update-baselines", "--reason", "kept bags",
+                 "--summary-md", "pr.md"]) == 1
+    blessed = tmp_path / "scene" / "baselines" / "hall.json"
+    assert blessed.is_file()
     assert not (tmp_path / "a" / "baselines").exists()
+    # the outputs say so (the group, judged before, still reads "no baseline at ...")
+    summary = json.loads((tmp_path / "a" / "suite" / "summary.json").read_text())
+    assert summary["baselines_blessed"] == {"reason": "kept bags", "written": [str(blessed)],
+                                            "unchanged": []}
+    md = (tmp_path / "a" / "pr.md").read_text()
+    assert "**Baselines blessed** (`--update-baselines`, reason: kept bags): 1 written" in md
+    assert "- `hall.json`" in md
 
 
 def test_a_baselines_path_that_is_a_file_is_refused(tmp_path: Path,
