@@ -569,7 +569,9 @@ def _validate_folder(folder: Path, overrides: Sequence[str]) -> int:
             (_validate_suite if is_suite_path(path) else _validate_scenario)(path, ())
         except SrrError as err:
             failed += 1
-            _stderr().print(f"srr validate: {_one_line(err)}", markup=False)
+            said = _one_line(err)  # an include's error names the include: say whose it is
+            said = said if said.startswith(str(path)) else f"{path}: {said}"
+            _stderr().print(f"srr validate: {said}", markup=False)
     if not failed:
         try:  # what only the folder as a whole can get wrong: two scenarios of one name
             load_suite([folder])

@@ -236,6 +236,33 @@ def _entry(item: str | EntryFile, raw: Any, base: Path, file: str, field: str,
         raise ScenarioError(file, f"{field}.set", f"{err.field}: {err.message}") from None
 
 
+def _folder(path: Path, cli: _Defaults) -> list[Entry]:
+    """The entries of a folder's scenario files. Every file is read before any is refused:
+    the first problem is said, and how many other files have one (``srr validate FOLDER``
+    says each)."""
+    found: list[Entry] = []
+    errors: list[SrrError] = []
+    scenarios = 0
+    for file in _yaml_files(path):
+        try:
+            if not _is_scenario(_read(file)):
+                continue
+            scenarios += 1
+            found.append(_checked(str(file), (), repeat=cli.repeat or 1,
+                                  timeout_s=cli.timeout_s, name=None, sweep_raw=None,
+                                  has_sweep=False, sweep_file=str(file), sweep_field="sweep",
+                                  declared_in=str(file)))
+        except SrrError as err:
+            errors.append(err)
+    if errors:
+        more = (f" (and {len(errors) - 1} more file(s) of {path} that do not load: `srr "
+                f"validate {path}` says each)") if len(errors) > 1 else ""
+        raise SrrError(f"{errors[0]}{more}")
+    if not scenarios:
+        raise SrrError(f"{path}: the folder holds no scenario files (*.yaml with a `name:`)")
+    return found
+
+
 def _safe_name(name: str) -> bool:
     return bool(name) and name not in (".", "..") and all(
         c.isalnum() or c in "_-." for c in name)
@@ -295,13 +322,7 @@ def load_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
     for given in paths:
         path = Path(given)
         if path.is_dir():
-            found = [p for p in _yaml_files(path) if _is_scenario(_read(p))]
-            if not found:
-                raise SrrError(f"{path}: the folder holds no scenario files (*.yaml with a "
-                               "`name:`)")
-            entries += [_checked(str(p), (), repeat=cli.repeat or 1, timeout_s=cli.timeout_s,
-                                 name=None, sweep_raw=None, has_sweep=False, sweep_file=str(p),
-                                 sweep_field="sweep", declared_in=str(p)) for p in found]
+            entries += _folder(path, cli)
             continue
         data = _read(path)
         if is_suite_file(data):

@@ -294,3 +294,25 @@ scenarios:
     assert said.startswith(f"{suite}: scenarios[0] [position.0=-6]: robots[0].spawn.position: "
                            "robot forklift at (-6, -6, 0) starts inside shelf 2"), said
     assert "--set" not in said
+
+
+def test_a_folder_says_how_many_files_fail_and_whose_include_is_bad(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``srr suite FOLDER`` names the first bad file and counts the others (it stopped at
+    the first); ``srr validate FOLDER`` names the scenario whose include is bad, not only
+    the include."""
+    from harness.cli import main
+
+    (tmp_path / "a.yaml").write_text("format_version: 1\nname: a\nrobots: [\n")
+    (tmp_path / "b.yaml").write_text("format_version: 1\nname: b\nrobots: 5\n")
+    (tmp_path / "inc.yml").write_text("duration: -1\n")  # a fragment: no name
+    (tmp_path / "c.yaml").write_text("format_version: 1\nname: c\ninclude: [inc.yml]\n")
+    with pytest.raises(SrrError) as info:
+        load_suite([tmp_path])
+    said = str(info.value)
+    assert said.startswith(f"{tmp_path / 'a.yaml'}: ") and said.endswith(
+        f"(and 2 more file(s) of {tmp_path} that do not load: `srr validate {tmp_path}` "
+        "says each)"), said
+    assert main(["validate", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert f"srr validate: {tmp_path / 'c.yaml'}: " in err and "inc.yml" in err, err
