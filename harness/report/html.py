@@ -183,6 +183,9 @@ def _headline(data: RunData) -> _Headline:
     if verdict == "MISMATCH":
         return _Headline("mismatch", list((s.get("baseline") or {}).get(
             "config_differences", [])))
+    if verdict == "INTERRUPTED":  # a shorter run's scores say nothing against a whole one's
+        return _Headline("none", text="The run was interrupted: the scores cover the recorded "
+                                      "part only and are not judged against the baseline.")
     regressed = [e for e in comparison if e.get("status") in ("regressed", "missing")]
     if regressed:
         return _Headline("regressions", [_comparison_row(e, data) for e in regressed],
@@ -198,8 +201,6 @@ def _headline(data: RunData) -> _Headline:
     if comparison:
         text = (f"All {len(comparison)} metrics within tolerance of the baseline; "
                 f"{n_gates} health gates ok.")
-    elif verdict == "INTERRUPTED":
-        text = "The run was interrupted: the scores cover the recorded part only."
     elif s.get("metrics"):
         text = "No baseline to compare with: the metric values are listed below."
     elif verdict == "RECORDED":

@@ -172,6 +172,11 @@ def test_interrupted_run_renders(failing_run: api.RunResult, summary: dict) -> N
                  reasons=["interrupted before the end of the scenario"])
     html = render_report(failing_run.run_dir, summary=s)
     assert 'class="banner v-INTERRUPTED"' in html
+    # its (regressed) comparison is of a shorter run: not judged, not headlined as regressions
+    assert any(e.get("status") == "regressed" for e in s["comparison"])
+    head = html[html.index('id="headline"'):][:600]
+    assert "Regressed metrics" not in head
+    assert "not judged against the baseline" in head
 
 
 def test_summary_is_kept_when_the_report_fails(tmp_path: Path,
