@@ -252,6 +252,11 @@ def check_summary(data: Any, path: Path) -> None:
     summary, for every command and for :meth:`harness.run.summary.RunSummary.from_json`."""
     if not isinstance(data, dict):
         raise SrrError(f"{path}: expected a JSON object, got {type(data).__name__}")
+    if "scenario" not in data and isinstance(data.get("groups"), list) \
+            and isinstance(data.get("runs"), list):  # what srr suite writes
+        raise SrrError(f"{path}: the summary of a suite, not of a run: the suite's page is "
+                       f"{Path(path).parent / 'index.html'}, and each run's directory is "
+                       "under its runs/ (srr report RUN_DIR renders one)")
     validate(SummaryFile, data, str(path), unknown="ignore", missing=_MISSING, yaml=False)
     version = data.get("schema_version", 1)
     if isinstance(version, int) and version > SCHEMA_VERSION:  # (its type: checked above)

@@ -256,3 +256,17 @@ def test_a_run_and_its_replay_record_the_scenario_file_absolute(
 def _said(argv: list[str]) -> str:
     """The command as srr names it in an error: ``baseline bless``, ``diff``, ..."""
     return " ".join(argv[:2]) if argv[0] == "baseline" else argv[0]
+
+
+def test_a_suites_summary_is_said_to_be_one(tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    # `srr report SUITE_OUT` said "scenario: missing (not an srr run summary)"
+    from harness.cli import main
+
+    (tmp_path / "summary.json").write_text(json.dumps(
+        {"format": 1, "name": "nightly", "groups": [], "runs": []}))
+    assert main(["report", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"srr report: {tmp_path / 'summary.json'}: the summary of a suite, not of a "
+                   f"run: the suite's page is {tmp_path / 'index.html'}, and each run's directory "
+                   "is under its runs/ (srr report RUN_DIR renders one)"), err
