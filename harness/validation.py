@@ -21,7 +21,7 @@ import difflib
 import math
 import types
 import typing
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
 from harness.errors import ScenarioError
@@ -261,8 +261,9 @@ def join(path: str, name: str) -> str:
     return f"{path}.{name}" if path else name
 
 
-def close_match(key: str, names: Mapping[str, Any]) -> str | None:
-    """The name in ``names`` that ``key`` is most likely a typo of, if any."""
+def close_match(key: str, names: Iterable[str]) -> str | None:
+    """The name in ``names`` (a mapping's keys, or any names) that ``key`` is most likely a
+    typo of, if any."""
     found = difflib.get_close_matches(key, list(names), n=1, cutoff=0.6)
     return found[0] if found else None
 

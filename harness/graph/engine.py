@@ -10,7 +10,6 @@ takes effect).
 
 from __future__ import annotations
 
-import difflib
 import re
 from collections.abc import Iterator, Mapping
 from contextvars import ContextVar, Token
@@ -30,6 +29,7 @@ from harness.graph.errors import GraphError
 from harness.graph.node import NodeType
 from harness.graph.program import Evaluation, NodeRuntime, Program, compile_program
 from harness.graph.registry import DEFAULT_REGISTRY, Registry
+from harness.validation import close_match
 
 __all__ = [
     "Attribute",
@@ -68,8 +68,8 @@ def split_attribute_name(full_name: str) -> tuple[str, str]:
 
 
 def _suggest(name: str, candidates: list[str]) -> str:
-    matches = difflib.get_close_matches(name, candidates, n=1, cutoff=0.6)
-    return f"; did you mean {matches[0]!r}?" if matches else ""
+    match = close_match(name, candidates)
+    return f"; did you mean {match!r}?" if match else ""
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,6 @@ the file and the field (:meth:`harness.validation.Validator.fail`)."""
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import re
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -496,8 +495,8 @@ def _check_tolerances(sc: Scenario, v: Validator) -> None:
         head = key.split(".", 1)[0]
         if head in METRIC_GROUPS or any(c in head for c in "*?["):
             continue
-        near = difflib.get_close_matches(head, METRIC_GROUPS, n=1)
-        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        near = close_match(head, METRIC_GROUPS)
+        hint = f" (did you mean {near!r}?)" if near else ""
         v.fail(f"scoring.tolerances.{key}", f"matches no metric: metric names start with "
                f"{', '.join(METRIC_GROUPS)}{hint}")
 
