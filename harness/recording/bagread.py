@@ -367,9 +367,9 @@ class _Rosbag2(_Rosbags):
 
     def _check(self) -> None:
         # rosbags compares and indexes metadata.yaml's fields without checking their types
-        rosbag2_metadata(self.path)
+        info = rosbag2_metadata(self.path)
         # rosbags reads an MCAP file's summary without its CRC, and its chunks through it
-        for file in _named_files(self.path):
+        for file in _files_in(self.path, info["relative_file_paths"]):
             if file.suffix == ".mcap" and file.is_file():  # (rosbags names a missing one)
                 try:
                     check_start(file)
@@ -507,9 +507,13 @@ def _named_files(bag_dir: Path) -> list[Path]:
         return []
     info = meta.get("rosbag2_bagfile_information") if isinstance(meta, dict) else None
     files = info.get("relative_file_paths") if isinstance(info, dict) else None
-    if not isinstance(files, list):
-        return []
-    return [bag_dir / PurePath(str(f)).name for f in files]
+    return _files_in(bag_dir, files) if isinstance(files, list) else []
+
+
+def _files_in(bag_dir: Path, names: list[Any]) -> list[Path]:
+    """Where rosbags looks for the files ``metadata.yaml`` names: by their base names, in the
+    bag directory."""
+    return [bag_dir / PurePath(str(f)).name for f in names]
 
 
 def _one_mcap(bag_dir: Path) -> Path | None:

@@ -144,9 +144,8 @@ def unprepare(run_dir: Path, made: Path | None, err: BaseException) -> None:
     there (the external ROS 2 processes' logs, written as they start): the run directory
     goes, and so do the folders :func:`prepare` said making it would make while they are
     empty (a suite's other runs make theirs beside it), or the user's folder is emptied
-    (``made`` None); unless
-    ``err`` names a file in it (an external node that died before it was ready: its log says
-    why)."""
+    (``made`` None); unless ``err`` names a file in it (an external node that died before it
+    was ready: its log says why)."""
     if str(run_dir) in str(err):
         return
     if made is not None:  # the run's folder, then the folders made for it while empty:
@@ -166,17 +165,17 @@ def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_tick
            update_reason: str = "", free_space: FreeSpace = disk_free,
            participants: Sequence[Participant] = (),
            started: Started | None = None, video: bool = True,
-           existed: bool = False, made: Path | None = None) -> RunResult:
+           made: Path | None) -> RunResult:
     """:func:`write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
     created and locked first (a live owner is refused), and released, its lock file
     removed, however the run ends (``kill -9`` releases the lock too). ``participants``
     (started) are shut down after that, in reverse order, however the run ends.
-    ``existed``: :func:`prepare`'s answer, the (empty) folder was the user's before the run
-    (not one the external ROS 2 processes' logs made since): a failed run leaves it.
-    ``made``: the outermost folder making ``run_dir`` created (:func:`prepare`); a run that
-    fails and removes ``run_dir`` removes the empty folders up to it too."""
+    ``made``: :func:`prepare`'s answer, the outermost folder making ``run_dir`` creates; a run
+    that fails and removes ``run_dir`` removes the empty folders up to it too. None: the
+    (empty) folder was the user's before the run (not one the external ROS 2 processes' logs
+    made since), and a failed run leaves it."""
     with contextlib.ExitStack() as owned:
-        if existed:
+        if made is None:
             owned.callback(lambda: run_dir.mkdir(exist_ok=True))
         for p in participants:  # called last, in reverse order
             owned.callback(p.shutdown)

@@ -153,8 +153,7 @@ def replay(run_dir: str | Path, *, suts: Sequence[str] = (), overrides: Sequence
                 output=playback.output, graphs=graphs)
     return record(scenario, loop, source=source, run_dir=out_dir,
                    n_ticks=int(summary.ticks or scenario.n_ticks), progress=progress,
-                   baselines=baselines, started=started, participants=participants,
-                   existed=made is None, made=made)
+                   baselines=baselines, started=started, participants=participants, made=made)
 
 
 def _named_by_flag(err: SrrError, scenario: Scenario, source: str,

@@ -143,8 +143,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
     return record(scenario, loop, source=source, run_dir=run_dir, n_ticks=scenario.n_ticks,
                   progress=progress, baselines=baselines, update_baseline=update_baseline,
                   update_reason=update_reason, free_space=free_space,
-                  participants=participants, started=started, video=video,
-                  existed=made is None, made=made)
+                  participants=participants, started=started, video=video, made=made)
 
 
 def start_streams(sim: Simulation, scenario: Scenario, source: str = "<scenario>",
