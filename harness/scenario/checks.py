@@ -444,7 +444,7 @@ def _check_suts(sc: Scenario, v: Validator) -> None:
             if any(r.name == sut.robot for r in sc.robots):
                 v.fail(f"{where}.robot", f"robot {sut.robot!r} is disabled; disable this "
                        "system under test too (enabled: false) or bind it to another robot")
-            close = close_match(sut.robot, dict.fromkeys(robots))
+            close = close_match(sut.robot, robots)
             hint = f"did you mean {close!r}? " if close else ""
             v.fail(f"{where}.robot", f"no enabled robot named {sut.robot!r} ({hint}robots: "
                    f"{', '.join(robots) or 'none'})")
@@ -477,7 +477,7 @@ def _check_graphs(sc: Scenario, v: Validator) -> None:
                    "); give one of them another name")
         names[name] = i
         if spec.robot and spec.enabled and spec.robot not in robots:
-            close = close_match(spec.robot, dict.fromkeys(robots))
+            close = close_match(spec.robot, robots)
             hint = f"did you mean {close!r}? " if close else ""
             v.fail(f"{where}.robot", f"no enabled robot named {spec.robot!r} ({hint}robots: "
                    f"{', '.join(robots) or 'none'})")

@@ -209,7 +209,7 @@ def _check_args(name: str, args: tuple[str, ...], ctx: SignalContext) -> None:
         if arg not in names:
             what = {"object": "robot or worker", "zone": "zone",
                     "robot_routed": "robot with a scoring.control route"}[kind]
-            near = close_match(arg, dict.fromkeys(names))
+            near = close_match(arg, names)
             hint = f" (did you mean {near!r}?)" if near else \
                 f" (known: {', '.join(sorted(names)) or 'none'})"
             raise SpecError(f"{name}(...): unknown {what} {arg!r}{hint}")
@@ -289,7 +289,7 @@ def parse_formula(formula: str, ctx: SignalContext) -> Formula:
                 out.append(text)
             continue
         if word not in SIGNALS:
-            near = close_match(word, SIGNALS) or close_match(word, dict.fromkeys(KEYWORDS))
+            near = close_match(word, SIGNALS) or close_match(word, KEYWORDS)
             hint = f" (did you mean {near!r}?)" if near else \
                 f" (signals: {', '.join(sorted(SIGNALS))})"
             kind = "reserved word" if word in _RESERVED else "signal"

@@ -178,7 +178,7 @@ def _read_urdf(path: Path, packages: PackagePath, text: str | None = None) -> _P
 def _check_joint_links(root: ET.Element) -> None:
     """Every joint of the URDF joins two links it has: MuJoCo says only "URDF joint parent or
     child missing" and a line number."""
-    links = {link.get("name", ""): None for link in root.findall("link")}
+    links = {link.get("name", "") for link in root.findall("link")}
     for joint in root.findall("joint"):  # not a <transmission>'s joints
         name = joint.get("name", "")
         for end in ("parent", "child"):

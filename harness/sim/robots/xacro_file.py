@@ -84,7 +84,7 @@ def _check_args(args: Mapping[str, str], table: _ArgTable, files: Iterable[Path]
     known = table.looked_up | _declared(files)
     for name in args:
         if name not in known:
-            close = close_match(name, dict.fromkeys(known))
+            close = close_match(name, known)
             hint = f" (did you mean {close!r}?)" if close else ""
             raise UnknownXacroArg(name, f"declares no argument {name!r}{hint}; its arguments: "
                                   f"{', '.join(sorted(known)) or 'none'}")
