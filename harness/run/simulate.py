@@ -9,7 +9,7 @@ import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from harness.atomic import write_json_atomic
 from harness.camera_topics import recorded_cameras
@@ -18,7 +18,7 @@ from harness.engine import Joined, Simulation
 from harness.errors import ScenarioError, SrrError
 from harness.interrupt import INTERRUPTED_EXIT
 from harness.live.view import LiveConfig, LiveView
-from harness.output import check_output_topics, decide_output
+from harness.output import OutputKind, check_output_topics, decide_output
 from harness.run.baselines import baselines_dir
 from harness.run.facts import default_run_dir, reproduce_command
 from harness.run.graphs import graphs_of
@@ -30,6 +30,9 @@ from harness.scoring import check_scoring
 from harness.sim.world_file import map_json
 from harness.sut.participant import Participant
 from harness.wiring import check_wiring
+
+if TYPE_CHECKING:  # the plan module is loaded where a plan is made
+    from harness.wiring import Plan
 
 __all__ = [
     "ROS2_BRIDGE",
@@ -109,9 +112,7 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
             raise SrrError(f"--foxglove: the live view serves ROS 2 messages, and this run "
                            f"records ROS 1 ({output.because})")
         plan = sim.plan()
-        warnings = [*sim.world.warnings, *rate_warnings(scenario, source),
-                    *robot_warnings(scenario, source), *check_wiring(plan, scenario, source),
-                    *check_output_topics(output, plan.topics, scenario, source)]
+        warnings = _built_warnings(sim, plan, output, scenario, source)
         # After the plan, so the server advertises every topic the run will publish at once.
         view = (LiveView.start(live, topics={t.topic: t.msgtype for t in plan.topics
                                              if t.kind == "pub"}, notice=notice)
@@ -279,12 +280,19 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
         output = decide_output(scenario, sim.stage, sim.custom_graphs, source)
         plan = sim.plan()
         size_note = large_bag_notice(scenario)
-        return (*sim.world.warnings, *rate_warnings(scenario, source),
-                *robot_warnings(scenario, source), *check_wiring(plan, scenario, source),
-                *check_output_topics(output, plan.topics, scenario, source), *busy,
+        return (*_built_warnings(sim, plan, output, scenario, source), *busy,
                 *([f"{source}: {size_note}"] if size_note else []))
     finally:
         sim.close()
+
+
+def _built_warnings(sim: Simulation, plan: Plan, output: OutputKind, scenario: Scenario,
+                    source: str) -> tuple[str, ...]:
+    """The warnings of a scenario built and wired (a run's and ``srr validate``'s alike): its
+    model files, its sensor rates, its robots' blocks, its wiring and its output topics."""
+    return (*sim.world.warnings, *rate_warnings(scenario, source),
+            *robot_warnings(scenario, source), *check_wiring(plan, scenario, source),
+            *check_output_topics(output, plan.topics, scenario, source))
 
 
 def check_video(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
