@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from harness import api
 from harness.cli import main
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 
 pytestmark = pytest.mark.slow  # every test damages (or runs) a real run
 
@@ -29,8 +29,8 @@ Damage = Callable[[bytes], bytes]
 
 
 @pytest.fixture(scope="module")
-def good_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("hostile") / "run"
+def good_run(module_tmp: ModuleTmp) -> Path:
+    out = module_tmp("hostile") / "run"
     api.run_scenario(api.load(FW, duration=0.5), source=str(FW), out=out)
     return out
 
@@ -121,9 +121,9 @@ def test_damaged_mcap(good_run: Path, tmp_path: Path, capsys: pytest.CaptureFixt
 
 
 @pytest.fixture(scope="module", params=["bag", "mcap"])
-def ros1_run(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
+def ros1_run(request: pytest.FixtureRequest, module_tmp: ModuleTmp) -> Path:
     """The forklift run recorded as ROS 1: a ``.bag``, or MCAP with the ``ros1`` profile."""
-    out = tmp_path_factory.mktemp(f"hostile-ros1-{request.param}") / "run"
+    out = module_tmp(f"hostile-ros1-{request.param}") / "run"
     sc = api.load(FW, duration=0.5, overrides=["output.ros=1",
                                                f"output.format={request.param}"])
     api.run_scenario(sc, source=str(FW), out=out)

@@ -59,6 +59,8 @@ pytest.importorskip("rclpy", reason="needs the ros2 extra: pip install -e '.[dev
 # (e.g. the ros_wheels_bootstrapper re-exec did not happen), that must be an error.
 from rclpy.serialization import deserialize_message, serialize_message
 
+from tests.conftest import ModuleTmp
+
 pytestmark = [pytest.mark.ros2]
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
@@ -236,8 +238,7 @@ def check_run(name: str, run_dir: Path) -> ScenarioCheck:
 
 
 @pytest.fixture(scope="module")
-def scenario_check(tmp_path_factory: pytest.TempPathFactory
-                   ) -> Callable[[Path], ScenarioCheck]:
+def scenario_check(module_tmp: ModuleTmp) -> Callable[[Path], ScenarioCheck]:
     """Runs a bundled scenario (≤ 2 s) once per module and checks its bag."""
     cache: dict[Path, ScenarioCheck] = {}
 
@@ -245,7 +246,7 @@ def scenario_check(tmp_path_factory: pytest.TempPathFactory
         if path not in cache:
             duration = min(MAX_DURATION_S, api.load(path).duration)
             scenario = api.load(path, duration=duration)
-            out = tmp_path_factory.mktemp(f"ros2_{path.stem}") / "run"
+            out = module_tmp(f"ros2_{path.stem}") / "run"
             start = time.perf_counter()
             run = api.run_scenario(scenario, source=str(path), out=out)
             run_s = time.perf_counter() - start

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from harness.cli import main
+from tests.conftest import ModuleTmp
 
 ROOT = Path(__file__).resolve().parents[2]
 FW = ROOT / "scenarios" / "forklift_warehouse.yaml"
@@ -21,8 +22,8 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    out = tmp_path_factory.mktemp("diffbase")
+def runs(module_tmp: ModuleTmp) -> dict[str, Path]:
+    out = module_tmp("diffbase")
     made = {"same": out / "same", "faster": out / "faster"}
     assert main(["run", str(FW), "--out", str(made["same"]), "-q"]) == 0
     main(["run", str(FW), "--out", str(made["faster"]), "-q",

@@ -15,6 +15,7 @@ from harness import api
 from harness.cli import main
 from harness.diff.html import diff_moments
 from harness.report.data import load_run
+from tests.conftest import ModuleTmp
 from tests.diff.conftest import Runs
 from tests.report.browser import page_requests, run_chromium
 from tests.report.cdp import open_page
@@ -91,9 +92,9 @@ def _probe(chromium: str, page: Path, tmp: Path) -> dict[str, Any]:
 
 
 @pytest.fixture(scope="module")
-def dock_page(runs: Runs, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
+def dock_page(runs: Runs, module_tmp: ModuleTmp) -> tuple[Path, Any]:
     a, b = runs.get("dock_11"), runs.get("dock_12")
-    page = tmp_path_factory.mktemp("diff-html") / "diff.html"
+    page = module_tmp("diff-html") / "diff.html"
     assert main(["diff", str(a), str(b), "--html", str(page)]) == 1
     return page, api.diff_runs(a, b)
 

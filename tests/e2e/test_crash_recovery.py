@@ -27,6 +27,7 @@ from harness import api, runmarker
 from harness.bag import inspect_bag
 from harness.cli import main
 from harness.recording.recorder import digest_update
+from tests.conftest import ModuleTmp
 
 from .bagread import decoded, mcap_file
 
@@ -44,9 +45,9 @@ def raw(path: Path) -> Raw:
 
 
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def reference(module_tmp: ModuleTmp) -> Path:
     sc = api.load(SCENARIO, duration=DURATION, overrides=OVERRIDES)
-    res = api.run_scenario(sc, source=str(SCENARIO), out=tmp_path_factory.mktemp("ref") / "r")
+    res = api.run_scenario(sc, source=str(SCENARIO), out=module_tmp("ref") / "r")
     assert not (res.run_dir / runmarker.MARKER).exists()  # a finished run has no marker
     return res.run_dir
 
@@ -266,11 +267,11 @@ def test_a_ctrl_c_while_the_report_renders_leaves_a_complete_run(
 
 
 @pytest.fixture(scope="module")
-def finished_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def finished_run(module_tmp: ModuleTmp) -> Path:
     """A finished 2 s run (two chunks) with its summary and report."""
     sc = api.load(SCENARIO, duration=2.0)
     return api.run_scenario(sc, source=str(SCENARIO),
-                            out=tmp_path_factory.mktemp("finished") / "r").run_dir
+                            out=module_tmp("finished") / "r").run_dir
 
 
 def _copy(run: Path, tmp_path: Path) -> Path:

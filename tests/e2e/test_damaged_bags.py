@@ -18,7 +18,7 @@ from harness.cli import main
 from harness.recording.errors import BagError
 from harness.recording.mcapread import McapIndex
 from harness.replay import Playback
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 
 pytestmark = pytest.mark.slow
 
@@ -27,9 +27,9 @@ COMMANDS = ["inspect", "diff", "report", "bless", "replay", "export"]
 
 
 @pytest.fixture(scope="module")
-def good(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def good(module_tmp: ModuleTmp) -> Path:
     """A finished 2 s run of the forklift warehouse: an MCAP file of two chunks."""
-    out = tmp_path_factory.mktemp("damaged") / "good"
+    out = module_tmp("damaged") / "good"
     api.run_scenario(api.load(FW, duration=2), source=str(FW), out=out)
     return out
 

@@ -13,18 +13,17 @@ import yaml
 
 from harness import api
 from harness.cli import main
+from tests.conftest import SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded
 
 pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory: pytest.TempPathFactory, ) -> api.RunResult:
-    from tests.conftest import SCENARIOS
-
+def run(module_tmp: ModuleTmp) -> api.RunResult:
     path = SCENARIOS / "forklift_warehouse.yaml"
     sc = api.load(path)
-    return api.run_scenario(sc, source=str(path), out=tmp_path_factory.mktemp("run") / "r")
+    return api.run_scenario(sc, source=str(path), out=module_tmp("run") / "r")
 
 
 def test_run_directory_follows_the_contract(run: api.RunResult) -> None:

@@ -20,6 +20,7 @@ from mcap.records import Schema
 from mcap_ros2.decoder import DecoderFactory
 
 from harness.cli import main
+from tests.conftest import ModuleTmp
 from tests.e2e.bagread import mcap_file
 from tests.live.foxglove_client import LiveClient, Received
 
@@ -40,8 +41,8 @@ class LiveRun:
 
 
 @pytest.fixture(scope="module")
-def live_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveRun]:
-    tmp = tmp_path_factory.mktemp("live")
+def live_run(module_tmp: ModuleTmp) -> Iterator[LiveRun]:
+    tmp = module_tmp("live")
     # port 0: the live view binds a port the system picks and says which (a port picked here
     # beforehand could be taken by another process before the run binds it); the client
     # connects once it is known, while the run waits for it

@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from tests.conftest import ROOT, SCENARIOS
+from tests.conftest import ROOT, SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded
 
 pytestmark = pytest.mark.slow  # every test reads a run of the module's fixture
@@ -33,10 +33,10 @@ CASES: dict[str, tuple[str, str, set[tuple[str, str]], set[str], float]] = {
 
 
 @pytest.fixture(scope="module", params=sorted(CASES))
-def run(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory,
+def run(request: pytest.FixtureRequest, module_tmp: ModuleTmp,
         ) -> tuple[str, Path]:
     name = str(request.param)
-    out = tmp_path_factory.mktemp(name)
+    out = module_tmp(name)
     done = subprocess.run([sys.executable, "-m", "harness.cli", "run",
                            str(SCENARIOS / f"{name}.yaml"), "--repeat", "2", "--out", str(out),
                            "-q"], cwd=ROOT, capture_output=True, text=True, timeout=600)

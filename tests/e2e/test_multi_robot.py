@@ -21,7 +21,7 @@ from harness import api
 from harness.errors import ScenarioError
 from harness.scenario import scenario_from_mapping
 from harness.wiring import Edge, roots, tree_problems
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded
 from tests.tf2check import tf2_accepts
 
@@ -42,8 +42,8 @@ def tf_edges(run_dir: Path) -> set[tuple[str, str, str]]:
 
 
 @pytest.fixture(scope="module")
-def fleet(tmp_path_factory: pytest.TempPathFactory) -> api.RunResult:
-    out = tmp_path_factory.mktemp("two_forklifts") / "run"
+def fleet(module_tmp: ModuleTmp) -> api.RunResult:
+    out = module_tmp("two_forklifts") / "run"
     return api.run_scenario(api.load(TWO), source=str(TWO), out=out)
 
 

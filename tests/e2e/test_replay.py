@@ -11,7 +11,7 @@ import pytest
 
 from harness import api
 from harness.cli import main
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded
 
 pytestmark = pytest.mark.slow
@@ -21,16 +21,16 @@ SUT_OUTPUTS = ["/cmd_vel", "/perception/tracks", "/safety/alarm", "/safety/is_mu
 
 
 @pytest.fixture(scope="module")
-def recorded(tmp_path_factory: pytest.TempPathFactory) -> api.RunResult:
-    out = tmp_path_factory.mktemp("replay") / "recorded"
+def recorded(module_tmp: ModuleTmp) -> api.RunResult:
+    out = module_tmp("replay") / "recorded"
     res = api.run_scenario(api.load(CROSSING), source=str(CROSSING), out=out)
     assert res.verdict == "PASS"
     return res
 
 
 @pytest.fixture(scope="module")
-def same(recorded: api.RunResult, tmp_path_factory: pytest.TempPathFactory) -> api.RunResult:
-    return api.replay(recorded.run_dir, out=tmp_path_factory.mktemp("replay") / "same")
+def same(recorded: api.RunResult, module_tmp: ModuleTmp) -> api.RunResult:
+    return api.replay(recorded.run_dir, out=module_tmp("replay") / "same")
 
 
 def test_replaying_the_same_systems_reproduces_every_topic(recorded: api.RunResult,

@@ -23,6 +23,7 @@ import pytest
 
 from harness import api, runlock, runmarker
 from harness.cli import main
+from tests.conftest import ModuleTmp
 
 pytestmark = pytest.mark.slow
 
@@ -31,10 +32,10 @@ SCENARIO = ROOT / "scenarios" / "forklift_warehouse.yaml"
 
 
 @pytest.fixture(scope="module")
-def finished(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def finished(module_tmp: ModuleTmp) -> Path:
     sc = api.load(SCENARIO, duration=1.0)
     return api.run_scenario(sc, source=str(SCENARIO),
-                            out=tmp_path_factory.mktemp("done") / "r").run_dir
+                            out=module_tmp("done") / "r").run_dir
 
 
 def start_run(out: Path) -> subprocess.Popen[str]:

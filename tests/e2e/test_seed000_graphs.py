@@ -36,7 +36,7 @@ from harness.engine import Simulation
 from harness.frames import load_frames
 from harness.report.images import nearest_images
 from harness.scenario import load_scenario
-from tests.conftest import ROOT
+from tests.conftest import ROOT, ModuleTmp
 from tests.e2e.bagread import decoded
 from tests.e2e.test_turtlebot3 import gl_env, rendering_available
 
@@ -115,10 +115,10 @@ READERS = {"ros1-mcap": _read_ros1_mcap, "ros1-bag": _read_ros1_bag, "ros2": _re
 
 
 @pytest.fixture(scope="module", params=list(FORMATS))
-def bag(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Recorded:
+def bag(request: pytest.FixtureRequest, module_tmp: ModuleTmp) -> Recorded:
     if not rendering_available():
         pytest.skip("no OpenGL for the seed's camera (MUJOCO_GL=egl or osmesa)")
-    out = tmp_path_factory.mktemp(f"seed000-{request.param}")
+    out = module_tmp(f"seed000-{request.param}")
     done = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(SCENARIO), "--out",
                            str(out), "-q", *SCORED, *FORMATS[request.param]], env=gl_env(),
                           cwd=ROOT, capture_output=True, text=True, timeout=300)

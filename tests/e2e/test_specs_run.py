@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from harness import api
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded
 
 pytestmark = pytest.mark.slow
@@ -37,8 +37,8 @@ ROI = [(10.0, -3.0), (14.5, -3.0), (14.5, 3.0), (10.0, 3.0)]  # scenarios/dock/s
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[api.RunResult, api.RunResult]:
-    root = tmp_path_factory.mktemp("specs")
+def runs(module_tmp: ModuleTmp) -> tuple[api.RunResult, api.RunResult]:
+    root = module_tmp("specs")
     baselines = root / "baselines"
     plain = api.load(CROSSING, duration=DURATION, overrides=SHORT)
     first = api.run_scenario(plain, source=str(CROSSING), out=root / "plain",

@@ -25,7 +25,7 @@ from harness.scenario import load_scenario
 from harness.sut.base import SutContext
 from harness.sut.errors import PluginError
 from harness.sut.teleop import ScriptedTeleop, Segment, command_at
-from tests.conftest import ROOT, SCENARIOS
+from tests.conftest import ROOT, SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded
 
 SCENARIO = SCENARIOS / "turtlebot3_room.yaml"
@@ -70,10 +70,10 @@ def expected_topics() -> dict[str, str]:
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def runs(module_tmp: ModuleTmp) -> Path:
     """``srr run --repeat 2`` in a fresh interpreter (MUJOCO_GL must be set before mujoco is
     imported); without OpenGL the camera is switched off and its topics are not expected."""
-    out = tmp_path_factory.mktemp("tb3")
+    out = module_tmp("tb3")
     cmd = [sys.executable, "-m", "harness.cli", "run", str(SCENARIO), "--repeat", "2",
            "--out", str(out), "-q"]
     if not camera_expected():

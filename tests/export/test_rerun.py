@@ -19,7 +19,7 @@ import pytest
 
 from harness import api
 from harness.cli import main
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded, mcap_file
 
 pytestmark = pytest.mark.slow
@@ -39,13 +39,13 @@ def _run(tmp: Path, scenario: str, duration: str, *extra: str) -> Path:
 
 
 @pytest.fixture(scope="module")
-def dock(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return _run(tmp_path_factory.mktemp("export"), "dock_nominal", "2", *CAMERAS)
+def dock(module_tmp: ModuleTmp) -> Path:
+    return _run(module_tmp("export"), "dock_nominal", "2", *CAMERAS)
 
 
 @pytest.fixture(scope="module")
-def lidar(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return _run(tmp_path_factory.mktemp("export"), "diffbot_urdf", "1")
+def lidar(module_tmp: ModuleTmp) -> Path:
+    return _run(module_tmp("export"), "diffbot_urdf", "1")
 
 
 def _read(rrd: Path) -> tuple[dict[str, int], dict[str, list[Any]]]:

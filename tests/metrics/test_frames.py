@@ -31,7 +31,7 @@ from harness.serde.messages import (
     transform_stamped,
     twist,
 )
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 from tests.metrics.synthbag import ODOM_ORIGIN, SynthSpec, forklift_xy, write_synthetic_bag
 
 BOOL = "std_msgs/msg/Bool"
@@ -144,8 +144,8 @@ def test_corrupt_message_is_a_bag_error() -> None:
 
 
 @pytest.fixture(scope="module")
-def synth(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, int]:
-    path = tmp_path_factory.mktemp("synth") / "bag"
+def synth(module_tmp: ModuleTmp) -> tuple[Path, int]:
+    path = module_tmp("synth") / "bag"
     n = write_synthetic_bag(path, SynthSpec(duration_s=3.0, frame_prefix="forklift/"))
     return path, n
 

@@ -15,6 +15,7 @@ from harness.metrics.specs import held, spec_metric, tick_grid, violation_window
 from harness.scenario import Scenario, scenario_from_mapping
 from harness.scenario.specs import SignalContext, parse_formula
 from harness.scoring import spec_fields, spec_metrics
+from tests.conftest import ModuleTmp
 from tests.metrics.synthbag import ROI, SynthSpec, character_xy, forklift_xy, write_synthetic_bag
 
 HZ = 60
@@ -113,8 +114,8 @@ DURATION = 6.0
 
 
 @pytest.fixture(scope="module")
-def synth(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    path = tmp_path_factory.mktemp("specs") / "bag"
+def synth(module_tmp: ModuleTmp) -> Path:
+    path = module_tmp("specs") / "bag"
     write_synthetic_bag(path, SynthSpec(duration_s=DURATION, n_characters=1))
     return path
 

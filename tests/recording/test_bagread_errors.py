@@ -31,13 +31,14 @@ from harness.recording.mcapread import McapIndex
 from harness.recording.recover import recover_bag
 from harness.regression.reference import write_reference
 from harness.replay import Playback
+from tests.conftest import ModuleTmp
 from tests.metrics.synthbag import SynthSpec, write_synthetic_bag
 
 
 @pytest.fixture(scope="module")
-def bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def bag(module_tmp: ModuleTmp) -> Path:
     """A rosbag2 directory of one finished MCAP file (1 s of a forklift and workers)."""
-    path = tmp_path_factory.mktemp("bagread") / "bag"
+    path = module_tmp("bagread") / "bag"
     write_synthetic_bag(path, SynthSpec(duration_s=1.0))
     return path
 

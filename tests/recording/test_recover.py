@@ -22,6 +22,7 @@ from harness.recording.errors import BagError, NothingRecorded
 from harness.recording.recorder import digest_update
 from harness.recording.recover import recover_bag
 from harness.serde.messages import clock, header, make, tf_message, transform_stamped
+from tests.conftest import ModuleTmp
 
 SPAN_NS = 250_000_000
 
@@ -62,8 +63,8 @@ def decoded_count(path: Path) -> int:
 
 
 @pytest.fixture(scope="module")
-def small_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    bag = tmp_path_factory.mktemp("small") / "bag"
+def small_bag(module_tmp: ModuleTmp) -> Path:
+    bag = module_tmp("small") / "bag"
     record(bag)
     return bag
 

@@ -44,6 +44,7 @@ from harness.serde.ros1 import (
     ros1_name,
     to_ros2,
 )
+from tests.conftest import ModuleTmp
 from tests.metrics.synthbag import SynthSpec, write_synthetic_bag
 from tests.metrics.test_frames import BOOL, random_messages
 
@@ -161,8 +162,8 @@ def _as_ros1(ros2_bag: Path, bag_dir: Path, fmt: str, max_span_ns: int) -> dict[
 
 
 @pytest.fixture(scope="module")
-def synth(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    path = tmp_path_factory.mktemp("synth") / "bag"
+def synth(module_tmp: ModuleTmp) -> Path:
+    path = module_tmp("synth") / "bag"
     write_synthetic_bag(path, SynthSpec(duration_s=3.0, frame_prefix="forklift/"))
     return path
 

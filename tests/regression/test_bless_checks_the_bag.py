@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from harness.cli import main
+from tests.conftest import ModuleTmp
 
 FORKLIFT = Path(__file__).resolve().parents[2] / "scenarios" / "forklift_warehouse.yaml"
 
@@ -17,8 +18,8 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
-    root = tmp_path_factory.mktemp("bless")
+def runs(module_tmp: ModuleTmp) -> tuple[Path, Path]:
+    root = module_tmp("bless")
     plain, other = root / "plain", root / "other"
     assert main(["run", str(FORKLIFT), "--duration", "1", "-q", "--no-video", "--out",
                  str(plain)]) in (0, 1)

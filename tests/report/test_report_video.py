@@ -11,6 +11,7 @@ import base64
 import hashlib
 import json
 import shutil
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,7 @@ from harness.report.html import clip_specs
 from harness.report.images import image_array
 from harness.report.video import read_videos
 from harness.video.codec import psnr
+from tests.conftest import ModuleTmp
 from tests.report.cdp import Page, open_page
 from tests.report.pngread import read_png
 
@@ -42,20 +44,25 @@ LOADED = """Promise.all(Array.prototype.map.call(document.querySelectorAll("vide
     v.addEventListener("error", function () { no(new Error(v.src + ": " + v.error.message)); });
   }); }))"""
 
-# Runs ACTION (a statement that seeks), resolves once every <video> has seeked, and returns
-# each one's topic, current time and pixels (drawn into a canvas, read back as PNG).
-GRAB = """(function () {
+# Runs ACTION (a statement that seeks) and resolves once every <video> has finished seeking to
+# the time ACTION gave it (a seek still in flight from before is not taken for this one).
+SEEK = """(function () {
   var vs = Array.prototype.slice.call(document.querySelectorAll("video"));
-  var done = Promise.all(vs.map(function (v) { return new Promise(function (ok) {
-    v.addEventListener("seeked", function () { ok(); }, {once: true}); }); }));
   ACTION;
-  return done.then(function () { return vs.map(function (v) {
-    var c = document.createElement("canvas");
-    c.width = v.videoWidth; c.height = v.videoHeight;
-    c.getContext("2d").drawImage(v, 0, 0);
-    return {topic: v.getAttribute("data-topic"), t0: parseFloat(v.getAttribute("data-t0")),
-            time: v.currentTime, png: c.toDataURL("image/png")}; }); });
+  var want = vs.map(function (v) { return v.currentTime; });
+  return new Promise(function (ok) { (function check() {
+    if (vs.every(function (v, i) { return !v.seeking && v.readyState >= 2
+                                          && Math.abs(v.currentTime - want[i]) < 1e-6; })) {
+      ok(want); } else { setTimeout(check, 20); } })(); });
 })()"""
+
+# Each <video>'s topic, current time and pixels (drawn into a canvas, read back as PNG).
+GRAB = """Array.prototype.map.call(document.querySelectorAll("video"), function (v) {
+  var c = document.createElement("canvas");
+  c.width = v.videoWidth; c.height = v.videoHeight;
+  c.getContext("2d").drawImage(v, 0, 0);
+  return {topic: v.getAttribute("data-topic"), time: v.currentTime,
+          png: c.toDataURL("image/png")}; })"""
 
 
 def _sha(path: Path) -> str:
@@ -80,8 +87,8 @@ def _frames(bag: Path, topic: str) -> list[tuple[float, np.ndarray]]:
 
 @pytest.fixture(scope="module")
 def page(chromium: str, failing_run: api.RunResult,
-         tmp_path_factory: pytest.TempPathFactory) -> Iterator[Page]:
-    with open_page(chromium, tmp_path_factory.mktemp("cdp"),
+         module_tmp: ModuleTmp) -> Iterator[Page]:
+    with open_page(chromium, module_tmp("cdp"),
                    (failing_run.run_dir / "report.html").as_uri()) as p:
         p.eval(LOADED)
         yield p
@@ -153,17 +160,31 @@ def test_seeking_to_a_moment_shows_the_recorded_frame(page: Page,
                    and psnr(frames[t][i][1], frames[t][i - 1][1]) < 40 for t in topics)
 
     moment = next(m for m in data.moments if moving(m))
-    got = page.eval(GRAB.replace("ACTION", f'document.getElementById("moment-{moment.number}")'
-                                           '.click()'))
+    page.eval(SEEK.replace("ACTION", f'document.getElementById("moment-{moment.number}")'
+                                     '.click()'))
     assert abs(page.eval("srrCursor.time()") - moment.t_s) < 1e-3
-    for g in got:
-        img = read_png(base64.b64decode(g["png"].split(",", 1)[1]))[:, :, :3]
-        want = shown_at(g["topic"], moment.t_s)
-        scores = [psnr(img, px) for _, px in frames[g["topic"]]]
-        assert scores[want] >= 28.0, f"{g['topic']}: {scores[want]:.1f} dB"
-        best = int(np.argmax(scores))  # no other recorded frame matches better
-        assert best == want or np.array_equal(frames[g["topic"]][best][1],
-                                              frames[g["topic"]][want][1]), (best, want)
+
+    def scores() -> dict[str, list[float]]:
+        out = {}
+        for g in page.eval(GRAB):
+            img = read_png(base64.b64decode(g["png"].split(",", 1)[1]))[:, :, :3]
+            out[g["topic"]] = [psnr(img, px) for _, px in frames[g["topic"]]]
+        return out
+
+    # Chromium may paint a seeked frame a little after the seek has ended (seen once in a
+    # loaded full run): the frame shown within a second is the one judged.
+    for _ in range(20):
+        got = scores()
+        if all(s[shown_at(t, moment.t_s)] >= 28.0 for t, s in got.items()):
+            break
+        time.sleep(0.05)
+    assert set(got) == set(topics)
+    for topic, s in got.items():
+        want = shown_at(topic, moment.t_s)
+        assert s[want] >= 28.0, f"{topic}: {s[want]:.1f} dB"
+        best = int(np.argmax(s))  # no other recorded frame matches better
+        assert best == want or np.array_equal(frames[topic][best][1],
+                                              frames[topic][want][1]), (best, want)
 
 
 def test_the_cursor_moves_the_map_markers_and_follows_a_plot(page: Page,

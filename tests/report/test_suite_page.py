@@ -25,6 +25,7 @@ from harness.report import render_suite_page, write_suite_page
 from harness.report.suite_page import VERDICT_ORDER
 from harness.report.templates import VERDICT_COLORS
 from harness.suite.history import load_history
+from tests.conftest import ModuleTmp
 from tests.report.browser import VIEWPORT, page_requests, run_chromium
 from tests.report.pngread import read_png
 from tests.suite.fake_summary import FakeRun, SuiteBuilder
@@ -104,9 +105,9 @@ def build_suite(out: Path, report: Path) -> dict[str, Any]:
 
 
 @pytest.fixture(scope="module")
-def suite(failing_run: api.RunResult, tmp_path_factory: pytest.TempPathFactory
-          ) -> tuple[Path, dict[str, Any], str]:
-    out = tmp_path_factory.mktemp("suite")
+def suite(failing_run: api.RunResult,
+          module_tmp: ModuleTmp) -> tuple[Path, dict[str, Any], str]:
+    out = module_tmp("suite")
     summary = build_suite(out, failing_run.run_dir / "report.html")
     (out / "summary.json").write_text(json.dumps(summary, indent=1), encoding="utf-8")
     page = write_suite_page(out, summary)

@@ -30,7 +30,7 @@ from harness import yamlio
 from harness.cli import main
 from harness.errors import SrrError
 from harness.suite.runner import plan_suite
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 
 #: Examples of the loaded profile (ci: a few; nightly: many); each test takes its share.
 BUDGET = settings.default.max_examples
@@ -153,8 +153,8 @@ def mutated_text(rel: str, m: Mutation) -> str:
 
 
 @pytest.fixture(scope="module")
-def tree(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    root = tmp_path_factory.mktemp("fuzz") / "scenarios"
+def tree(module_tmp: ModuleTmp) -> Path:
+    root = module_tmp("fuzz") / "scenarios"
     shutil.copytree(SCENARIOS, root)
     return root
 

@@ -26,7 +26,7 @@ from harness.scenario.schema import (
     WorldSpec,
 )
 from tests import seed001
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded
 from tests.seed001 import Camera, publish_camera_tf
 
@@ -68,8 +68,8 @@ def at_stamp(tfs: list[Any], stamp: Any) -> Any:
 # ----------------------------------------------------------------------------- the scenario
 
 @pytest.fixture(scope="module")
-def repeat_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("camera_publishing") / "rep"
+def repeat_dir(module_tmp: ModuleTmp) -> Path:
+    out = module_tmp("camera_publishing") / "rep"
     code = main(["run", str(SCENARIOS / "camera_publishing.yaml"), "--duration", "0.25",
                  "--repeat", "2", "--out", str(out), "-q"])
     assert code == 1  # recorded, identical, but nothing scored: UNSCORED is not a pass

@@ -26,7 +26,7 @@ from harness.report.plots import map_svg
 from harness.scenario import load_scenario
 from harness.sim import World
 from harness.sim.world_file import map_json
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded
 
 SCENARIO = SCENARIOS / "shelf_world_mjcf.yaml"
@@ -117,11 +117,11 @@ def test_a_robot_bumps_into_the_files_wall(tmp_path: Path) -> None:
 # ------------------------------------------------------------------ a run: sensors, map, digests
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory: pytest.TempPathFactory) -> api.RunResult:
+def run(module_tmp: ModuleTmp) -> api.RunResult:
     """The bundled scenario, its first two seconds."""
     sc = api.load(SCENARIO, duration=2.0)
     return api.run_scenario(sc, source=str(SCENARIO),
-                            out=tmp_path_factory.mktemp("shelf") / "run")
+                            out=module_tmp("shelf") / "run")
 
 
 @pytest.mark.slow

@@ -20,6 +20,7 @@ from mcap.reader import make_reader
 from harness import api
 from harness.video import psnr, read_sim_time
 from harness.video.sei import nal_units
+from tests.conftest import ModuleTmp
 from tests.e2e.bagread import decoded, mcap_file
 
 pytestmark = pytest.mark.slow  # every test reads runs of the module's fixture
@@ -41,8 +42,8 @@ def _run(tmp: Path, name: str, scenario: Path, overrides: list[str]) -> api.RunR
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[api.RunResult, api.RunResult]:
-    tmp = tmp_path_factory.mktemp("compressed")
+def runs(module_tmp: ModuleTmp) -> tuple[api.RunResult, api.RunResult]:
+    tmp = module_tmp("compressed")
     return _run(tmp, "a", SCENE, BOTH), _run(tmp, "b", SCENE, BOTH)
 
 

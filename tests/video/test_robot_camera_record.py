@@ -21,6 +21,7 @@ from harness.cli import main
 from harness.regression import config_differences
 from harness.scenario import scenario_to_mapping
 from harness.video import psnr
+from tests.conftest import ModuleTmp
 from tests.e2e.bagread import decoded
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -33,13 +34,13 @@ FRAMES = 10  # 1 s at 10 fps
 
 
 @pytest.fixture(scope="module")
-def scene(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def scene(module_tmp: ModuleTmp) -> Path:
     """turtlebot3_room.yaml with a system under test that reads the camera's raw topics."""
     doc = yaml.safe_load(TURTLEBOT.read_text())
     doc["systems_under_test"].append({
         "name": "stats", "plugin": "tests.video.robot_plugins:ImageStats",
         "params": {"rgb": "camera/color", "depth": "camera/depth"}})
-    path = tmp_path_factory.mktemp("robotcam") / "turtlebot3_stats.yaml"
+    path = module_tmp("robotcam") / "turtlebot3_stats.yaml"
     path.write_text(yaml.safe_dump(doc, sort_keys=False))
     return path
 

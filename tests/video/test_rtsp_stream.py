@@ -20,6 +20,7 @@ from harness.cli import main
 from harness.graph.nodes.video import RTSP_HUB
 from harness.video import psnr, read_sim_time, sim_time_of_user_data
 from harness.video.errors import StreamError
+from tests.conftest import ModuleTmp
 from tests.e2e.bagread import decoded
 
 SCENARIO = Path(__file__).with_name("rtsp_two_cameras.yaml")
@@ -120,9 +121,8 @@ def _serve(run_dir: Path, ports: list[int]) -> tuple[dict[str, Received], Any] |
 
 
 @pytest.fixture(scope="module")
-def streamed(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Received], Path,
-                                                              dict[str, Any]]:
-    run_dir = tmp_path_factory.mktemp("rtsp") / "run"
+def streamed(module_tmp: ModuleTmp) -> tuple[dict[str, Received], Path, dict[str, Any]]:
+    run_dir = module_tmp("rtsp") / "run"
     for _ in range(5):  # a port taken since it was picked: pick others
         served = _serve(run_dir, _unused_ports(2))
         if served is not None:
