@@ -4,8 +4,10 @@
 robots, enabled fixed cameras, robot-mounted sensor attach points, workers on foot), compiles
 it and resolves every prim path to a MuJoCo object. A world file (``world.model``,
 :mod:`harness.sim.world_file`) is read and checked before anything else, and after compiling
-no robot may start inside one of its static geoms. Everything the rest of srr needs is
-addressed by prim path (``/World/...``) or by robot name; MuJoCo names stay internal.
+no robot may start inside one of its static geoms; each robot's ``control:`` block is
+measured against its compiled model (:mod:`harness.sim.kinematics`). Everything the rest of
+srr needs is addressed by prim path (``/World/...``) or by robot name; MuJoCo names stay
+internal.
 
 Conventions:
 
@@ -43,6 +45,7 @@ from harness.geometry import FloatArray
 from harness.scenario.schema import Scenario, WorldSpec
 from harness.sim.cameras import add_fixed_camera, world_convention_quat
 from harness.sim.footprints import Footprint
+from harness.sim.kinematics import base_axes, check_drive
 from harness.sim.layout import check_layout
 from harness.sim.lidar import check_lidars
 from harness.sim.mjquat import quat_wxyz_from_mat_mj, quat_wxyz_from_rpy_deg_mj
@@ -271,6 +274,30 @@ def _robot_of_element(scenario: Scenario, message: str) -> tuple[int, Any] | Non
     return None
 
 
+def _check_drives(model: mujoco.MjModel, data: mujoco.MjData, scenario: Scenario,
+                  robots: Mapping[str, RobotInfo], prims: Mapping[str, PrimRef],
+                  source: str) -> tuple[str, ...]:
+    """Every enabled robot's control block against its compiled model
+    (:mod:`harness.sim.kinematics`): the warnings, or the first error raised. Reads the spawn
+    state's poses, which ``mj_kinematics`` computes here (the world's ``mj_forward`` computes
+    the same again)."""
+    mujoco.mj_kinematics(model, data)
+    out: list[str] = []
+    for i, robot in enumerate(scenario.robots):
+        info = robots.get(robot.name)
+        if not robot.enabled or info is None:
+            continue
+        front = (robot.odometry.robot_front if robot.odometry.robot_front is not None
+                 else info.robot_front)  # as odometry reads it
+        base = base_axes(model, data, prims[info.base_prim].id, front, f"{robot.name}/")
+        if base is None:
+            continue
+        out += check_drive(model, data, robot, f"robots[{i}]",
+                           lambda path: scenario.file_for(path, source),
+                           {j: ref.joint_id for j, ref in info.joints.items()}, base)
+    return tuple(out)
+
+
 class World:
     """A compiled MuJoCo world plus the prim and robot tables; build it with :meth:`build`."""
 
@@ -284,7 +311,8 @@ class World:
         self._world_file = world_file
         self.scene_files: Mapping[str, str] = types.MappingProxyType(dict(scene_files or {}))
         #: ``file: field: message`` lines about the robots' model files that do not stop a
-        #: run (a link that collides but weighs nothing).
+        #: run (a link that collides but weighs nothing), and about control blocks that do
+        #: not agree with their models (:mod:`harness.sim.kinematics`).
         self.warnings = warnings
         self._model = model
         self._data = data
@@ -306,7 +334,8 @@ class World:
         the scenario file: robots' and the world's model files are found relative to it (or
         to the include that holds the robot or the world) and errors about them name it;
         ``environ`` (default: the process environment) holds ``SRR_PACKAGE_PATH`` /
-        ``ROS_PACKAGE_PATH``."""
+        ``ROS_PACKAGE_PATH``. A control block that does not agree with its robot's model is
+        a warning in :attr:`warnings`, wheels listed right before left an error."""
         check_layout(scenario, source)
         check_lidars(scenario, source)
         prims = PrimTable()
@@ -340,9 +369,10 @@ class World:
                  for b, _ in builds if b.file_digest is not None}
         if loaded is not None:
             files["world.model"] = file_digest(loaded.path, loaded.assets)
+        drives = _check_drives(model, data, scenario, robots, resolved, source)
         world = cls(scenario, model, data, resolved, types.MappingProxyType(robots),
                     WorkerDriver(model, workers), loaded, files,
-                    tuple(w for b, _ in builds for w in b.warnings))
+                    (*(w for b, _ in builds for w in b.warnings), *drives))
         owner = {b: name for name in world.robot_names() for b in world.robot_body_ids(name)}
         check_spawns(model, data, owner, robot_spawn(scenario, source),
                      None if loaded is None else loaded.describe_static)
