@@ -308,7 +308,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     finally:
         if bar is not None:
             bar.stop()
-    _print_run(res)
+    _print_run(res, "replay")
     return res.exit_code
 
 
@@ -430,7 +430,7 @@ def _fmt(v: Any) -> str:
     return "—" if v is None else f"{v:.4g}"
 
 
-def _print_run(res: api.RunResult) -> None:
+def _print_run(res: api.RunResult, command: str = "run") -> None:
     from rich.table import Table
 
     s = res.summary
@@ -466,7 +466,7 @@ def _print_run(res: api.RunResult) -> None:
             mt.add_row(m["name"], _fmt(m["value"]), m["unit"])
         _stdout().print(mt)
     for w in s.get("warnings", []):
-        _stderr().print(f"srr run: warning: {w}", markup=False)
+        _stderr().print(f"srr {command}: warning: {w}", markup=False)
     bad = [h for h in s["health"] if not h["ok"]]
     _stdout().print(f"health: {len(s['health']) - len(bad)}/{len(s['health'])} gates ok",
                     markup=False)

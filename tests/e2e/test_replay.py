@@ -109,6 +109,16 @@ def test_bad_replay_arguments_exit_2(recorded: api.RunResult, tmp_path: Path,
     assert not (tmp_path / "o").exists()
 
 
+def test_a_replays_warnings_are_said_of_srr_replay(recorded: api.RunResult, tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """They were printed as `srr run: warning: ...`."""
+    main(["replay", str(recorded.run_dir), "--out", str(tmp_path / "o"), "-q",
+          "--set", "systems_under_test.safety_monitor.enabled=false"])  # its verdict: not here
+    err = capsys.readouterr().err.strip().splitlines()
+    assert all(line.startswith("srr replay: warning: ") for line in err), err
+    assert any("subscribes to /safety/alarm" in line for line in err), err
+
+
 def test_bad_recordings_exit_2(recorded: api.RunResult, tmp_path: Path,
                                capsys: pytest.CaptureFixture[str]) -> None:
     broken = tmp_path / "broken"
