@@ -42,12 +42,13 @@ from harness.blas import users_environ
 from harness.bus.bus import Envelope, Qos
 from harness.errors import RunStopped, SrrError
 from harness.recording.recorder import Recorder, cdr_bytes
-from harness.ros2.domain import DomainLease, lease_domain
+from harness.ros2.domain import DomainInUse, DomainLease, lease_domain
 from harness.ros2.processes import ExternalProcess, start_processes, stop_processes
 from harness.scenario.schema import Ros2OutputSpec, Ros2Spec
 from harness.serde.messages import deserialize
 from harness.sut.base import SutContext, SystemUnderTest
 from harness.sut.errors import PluginError
+from harness.validation import close_match
 
 __all__ = ["Ros2Bridge", "message_class", "qos_profile"]
 
@@ -145,17 +146,20 @@ class Ros2Bridge(SystemUnderTest):
             raise PluginError(f"{self.source}: ros2.enabled needs rclpy (pip install -e "
                               f"'.[ros2]', Linux x86-64): {err}") from None
         self._rclpy = rclpy
+        for i, proc in enumerate(self.spec.external):
+            if shutil.which(proc.cmd[0]) is None:
+                raise PluginError(f"{self.source}: ros2.external[{i}].cmd: {proc.cmd[0]!r} "
+                                  "is not an executable file or on PATH")
         if ctx.params.get("check_only"):
             for i, out in enumerate(self.spec.outputs):
                 self._output_rule(i, out)
                 ctx.publisher(out.topic, out.type)
-            for i, proc in enumerate(self.spec.external):
-                if shutil.which(proc.cmd[0]) is None:
-                    raise PluginError(f"{self.source}: ros2.external[{i}].cmd: {proc.cmd[0]!r} "
-                                      "is not an executable file or on PATH")
             return
         self.setup_notes = self._tf2_msgs()
-        self.lease = lease_domain(self.spec.domain_id)
+        try:
+            self.lease = lease_domain(self.spec.domain_id)
+        except DomainInUse as err:
+            raise PluginError(f"{self.source}: ros2.domain_id: {err}") from None
         # with tf2_msgs on PYTHONPATH for Python nodes; their BLAS threads as the user set them
         env = users_environ()
         env["ROS_DOMAIN_ID"] = str(self.lease.domain_id)
@@ -288,12 +292,69 @@ class Ros2Bridge(SystemUnderTest):
             except RunStopped as err:
                 raise SrrError(str(err)) from None
             if time.monotonic() > deadline:
+                outputs = {o.topic: o for o in self.outputs}
+                waiting = ", ".join(self._not_published(t, outputs.get(t))
+                                    for t in sorted(set(missing)))
                 raise SrrError(f"ros2: the external nodes were not ready within {timeout:g} s "
-                               f"(still waiting on {', '.join(sorted(set(missing)))}; domain "
-                               f"{self.domain_id}; logs in {self.run_dir / 'ros2'})")
+                               f"(still waiting on {waiting}; domain {self.domain_id}; logs in "
+                               f"{self.run_dir / 'ros2'})")
         for o in self.outputs:  # what arrived while waiting is not part of any tick
             o.received.clear()
         self._started = True
+
+    def _publishers(self, topic: str) -> list[Any]:
+        """The graph's publishers of ``topic`` (rclpy ``TopicEndpointInfo``), not the
+        bridge's."""
+        return [p for p in self.node.get_publishers_info_by_topic(topic)
+                if p.node_name != self.node.get_name()]
+
+    def _not_published(self, topic: str, o: _Output | None) -> str:
+        """``topic`` (the output ``o``, or a ready topic), which has no publisher the bridge
+        matched, and what the graph has instead: a publisher of another type or of a QoS
+        the output's subscription cannot match, or a published topic of that name in another
+        namespace or spelt alike."""
+        from rclpy.qos import QoSCompatibility, qos_check_compatible
+
+        published = {name: sorted({p.topic_type for p in pubs}) for name, _ in
+                     self.node.get_topic_names_and_types()
+                     if (pubs := self._publishers(name))}
+        if o is not None and published.get(topic, [o.spec.type]) != [o.spec.type]:
+            return (f"{topic} (published as {', '.join(published[topic])}, not the declared "
+                    f"{o.spec.type})")
+        if o is not None and topic in published:
+            for p in self._publishers(topic):
+                compat, why = qos_check_compatible(p.qos_profile, o.subscription.qos_profile)
+                if compat == QoSCompatibility.ERROR:
+                    offered = p.qos_profile
+                    fix = {"reliability": offered.reliability.name.lower(),
+                           "durability": offered.durability.name.lower()}
+                    return (f"{topic} (its publisher's QoS does not match the bridge's "
+                            f"subscription: {why.removeprefix('ERROR: ').strip('; ').lower()}; "
+                            f"set ros2.qos: {{{topic}: {{reliability: {fix['reliability']}, "
+                            f"durability: {fix['durability']}}}}})")
+        leaf = topic.rsplit("/", 1)[-1]
+        declared = {o.topic for o in self.outputs}  # another output's publisher is its own
+        others = [t for t in published if t != topic and t not in declared]
+        near = [t for t in others if t.rsplit("/", 1)[-1] == leaf]
+        alike = near[0] if len(near) == 1 else close_match(topic, others)
+        if alike is None:
+            return topic
+        return (f"{topic} (nothing publishes it; {alike} ({', '.join(published[alike])}) is "
+                "published: misspelt or in another namespace?)")
+
+    def _unfed(self) -> str:
+        """The topics the external nodes subscribe to that nothing publishes but that are
+        spelt like one the bridge publishes (a misspelt input), as a note for an error."""
+        ours = [t for t, pub in self.pubs.items() if pub is not None]
+        notes = []
+        for name, _ in self.node.get_topic_names_and_types():
+            if name in ours or self.node.count_publishers(name) or \
+                    not self.node.count_subscribers(name):
+                continue
+            alike = close_match(name, ours)
+            if alike is not None:
+                notes.append(f"{name}, which nothing publishes (did you mean {alike}?)")
+        return f"; the external nodes subscribe to {', '.join(notes)}" if notes else ""
 
     @property
     def domain_id(self) -> int:
@@ -327,10 +388,11 @@ class Ros2Bridge(SystemUnderTest):
             self.executor.spin_once(timeout_sec=0.01)
             if time.monotonic() > deadline:
                 late = [o for o in due if not o.arrived(now_ns)]
-                names = ", ".join(f"{o.topic} ({o.spec.type})" for o in late)
+                names = ", ".join(f"{o.topic} ({o.spec.type}{_older(o)})" for o in late)
                 raise RunStopped("ros2_lockstep", (
                     f"ros2: no {names} from the external nodes within "
-                    f"{self.spec.timeout:g} s of wall-clock time at t={now_ns / 1e9:g} s"))
+                    f"{self.spec.timeout:g} s of wall-clock time at t={now_ns / 1e9:g} s"
+                    f"{self._unfed()}"))
             self._alive_or_stop(f"while the run waited at t={now_ns / 1e9:g} s")
         self._drain()
         for o in self.outputs:
@@ -395,6 +457,15 @@ class Ros2Bridge(SystemUnderTest):
         return [*self.setup_notes, *(
             f"ros2: {t} ({m}) is recorded but not published on the ROS 2 graph: no rclpy "
             "type support for it here" for t, m in sorted(self.unbridged.items()))]
+
+
+def _older(o: _Output) -> str:
+    """For a stamped output without a rate whose latest message is older than the tick: its
+    stamp, and why one stamped at the tick is due."""
+    if o.spec.rate_hz is not None or o.latest_stamp_ns < 0:
+        return ""
+    return (f"; the latest was stamped {o.latest_stamp_ns / 1e9:g} s, and without rate_hz "
+            "one stamped at or after every tick is due")
 
 
 _decode: Callable[[bytes, str], Any] = deserialize

@@ -3,13 +3,20 @@
 A domain is taken by holding an exclusive ``flock`` on ``<lock dir>/domain-<id>.lock`` for the
 run's lifetime; the kernel releases it when the process ends, however it ends, so a crashed run
 never leaks its domain. Ids 1-101 are used (0 is everyone's default; above 101 the RTPS port
-arithmetic collides with the ephemeral port range on Linux)."""
+arithmetic collides with the ephemeral port range on Linux). A domain the scenario names
+(``ros2.domain_id``) is locked too: two runs on one domain would hear each other's clock,
+sensors and outputs, so the second is refused, and a run that picks a free id skips it.
+
+The lock folder is shared by every user of the machine (sticky and writable by all, as
+``/tmp`` is), and a lock file is opened read-only (``flock`` needs no more), so one user's
+runs see another's locks instead of failing on their files."""
 
 from __future__ import annotations
 
 import contextlib
 import fcntl
 import os
+import stat
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,9 +24,13 @@ from typing import IO
 
 from harness.errors import SrrError
 
-__all__ = ["DomainLease", "lease_domain"]
+__all__ = ["DomainInUse", "DomainLease", "lease_domain"]
 
 FIRST, LAST = 1, 101
+
+
+class DomainInUse(SrrError):
+    """The ``ros2.domain_id`` a scenario names is held by another srr run on this machine."""
 
 
 @dataclass
@@ -36,25 +47,63 @@ class DomainLease:
 
 
 def _lock_dir() -> Path:
-    d = Path(os.environ.get("SRR_ROS2_LOCK_DIR") or Path(tempfile.gettempdir()) / "srr-ros2")
-    d.mkdir(parents=True, exist_ok=True)
+    chosen = os.environ.get("SRR_ROS2_LOCK_DIR")
+    d = Path(chosen or Path(tempfile.gettempdir()) / "srr-ros2")
+    try:
+        d.mkdir(parents=True)
+    except FileExistsError:
+        return d
+    if not chosen:  # made here: every user's runs lock in it (sticky, as /tmp is)
+        with contextlib.suppress(OSError):
+            os.chmod(d, stat.S_ISVTX | 0o777)
     return d
 
 
+def _open(d: Path, domain: int) -> IO[bytes] | OSError:
+    """The lock file of ``domain`` opened read-only (made if missing), or why it cannot be."""
+    try:
+        return os.fdopen(os.open(d / f"domain-{domain}.lock", os.O_RDONLY | os.O_CREAT, 0o644),
+                         "rb")
+    except OSError as err:
+        return err
+
+
+def _locked(f: IO[bytes]) -> bool:
+    """Whether the exclusive lock on ``f`` was taken (False: another run holds it; ``f`` is
+    closed then)."""
+    try:
+        fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        f.close()
+        return False
+    return True
+
+
 def lease_domain(requested: int | None) -> DomainLease:
-    """``requested`` as given (no lock: the user chose it), else the first free id, locked."""
-    if requested is not None:
-        return DomainLease(requested)
+    """``requested``, locked (:class:`DomainInUse` if another srr run holds it; not locked if
+    its lock file cannot be opened), else the first free id, locked."""
     d = _lock_dir()
+    if requested is not None:
+        f = _open(d, requested)
+        if isinstance(f, OSError):
+            return DomainLease(requested)
+        if not _locked(f):
+            raise DomainInUse(f"ROS_DOMAIN_ID {requested} is in use by another srr run on this "
+                              f"machine (lock {d / f'domain-{requested}.lock'}): this run would "
+                              "hear its messages; leave it unset for a free one")
+        return DomainLease(requested, f)
     start = FIRST + os.getpid() % (LAST - FIRST + 1)  # spread concurrent starts
+    unopened: OSError | None = None
     for k in range(LAST - FIRST + 1):
         domain = FIRST + (start - FIRST + k) % (LAST - FIRST + 1)
-        f = (d / f"domain-{domain}.lock").open("ab")
-        try:
-            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            f.close()
-            continue
-        return DomainLease(domain, f)
+        f = _open(d, domain)
+        if isinstance(f, OSError):
+            unopened = f
+        elif _locked(f):
+            return DomainLease(domain, f)
+    if unopened is not None:
+        raise SrrError(f"ros2: no free ROS_DOMAIN_ID {FIRST}-{LAST}: cannot open the locks in "
+                       f"{d} ({unopened.strerror or unopened}); make that folder writable by "
+                       "every user of srr, or set ros2.domain_id")
     raise SrrError(f"ros2: every ROS_DOMAIN_ID {FIRST}-{LAST} is taken by another srr run "
                    f"(locks in {d}); set ros2.domain_id")

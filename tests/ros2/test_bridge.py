@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -17,8 +19,9 @@ from mcap.reader import make_reader
 
 from harness import api
 from harness.blas import one_blas_thread
+from harness.cli import main
 from harness.errors import SrrError
-from harness.ros2.domain import lease_domain
+from harness.ros2.domain import DomainInUse, lease_domain
 from harness.serde.messages import TYPESTORE
 
 if os.environ.get("SRR_REQUIRE_ROS2") == "1":
@@ -131,7 +134,107 @@ def test_runs_take_different_domains_and_release_them() -> None:
     finally:
         a.release()
         b.release()
-    assert lease_domain(7).domain_id == 7  # as the scenario says, not locked
+    named = lease_domain(7)  # as the scenario says, and locked like any other
+    try:
+        assert named.domain_id == 7
+        with pytest.raises(DomainInUse, match="ROS_DOMAIN_ID 7 is in use by another srr run"):
+            lease_domain(7)
+    finally:
+        named.release()
+    lease_domain(7).release()  # free again
+
+
+def test_a_domain_id_another_run_holds_is_refused_in_one_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Two runs that name the same ros2.domain_id hear each other's /clock, sensors and
+    outputs: both recorded something else than alone, and both said RECORDED. The second is
+    refused before anything starts, and leaves no run directory."""
+    held = lease_domain(43)
+    try:
+        code = main(["run", str(FORKLIFT), "-q", "--out", str(tmp_path / "run"), "--set",
+                     "duration=1", *(f"--set={o}" for o in _overrides()),
+                     "--set", "ros2.domain_id=43"])
+    finally:
+        held.release()
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"srr run: {FORKLIFT}: ros2.domain_id: ROS_DOMAIN_ID 43 is in use")
+    assert not (tmp_path / "run").exists()
+
+
+def test_the_lock_folder_is_shared_by_every_user(tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """The first user's run made it 0755 and its lock files 0644, opened for writing: another
+    user's run failed with a PermissionError traceback. It is sticky and writable by all, as
+    /tmp is, and a lock file is opened read-only."""
+    monkeypatch.delenv("SRR_ROS2_LOCK_DIR", raising=False)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    lease = lease_domain(None)
+    try:
+        assert stat.S_IMODE((tmp_path / "srr-ros2").stat().st_mode) == 0o1777
+        assert lease._file is not None and lease._file.mode == "rb"
+    finally:
+        lease.release()
+
+
+def test_a_missing_external_command_is_named_with_the_scenario_file(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`srr validate` named the file; `srr run` said only `ros2.external[0].cmd: cannot
+    start ...`."""
+    code = main(["run", str(FORKLIFT), "-q", "--out", str(tmp_path / "run"),
+                 *(f"--set={o}" for o in _overrides()[:-1]),
+                 "--set", "ros2.external=[{cmd: [no-such-node-binary]}]"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err == (f"srr run: {FORKLIFT}: ros2.external[0].cmd: "
+                                 "'no-such-node-binary' is not an executable file or on PATH")
+    assert not (tmp_path / "run").exists()
+
+
+def _inline_node(body: str) -> str:
+    """``ros2.external`` with one rclpy node written inline (``python -c``)."""
+    code = ("import rclpy\nfrom geometry_msgs.msg import Twist, TwistStamped\n"
+            "from nav_msgs.msg import Odometry\nrclpy.init()\nn = rclpy.create_node('probe')\n"
+            f"{body}\ntry:\n    rclpy.spin(n)\nexcept BaseException:\n    pass\n")
+    return f"ros2.external=[{{name: probe, cmd: {json.dumps([sys.executable, '-c', code])}}}]"
+
+
+@pytest.mark.parametrize(("body", "words"), [
+    ("n.create_publisher(TwistStamped, '/cmd_vel', 10)",
+     "still waiting on /cmd_vel (published as geometry_msgs/msg/TwistStamped, not the "
+     "declared geometry_msgs/msg/Twist)"),
+    ("n.create_publisher(Twist, '/cmd_vell', 10)",
+     "still waiting on /cmd_vel (nothing publishes it; /cmd_vell (geometry_msgs/msg/Twist) "
+     "is published: misspelt or in another namespace?)"),
+    ("n.create_publisher(Twist, '/forklift/cmd_vel', 10)",
+     "still waiting on /cmd_vel (nothing publishes it; /forklift/cmd_vel"),
+    ("from rclpy.qos import qos_profile_sensor_data\n"
+     "n.create_publisher(Twist, '/cmd_vel', qos_profile_sensor_data)",
+     "still waiting on /cmd_vel (its publisher's QoS does not match the bridge's subscription: "
+     "best effort publisher and reliable subscription; set ros2.qos: {/cmd_vel: "
+     "{reliability: best_effort, durability: volatile}})"),
+])
+def test_a_node_never_ready_is_told_what_the_graph_has_instead(
+        tmp_path: Path, body: str, words: str) -> None:
+    """A publisher of the output of another type, QoS, or of a misspelt or namespaced name:
+    the error said only `still waiting on /cmd_vel`, though `ros2 topic list` showed one."""
+    sc = api.load(FORKLIFT, duration=1.0, overrides=[
+        *_overrides()[:-1], _inline_node(body), "ros2.external.0.ready_timeout=2"])
+    with pytest.raises(SrrError, match="not ready within 2 s") as err:
+        api.run_scenario(sc, source=str(FORKLIFT), out=tmp_path / "run")
+    assert words in str(err.value)
+
+
+def test_a_lockstep_timeout_names_a_misspelt_input(tmp_path: Path) -> None:
+    """The node subscribes to /odm, which nothing publishes, so it never answers: the error
+    said only that no /cmd_vel came."""
+    body = ("p = n.create_publisher(Twist, '/cmd_vel', 10)\n"
+            "n.create_subscription(Odometry, '/odm', lambda m: p.publish(Twist()), 10)")
+    sc = api.load(FORKLIFT, duration=1.0, overrides=[
+        *_overrides(timeout=1.0)[:-1], _inline_node(body)])
+    res = api.run_scenario(sc, source=str(FORKLIFT), out=tmp_path / "run")
+    gate = next(h for h in res.summary["health"] if h["name"] == "ros2_lockstep")
+    assert "the external nodes subscribe to /odm, which nothing publishes (did you mean " \
+        "/odom?)" in gate["detail"]
 
 
 def test_external_safety_monitor_is_scored_like_the_built_in(tmp_path: Path) -> None:
@@ -185,3 +288,19 @@ def test_validate_counts_external_outputs_as_publishers() -> None:
     off = api.load(FORKLIFT, overrides=["systems_under_test.route_follower.enabled=false"])
     with pytest.raises(SrrError, match="nothing in the scenario publishes /cmd_vel"):
         api.validate(off, str(FORKLIFT))
+
+
+def test_a_lockstep_timeout_says_a_stamped_outputs_latest_stamp(tmp_path: Path) -> None:
+    """A stamped output without rate_hz is due at every tick; a node that answers a 5 Hz
+    camera only waited in vain at the second tick, and the error did not say why."""
+    body = ("p = n.create_publisher(TwistStamped, '/det', 10)\n"
+            "def on(m):\n    if m.header.stamp.nanosec == 0 and m.header.stamp.sec == 0:\n"
+            "        t = TwistStamped(); t.header = m.header; p.publish(t)\n"
+            "n.create_subscription(Odometry, '/odom', on, 10)")
+    sc = api.load(FORKLIFT, duration=1.0, overrides=[  # the route follower drives
+        "ros2.enabled=true", "ros2.timeout=1", _inline_node(body),
+        "ros2.outputs=[{topic: /det, type: geometry_msgs/msg/TwistStamped}]"])
+    res = api.run_scenario(sc, source=str(FORKLIFT), out=tmp_path / "run")
+    gate = next(h for h in res.summary["health"] if h["name"] == "ros2_lockstep")
+    assert ("no /det (geometry_msgs/msg/TwistStamped; the latest was stamped 0 s, and without "
+            "rate_hz one stamped at or after every tick is due)") in gate["detail"], gate
