@@ -22,7 +22,7 @@ from websockets.sync.client import ClientConnection, connect
 
 from tests.report.browser import CHROMIUM_FLAGS, VIEWPORT
 
-__all__ = ["Page", "open_page"]
+__all__ = ["LOOPBACK_ONLY", "Page", "open_page"]
 
 STARTUP_S = 60.0
 
@@ -56,12 +56,20 @@ class Page:
         return res["result"].get("value")
 
 
+#: The host-resolver rule that, with ``loopback``, lets a page reach a server of the test's
+#: on 127.0.0.1 (and nothing else).
+LOOPBACK_ONLY = "--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1"
+
+
 @contextmanager
-def open_page(binary: str, tmp: Path, url: str) -> Iterator[Page]:
-    """Chromium with ``url`` loaded (its ``load`` event fired), driven over DevTools."""
+def open_page(binary: str, tmp: Path, url: str, *, loopback: bool = False) -> Iterator[Page]:
+    """Chromium with ``url`` loaded (its ``load`` event fired), driven over DevTools.
+    ``loopback``: 127.0.0.1 is reachable (a server the test runs), nothing else is."""
     profile = tmp / f"cdp-profile-{len(list(tmp.glob('cdp-profile-*')))}"
     profile.mkdir()
-    cmd = [binary, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", "--remote-debugging-port=0",
+    flags = [LOOPBACK_ONLY if loopback and f.startswith("--host-resolver-rules=") else f
+             for f in CHROMIUM_FLAGS]
+    cmd = [binary, *flags, f"--user-data-dir={profile}", "--remote-debugging-port=0",
            f"--window-size={VIEWPORT[0]},{VIEWPORT[1]}",
            "--autoplay-policy=no-user-gesture-required", "--mute-audio",
            # file:// pages are one origin: a canvas with a drawn video frame can be read back

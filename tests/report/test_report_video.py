@@ -3,14 +3,18 @@ with the network unreachable: the WebM files are VP9 (so they play where h264 do
 <video> elements load and play, seeking to a moment shows the image the bag recorded at that
 time (PSNR against the bag's frame), the one cursor moves the map's markers and follows a
 click on a plot, and a clip plays its window. ``srr report`` writes the same videos again
-(same bytes) and leaves the bag alone; ``--no-video`` and a run without cameras have none."""
+(same bytes) and leaves the bag alone; ``--no-video`` and a run without cameras have none.
+Served by a server that ignores byte ranges, the videos still seek (played from memory)."""
 
 from __future__ import annotations
 
 import base64
+import functools
 import hashlib
+import http.server
 import json
 import shutil
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -241,6 +245,55 @@ def test_a_clip_plays_its_window(page: Page) -> None:
       if (!bar.classList.contains("playing")) { ok(-1); }
     })""", timeout=120)
     assert end == pytest.approx(clip["until"], abs=1e-6), clip
+
+
+class _WholeFiles(http.server.SimpleHTTPRequestHandler):
+    """A static file server that ignores byte ranges, as ``python -m http.server`` does."""
+
+    def log_message(self, format: str, *args: Any) -> None:
+        pass
+
+
+# Resolves, within 20 s, with each <video>'s seekable end and duration (once every one can
+# be put anywhere in its file, or when the time is up).
+SEEKABLE = """new Promise(function (ok) {
+  var vs = Array.prototype.slice.call(document.querySelectorAll("video"));
+  var until = performance.now() + 20000;
+  function state() { return vs.map(function (v) { var s = v.seekable;
+    return {end: s.length ? s.end(s.length - 1) : 0, duration: v.duration}; }); }
+  (function check() {
+    var st = state();
+    if (st.every(function (x) { return x.duration > 0 && x.end >= x.duration - 0.05; })
+        || performance.now() > until) { ok(st); } else { setTimeout(check, 50); }
+  })(); })"""
+
+
+def test_videos_seek_when_the_server_sends_whole_files(chromium: str,
+                                                       failing_run: api.RunResult,
+                                                       tmp_path: Path) -> None:
+    """Over HTTP from a server without byte ranges a <video> can only play from its start:
+    the page fetches such a file once and plays it from memory, so a moment still seeks
+    every video, and playing from there keeps the cursor where it was put."""
+    handler = functools.partial(_WholeFiles, directory=str(failing_run.run_dir))
+    with http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler) as server:
+        threading.Thread(target=server.serve_forever, daemon=True).start()
+        try:
+            url = f"http://127.0.0.1:{server.server_address[1]}/report.html"
+            with open_page(chromium, tmp_path, url, loopback=True) as p:
+                p.eval(LOADED)
+                st = p.eval(SEEKABLE, timeout=60)
+                assert all(x["end"] >= x["duration"] - 0.05 for x in st), st
+                t0s = p.eval('Array.prototype.map.call(document.querySelectorAll("video"), '
+                             'function (v) { return parseFloat(v.getAttribute("data-t0")); })')
+                want = p.eval(SEEK.replace("ACTION", "srrCursor.seek(8.0)"))
+                assert want == pytest.approx([8.0 - t0 + 0.001 for t0 in t0s], abs=1e-3)
+                played = p.eval("""new Promise(function (ok) {
+                  srrCursor.seek(5.0); srrCursor.play();
+                  setTimeout(function () { var t = srrCursor.time(); srrCursor.pause();
+                    ok(t); }, 600); })""")
+                assert 5.0 <= played < 6.5  # from 5 s on, not from the file's start
+        finally:
+            server.shutdown()
 
 
 def test_srr_report_writes_the_same_videos_and_leaves_the_bag(failing_run: api.RunResult,

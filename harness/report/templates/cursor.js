@@ -6,6 +6,8 @@
    - map: g.map-frame (data-sx, data-sy: "d0 r0 k", px = r0 + (x - d0) k) and the JSON of
      #srr-tracks (name, kind, run, color, t, x, y)
    - anything with data-seek="t" seeks there on click; data-until="t" then plays to t.
+   - a video its server sends whole (no byte ranges: `python -m http.server`) cannot seek;
+     it is fetched once and played from memory, and leads nothing until then.
    window.srrCursor = {seek(t), time(), play(), pause()} */
 (function () {
   "use strict";
@@ -102,11 +104,31 @@
     draw();
   }
 
+  /* whether the video can be put at any time of its file: a server that ignores byte
+     ranges (python -m http.server) leaves it seekable over [0, 0] only */
+  function seekable(v) {
+    var s = v.seekable;
+    return s.length > 0 && isFinite(v.duration) && s.end(s.length - 1) >= v.duration - 0.05;
+  }
+
+  /* such a video is fetched whole, once, and played from memory (a blob: URL) */
+  function fromMemory(v) {
+    if (v.hasAttribute("data-memory") || !window.fetch || !window.URL) { return; }
+    v.setAttribute("data-memory", "loading");
+    fetch(v.currentSrc).then(function (r) {
+      if (!r.ok) { throw new Error(String(r.status)); }
+      return r.blob();
+    }).then(function (b) {
+      v.setAttribute("data-memory", "yes");
+      v.src = URL.createObjectURL(b);
+    }).catch(function () { v.setAttribute("data-memory", "failed"); });
+  }
+
   /* the leading video is the first one still playing; without one, a clock at 1x */
   function leader() {
     for (var i = 0; i < videos.length; i++) {
       var v = videos[i];
-      if (!v.paused && !v.ended && T >= num(v, "data-t0") - EPS) { return v; }
+      if (!v.paused && !v.ended && seekable(v) && T >= num(v, "data-t0") - EPS) { return v; }
     }
     return null;
   }
@@ -121,7 +143,8 @@
     } else if (clockStart) {
       T = clockStart.t + (performance.now() - clockStart.at) / 1000;
       videos.forEach(function (w) {  /* a video whose first frame is now due starts */
-        if (w.paused && T >= num(w, "data-t0") && w.currentTime < videoTime(w, T) - 0.2) {
+        if (w.paused && seekable(w) && T >= num(w, "data-t0")
+            && w.currentTime < videoTime(w, T) - 0.2) {
           w.currentTime = videoTime(w, T); w.play().catch(function () {});
         }
       });
@@ -145,6 +168,7 @@
     playing = true;
     clockStart = {t: T, at: performance.now()};
     videos.forEach(function (v) {
+      if (!seekable(v)) { return; }  /* it starts once it can be put at the cursor */
       v.currentTime = videoTime(v, T);
       if (T < num(v, "data-t0") - EPS) { return; }
       v.play().catch(function () {});
@@ -186,7 +210,11 @@
     }
   });
   videos.forEach(function (v) {
-    v.addEventListener("loadedmetadata", function () { v.currentTime = videoTime(v, T); });
+    v.addEventListener("loadedmetadata", function () {
+      if (!seekable(v)) { fromMemory(v); return; }
+      v.currentTime = videoTime(v, T);
+      if (playing && T >= num(v, "data-t0") - EPS) { v.play().catch(function () {}); }
+    });
   });
   window.srrCursor = {seek: seek, play: play, pause: pause,
                       time: function () { return T; }};
