@@ -725,6 +725,10 @@ def _print_diff(r: DiffResult) -> None:
                         f"{run.verdict})", markup=False)
     for note in r.replay_notes:
         _stdout().print(note, markup=False)
+    if r.changes:
+        _stdout().print("what changed (A → B):", markup=False)
+        for line in r.changes:
+            _stdout().print(f"  {line}", markup=False)
     table = Table(title="recorded topics (messages paired by index)")
     for col in ("topic", "type", "A", "B", "status", "differ", "first divergence"):
         table.add_column(col, justify="right" if col in ("A", "B", "differ") else "left")

@@ -34,8 +34,14 @@ __all__ = ["check_against_summary", "diff_runs", "is_baseline_file", "open_basel
 
 def is_baseline_file(path: Path) -> bool:
     """Whether ``srr diff`` reads ``path`` as a baseline file (``baselines/<name>.json``)
-    rather than a run directory."""
-    return path.suffix == ".json" and not path.is_dir()
+    rather than a run directory (a run's own ``summary.json`` is neither: see
+    :func:`diff_runs`)."""
+    return path.suffix == ".json" and not path.is_dir() and not _run_summary(path)
+
+
+def _run_summary(path: Path) -> bool:
+    """``path`` is the ``summary.json`` of a run directory (one with its ``bag/``)."""
+    return path.name == "summary.json" and (path.parent / "bag").is_dir()
 
 
 def open_run(path: Path) -> tuple[dict[str, Any], Path]:
@@ -112,6 +118,56 @@ def _info(path: Path, s: Mapping[str, Any]) -> RunInfo:
                    str(s.get("digest", "")), replay_note(s))
 
 
+def _resolved(run: Path) -> dict[str, Any] | None:
+    """The run's resolved scenario (``scenario.yaml``) as a mapping with every default; None
+    when it is missing or does not load (the metric tolerances' note says so)."""
+    from harness.scenario import load_scenario, scenario_to_mapping
+
+    file = run / "scenario.yaml"
+    if not file.is_file():
+        return None
+    try:
+        return scenario_to_mapping(load_scenario(file))
+    except SrrError:
+        return None
+
+
+def _changes(a: Path, b: Path, sa: Mapping[str, Any], sb: Mapping[str, Any]) -> tuple[str, ...]:
+    """What differs between two runs' inputs, A → B: every resolved scenario field (the
+    systems under test too), then the versions both recorded (srr, Python, MuJoCo, the
+    OpenGL renderer, ...) in one line."""
+    from harness.regression import scenario_differences
+
+    out: list[str] = []
+    ma, mb = _resolved(a), _resolved(b)
+    if ma is not None and mb is not None:
+        out += scenario_differences(ma, mb)
+    va, vb = sa.get("versions"), sb.get("versions")
+    if isinstance(va, Mapping) and isinstance(vb, Mapping):
+        moved = [f"{k} {va[k]} → {vb[k]}" for k in sorted(set(va) & set(vb))
+                 if str(va[k]) != str(vb[k])]
+        if moved:
+            out.append("versions: " + ", ".join(moved))
+    return tuple(out)
+
+
+def _count_only(topics: Sequence[TopicDiff], a: RunInfo, b: RunInfo) -> str | None:
+    """A note when topics differ only in how many messages they have (one run is longer, or
+    was cut short): their status says ``differs`` with no message that differs."""
+    only = [t.name for t in topics if t.status == "differs" and t.messages_differ == 0
+            and t.first_beyond is not None and t.first_beyond.path == "(message)"]
+    if not only:
+        return None
+    shown = ", ".join(only[:4]) + (", …" if len(only) > 4 else "")
+    lengths = ""
+    if a.simulated_s is not None and b.simulated_s is not None \
+            and a.simulated_s != b.simulated_s:
+        lengths = (f"; A has {a.simulated_s:g} s of simulated time, "
+                   f"B {b.simulated_s:g} s")
+    return (f"{len(only)} topic(s) differ only in how many messages they have ({shown}): "
+            f"the messages both runs recorded are identical{lengths}")
+
+
 def _scenario_tolerances(run: Path) -> tuple[dict[str, ToleranceSpec], str | None]:
     from harness.scenario import load_scenario
 
@@ -149,6 +205,11 @@ def diff_runs(a: str | Path, b: str | Path, *,
     tols = tuple(t if isinstance(t, Tolerance) else parse_tolerance(t) for t in tolerances)
     pa, pb = Path(a), Path(b)
     kept: frozenset[str] | None = None  # A is a baseline: the topics its reference keeps
+    for p in (pa, pb):
+        if _run_summary(p):
+            raise SrrError(f"{p}: the summary of the run {p.parent}: give the run directory "
+                           f"(srr diff {pa.parent if p is pa else pa} "
+                           f"{pb.parent if p is pb else pb})")
     if is_baseline_file(pa):
         sa, bag_a, kept = open_baseline(pa)
     else:
@@ -179,8 +240,13 @@ def diff_runs(a: str | Path, b: str | Path, *,
     if sa.get("scenario") != sb.get("scenario"):
         notes.append(f"the runs are of different scenarios: {sa.get('scenario')!r} (A) and "
                      f"{sb.get('scenario')!r} (B)")
+    info_a, info_b = _info(pa, sa), _info(pb, sb)
+    count_only = _count_only(topics, info_a, info_b)
+    if count_only:
+        notes.append(count_only)
     metric_tols, problem = _scenario_tolerances(pb if kept is not None else pa)
     if problem and (ma or mb):
         notes.append(problem)
-    return DiffResult(_info(pa, sa), _info(pb, sb), topics, metric_deltas(ma, mb, metric_tols),
-                      tols, tuple(notes))
+    changes = () if kept is not None else _changes(pa, pb, sa, sb)
+    return DiffResult(info_a, info_b, topics, metric_deltas(ma, mb, metric_tols),
+                      tols, tuple(notes), changes)

@@ -294,6 +294,7 @@ def render_diff(result: DiffResult, *, data_a: RunData | None = None,
         "problems": problems,
         "notes": notes,
         "replay_notes": list(result.replay_notes),
+        "changes": list(result.changes),
         "runs": [{"key": st.key, "label": st.label, "color": st.color,
                   "info": _run_info(r, d)}
                  for r, d, st in ((result.a, a, BASELINE), (result.b, b, CANDIDATE))],

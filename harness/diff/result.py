@@ -170,7 +170,9 @@ class RunInfo:
 class DiffResult:
     """``srr diff A B``. ``equal`` (exit 0) depends on the recorded data only: the same
     topics, with the same types and counts, each identical or within tolerance. Metrics are
-    shown side by side but do not decide it."""
+    shown side by side but do not decide it. ``changes``: what differs between the runs'
+    inputs, A → B (resolved scenario fields, systems under test included, and versions),
+    one line each; empty when A is a baseline file."""
 
     a: RunInfo
     b: RunInfo
@@ -178,6 +180,7 @@ class DiffResult:
     metrics: tuple[MetricDelta, ...]
     tolerances: tuple[Tolerance, ...]
     notes: tuple[str, ...]
+    changes: tuple[str, ...] = ()
 
     @property
     def equal(self) -> bool:

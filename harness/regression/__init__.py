@@ -19,7 +19,12 @@ from harness.regression.compare import (
 )
 
 if TYPE_CHECKING:
-    from harness.regression.config import comparable_config, config_differences, with_defaults
+    from harness.regression.config import (
+        comparable_config,
+        config_differences,
+        scenario_differences,
+        with_defaults,
+    )
     from harness.regression.store import (
         Baseline,
         BaselineError,
@@ -46,6 +51,7 @@ __all__ = [
     "decide",
     "load_baseline",
     "save_baseline",
+    "scenario_differences",
     "tolerance_for",
     "with_defaults",
 ]
@@ -53,6 +59,7 @@ __all__ = [
 _WHERE = {
     "comparable_config": "config",
     "config_differences": "config",
+    "scenario_differences": "config",
     "with_defaults": "config",
     "Baseline": "store",
     "BaselineError": "store",

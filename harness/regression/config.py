@@ -15,7 +15,8 @@ metric, compared by name: a spec added to a scenario is a ``new`` metric, not an
 configuration).
 :func:`comparable_config` is that part of a resolved scenario, as plain data (a run adds
 ``scene_files``, the digests of the model files its scene is built from);
-:func:`config_differences` names what differs, field by field. A baseline blessed before srr
+:func:`config_differences` names what differs, field by field
+(:func:`scenario_differences`: every field, for ``srr diff``). A baseline blessed before srr
 gained a field has no value for it; :func:`with_defaults` gives it the field's default, so
 adding a field with a default changes no verdict.
 """
@@ -28,7 +29,8 @@ from typing import Any
 from harness.errors import SrrError
 from harness.scenario import FORMAT_VERSION, scenario_from_mapping, scenario_to_mapping
 
-__all__ = ["EXCLUDED", "comparable_config", "config_differences", "with_defaults"]
+__all__ = ["EXCLUDED", "LABELS", "comparable_config", "config_differences",
+           "scenario_differences", "with_defaults"]
 
 #: Top-level keys, and ``scoring`` sub-keys, that do not make two configurations different.
 EXCLUDED = frozenset({"format_version", "name", "description", "baseline", "baselines",
@@ -119,10 +121,28 @@ def config_differences(baseline: Mapping[str, Any], run: Mapping[str, Any],
                        limit: int = 8) -> list[str]:
     """``field: baseline value → run value`` for every leaf that differs (sorted; at most
     ``limit`` lines, then a count of the rest)."""
+    return _differences(comparable_config(baseline), comparable_config(run), limit)
+
+
+#: Top-level keys that name or describe a scenario: no difference between two runs.
+LABELS = frozenset({"format_version", "name", "description"})
+
+
+def scenario_differences(a: Mapping[str, Any], b: Mapping[str, Any],
+                         limit: int = 10) -> list[str]:
+    """``field: A's value → B's value`` for every leaf of two resolved scenario mappings that
+    differs, the systems under test, recording and scoring settings included (what
+    ``srr diff`` shows as what changed between two runs; only :data:`LABELS` are left out).
+    Sorted; at most ``limit`` lines, then a count of the rest."""
+    return _differences({k: v for k, v in a.items() if k not in LABELS},
+                        {k: v for k, v in b.items() if k not in LABELS}, limit)
+
+
+def _differences(one: Mapping[str, Any], other: Mapping[str, Any], limit: int) -> list[str]:
     a: dict[str, Any] = {}
     b: dict[str, Any] = {}
-    _flat(comparable_config(baseline), "", a)
-    _flat(comparable_config(run), "", b)
+    _flat(one, "", a)
+    _flat(other, "", b)
     diffs = [f"{k}: {_show(a.get(k, _ABSENT))} → {_show(b.get(k, _ABSENT))}"
              for k in sorted(set(a) | set(b)) if a.get(k, _ABSENT) != b.get(k, _ABSENT)
              and not _emptied(k, a, b) and not _emptied(k, b, a)]

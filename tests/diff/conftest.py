@@ -4,6 +4,7 @@
 * ``seed_7`` / ``seed_8``: the same scene with a walking worker whose speed varies with the
   seed (``variation``): only ``/gt/character_0/tf`` differs.
 * ``short``: forklift_warehouse cut to 1.5 s: fewer messages on every topic.
+* ``slower``: forklift_warehouse, 2 s, its route follower driving at 1.0 m/s instead of 1.5.
 * ``scan_1`` / ``scan_2``: turtlebot3_room, 1 s, seeds 1 and 2: the lidar noise differs.
 * ``dock_11`` / ``dock_12``: dock_worker_crossing cut to 6 s (forklift near the dock, the
   worker crossing early at a seed-dependent speed): cameras, perception, safety, both differ.
@@ -44,6 +45,8 @@ class Runs:
             "seed_7": (FORKLIFT, 2.0, 7, [WORKER]),
             "seed_8": (FORKLIFT, 2.0, 8, [WORKER]),
             "short": (FORKLIFT, 1.5, None, []),
+            "slower": (FORKLIFT, 2.0, None,
+                       ["systems_under_test.route_follower.params.speed=1.0"]),
             "scan_1": (TURTLEBOT, 1.0, 1, []),
             "scan_2": (TURTLEBOT, 1.0, 2, []),
             "dock_11": (DOCK, 6.0, 11, DOCK_SHORT),

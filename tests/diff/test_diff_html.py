@@ -115,6 +115,15 @@ def test_page_is_self_contained(dock_page: tuple[Path, Any]) -> None:
     assert not re.search(r"(?i)@import|@font-face|(?<![\w.])url\(", html)
 
 
+def test_page_says_what_changed_between_the_runs(dock_page: tuple[Path, Any]) -> None:
+    page, result = dock_page
+    assert result.changes == ("seed: 11 → 12",)
+    html = page.read_text(encoding="utf-8")
+    section = html[html.index('<div class="changes" id="changes">'):]
+    assert "What changed (A → B)" in section[:200]
+    assert '<li class="mono">seed: 11 → 12</li>' in section[:400]
+
+
 def test_page_shows_both_runs_in_chromium_offline(chromium: str, dock_page: tuple[Path, Any],
                                                   runs: Runs, tmp_path: Path) -> None:
     page, result = dock_page

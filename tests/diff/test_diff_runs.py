@@ -130,6 +130,29 @@ def test_counts_and_topic_sets_that_differ(runs: Runs) -> None:
     assert r.first_divergence is not None and r.first_divergence.path == "(topic)"
 
 
+def test_what_changed_between_the_runs_is_said_in_their_scenarios_words(
+        runs: Runs, capsys: pytest.CaptureFixture[str]) -> None:
+    """The resolved scenarios' fields that differ, A → B (a system under test's parameter
+    too, which a baseline comparison leaves out), and a note for topics that differ only in
+    their message counts, the messages both runs have being identical."""
+    assert api.diff_runs(runs.get("same_a"), runs.get("same_b")).changes == ()
+    r = api.diff_runs(runs.get("same_a"), runs.get("slower"))
+    assert r.changes == ("systems_under_test[0].params.speed: 1.5 → 1.0",)
+    assert main(["diff", str(runs.get("same_a")), str(runs.get("slower"))]) == 1
+    out = capsys.readouterr().out
+    assert "what changed (A → B):\n  systems_under_test[0].params.speed: 1.5 → 1.0\n" in out
+    r = api.diff_runs(runs.get("same_a"), runs.get("short"))
+    assert r.changes == ("duration: 2.0 → 1.5",)
+    assert r.to_dict()["changes"] == ["duration: 2.0 → 1.5"]
+    (note,) = [n for n in r.notes if "only in how many messages" in n]
+    shared = [t.name for t in r.topics if t.status == "differs"]
+    assert note.startswith(f"{len(shared)} topic(s) differ only in how many messages they "
+                           f"have ({shared[0]}, ")
+    assert note.endswith("the messages both runs recorded are identical; A has 2 s of "
+                         "simulated time, B 1.5 s")
+    assert "seed: 7 → 8" in api.diff_runs(runs.get("seed_7"), runs.get("seed_8")).changes
+
+
 def test_result_is_frozen_data(runs: Runs) -> None:
     r = api.diff_runs(runs.get("same_a"), runs.get("same_b"))
     with pytest.raises(dataclasses.FrozenInstanceError):
@@ -159,6 +182,8 @@ def _corrupt(run: Path, dst: Path, how: str, other: Path | None = None) -> Path:
         assert other is not None
         (other_mcap,) = (other / "bag").glob("*.mcap")
         mcap.write_bytes(other_mcap.read_bytes())
+    elif how == "summary-file":  # the run's summary.json given for its run directory
+        return dst / "summary.json"
     elif how == "bad-json":
         (dst / "summary.json").write_text("{", encoding="utf-8")
     elif how == "bad-metric":
@@ -176,6 +201,7 @@ def _corrupt(run: Path, dst: Path, how: str, other: Path | None = None) -> Path:
     ("truncated", "cannot read bag"),
     ("overwritten", "cannot read bag: Chunk checksum mismatch"),
     ("swapped", "does not match summary.json"),
+    ("summary-file", "summary.json: the summary of the run "),
     ("bad-json", "summary.json: not valid JSON"),
     ("bad-metric", "summary.json: metrics[0].value: expected a number, got 'fast'"),
 ])
