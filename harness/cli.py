@@ -431,6 +431,13 @@ def _fmt(v: Any) -> str:
 
 
 def _print_run(res: api.RunResult, command: str = "run") -> None:
+
+def _fmt_unit(v: Any, unit: str) -> str:
+    """A value with its unit; — alone for none (not `— m`)."""
+    return "—" if v is None else f"{v:.4g} {unit}".rstrip()
+
+
+def _print_run(res: api.RunResult) -> None:
     from rich.table import Table
 
     s = res.summary
@@ -454,7 +461,7 @@ def _print_run(res: api.RunResult, command: str = "run") -> None:
         for e in s["comparison"]:
             style = {"regressed": "bold red", "missing": "bold red",
                      "improved": "green", "not_compared": "dim"}.get(e["status"], "")
-            mt.add_row(e["name"], f"{_fmt(e['value'])} {e['unit']}", _fmt(e["baseline"]),
+            mt.add_row(e["name"], _fmt_unit(e["value"], e["unit"]), _fmt(e["baseline"]),
                        _fmt(e["delta"]), f"±{e['tolerance']:.3g}",
                        e["status"].replace("_", " "), style=style)
         _stdout().print(mt)
@@ -764,7 +771,7 @@ def _print_diff(r: DiffResult) -> None:
         for col in ("metric", "A", "B", "delta", "tolerance", "status", "better"):
             mt.add_column(col)
         for m in moved:
-            mt.add_row(m.name, f"{_fmt(m.value_a)} {m.unit}", f"{_fmt(m.value_b)} {m.unit}",
+            mt.add_row(m.name, _fmt_unit(m.value_a, m.unit), _fmt_unit(m.value_b, m.unit),
                        _fmt(m.delta), f"±{m.tolerance:.3g}", m.status, m.better or "—",
                        style=_STATUS_STYLE.get(m.status, ""))
         _stdout().print(mt)

@@ -153,6 +153,21 @@ def test_what_changed_between_the_runs_is_said_in_their_scenarios_words(
     assert "seed: 7 → 8" in api.diff_runs(runs.get("seed_7"), runs.get("seed_8")).changes
 
 
+def test_a_metric_one_run_lacks_shows_a_dash_not_a_dash_and_unit(
+        runs: Runs, capsys: pytest.CaptureFixture[str]) -> None:
+    from harness.cli import _print_diff
+    from harness.diff.result import MetricDelta
+
+    r = api.diff_runs(runs.get("same_a"), runs.get("same_b"))
+    lost = MetricDelta("control.time_to_goal", "s", "lower", 24.68, None, None, 1.23,
+                       "regressed")
+    _print_diff(dataclasses.replace(r, metrics=(lost,)))
+    (row,) = [line for line in capsys.readouterr().out.splitlines()
+              if "control.time_to_goal" in line]
+    cells = [c.strip() for c in row.strip("│ ").split("│")]
+    assert cells[:3] == ["control.time_to_goal", "24.68 s", "—"], cells
+
+
 def test_result_is_frozen_data(runs: Runs) -> None:
     r = api.diff_runs(runs.get("same_a"), runs.get("same_b"))
     with pytest.raises(dataclasses.FrozenInstanceError):
