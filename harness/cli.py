@@ -430,14 +430,12 @@ def _fmt(v: Any) -> str:
     return "—" if v is None else f"{v:.4g}"
 
 
-def _print_run(res: api.RunResult, command: str = "run") -> None:
-
 def _fmt_unit(v: Any, unit: str) -> str:
     """A value with its unit; — alone for none (not `— m`)."""
     return "—" if v is None else f"{v:.4g} {unit}".rstrip()
 
 
-def _print_run(res: api.RunResult) -> None:
+def _print_run(res: api.RunResult, command: str = "run") -> None:
     from rich.table import Table
 
     s = res.summary
