@@ -14,9 +14,11 @@ from urllib.parse import quote
 __all__ = ["COMMENT_LIMIT", "STEP_SUMMARY_LIMIT", "VERDICT_MARK", "cap", "cell", "code",
            "join_link", "link", "num", "table", "verdict_mark"]
 
-#: GitHub's limits: a job's step summary (bytes) and a pull-request comment (characters).
+#: GitHub's limits: a job's step summary (bytes), and a pull-request comment (65,536
+#: characters) less 1,024 left for what the action that posts it adds (the sticky-comment
+#: action of the pull-request workflow adds a hidden marker line of about 40).
 STEP_SUMMARY_LIMIT = 1024 * 1024
-COMMENT_LIMIT = 65536
+COMMENT_LIMIT = 65536 - 1024
 
 #: A verdict's mark in a headline or a table row (anything else: ❌).
 VERDICT_MARK = {"PASS": "✅", "RECORDED": "✅", "INVALID": "💥", "FLAKY": "🎲",
