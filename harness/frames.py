@@ -38,7 +38,12 @@ Tables (all times are simulation time in integer nanoseconds):
 * ``tf``: ``t_ns, log_ns, topic, tree, static, parent, child, x, y, z, qx, qy, qz, qw``: every
   transform on a TF-tree topic (``/tf``, ``/tf_static``, ``/<ns>/tf``...; not ``/gt/*``),
   ``tree`` its namespace (:func:`~harness.bus.endpoints.tf_tree_of`), ``static`` whether
-  the topic is a ``tf_static`` one, ``t_ns`` the header stamp.
+  the topic is a ``tf_static`` one, ``t_ns`` the header stamp. A ROS 1 recording's latched
+  ``tf_static`` topics hold in each message every static transform sent so far (as ROS 1's
+  static broadcaster sends them; :mod:`harness.recording.ros1bag`): a transform is a row
+  where it was sent, not again in each later message that carries it unchanged (the same
+  parent, stamp and pose as that child frame's transform before), so the rows are those of
+  the same run recorded as ROS 2.
 * ``tf_static``: ``parent, child, x, y, z, qx, qy, qz, qw``: the static rows of ``tf``, the
   chain that places odometry in the world frame.
 * ``fields``: ``(topic, field path) →`` :class:`FieldSeries`, the numeric fields asked for
@@ -72,6 +77,7 @@ from harness.geometry import (
 )
 from harness.recording.bagread import DECODE_ERRORS, Encoding, open_indexed, ros1_recording
 from harness.recording.errors import BagError
+from harness.recording.ros1bag import accumulates_static_tf
 from harness.serde.messages import TYPESTORE
 from harness.serde.ros1 import deserialize_ros1
 
@@ -715,6 +721,30 @@ def _tf_frame(topics: list[tuple[str, list[dict[str, Any]]]]) -> pd.DataFrame:
     return pd.DataFrame(out, copy=False)
 
 
+_TfKey = tuple[Any, ...]  # a transform as a row: parent, stamp, pose
+
+
+def _sent_rows(part: dict[str, Any], held: dict[str, _TfKey]) -> dict[str, Any]:
+    """The rows of a tf batch (:func:`_tf_part`) of a topic whose messages each hold every
+    static transform sent so far (:func:`~harness.recording.ros1bag.accumulates_static_tf`)
+    that a message sends: a child frame's first transform, or one unlike the transform that
+    child frame had before (``held``: child frame → its transform, across the batches)."""
+    parent = np.asarray(part["parent"], dtype=object)
+    child = np.asarray(part["child"], dtype=object)
+    rows = zip(child.tolist(), parent.tolist(), part["t_ns"].tolist(),
+               *(part[k].tolist() for k in _POSE), strict=True)
+    keep = np.zeros(child.size, dtype=bool)
+    for i, (name, *key) in enumerate(rows):
+        row = tuple(key)
+        if held.get(name) != row:
+            held[name] = row
+            keep[i] = True
+    if keep.all():
+        return part
+    return {k: pd.Categorical(np.asarray(v, dtype=object)[keep]) if k in ("parent", "child")
+            else v[keep] for k, v in part.items()}
+
+
 #: Messages of one topic decoded at a time by :func:`load_frames`.
 _DECODE_BATCH = 4096
 
@@ -773,6 +803,11 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
         # the transform tree's topics go straight into the tf table's columns
         tree = {cid for cid, topic in wanted.items()
                 if tf_tree_of(topic) is not None and GT_TOPIC.match(topic) is None}
+        # ROS 1 static TF topics whose messages repeat the transforms sent before: child
+        # frame -> its transform so far (see _sent_rows)
+        held: dict[int, dict[str, _TfKey]] = {
+            c.id: {} for c in conns if c.id in tree and encoding == "ros1"
+            and accumulates_static_tf(c.topic, c.msgtype, c.latched)}
         # topic(...) fields: decoded message by message (few topics, any type)
         field_conns = {c.id: c for c in conns if any(c.topic == t for t, _ in fields)}
         field_rows: dict[tuple[str, str], tuple[array[int], array[float], list[str]]] = {
@@ -788,6 +823,8 @@ def load_frames(bag_dir: str | Path, *, marker_topics: Sequence[str] | None = No
             if cid in tree:
                 batch_log = np.frombuffer(log[cid][first:], dtype=np.int64)
                 cols = _tf_part(cols, batch_log[cols["msg"] - first])
+                if cid in held:
+                    cols = _sent_rows(cols, held[cid])
             parts[cid].append(cols)
             raws[cid] = []
 

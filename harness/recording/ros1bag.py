@@ -18,6 +18,15 @@ Counts, bytes and digests are kept as for ROS 2, over the ROS 1 bytes.
   (``true``/``false``), written by the same bounded-chunk writer as ROS 2 bags (so
   ``chunk_mb``, ``chunk_s``, ``fsync`` and ``compression`` apply alike). No
   ``metadata.yaml``: it is not a rosbag2 bag.
+
+Static TF as ROS 1's ``tf2_ros::StaticTransformBroadcaster`` sends it: every message of a
+latched ``tf2_msgs/TFMessage`` topic named ``tf_static`` (``/tf_static``,
+``/<ns>/tf_static``) is written holding every transform sent on that topic so far
+(:class:`StaticTfUnion`), because ``rosbag play`` re-latches only the last message of a
+latched connection: a subscriber that joins late still gets the whole static tree. The bus
+and its subscribers keep the messages as published; only the recorded bytes (and so the
+topic's digest) carry the union. ROS 2 output keeps each message as published (its readers
+get every one, transient local).
 """
 
 from __future__ import annotations
@@ -32,13 +41,54 @@ from rosbags.typesys.msg import normalize_msgtype
 
 from harness.bus.bus import Envelope, Qos, resolved
 from harness.recording.bagfile import ChunkPolicy, McapBagWriter, TopicMeta
-from harness.recording.recorder import Recorder
-from harness.serde.ros1 import ROS1_TYPESTORE, Ros1Encoder, msgdef, ros1_name
+from harness.recording.recorder import Recorder, _TopicState
+from harness.serde.messages import tf_message
+from harness.serde.ros1 import (
+    ROS1_TYPESTORE,
+    Ros1Encoder,
+    deserialize_ros1,
+    msgdef,
+    ros1_name,
+    ros1_type,
+    to_ros2,
+)
 
-__all__ = ["CALLERID", "Ros1Recorder", "ros1_file"]
+__all__ = ["CALLERID", "Ros1Recorder", "StaticTfUnion", "accumulates_static_tf", "ros1_file"]
 
 CALLERID = "/srr"
 Ros1Format = Literal["bag", "mcap"]
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+
+
+def accumulates_static_tf(topic: str, msgtype: str, latched: bool) -> bool:
+    """Whether ROS 1 output writes ``topic`` (bus type ``msgtype``) as a static TF
+    broadcaster sends it, each message holding every transform sent so far
+    (:class:`StaticTfUnion`): a latched ``tf2_msgs/msg/TFMessage`` topic named ``tf_static``.
+
+    Only ``tf_static`` topics: tf2 (and srr's ``tf_tree`` gate) take the transforms of any
+    other TF topic as dynamic, so sending one again, with its old stamp, would repeat it (a
+    latched ``/tf``, from a ``staticPublisher`` on ``/tf``, is written as published)."""
+    return latched and msgtype == TF_MESSAGE and topic.rsplit("/", 1)[-1] == "tf_static"
+
+
+class StaticTfUnion:
+    """The static transforms sent on one topic so far, as ROS 1's
+    ``tf2_ros::StaticTransformBroadcaster`` keeps them: by child frame, a new transform for a
+    child frame replacing the one before it in its place, new child frames after the rest
+    (the order stays the order in which each child frame was first sent)."""
+
+    def __init__(self) -> None:
+        self._by_child: dict[str, Any] = {}
+
+    def add(self, msg: Any) -> None:
+        """Take the transforms of ``msg`` (a ROS 2 ``tf2_msgs/msg/TFMessage``)."""
+        by_child = self._by_child
+        for tf in msg.transforms:
+            by_child[tf.child_frame_id] = tf  # an existing key keeps its place
+
+    def message(self) -> Any:
+        """A ROS 2 ``tf2_msgs/msg/TFMessage`` of every transform held, in their order."""
+        return tf_message(list(self._by_child.values()))
 
 
 def ros1_file(bag_dir: Path, fmt: Ros1Format) -> Path:
@@ -113,6 +163,8 @@ class Ros1Recorder(Recorder):
         super().__init__(bag_dir, queue_size=queue_size, chunks=chunks, unrecorded=unrecorded)
         self.format: Ros1Format = fmt
         self._encoder = Ros1Encoder()
+        # topic -> its static transforms so far (accumulates_static_tf); caller's thread
+        self._static_tf: dict[str, StaticTfUnion] = {}
 
     @property
     def path(self) -> Path:
@@ -124,14 +176,41 @@ class Ros1Recorder(Recorder):
             return _BagWriter(self.path, self.chunks)
         return McapBagWriter(self.path, self.chunks, profile="ros1")
 
+    def write(self, env: Envelope) -> None:
+        """Record one message (see :meth:`Recorder.write`). A message of a static TF topic
+        that comes as ROS 1 bytes (a replayed ROS 1 recording, whose messages already hold
+        their union) is written as it is, and its transforms join the topic's union, so a
+        message converted after it still carries them."""
+        super().write(env)
+        union = self._static_tf.get(env.topic)
+        if union is not None and env.raw is not None and env.encoding == "ros1":
+            msg = env.msg  # a replay decodes a latched topic's messages as it publishes them
+            if msg is None:
+                name = ros1_type(env.msgtype)
+                msg = to_ros2(deserialize_ros1(env.raw, name), name)
+            union.add(msg)
+
+    __call__ = write
+
+    def _first_of(self, env: Envelope) -> _TopicState | None:
+        st = super()._first_of(env)
+        if st is not None and accumulates_static_tf(env.topic, env.msgtype,
+                                                    st.qos.durability == "transient_local"):
+            self._static_tf[env.topic] = StaticTfUnion()
+        return st
+
     def _recorded_type(self, msgtype: str) -> str:
         return ros1_name(msgtype)
 
     def _serialize(self, env: Envelope) -> bytes:
         if env.raw is not None and env.encoding == "ros1":  # a replayed ROS 1 recording's
             return env.raw
-        return self._encoder.encode(env.topic, env.msgtype,  # (CDR bytes: built)
-                                    resolved(env.msg))
+        msg = resolved(env.msg)  # (CDR bytes: built)
+        union = self._static_tf.get(env.topic)
+        if union is not None:
+            union.add(msg)
+            msg = union.message()
+        return self._encoder.encode(env.topic, env.msgtype, msg)
 
     def _add_topic(self, writer: Any, topic: str, msgtype: str, qos: Qos) -> int:
         latched = qos.durability == "transient_local"
