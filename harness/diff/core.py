@@ -14,7 +14,7 @@ score equally, and the point of ``diff`` is to say where the data part.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -28,8 +28,8 @@ from harness.recording.verify import check_read_back
 from harness.scenario.schema import ToleranceSpec
 from harness.summary import replay_note
 
-__all__ = ["check_against_summary", "diff_runs", "is_baseline_file", "open_baseline",
-           "open_run"]
+__all__ = ["check_against_summary", "check_bag", "diff_runs", "is_baseline_file",
+           "open_baseline", "open_run"]
 
 
 def is_baseline_file(path: Path) -> bool:
@@ -44,9 +44,11 @@ def _run_summary(path: Path) -> bool:
     return path.name == "summary.json" and (path.parent / "bag").is_dir()
 
 
-def open_run(path: Path) -> tuple[dict[str, Any], Path]:
+def open_run(path: Path, *, bag_needed: bool = True) -> tuple[dict[str, Any], Path]:
     """(summary, bag directory) of a run directory; :class:`SrrError` (exit 2) naming what is
-    missing or malformed."""
+    missing or malformed. ``bag_needed=False``: the bag directory is not looked at (a caller
+    that may compare the summaries' digests only checks it with :func:`check_bag` when it
+    reads the bag)."""
     from harness.summary import read_summary
 
     summary = read_summary(path)
@@ -55,11 +57,17 @@ def open_run(path: Path) -> tuple[dict[str, Any], Path]:
         raise SrrError(f"{path / 'summary.json'}: topics: expected a mapping of topic → "
                        "{count, sha256, ...}")
     bag = path / "bag"
+    if bag_needed:
+        check_bag(bag)
+    return summary, bag
+
+
+def check_bag(bag: Path) -> None:
+    """:class:`SrrError` (exit 2) when a run's ``bag/`` is missing or holds no recording."""
     if not bag.is_dir():
         raise SrrError(f"{bag}: missing (a run directory holds its recording in bag/)")
     if not (bag / "metadata.yaml").is_file() and ros1_recording(bag) is None:
         raise SrrError(f"{bag / 'metadata.yaml'}: missing (not a rosbag2 directory)")
-    return summary, bag
 
 
 def open_baseline(path: Path) -> tuple[dict[str, Any], Path, frozenset[str]]:
@@ -109,6 +117,27 @@ def _by_digest(topics: Sequence[TopicDiff], recorded: Mapping[str, Any],
             status="identical" if same else "differs", messages_differ=None, first=None,
             first_beyond=None, fields=(), mismatches=(), time_shifts=0, worst=None)
     return tuple(out[n] for n in sorted(out))
+
+
+def _same_in_summaries(sa: Mapping[str, Any], sb: Mapping[str, Any]) -> frozenset[str]:
+    """The topics both summaries record with the same type, message count and SHA-256 (over
+    log times and payloads): identical, whatever their messages are."""
+    ta, tb = sa.get("topics") or {}, sb.get("topics") or {}
+    return frozenset(n for n, ea in ta.items() if (eb := tb.get(n)) is not None
+                     and isinstance(ea.get("sha256"), str) and ea.get("sha256")
+                     and (ea.get("sha256"), ea.get("count"), ea.get("type"))
+                     == (eb.get("sha256"), eb.get("count"), eb.get("type")))
+
+
+def _identical(name: str, entry: Mapping[str, Any], tolerances: Sequence[Tolerance]
+               ) -> TopicDiff:
+    """A topic both runs' summaries record alike, as :func:`diff_bags` would give it."""
+    count, sha = int(entry.get("count") or 0), str(entry.get("sha256"))
+    return TopicDiff(name=name, type_a=str(entry.get("type")), type_b=str(entry.get("type")),
+                     count_a=count, count_b=count, sha256_a=sha, sha256_b=sha,
+                     status="identical", messages_differ=0, first=None, first_beyond=None,
+                     fields=(), mismatches=(), time_shifts=0, worst=None,
+                     tolerances=tuple(t for t in tolerances if glob_match(name, t.topic)))
 
 
 def _info(path: Path, s: Mapping[str, Any]) -> RunInfo:
@@ -181,27 +210,36 @@ def _scenario_tolerances(run: Path) -> tuple[dict[str, ToleranceSpec], str | Non
 
 
 def check_against_summary(bag: Path, summary: Mapping[str, Any], topics: Sequence[TopicDiff],
-                          side: int) -> str | None:
+                          side: int, skipped: Collection[str] = ()) -> str | None:
     """Raise :class:`BagError` when the bag read back is not what ``summary.json`` recorded
     (per topic count and SHA-256 over log time and payload): a truncated or damaged MCAP can
-    still parse. Returns a note when the summary has no digests to check against."""
+    still parse. Returns a note when the summary has no digests to check against.
+    ``skipped``: topics that were not read back (not checked)."""
     recorded = summary.get("topics") or {}
     if not recorded:
         return f"{bag.parent / 'summary.json'}: no per-topic digests; the bag is not checked"
     read = {t.name: (t.count_a, t.sha256_a) if side == 0 else (t.count_b, t.sha256_b)
-            for t in topics}
-    check_read_back(bag, recorded, {k: (c or 0, sha) for k, (c, sha) in read.items()})
+            for t in topics if t.name not in skipped}
+    check_read_back(bag, {k: v for k, v in recorded.items() if k not in skipped},
+                    {k: (c or 0, sha) for k, (c, sha) in read.items()})
     return None
 
 
 def diff_runs(a: str | Path, b: str | Path, *,
-              tolerances: Sequence[Tolerance | str] = ()) -> DiffResult:
+              tolerances: Sequence[Tolerance | str] = (),
+              digests_first: bool = False) -> DiffResult:
     """Compare run directory ``a`` (the baseline) with ``b`` (the candidate).
 
     ``tolerances``: :class:`Tolerance` objects or ``--tolerance`` strings
     (``TOPIC_GLOB[:FIELD_GLOB]=ABS[,REL]``). Raises :class:`SrrError` (exit 2) for bad
     input: a tolerance that does not parse, a directory that is not a run, a malformed
-    ``summary.json``, a bag that does not read back or does not match its summary."""
+    ``summary.json``, a bag that does not read back or does not match its summary.
+
+    ``digests_first`` (what ``srr diff SUITE_A SUITE_B`` does for each pair of runs): a topic
+    both summaries record with the same type, count and SHA-256 is identical without its
+    messages being read, and the bags are read (and checked against their summaries) for the
+    other topics only — not opened at all when there are none. The summaries are trusted:
+    a bag damaged since its run is not noticed where the digests agree."""
     tols = tuple(t if isinstance(t, Tolerance) else parse_tolerance(t) for t in tolerances)
     pa, pb = Path(a), Path(b)
     kept: frozenset[str] | None = None  # A is a baseline: the topics its reference keeps
@@ -213,14 +251,25 @@ def diff_runs(a: str | Path, b: str | Path, *,
     if is_baseline_file(pa):
         sa, bag_a, kept = open_baseline(pa)
     else:
-        sa, bag_a = open_run(pa)
+        sa, bag_a = open_run(pa, bag_needed=not digests_first)
     if is_baseline_file(pb):
         raise SrrError(f"{pb}: a baseline file can only be A, the reference: give it first "
                        f"(srr diff {pb} RUN_DIR)")
-    sb, bag_b = open_run(pb)
+    sb, bag_b = open_run(pb, bag_needed=not digests_first)
     ma = summary_metrics(sa)
     mb = summary_metrics(sb)
-    topics = diff_bags(bag_a, bag_b, tols)
+    same = _same_in_summaries(sa, sb) if digests_first and kept is None else frozenset()
+    read = not same or not same >= set(sa.get("topics") or ()) | set(sb.get("topics") or ())
+    topics: tuple[TopicDiff, ...] = ()
+    if read:
+        if digests_first:  # (a baseline's reference recording was found when it was opened)
+            if kept is None:
+                check_bag(bag_a)
+            check_bag(bag_b)
+        topics = diff_bags(bag_a, bag_b, tols, skip=same)
+    if same:
+        alike = (_identical(n, sa["topics"][n], tols) for n in same)
+        topics = tuple(sorted((*topics, *alike), key=lambda t: t.name))
     notes: list[str] = []
     if kept is not None:
         recorded = sa["topics"]
@@ -233,8 +282,8 @@ def diff_runs(a: str | Path, b: str | Path, *,
         if not any(glob_match(td.name, t.topic) for td in topics):
             notes.append(f"--tolerance {t.spec!r} matches no topic of either run")
     read_back = topics if kept is None else tuple(t for t in topics if t.name in kept)
-    for side, (s, bag) in enumerate(((sa, bag_a), (sb, bag_b))):
-        note = check_against_summary(bag, s, read_back if side == 0 else topics, side)
+    for side, (s, bag) in enumerate(((sa, bag_a), (sb, bag_b)) if read else ()):
+        note = check_against_summary(bag, s, read_back if side == 0 else topics, side, same)
         if note:
             notes.append(note)
     if sa.get("scenario") != sb.get("scenario"):

@@ -22,7 +22,7 @@ import hashlib
 import math
 import struct
 from collections import deque
-from collections.abc import Generator, Sequence
+from collections.abc import Collection, Generator, Sequence
 from contextlib import closing
 from pathlib import Path
 from typing import Any
@@ -33,7 +33,7 @@ from harness.diff.fields import as_float, walk
 from harness.diff.result import Divergence, FieldDiff, TopicDiff, TopicStatus, Worst
 from harness.diff.tolerance import Tolerance, glob_match, tolerance_for
 from harness.errors import reason
-from harness.recording.bagread import DECODE_ERRORS, deserialize, open_recording
+from harness.recording.bagread import DECODE_ERRORS, deserialize, open_indexed, open_recording
 from harness.recording.errors import BagError
 
 __all__ = ["diff_bags", "message_stream"]
@@ -298,32 +298,39 @@ class _Topic:
                          self.time_shifts, self.worst, self.tolerances)
 
 
-def message_stream(bag: Path
+def message_stream(bag: Path, skip: Collection[str] = ()
                    ) -> tuple[dict[str, str], Generator[tuple[str, str, int, bytes], None, None]]:
     """The topics of a rosbag2 directory or a ROS 1 run's ``bag/`` (name → type as
     recorded) and an iterator of ``(topic, type, log time, payload)`` over every message, in
     the reader's order, which closes the bag when exhausted. Read errors (when opening or
-    later) are :class:`~harness.recording.errors.BagReadError` naming the bag."""
-    reader = open_recording(bag, shown=bag)
-    types = {c.topic: c.recorded_type for c in reader.connections}
+    later) are :class:`~harness.recording.errors.BagReadError` naming the bag.
+
+    ``skip``: topics left out, listed and read neither; the bag is then read through its
+    MCAP index (:func:`~harness.recording.bagread.open_indexed`), which leaves their payloads
+    (camera images) on disk."""
+    reader = open_indexed(bag, shown=bag) if skip else open_recording(bag, shown=bag)
+    kept = [c for c in reader.connections if c.topic not in skip]
+    types = {c.topic: c.recorded_type for c in kept}
 
     def messages() -> Generator[tuple[str, str, int, bytes], None, None]:
         try:
-            for conn, ns, raw in reader.messages():
-                yield conn.topic, conn.recorded_type, int(ns), bytes(raw)
+            if kept or not skip:  # (no connection given: every topic)
+                for conn, ns, raw in reader.messages(kept if skip else ()):
+                    yield conn.topic, conn.recorded_type, int(ns), bytes(raw)
         finally:
             reader.close()
 
     return types, messages()
 
 
-def diff_bags(bag_a: Path, bag_b: Path, tolerances: Sequence[Tolerance] = ()
-              ) -> tuple[TopicDiff, ...]:
-    """Every topic of either bag compared (sorted by name)."""
+def diff_bags(bag_a: Path, bag_b: Path, tolerances: Sequence[Tolerance] = (), *,
+              skip: Collection[str] = ()) -> tuple[TopicDiff, ...]:
+    """Every topic of either bag compared (sorted by name), but those in ``skip`` (which
+    are not read: the caller knows them to be identical)."""
     bags = (Path(bag_a), Path(bag_b))
-    (types_a, stream_a) = message_stream(bags[0])
+    (types_a, stream_a) = message_stream(bags[0], skip)
     try:
-        (types_b, stream_b) = message_stream(bags[1])
+        (types_b, stream_b) = message_stream(bags[1], skip)
     except BagError:
         stream_a.close()
         raise
