@@ -64,6 +64,7 @@ if TYPE_CHECKING:  # srr search imports optuna lazily: only when it runs
     from harness.run.replay import replay
     from harness.run.rerender import report
     from harness.search.runner import SearchResult
+    from harness.suite.diff import SuiteDiff
 
 __all__ = [
     "PROJECT_MARKERS",
@@ -87,6 +88,7 @@ __all__ = [
     "combined_digest",
     "default_run_dir",
     "diff_runs",
+    "diff_suites",
     "export_rerun",
     "graph_text",
     "import_after_the_loop",
@@ -108,6 +110,7 @@ __all__ = [
     "validate",
     "versions",
     "write_diff",
+    "write_suite_diff",
     "write_summary_md",
 ]
 
@@ -148,6 +151,25 @@ def diff_runs(a: str | Path, b: str | Path, *,
     from harness.diff import diff_runs as _diff_runs
 
     return _diff_runs(a, b, tolerances=tolerances)
+
+
+def diff_suites(a: str | Path, b: str | Path, *,
+                tolerances: Sequence[Tolerance | str] = ()) -> SuiteDiff:
+    """Compare two suite output folders (``srr diff SUITE_A SUITE_B``): runs matched by their
+    id in the suite, runs only in one, verdict changes, and for each pair a run diff
+    (:func:`diff_runs`) that reads only the topics whose digests differ. Raises
+    :class:`SrrError` for bad input (exit 2)."""
+    from harness.suite.diff import diff_suites as _diff_suites
+
+    return _diff_suites(a, b, tolerances=tolerances)
+
+
+def write_suite_diff(result: SuiteDiff, path: str | Path, *, video: bool = True) -> Path:
+    """Write the page of a suite comparison (``srr diff SUITE_A SUITE_B --html FILE``), and
+    the run diff's page of every pair that differs into ``FILE.pairs/``."""
+    from harness.suite.diff_page import write_suite_diff as _write
+
+    return _write(result, path, video=video)
 
 
 def suite(paths: Sequence[str | Path], *, executor: str = "local", jobs: int | None = None,

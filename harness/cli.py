@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from harness import api
     from harness.diff import DiffResult
     from harness.live.config import LiveConfig
+    from harness.suite.diff import SuiteDiff
 
 __all__ = ["main"]
 
@@ -186,18 +187,20 @@ def _parser() -> argparse.ArgumentParser:
 
     _search_parser(sub)
 
-    dif = sub.add_parser("diff", help="compare two runs: recorded topics, first divergence, "
-                         "metrics side by side")
-    dif.add_argument("run_a", type=Path, help="baseline run directory, or a baseline file "
+    dif = sub.add_parser("diff", help="compare two runs (recorded topics, first divergence, "
+                         "metrics side by side) or two suite output folders (run by run)")
+    dif.add_argument("run_a", type=Path, help="baseline run directory, a baseline file "
                      "(baselines/NAME.json: its reference recording; the topics it does not "
-                     "keep, by digest)")
-    dif.add_argument("run_b", type=Path, help="candidate run directory")
+                     "keep, by digest), or a suite output folder (srr suite --out; B is one "
+                     "too, its runs matched by their ids)")
+    dif.add_argument("run_b", type=Path, help="candidate run directory, or suite output folder")
     dif.add_argument("--tolerance", dest="tolerances", action="append", default=[],
                      metavar="TOPIC_GLOB[:FIELD_GLOB]=ABS[,REL]",
                      help="numeric differences within max(ABS, REL*|A|) count as equal, e.g. "
                      "'/odom:pose.pose.position.*=0.01,0.05' (repeatable; no field glob: "
                      "every field of the topic)")
-    dif.add_argument("--html", type=Path, default=None, help="write a one-page view of both runs")
+    dif.add_argument("--html", type=Path, default=None, help="write a one-page view of both runs "
+                     "(of two suites: the page, and each differing pair's in FILE.pairs/)")
     dif.add_argument("--no-video", dest="video", action="store_false",
                      help="--html without the runs' camera videos")
     dif.add_argument("--json", type=Path, default=None, help="write the result as JSON")
@@ -790,13 +793,74 @@ def _print_diff(r: DiffResult) -> None:
                     markup=False)
 
 
+def _print_suite_diff(r: SuiteDiff) -> None:
+    out = _stdout()
+    for label, s in (("A", r.a), ("B", r.b)):
+        out.print(f"{label}: {s.path}  (suite {s.name}, {s.runs} runs, {s.verdict}, started "
+                  f"{s.started_at or '?'})", markup=False)
+    if r.changes:
+        out.print("what changed (A → B):", markup=False)
+        for line, ids in r.changes:
+            which = (f"all {len(ids)} runs" if len(ids) == len(r.pairs) > 1 else
+                     ", ".join(ids[:4]) + (f", +{len(ids) - 4} more" if len(ids) > 4 else ""))
+            out.print(f"  {line}  ({which})", markup=False)
+    if r.groups:
+        out.print("group verdicts that changed:", markup=False)
+        for g in r.groups:
+            out.print(f"  {g.id}: {g.verdict_a} → {g.verdict_b}", markup=False)
+    for side, runs in (("A", r.only_in_a), ("B", r.only_in_b)):
+        if runs:
+            out.print(f"runs only in {side} ({len(runs)}):", markup=False)
+            for u in runs:
+                out.print(f"  {u.id}: {u.verdict}", markup=False)
+    changed = r.changed
+    if changed:
+        out.print(f"runs that differ ({len(changed)} of {len(r.pairs)} matched):", markup=False)
+        for p in changed:
+            out.print(f"  {p.id}: {p.describe()}", style="" if p.equal else "bold red",
+                      markup=False)
+    for note in r.notes:
+        _stderr().print(f"srr diff: note: {note}", markup=False)
+    first = next((p for p in changed if p.run_a is not None and p.run_b is not None), None)
+    if first is not None:
+        out.print(f"details of a pair: srr diff {first.run_a} {first.run_b}", markup=False)
+    out.print(f"verdict: {r.verdict.replace('_', ' ')} ({r.counts()})", markup=False)
+
+
+def _diff_suites(args: argparse.Namespace, suites: tuple[bool, bool]) -> int:
+    from harness import api
+    from harness.atomic import write_json_atomic
+
+    if not all(suites):
+        suite, other = (args.run_a, args.run_b) if suites[0] else (args.run_b, args.run_a)
+        what = "not a suite folder" if Path(other).exists() else "no such directory"
+        raise SrrError(f"{other}: {what}; {suite} is one: srr diff compares two suite "
+                       "folders, or two runs")
+    result = api.diff_suites(args.run_a, args.run_b, tolerances=args.tolerances)
+    _print_suite_diff(result)
+    if args.json is not None:
+        write_json_atomic(args.json, result.to_dict())
+        _stdout().print(f"json: {args.json}", markup=False)
+    if args.html is not None:
+        page = api.write_suite_diff(result, args.html, video=args.video)
+        _stdout().print(f"html: {page}", markup=False)
+    return result.exit_code
+
+
 def _cmd_diff(args: argparse.Namespace) -> int:
     from harness import api
     from harness.atomic import write_json_atomic
     from harness.diff.core import is_baseline_file
+    from harness.suite.diff import is_suite_dir
 
     _writable("--html", args.html)
     _writable("--json", args.json)
+    for p in (Path(args.run_a), Path(args.run_b)):
+        if p.name == "summary.json" and is_suite_dir(p.parent):
+            raise SrrError(f"{p}: the summary of the suite {p.parent}: give the suite folder")
+    suites = (is_suite_dir(args.run_a), is_suite_dir(args.run_b))
+    if any(suites):
+        return _diff_suites(args, suites)
     if args.html is not None and is_baseline_file(Path(args.run_a)):
         raise SrrError(f"--html: shows two run directories; {args.run_a} is a baseline file "
                        "(the run's report.html overlays it, under 'Against the baseline')")

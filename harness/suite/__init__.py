@@ -7,7 +7,9 @@ Modules: :mod:`~harness.suite.sweep` (sweep declarations → points), :mod:`~har
 :mod:`~harness.suite.worker` (one run, in whatever process it is given),
 :mod:`~harness.suite.local` and :mod:`~harness.suite.ray_executor` (where runs execute),
 :mod:`~harness.suite.stats` and :mod:`~harness.suite.results` (repeats → groups, verdicts),
-:mod:`~harness.suite.outputs` (the files CI reads), :mod:`~harness.suite.runner` (all of it).
+:mod:`~harness.suite.outputs` (the files CI reads), :mod:`~harness.suite.runner` (all of it);
+:mod:`~harness.suite.diff` and :mod:`~harness.suite.diff_page` (``srr diff SUITE_A SUITE_B``:
+two suite output folders compared run by run).
 """
 
 __all__: list[str] = []

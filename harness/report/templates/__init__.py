@@ -11,8 +11,9 @@ package data:
   panels and their legends, key-value lists and run cards, metric tables;
 * ``cursor.js`` the time cursor of the report and diff pages (videos, plots and map on one
   simulation time), inlined by the ``cursor_data`` macro;
-* ``report.html`` (a run's ``report.html``), ``diff.html`` (``srr diff --html``) and
-  ``suite.html`` (``srr suite``'s ``index.html``).
+* ``report.html`` (a run's ``report.html``), ``diff.html`` (``srr diff --html``),
+  ``suite.html`` (``srr suite``'s ``index.html``) and ``suitediff.html`` (``srr diff SUITE_A
+  SUITE_B --html``).
 
 Autoescaping is on: every value is text unless wrapped in ``Markup`` (the SVGs the report
 builds itself).
