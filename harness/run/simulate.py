@@ -25,7 +25,7 @@ from harness.run.graphs import graphs_of
 from harness.run.judge import check_baseline
 from harness.run.participants import LiveViewParticipant, RtspParticipant
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record, unprepare
-from harness.scenario import Scenario, rate_warnings, robot_warnings
+from harness.scenario import Scenario, rate_warnings, robot_warnings, worker_warnings
 from harness.scoring import check_scoring
 from harness.sim.world_file import map_json
 from harness.sut.participant import Participant
@@ -291,7 +291,8 @@ def _built_warnings(sim: Simulation, plan: Plan, output: OutputKind, scenario: S
     """The warnings of a scenario built and wired (a run's and ``srr validate``'s alike): its
     model files, its sensor rates, its robots' blocks, its wiring and its output topics."""
     return (*sim.world.warnings, *rate_warnings(scenario, source),
-            *robot_warnings(scenario, source), *check_wiring(plan, scenario, source),
+            *robot_warnings(scenario, source),
+            *worker_warnings(scenario, source), *check_wiring(plan, scenario, source),
             *check_output_topics(output, plan.topics, scenario, source))
 
 

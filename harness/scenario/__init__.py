@@ -9,6 +9,7 @@ from harness.scenario.loader import (
     scenario_from_mapping,
     scenario_to_mapping,
     validate_dataclass,
+    worker_warnings,
 )
 from harness.scenario.schema import *  # noqa: F403
 from harness.scenario.schema import __all__ as _schema_all
@@ -16,6 +17,7 @@ from harness.scenario.schema import __all__ as _schema_all
 __all__ = [
     "apply_overrides",
     "robot_warnings",
+    "worker_warnings",
     "load_scenario",
     "parse_override",
     "rate_warnings",

@@ -38,6 +38,7 @@ __all__ = [
     "robot_warnings",
     "sensor_rates",
     "spec_context",
+    "worker_warnings",
 ]
 
 
@@ -158,6 +159,20 @@ def robot_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
                        "optical frame (+Z forward) as ROS image consumers assume; give another "
                        f"name (e.g. {cam.link}_optical) and srr publishes that optical frame "
                        "under the link")
+    return tuple(out)
+
+
+def worker_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """Warnings about workers that never walk: an enabled worker whose ``start_delay`` is not
+    before the end of the run stands at its first waypoint the whole run. A warning, not an
+    error: a sweep over ``start_delay`` or ``duration`` may reach such points on purpose."""
+    out = []
+    for i, worker in enumerate(sc.workers):
+        if worker.enabled and worker.start_delay >= sc.duration:
+            field = f"workers[{i}].start_delay"
+            out.append(f"{sc.file_for(field, source)}: {field}: {worker.start_delay:g} s is not "
+                       f"before the end of the run (duration {sc.duration:g} s): worker "
+                       f"{sc.worker_name(i)!r} stands at its first waypoint the whole run")
     return tuple(out)
 
 

@@ -24,6 +24,7 @@ from harness.scenario.checks import (
     rate_warnings,
     robot_warnings,
     sensor_rates,
+    worker_warnings,
 )
 from harness.scenario.includes import Origins, expand_includes, read_yaml
 from harness.scenario.origins import SET_FLAG
@@ -52,6 +53,7 @@ __all__ = [
     "scenario_to_mapping",
     "sensor_rates",
     "validate_dataclass",
+    "worker_warnings",
 ]
 
 T = typing.TypeVar("T")

@@ -4,7 +4,9 @@ shelves and dock inside it, checked before the world is built.
 The warehouse's floor is the walled room (``world.size``, centred on the origin) and, with
 ``world.dock.enabled``, the trailer backed up to it (:func:`~harness.sim.warehouse.
 trailer_footprint`). A robot's spawn position, every waypoint of a robot's or a worker's
-route and a fixed camera's position must lie on it; a shelf's footprint must lie in the room;
+route and a fixed camera's position must lie on it, and no waypoint of a route may lie inside
+a shelf's footprint (a robot would drive into the rack, a worker walk through it); a shelf's
+footprint must lie in the room;
 the trailer's open end must be in the room or on its wall (so that the trailer meets a wall
 and gets a door).
 The defaults of ``world.shelves`` and ``world.dock`` are laid out for the default 30 x 20 m
@@ -64,6 +66,16 @@ def _shelf_corners(position: Point, size: Sequence[float], yaw_deg: float) -> li
             for x, y in ((-hl, -hd), (hl, -hd), (hl, hd), (-hl, hd))]
 
 
+def _in_shelf(world: WorldSpec, p: Sequence[float]) -> str | None:
+    """The first shelf (described, with its field) whose footprint holds ``p``, or None."""
+    for i, shelf in enumerate(world.shelves):
+        corners = _shelf_corners(shelf.position, shelf.size, shelf.yaw_deg)
+        if _in_polygon(p, corners):
+            return (f"inside the shelf at ({shelf.position[0]:g}, {shelf.position[1]:g}) "
+                    f"(world.shelves[{i}])")
+    return None
+
+
 def check_layout(scenario: Scenario, source: str = "<scenario>") -> None:
     """Refuse (:class:`ScenarioError`, naming the file and the field) anything of the
     procedural warehouse's scene that lies outside it (see the module docstring)."""
@@ -103,10 +115,19 @@ def check_layout(scenario: Scenario, source: str = "<scenario>") -> None:
         for j, (x, y) in enumerate(worker.route):
             if worker.enabled and not _on_floor(world, (x, y)):
                 fail(f"workers[{i}].route[{j}]", f"({x:g}, {y:g}) is {_where(world)}")
+            inside = _in_shelf(world, (x, y)) if worker.enabled else None
+            if inside is not None:
+                fail(f"workers[{i}].route[{j}]", f"({x:g}, {y:g}) is {inside}: the worker "
+                     "would walk through the rack; move the waypoint to free floor")
     for name, route in scenario.routes.items():
         for j, (x, y) in enumerate(route.waypoints):
             if not _on_floor(world, (x, y)):
                 fail(f"routes.{name}.waypoints[{j}]", f"({x:g}, {y:g}) is {_where(world)}")
+            inside = _in_shelf(world, (x, y))
+            if inside is not None:
+                fail(f"routes.{name}.waypoints[{j}]", f"({x:g}, {y:g}) is {inside}: a robot "
+                     "following the route would drive into the rack; move the waypoint to "
+                     "free floor")
     for i, cam in enumerate(scenario.cameras):
         p = cam.spawn.position
         if cam.enabled and not _on_floor(world, p):

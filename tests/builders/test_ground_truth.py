@@ -27,7 +27,7 @@ from tests.e2e.bagread import decoded
 SCENARIO = SCENARIOS / "forklift_warehouse.yaml"
 S = 1_000_000_000
 # character_0 walks across the forklift's path, character_1 is disabled, "dana" is character_2
-WORKERS = ("workers=[{route: [[-8, 2], [-8, -6]], speed: 1.0}, "
+WORKERS = ("workers=[{route: [[-8, 2], [-8, -5]], speed: 1.0}, "
            "{route: [[0, 0], [1, 0]], enabled: false}, "
            "{name: dana, route: [[-10, 0], [-4, 0]], speed: 2.0, pause_s: 0.5}]")
 

@@ -283,3 +283,43 @@ def test_a_robot_camera_stamped_in_its_link_frame_is_warned_about(
     assert ("warning: --set: robots[0].sensors.camera.frame_id: 'camera_link' is the camera "
             "link's own frame (+X forward)") in err
     assert "camera_link_optical" in err
+
+
+@pytest.mark.parametrize(("change", "field", "words"), [
+    ("routes:\n  go: {waypoints: [[-12, 0], [0, 6]]}\n", "routes.go.waypoints[1]",
+     "(0, 6) is inside the shelf at (2, 6) (world.shelves[1]): a robot"),
+    ("workers:\n  - {route: [[-4, -3], [-4, -6]]}\n", "workers[0].route[1]",
+     "(-4, -6) is inside the shelf at (-6, -6) (world.shelves[2]): the worker"),
+])
+def test_waypoints_inside_a_shelf_are_refused(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], change: str, field: str,
+        words: str) -> None:
+    """A route through a rack drives the robot into it; a worker walks through it (workers
+    are kinematic): both refused before the run, naming the shelf."""
+    path = _write(tmp_path, ROOM + change)
+    code, _out, err = _validate(capsys, path)
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err
+    assert f"{path}: {field}: " in err and words in err, err
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert words in capsys.readouterr().err
+
+
+def test_waypoints_beside_a_shelf_and_a_disabled_worker_in_one_are_accepted(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = _write(tmp_path, ROOM + "routes:\n  go: {waypoints: [[-12, 0], [0, 5]]}\n"
+                  "workers:\n  - {route: [[-4, -3], [-4, -6]], enabled: false}\n")
+    code, _out, err = _validate(capsys, path)
+    assert code == 0, err
+
+
+def test_a_worker_starting_after_the_run_ends_is_a_warning(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = _write(tmp_path, ROOM + "workers:\n  - {name: bob, route: [[4, 3], [4, -3]], "
+                  "start_delay: 2}\n  - {route: [[2, 3], [2, -3]], start_delay: 1.5}\n")
+    code, _out, err = _validate(capsys, path)
+    assert code == 0, err
+    mine = [line for line in err.splitlines() if "start_delay" in line]
+    assert mine == [
+        f"srr validate: warning: {path}: workers[0].start_delay: 2 s is not before the end of "
+        "the run (duration 2 s): worker 'bob' stands at its first waypoint the whole run"], err
