@@ -25,7 +25,13 @@ from harness.run.graphs import graphs_of
 from harness.run.judge import check_baseline
 from harness.run.participants import LiveViewParticipant, RtspParticipant
 from harness.run.record import Loop, Progress, RunResult, Started, prepare, record, unprepare
-from harness.scenario import Scenario, rate_warnings, robot_warnings, worker_warnings
+from harness.scenario import (
+    Scenario,
+    degree_warnings,
+    rate_warnings,
+    robot_warnings,
+    worker_warnings,
+)
 from harness.scoring import check_scoring
 from harness.sim.world_file import map_json
 from harness.sut.participant import Participant
@@ -289,9 +295,10 @@ def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
 def _built_warnings(sim: Simulation, plan: Plan, output: OutputKind, scenario: Scenario,
                     source: str) -> tuple[str, ...]:
     """The warnings of a scenario built and wired (a run's and ``srr validate``'s alike): its
-    model files, its sensor rates, its robots' blocks, its wiring and its output topics."""
+    model files and fixed cameras, its sensor rates, its robots' blocks, its degree fields,
+    its wiring and its output topics."""
     return (*sim.world.warnings, *rate_warnings(scenario, source),
-            *robot_warnings(scenario, source),
+            *robot_warnings(scenario, source), *degree_warnings(scenario, source),
             *worker_warnings(scenario, source), *check_wiring(plan, scenario, source),
             *check_output_topics(output, plan.topics, scenario, source))
 

@@ -2,6 +2,7 @@
 
 from harness.scenario.loader import (
     apply_overrides,
+    degree_warnings,
     load_scenario,
     parse_override,
     rate_warnings,
@@ -16,6 +17,7 @@ from harness.scenario.schema import __all__ as _schema_all
 
 __all__ = [
     "apply_overrides",
+    "degree_warnings",
     "robot_warnings",
     "worker_warnings",
     "load_scenario",

@@ -6,6 +6,7 @@ the file and the field (:meth:`harness.validation.Validator.fail`)."""
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -34,6 +35,7 @@ __all__ = [
     "H264_PRESETS",
     "RATE_TOLERANCE",
     "check_semantics",
+    "degree_warnings",
     "rate_warnings",
     "robot_warnings",
     "sensor_rates",
@@ -159,6 +161,60 @@ def robot_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
                        "optical frame (+Z forward) as ROS image consumers assume; give another "
                        f"name (e.g. {cam.link}_optical) and srr publishes that optical frame "
                        "under the link")
+    return tuple(out)
+
+
+#: Radians a value of a ``*_deg`` field is taken for when it lies within
+#: :data:`RADIAN_TOLERANCE` of one of them: pi/2, pi, 2 pi and their negatives.
+RADIAN_LOOKALIKES = tuple(s * k * math.pi for k in (0.5, 1.0, 2.0) for s in (1, -1))
+RADIAN_TOLERANCE = 0.01
+
+
+def _degree_fields(obj: Any, path: str) -> list[tuple[str, str, float]]:
+    """(field path, field name, value) of every number in a ``*_deg`` field of ``obj`` (a
+    scenario block, walked like :func:`_check_names`; a vector field gives one entry per
+    component, ``rpy_deg[2]``). Disabled robots and cameras are left out."""
+    if isinstance(obj, tuple):
+        return [hit for i, item in enumerate(obj) for hit in _degree_fields(item, f"{path}[{i}]")]
+    if not dataclasses.is_dataclass(obj) or getattr(obj, "enabled", True) is False:
+        return []
+    out: list[tuple[str, str, float]] = []
+    for f in dataclasses.fields(obj):
+        value, sub = getattr(obj, f.name), join(path, f.name)
+        if not f.name.endswith("_deg"):
+            out += _degree_fields(value, sub)
+        elif isinstance(value, tuple):
+            out += [(f"{sub}[{i}]", f.name, float(v)) for i, v in enumerate(value)
+                    if isinstance(v, int | float) and not isinstance(v, bool)]
+        elif isinstance(value, int | float) and not isinstance(value, bool):
+            out.append((sub, f.name, float(value)))
+    return out
+
+
+def _looks_like_radians(name: str, value: float) -> bool:
+    """Whether a ``*_deg`` value reads as radians: near +-pi/2, +-pi or +-2 pi; a field of
+    view (``fovy_deg``) also below pi, as no lens sees 180 degrees or more and a value that
+    small in degrees is a telescope's, while 0.5-3 is what a radian field of view reads (URDF,
+    SDF and MuJoCo's fovy in radians: 1.047 is 60 degrees)."""
+    if name == "fovy_deg" and value < math.pi:
+        return True
+    return any(abs(value - r) <= RADIAN_TOLERANCE for r in RADIAN_LOOKALIKES)
+
+
+def degree_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """One warning per value of a ``*_deg`` field (every one the schema has: poses'
+    ``rpy_deg``, shelves' and the dock's ``yaw_deg``, ``fovy_deg``, ``max_steer_deg``, ...)
+    that looks like radians (:func:`_looks_like_radians`): ``rpy_deg: [0, 0, 3.14159]``
+    turns the robot by 3 degrees, not 180. A warning, not an error: 3.14 degrees may be
+    meant."""
+    out = []
+    for field, name, value in _degree_fields(sc, ""):
+        if not _looks_like_radians(name, value):
+            continue
+        deg = math.degrees(value)
+        write = f"{deg:.3g}"
+        out.append(f"{sc.file_for(field, source)}: {field}: {value:g} looks like radians: "
+                   f"{value:g} rad is {write}°; this field is in degrees, write {write}")
     return tuple(out)
 
 

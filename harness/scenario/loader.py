@@ -21,6 +21,7 @@ from harness.errors import ScenarioError
 from harness.scenario.checks import (
     RATE_TOLERANCE,
     check_semantics,
+    degree_warnings,
     rate_warnings,
     robot_warnings,
     sensor_rates,
@@ -43,6 +44,7 @@ from harness.validation import Validator, validate
 __all__ = [
     "RATE_TOLERANCE",
     "apply_overrides",
+    "degree_warnings",
     "graph_name",
     "load_scenario",
     "parse_override",

@@ -8,7 +8,12 @@ route and a fixed camera's position must lie on it, and no waypoint of a route m
 a shelf's footprint (a robot would drive into the rack, a worker walk through it); a shelf's
 footprint must lie in the room;
 the trailer's open end must be in the room or on its wall (so that the trailer meets a wall
-and gets a door).
+and gets a door). A zone (``zones.loading_roi``, a polygon ``scoring.perception.area``) must
+overlap the floor by some area: one wholly outside it holds no robot or worker, so the safety
+score and every ``in_zone(...)`` spec over it hold without ever being tested. The trailer
+tripwire counts by the side of the infinite line through ``a`` and ``b``
+(:mod:`harness.metrics.safety`), so that line must cross the floor; where its segment lies
+does not matter.
 The defaults of ``world.shelves`` and ``world.dock`` are laid out for the default 30 x 20 m
 room, so a smaller ``world.size`` that keeps them is refused here, naming them.
 
@@ -23,7 +28,7 @@ from collections.abc import Sequence
 
 from harness.errors import ScenarioError
 from harness.scenario import Scenario, WorldSpec
-from harness.sim.warehouse import WALL_THICKNESS, trailer_footprint
+from harness.sim.warehouse import WALL_THICKNESS, clip_half_plane, trailer_footprint
 
 __all__ = ["check_layout"]
 
@@ -74,6 +79,58 @@ def _in_shelf(world: WorldSpec, p: Sequence[float]) -> str | None:
             return (f"inside the shelf at ({shelf.position[0]:g}, {shelf.position[1]:g}) "
                     f"(world.shelves[{i}])")
     return None
+
+
+def _clip(poly: Sequence[Point], convex: Sequence[Point]) -> list[Point]:
+    """The part of ``poly`` inside the convex polygon ``convex`` (counter-clockwise)."""
+    out = list(poly)
+    for (x0, y0), (x1, y1) in zip(convex, [*convex[1:], convex[0]], strict=True):
+        n = (y1 - y0, x0 - x1)  # outward normal of a counter-clockwise edge
+        out = clip_half_plane(out, n, n[0] * x0 + n[1] * y0) if out else out
+    return out
+
+
+def _area(poly: Sequence[Point]) -> float:
+    return abs(sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1)
+                   in zip(poly, [*poly[1:], poly[0]], strict=True))) / 2 if poly else 0.0
+
+
+def _floors(world: WorldSpec) -> list[list[Point]]:
+    """The floor as convex polygons (counter-clockwise): the room inside its walls and,
+    with the dock, the trailer."""
+    hx, hy = world.size[0] / 2, world.size[1] / 2
+    out = [[(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]]
+    if world.dock.enabled:
+        out.append(trailer_footprint(world.dock))
+    return out
+
+
+def _extent(points: Sequence[Sequence[float]]) -> str:
+    xs, ys = [p[0] for p in points], [p[1] for p in points]
+    return f"x {min(xs):g}..{max(xs):g}, y {min(ys):g}..{max(ys):g}"
+
+
+def _room_extent(world: WorldSpec) -> str:
+    hx, hy = world.size[0] / 2, world.size[1] / 2
+    dock = " and the trailer (world.dock)" if world.dock.enabled else ""
+    return f"the {world.size[0]:g} x {world.size[1]:g} m room (world.size: x {-hx:g}..{hx:g}, " \
+        f"y {-hy:g}..{hy:g}){dock}"
+
+
+def _off_floor(world: WorldSpec, polygon: Sequence[Sequence[float]]) -> bool:
+    """Whether ``polygon`` (three points or more) overlaps no floor by any area."""
+    ring = [(float(x), float(y)) for x, y in polygon]
+    return all(_area(_clip(ring, floor)) <= _EPS for floor in _floors(world))
+
+
+def _line_misses_floor(world: WorldSpec, a: Sequence[float], b: Sequence[float]) -> bool:
+    """Whether the infinite line through ``a`` and ``b`` leaves every floor polygon wholly
+    on one side (touching a corner counts as missing)."""
+    for floor in _floors(world):
+        sides = [(b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]) for x, y in floor]
+        if max(sides) > _EPS and min(sides) < -_EPS:
+            return False
+    return True
 
 
 def check_layout(scenario: Scenario, source: str = "<scenario>") -> None:
@@ -132,3 +189,20 @@ def check_layout(scenario: Scenario, source: str = "<scenario>") -> None:
         p = cam.spawn.position
         if cam.enabled and not _on_floor(world, p):
             fail(f"cameras[{i}].spawn.position", f"({p[0]:g}, {p[1]:g}) is {_where(world)}")
+    zones = [("zones.loading_roi", scenario.zones.loading_roi,
+              "no robot or worker can be in it, so the safety score and any in_zone spec "
+              "over it are never tested")]
+    perception = scenario.scoring.perception
+    if perception is not None and perception.enabled:
+        zones.append(("scoring.perception.area", perception.area,
+                      "no worker or track can be in it, so perception scores nothing"))
+    for field, polygon, why in zones:
+        if len(polygon) >= 3 and _off_floor(world, polygon):
+            fail(field, f"the polygon ({_extent(polygon)}) does not overlap the floor of "
+                 f"{_room_extent(world)}: {why}; move it onto the floor")
+    wire = scenario.zones.trailer_tripwire
+    if wire is not None and wire.a != wire.b and _line_misses_floor(world, wire.a, wire.b):
+        fail("zones.trailer_tripwire", f"the line through a {list(wire.a)} and b "
+             f"{list(wire.b)} does not cross the floor of {_room_extent(world)}: every "
+             "point of the floor is on one side of it, so the forklift is always or never "
+             "inside the trailer; move it across the trailer's entrance")

@@ -7,19 +7,33 @@ below the floor rose 18 m), and every gate can still pass. So the contacts of th
 (after ``mj_forward``) are read: a robot's geom deeper than :data:`SPAWN_DEPTH` into one of
 those refuses the scenario, naming ``robots[i].spawn.position`` and what it is inside.
 Contacts with bodies that move (pallets, workers) are the scene's business, not a bad spawn.
+
+A fixed camera (``cameras:``) whose position lies inside a robot's geometry at its spawn pose
+or inside fixed geometry (a shelf, a wall, the trailer, the floor, a world file's static
+geometry) renders only the inside of it: its perception scores drop to nothing and no
+message says why. :func:`camera_warnings` warns about it (a warning: a camera in a glass box
+is conceivable). It tests the camera's point against every geom a camera renders (groups
+below :data:`~harness.sim.robots.common.COLLISION_GROUP`, not transparent) of a robot or the
+fixed scene, in the spawn state: exactly for MuJoCo's primitive shapes, and for a mesh by
+casting rays (``mj_rayMesh``) both ways along each axis, all six of which hit the mesh from a
+point inside it (exact for a convex mesh, as MuJoCo collides meshes by their convex hulls;
+a point in a concave mesh's pocket may be missed, never a point outside flagged). Contacts
+cannot tell this (a camera is no geom), and adding a probe geom would change the model.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 import mujoco
+import numpy as np
 
 from harness.errors import ScenarioError
 from harness.scenario.schema import Scenario
+from harness.sim.robots.common import COLLISION_GROUP
 
-__all__ = ["SPAWN_DEPTH", "check_spawns", "robot_spawn"]
+__all__ = ["SPAWN_DEPTH", "camera_warnings", "check_spawns", "fixed_cameras", "robot_spawn"]
 
 #: Metres: a robot's geom deeper than this into the floor, a fixed geom or another robot at
 #: its spawn pose is refused. Wheels resting on the floor touch it at 0.
@@ -70,6 +84,73 @@ def check_spawns(model: mujoco.MjModel, data: mujoco.MjData, owner: Mapping[int,
         shown = (describe(name) if describe is not None else None) or _procedural(name)
         what = f"starts inside {shown} ({-dist:.3f} m deep): move it to free floor"
     raise ScenarioError(file, field, f"{where} {what}")
+
+
+_G = mujoco.mjtGeom
+_AXES = np.vstack([np.eye(3), -np.eye(3)])
+
+
+def _inside_geom(model: mujoco.MjModel, data: mujoco.MjData, geom: int,
+                 point: np.ndarray) -> bool:
+    """Whether ``point`` (world) lies strictly inside ``geom`` in ``data``'s state."""
+    kind, size = int(model.geom_type[geom]), model.geom_size[geom]
+    x, y, z = data.geom_xmat[geom].reshape(3, 3).T @ (point - data.geom_xpos[geom])
+    if kind == _G.mjGEOM_SPHERE:
+        return bool(x * x + y * y + z * z < size[0] ** 2)
+    if kind == _G.mjGEOM_CAPSULE:
+        dz = max(abs(z) - size[1], 0.0)
+        return bool(x * x + y * y + dz * dz < size[0] ** 2)
+    if kind == _G.mjGEOM_ELLIPSOID:
+        return bool((x / size[0]) ** 2 + (y / size[1]) ** 2 + (z / size[2]) ** 2 < 1)
+    if kind == _G.mjGEOM_CYLINDER:
+        return bool(x * x + y * y < size[0] ** 2 and abs(z) < size[1])
+    if kind == _G.mjGEOM_BOX:
+        return bool(abs(x) < size[0] and abs(y) < size[1] and abs(z) < size[2])
+    if kind == _G.mjGEOM_PLANE:  # below it, within its drawn extent (0: unbounded)
+        return bool(z < 0 and (size[0] <= 0 or abs(x) < size[0])
+                    and (size[1] <= 0 or abs(y) < size[1]))
+    if kind == _G.mjGEOM_MESH:
+        return all(mujoco.mj_rayMesh(model, data, geom, point, axis) >= 0 for axis in _AXES)
+    return False  # a height field, an SDF: not tested
+
+
+def camera_warnings(model: mujoco.MjModel, data: mujoco.MjData, owner: Mapping[int, str],
+                    cameras: Sequence[tuple[str, str, tuple[float, ...]]],
+                    describe: Callable[[str], str | None] | None = None) -> tuple[str, ...]:
+    """One warning per fixed camera whose position is inside a robot at its spawn pose or
+    inside fixed geometry (see the module docstring). ``cameras``: (file, field, position)
+    of each enabled fixed camera; ``owner`` and ``describe`` as for :func:`check_spawns`;
+    ``data`` in the spawn state (after ``mj_forward``)."""
+    seen = [g for g in range(model.ngeom)
+            if int(model.geom_group[g]) < COLLISION_GROUP and model.geom_rgba[g][3] > 0
+            and (int(model.geom_bodyid[g]) in owner or _fixed(model, g))]
+    out = []
+    for file, field, pos in cameras:
+        point = np.asarray(pos, dtype=np.float64)
+        for g in seen:
+            if not _inside_geom(model, data, g, point):
+                continue
+            robot = owner.get(int(model.geom_bodyid[g]))
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom {g}"
+            if robot is not None:
+                what = f"robot {robot} at its spawn pose (its geom {name!r})"
+            elif int(model.geom_type[g]) == _PLANE:
+                what = "the floor"
+            else:
+                what = (describe(name) if describe is not None else None) or _procedural(name)
+            out.append(f"{file}: {field}: ({', '.join(f'{v:g}' for v in pos)}) is inside "
+                       f"{what}: the camera sees only the inside of it; move the camera")
+            break
+    return tuple(out)
+
+
+def fixed_cameras(scenario: Scenario,
+                  source: str) -> tuple[tuple[str, str, tuple[float, ...]], ...]:
+    """``cameras`` for :func:`camera_warnings` from a scenario: the file, the field and the
+    position of every enabled fixed camera's ``spawn.position``."""
+    return tuple((scenario.file_for(f"cameras[{i}].spawn.position", source),
+                  f"cameras[{i}].spawn.position", tuple(float(v) for v in cam.spawn.position))
+                 for i, cam in enumerate(scenario.cameras) if cam.enabled)
 
 
 def _fixed(model: mujoco.MjModel, geom: int) -> bool:

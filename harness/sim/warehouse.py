@@ -34,6 +34,7 @@ __all__ = [
     "add_sky",
     "add_sun",
     "add_warehouse",
+    "clip_half_plane",
     "door_gaps",
     "floor_half_extent",
     "set_headlight",
@@ -101,8 +102,10 @@ def _walls(world: WorldSpec) -> list[_Wall]:
     ]
 
 
-def _clip(poly: list[Point], n: Point, offset: float) -> list[Point]:
-    """Keep the part of convex ``poly`` where ``n · p <= offset`` (Sutherland-Hodgman)."""
+def clip_half_plane(poly: Sequence[Point], n: Point, offset: float) -> list[Point]:
+    """Keep the part of ``poly`` where ``n · p <= offset`` (Sutherland-Hodgman: exact for a
+    convex ``poly``; for a concave one the kept part's area is still right, though pieces
+    it cuts apart stay joined by zero-width edges)."""
     out: list[Point] = []
     for i, p in enumerate(poly):
         q = poly[(i + 1) % len(poly)]
@@ -121,8 +124,8 @@ def _gap_on(wall: _Wall, footprint: list[Point]) -> tuple[float, float] | None:
     n = (-wall.u[1], wall.u[0])
     centre = n[0] * wall.a[0] + n[1] * wall.a[1]
     band = WALL_THICKNESS / 2
-    poly = _clip(footprint, n, centre + band)
-    poly = _clip(poly, (-n[0], -n[1]), -(centre - band))
+    poly = clip_half_plane(footprint, n, centre + band)
+    poly = clip_half_plane(poly, (-n[0], -n[1]), -(centre - band))
     if len(poly) < 3:
         return None
     along = [wall.u[0] * (x - wall.a[0]) + wall.u[1] * (y - wall.a[1]) for x, y in poly]

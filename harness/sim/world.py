@@ -54,7 +54,7 @@ from harness.sim.render import apply_render_settings
 from harness.sim.robots import ActuatorMode, ModelSource, RobotBuild, add_robot
 from harness.sim.robots.model_file import file_digest
 from harness.sim.sensors import MountedSensors, add_robot_sensors
-from harness.sim.spawns import check_spawns, robot_spawn
+from harness.sim.spawns import camera_warnings, check_spawns, fixed_cameras, robot_spawn
 from harness.sim.warehouse import (
     FLOOR_MARGIN,
     add_ground,
@@ -312,7 +312,8 @@ class World:
         self.scene_files: Mapping[str, str] = types.MappingProxyType(dict(scene_files or {}))
         #: ``file: field: message`` lines about the robots' model files that do not stop a
         #: run (a link that collides but weighs nothing), and about control blocks that do
-        #: not agree with their models (:mod:`harness.sim.kinematics`).
+        #: not agree with their models (:mod:`harness.sim.kinematics`), and about fixed
+        #: cameras inside something (:func:`~harness.sim.spawns.camera_warnings`).
         self.warnings = warnings
         self._model = model
         self._data = data
@@ -374,8 +375,10 @@ class World:
                     WorkerDriver(model, workers), loaded, files,
                     (*(w for b, _ in builds for w in b.warnings), *drives))
         owner = {b: name for name in world.robot_names() for b in world.robot_body_ids(name)}
-        check_spawns(model, data, owner, robot_spawn(scenario, source),
-                     None if loaded is None else loaded.describe_static)
+        describe = None if loaded is None else loaded.describe_static
+        check_spawns(model, data, owner, robot_spawn(scenario, source), describe)
+        world.warnings = (*world.warnings, *camera_warnings(
+            model, data, owner, fixed_cameras(scenario, source), describe))
         return world
 
     # ------------------------------------------------------------------ world file
