@@ -177,7 +177,7 @@ def suite(paths: Sequence[str | Path], *, executor: str = "local", jobs: int | N
           timeout_s: float | None = None, history: Path | None = None,
           baselines: Path | None = None, gpu_share: float = 0.5,
           bless_reason: str | None = None, listen: Listener | None = None,
-          fork: bool = False) -> SuiteResult:
+          fork: bool = False, allow_failing: bool = False) -> SuiteResult:
     """``srr suite``: check every scenario, sweep point and suite file in ``paths`` (bad input
     raises :class:`SrrError` before anything runs), run them on ``executor`` (``local``: ``jobs``
     worker processes, default one per CPU; ``ray``: tasks on the cluster at ``address``, else on
@@ -185,22 +185,27 @@ def suite(paths: Sequence[str | Path], *, executor: str = "local", jobs: int | N
     and ``index.html``. Returns a :class:`harness.suite.runner.SuiteResult`; ``listen`` gets
     :class:`harness.suite.events.Event` s as runs start and finish. ``fork``: local workers
     are forked from this process when it is safe (:func:`harness.suite.local.fork_safe`; what
-    ``srr suite`` does), saving each run the interpreter's start-up and imports."""
+    ``srr suite`` does), saving each run the interpreter's start-up and imports.
+    ``bless_reason`` (``--update-baselines``) blesses each valid group's first run, but not one
+    that fails an absolute criterion unless ``allow_failing``."""
     plan = plan_suite(paths, repeat=repeat, timeout_s=timeout_s)
     return run_planned_suite(plan, executor=executor, jobs=jobs, address=address, out=out,
                              history=history, baselines=baselines, gpu_share=gpu_share,
-                             bless_reason=bless_reason, listen=listen, fork=fork)
+                             bless_reason=bless_reason, listen=listen, fork=fork,
+                             allow_failing=allow_failing)
 
 
 def run_planned_suite(plan: SuitePlan, *, executor: str = "local", jobs: int | None = None,
                       address: str | None = None, out: Path | None = None,
                       history: Path | None = None, baselines: Path | None = None,
                       gpu_share: float = 0.5, bless_reason: str | None = None,
-                      listen: Listener | None = None, fork: bool = False) -> SuiteResult:
+                      listen: Listener | None = None, fork: bool = False,
+                      allow_failing: bool = False) -> SuiteResult:
     """:func:`suite` for a plan already checked (:func:`harness.suite.runner.plan_suite`)."""
     ex = _executor(executor, jobs, address, baselines, gpu_share, fork)
     return run_suite(plan, ex, out=out, history=history, listen=listen,
-                     bless_reason=bless_reason, baselines=baselines)
+                     bless_reason=bless_reason, baselines=baselines,
+                     allow_failing=allow_failing)
 
 
 def search(scenario_file: str | Path, *, space: Sequence[str], objective: str,

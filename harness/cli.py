@@ -92,6 +92,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="bless this run as the scenario's baseline")
     run.add_argument("--reason", default=None,
                      help="why, recorded in the baseline (with --update-baseline)")
+    run.add_argument("--allow-failing", action="store_true",
+                     help="with --update-baseline: bless the run even if it fails an absolute "
+                     "criterion (see srr baseline bless --allow-failing)")
     run.add_argument("--baselines", type=Path, default=None,
                      help="baselines folder (default: the project's baselines/)")
     run.add_argument("--min-free-mb", type=float, default=None, metavar="MB",
@@ -180,6 +183,9 @@ def _parser() -> argparse.ArgumentParser:
                          "baseline it changes (recording, metrics, configuration, versions); "
                          "baselines that already hold the same are left as they are")
     su.add_argument("--reason", default=None, help="why (with --update-baselines)")
+    su.add_argument("--allow-failing", action="store_true",
+                    help="with --update-baselines: also bless runs that fail an absolute "
+                    "criterion (see srr baseline bless --allow-failing)")
     su.add_argument("--quiet", "-q", action="store_true",
                     help="no live status display (a line per finished run and the summary "
                          "still print)")
@@ -217,6 +223,10 @@ def _parser() -> argparse.ArgumentParser:
     bl.add_argument("--reason", required=True, help="why this run becomes the baseline")
     bl.add_argument("--baselines", type=Path, default=None,
                     help="baselines folder (default: the project's baselines/)")
+    bl.add_argument("--allow-failing", action="store_true",
+                    help="bless a run that fails an absolute criterion (a required spec, the "
+                    "safety match rate's FAIL band, a route goal not reached): later runs "
+                    "are then held to it")
 
     ros2 = sub.add_parser("ros2", help="set up the ros2 extra (rclpy from the ROS 2 wheels)")
     ros2_sub = ros2.add_subparsers(dest="ros2_command", required=True, parser_class=_Parser)
@@ -372,6 +382,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise SrrError("--update-baseline: bless one run, not a --repeat series")
     if args.reason is not None and not args.update_baseline:
         raise SrrError("--reason: only with --update-baseline (it is recorded in the baseline)")
+    if args.allow_failing and not args.update_baseline:
+        raise SrrError("--allow-failing: only with --update-baseline")
     bar = _progress(args.quiet)
     task: Any = None
 
@@ -392,6 +404,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             res = api.run_scenario(scenario, source=str(args.scenario), out=args.out,
                                    progress=tick, baselines=args.baselines,
                                    update_baseline=args.update_baseline,
+                                   allow_failing=args.allow_failing,
                                    update_reason=args.reason or "updated with "
                                    "--update-baseline", live=live,
                                    notice=lambda text: _stderr().print(
@@ -497,7 +510,8 @@ def _print_run(res: api.RunResult, command: str = "run") -> None:
 def _cmd_baseline(args: argparse.Namespace) -> int:
     from harness import api
 
-    path = api.bless(args.run_dir, args.reason, baselines=args.baselines)
+    path = api.bless(args.run_dir, args.reason, baselines=args.baselines,
+                     allow_failing=args.allow_failing)
     _stdout().print(f"blessed {args.run_dir} as {path}", markup=False)
     return 0
 
@@ -900,6 +914,8 @@ def _suite(args: argparse.Namespace) -> int:
     if args.reason is not None and not args.update_baselines:
         raise SrrError("--reason: only with --update-baselines (it is recorded in the "
                        "baselines blessed)")
+    if args.allow_failing and not args.update_baselines:
+        raise SrrError("--allow-failing: only with --update-baselines")
     _check_summary_md(args)
     live = not args.quiet and _stdout().is_terminal
     holder: dict[str, Any] = {}
@@ -918,7 +934,8 @@ def _suite(args: argparse.Namespace) -> int:
             out=args.out, history=args.history, baselines=args.baselines,
             gpu_share=args.gpu_share,
             bless_reason=args.reason if args.update_baselines else None, listen=listen,
-            fork=True)  # this process only plans: workers fork from it when safe
+            fork=True,  # this process only plans: workers fork from it when safe
+            allow_failing=args.allow_failing)
     s = res.summary
     unstarted = sum(not r.started for g in res.groups for r in g.runs)
     runs = (f"{len(s['runs']) - unstarted} of {len(s['runs'])} runs" if unstarted
@@ -929,6 +946,8 @@ def _suite(args: argparse.Namespace) -> int:
         _stderr().print(f"srr suite: warning: {w}", markup=False)
     for path in res.blessed:
         _stdout().print(f"blessed {path}", markup=False)
+    for why in res.not_blessed:
+        _stderr().print(f"srr suite: {why}", markup=False)
     if res.unchanged:
         _stdout().print(f"unchanged: {len(res.unchanged)} baseline(s) already hold what these "
                         "runs recorded and scored (left as they are): "

@@ -1,5 +1,6 @@
 """Rotations: the one module srr does its quaternion, roll/pitch/yaw and rotation-matrix maths
-in. Pure numpy and Python floats, no MuJoCo.
+in; and the side of a directed line (:func:`side_of_line`, which the safety monitor and the
+scenario checks share). Pure numpy and Python floats, no MuJoCo.
 
 Component order is part of every name that takes or gives a quaternion:
 
@@ -67,6 +68,7 @@ __all__ = [
     "quat_xyzw_rotate_columns",
     "rotate_rows",
     "rpy_from_quat_wxyz",
+    "side_of_line",
     "wxyz_to_xyzw",
     "xyzw_to_wxyz",
     "yaw_between",
@@ -278,3 +280,11 @@ def rpy_from_quat_wxyz(q: FloatVec) -> FloatArray:
     roll = math.atan2(float(r[2, 1]), float(r[2, 2]))
     yaw = math.atan2(float(r[1, 0]), float(r[0, 0]))
     return np.array([roll, pitch, yaw])
+
+
+def side_of_line(x: float, y: float, a: Sequence[float], b: Sequence[float]) -> str:
+    """``"left"`` or ``"right"`` of the directed line a → b (on the line counts as right).
+    Left is seen from above (+Z), walking from ``a`` to ``b``: the side ``b - a`` turned +90°
+    (counter-clockwise) points to; for a → b along +x, left is +y."""
+    cross = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
+    return "left" if cross > 0 else "right"

@@ -193,7 +193,10 @@ class SchemaBuilder:
         if origin is tuple:
             args = get_args(tp)
             if len(args) == 2 and args[1] is Ellipsis:
-                return {"type": "array", "items": self.value(args[0], meta)}
+                out: dict[str, Any] = {"type": "array", "items": self.value(args[0], meta)}
+                if meta.get("polygon"):  # empty (none) or three points or more
+                    out["anyOf"] = [{"maxItems": 0}, {"minItems": 3}]
+                return out
             return {"type": "array", "prefixItems": [self.value(a, meta) for a in args],
                     "items": False, "minItems": len(args), "maxItems": len(args)}
         if origin in _MAPPINGS:

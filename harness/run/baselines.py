@@ -9,14 +9,57 @@ from typing import Any
 
 from harness import runlock
 from harness.errors import ScenarioError, SrrError
-from harness.regression import baseline_path, comparable_config, save_baseline
+from harness.metrics.types import MetricResult
+from harness.regression import absolute_failures, baseline_path, comparable_config, save_baseline
 from harness.run.summary import RunSummary
 from harness.scenario import Scenario, load_scenario, scenario_to_mapping
 
-__all__ = ["PROJECT_MARKERS", "baseline_name", "baselines_dir", "bless", "scene_config"]
+__all__ = ["PROJECT_MARKERS", "NotBlessedError", "baseline_name", "baselines_dir", "bless",
+           "blessing_refusal", "scene_config"]
 
 #: What makes a folder a project root: the search for ``baselines/`` stops there.
 PROJECT_MARKERS = (".git", "pyproject.toml")
+
+
+class NotBlessedError(SrrError):
+    """A finished run that cannot become its scenario's baseline (exit 2): it is INVALID or
+    interrupted, or (without ``allow_failing``) it fails an absolute criterion."""
+
+
+def _metric(data: Mapping[str, Any]) -> MetricResult:
+    """A metric of a ``summary.json`` back as the :class:`MetricResult` it was written from
+    (what the verdict's absolute criteria read)."""
+    return MetricResult(name=str(data.get("name", "")), value=data.get("value"),
+                        unit=str(data.get("unit", "")),
+                        direction=data.get("direction", "none"),
+                        group=data.get("group", "control"), detail=str(data.get("detail", "")),
+                        verdict=data.get("verdict"))
+
+
+def blessing_refusal(summary: RunSummary, *, allow_failing: bool = False) -> str | None:
+    """Why the finished run of ``summary`` cannot become its scenario's baseline, or None
+    when it can: the one rule of ``srr baseline bless``, ``srr run --update-baseline`` and
+    ``srr suite --update-baselines``.
+
+    An INVALID (a health gate tripped) or interrupted run never can. A run that fails an
+    absolute criterion of the verdict (a required spec violated or not evaluated, the safety
+    match rate in its FAIL band, a route goal not reached:
+    :func:`~harness.regression.absolute_failures`) can only with ``allow_failing``: a
+    baseline is the bar later runs are held to, and every later run would FAIL against it.
+    The verdict itself is not the test: a run with no baseline yet is FAIL too."""
+    if summary.verdict == "INVALID" or summary.interrupted or not summary.ok:
+        why = " ".join("; ".join(summary.reasons).split())
+        return (f"the run is {summary.verdict} ({why or 'no reason recorded'}); only a valid, "
+                "complete run can become the baseline")
+    if allow_failing:
+        return None
+    failed = absolute_failures([_metric(m) for m in summary.metrics])
+    if not failed:
+        return None
+    what = "; ".join(" ".join(f.split(" — ")[0].split()) for f in failed)
+    return (f"the run fails {'an absolute criterion' if len(failed) == 1 else 'absolute criteria'}"
+            f" ({what}), and every later run would FAIL against it; bless it anyway with "
+            "`srr baseline bless RUN_DIR --reason TEXT --allow-failing`")
 
 
 def baseline_name(scenario: Scenario) -> str:
@@ -72,30 +115,36 @@ def scene_config(scenario: Scenario, scene_files: Mapping[str, str] | None) -> d
     return config
 
 
-def bless(run_dir: Path, reason: str, *, baselines: Path | None = None) -> Path:
+def bless(run_dir: Path, reason: str, *, baselines: Path | None = None,
+          allow_failing: bool = False) -> Path:
     """Make a finished run the baseline of its scenario (``srr baseline bless``), in
     ``baselines`` if given, else in the folder the run was judged against (its summary's
     ``baselines_dir``; for runs from before it was recorded, :func:`baselines_dir` of its
-    scenario file). An INVALID or interrupted run is refused (SrrError, exit 2)."""
-    return bless_if_changed(run_dir, reason, baselines=baselines, keep_unchanged=False)[0]
+    scenario file). A run :func:`blessing_refusal` refuses is refused
+    (:class:`NotBlessedError`, exit 2)."""
+    return bless_if_changed(run_dir, reason, baselines=baselines, keep_unchanged=False,
+                            allow_failing=allow_failing)[0]
 
 
 def bless_if_changed(run_dir: Path, reason: str, *, baselines: Path | None = None,
-                     keep_unchanged: bool = True) -> tuple[Path, bool]:
+                     keep_unchanged: bool = True,
+                     allow_failing: bool = False) -> tuple[Path, bool]:
     """:func:`bless`, leaving a baseline that would only change in who blessed it when and
     why as it is (``srr suite --update-baselines``); the baseline's path and whether it was
     written."""
     runlock.refuse_if_live(run_dir)
     summary = RunSummary.read(run_dir)
-    if summary.verdict == "INVALID" or summary.interrupted:
-        why = " ".join("; ".join(summary.reasons).split())
-        raise SrrError(f"{Path(run_dir).resolve()}: not blessed: the run is "
-                       f"{summary.verdict} ({why or 'no reason recorded'}); "
-                       "only a valid, complete run can become the baseline")
-    # imported here: reading bags back is a bless's, never a run's start
-    from harness.recording.verify import verify_recording
+    # an invalid run first, then the recording, then the criteria (what --allow-failing
+    # lifts is the last thing said)
+    refusal = blessing_refusal(summary, allow_failing=True)
+    if refusal is None:
+        # imported here: reading bags back is a bless's, never a run's start
+        from harness.recording.verify import verify_recording
 
-    verify_recording(Path(run_dir), summary.to_json())  # the bag is the summary's
+        verify_recording(Path(run_dir), summary.to_json())  # the bag is the summary's
+        refusal = blessing_refusal(summary, allow_failing=allow_failing)
+    if refusal is not None:
+        raise NotBlessedError(f"{Path(run_dir).resolve()}: not blessed: {refusal}")
     scenario = load_scenario(Path(run_dir) / "scenario.yaml")
     recorded = summary.baselines_dir  # the folder the run was judged against
     path = baseline_path(baseline_name(scenario), baselines_dir(

@@ -54,7 +54,7 @@ from harness.recording.bagfile import ChunkPolicy
 from harness.regression import baseline_path, save_baseline
 from harness.report.graphs import RunGraphs, write_graphs
 from harness.report.junit import junit_cases, write_junit
-from harness.run.baselines import baseline_name, baselines_dir, scene_config
+from harness.run.baselines import baseline_name, baselines_dir, blessing_refusal, scene_config
 from harness.run.facts import (
     combined_digest,
     scenario_path,
@@ -162,8 +162,8 @@ def unprepare(run_dir: Path, made: Path | None, err: BaseException) -> None:
 
 def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_ticks: int,
            progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
-           update_reason: str = "", free_space: FreeSpace = disk_free,
-           participants: Sequence[Participant] = (),
+           update_reason: str = "", allow_failing: bool = False,
+           free_space: FreeSpace = disk_free, participants: Sequence[Participant] = (),
            started: Started | None = None, video: bool = True,
            made: Path | None) -> RunResult:
     """:func:`write_run` while this process owns ``run_dir`` (:mod:`harness.runlock`): it is
@@ -190,7 +190,8 @@ def record(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_tick
             return write_run(scenario, loop, source=source, run_dir=run_dir, n_ticks=n_ticks,
                              progress=progress, baselines=baselines,
                              update_baseline=update_baseline, update_reason=update_reason,
-                             free_space=free_space, participants=participants, video=video)
+                             allow_failing=allow_failing, free_space=free_space,
+                             participants=participants, video=video)
         except BaseException:
             if made is not None and not run_dir.exists():
                 remove_empty(run_dir.parent, made)
@@ -209,7 +210,8 @@ class _Ended:
 
 def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_ticks: int,
               progress: Progress | None, baselines: Path | None, update_baseline: bool = False,
-              update_reason: str = "", free_space: FreeSpace = disk_free,
+              update_reason: str = "", allow_failing: bool = False,
+              free_space: FreeSpace = disk_free,
               participants: Sequence[Participant] = (), video: bool = True) -> RunResult:
     """Record ``loop`` into ``run_dir``, score it and write the run directory. Until
     ``summary.json`` is written the directory holds ``incomplete.json``
@@ -256,11 +258,11 @@ def write_run(scenario: Scenario, loop: Loop, *, source: str, run_dir: Path, n_t
     data = _write_outputs(scenario, summary, run_dir, frames, video=video)
     blessed = not_blessed = None
     if blessing:  # judged against the baseline it replaces, written out, then blessed
-        if summary.ok:
+        refusal = blessing_refusal(summary, allow_failing=allow_failing)
+        if refusal is None:
             blessed = _update_baseline(scenario, summary, bdir, run_dir, update_reason)
         else:
-            not_blessed = (f"{run_dir}: not blessed: health gates tripped; an invalid run "
-                           "cannot become the baseline")
+            not_blessed = f"{run_dir}: not blessed: {refusal}"
     return RunResult(run_dir, summary.verdict, summary.exit_code, data, summary,
                      blessed=blessed, not_blessed=not_blessed)
 

@@ -30,6 +30,7 @@ from harness.scenario import (
     degree_warnings,
     rate_warnings,
     robot_warnings,
+    tripwire_warnings,
     worker_warnings,
 )
 from harness.scoring import check_scoring
@@ -83,7 +84,8 @@ def _finished(runs: Sequence[RunResult]) -> tuple[RunResult, ...]:
 def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | None = None,
                  progress: Progress | None = None, baselines: Path | None = None,
                  update_baseline: bool = False, update_reason: str = "updated with "
-                 "--update-baseline", free_space: FreeSpace = disk_free,
+                 "--update-baseline", allow_failing: bool = False,
+                 free_space: FreeSpace = disk_free,
                  live: LiveConfig | None = None, notice: Notice | None = None,
                  started: Started | None = None, video: bool = True) -> RunResult:
     """Build, run and record ``scenario``; write the run directory and return its verdict.
@@ -149,7 +151,8 @@ def run_scenario(scenario: Scenario, *, source: str = "<scenario>", out: Path | 
                 graphs=graphs)
     return record(scenario, loop, source=source, run_dir=run_dir, n_ticks=scenario.n_ticks,
                   progress=progress, baselines=baselines, update_baseline=update_baseline,
-                  update_reason=update_reason, free_space=free_space,
+                  update_reason=update_reason, allow_failing=allow_failing,
+                  free_space=free_space,
                   participants=participants, started=started, video=video, made=made)
 
 
@@ -296,10 +299,11 @@ def _built_warnings(sim: Simulation, plan: Plan, output: OutputKind, scenario: S
                     source: str) -> tuple[str, ...]:
     """The warnings of a scenario built and wired (a run's and ``srr validate``'s alike): its
     model files and fixed cameras, its sensor rates, its robots' blocks, its degree fields,
-    its wiring and its output topics."""
+    its workers, its tripwires, its wiring and its output topics."""
     return (*sim.world.warnings, *rate_warnings(scenario, source),
             *robot_warnings(scenario, source), *degree_warnings(scenario, source),
-            *worker_warnings(scenario, source), *check_wiring(plan, scenario, source),
+            *worker_warnings(scenario, source), *tripwire_warnings(scenario, source),
+            *check_wiring(plan, scenario, source),
             *check_output_topics(output, plan.topics, scenario, source))
 
 

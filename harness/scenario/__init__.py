@@ -9,6 +9,7 @@ from harness.scenario.loader import (
     robot_warnings,
     scenario_from_mapping,
     scenario_to_mapping,
+    tripwire_warnings,
     validate_dataclass,
     worker_warnings,
 )
@@ -19,6 +20,7 @@ __all__ = [
     "apply_overrides",
     "degree_warnings",
     "robot_warnings",
+    "tripwire_warnings",
     "worker_warnings",
     "load_scenario",
     "parse_override",

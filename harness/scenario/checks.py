@@ -12,6 +12,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from harness.errors import SrrError
+from harness.geometry import side_of_line
 from harness.scenario.resolve import graph_name
 from harness.scenario.schema import (
     BUILTIN_JOINTS,
@@ -36,20 +37,74 @@ __all__ = [
     "RATE_TOLERANCE",
     "check_semantics",
     "degree_warnings",
+    "polygon_crossing",
     "rate_warnings",
     "robot_warnings",
     "sensor_rates",
     "spec_context",
+    "tripwire_warnings",
     "worker_warnings",
 ]
 
 
+def _orient(p: Sequence[float], q: Sequence[float], r: Sequence[float]) -> int:
+    """The turn p → q → r: 1 counter-clockwise, -1 clockwise, 0 on one line."""
+    cross = (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+    return (cross > 0) - (cross < 0)
+
+
+def _on_segment(p: Sequence[float], q: Sequence[float], r: Sequence[float]) -> bool:
+    """``r``, on the line through ``p`` and ``q``, lies within the segment p–q."""
+    return (min(p[0], q[0]) <= r[0] <= max(p[0], q[0])
+            and min(p[1], q[1]) <= r[1] <= max(p[1], q[1]))
+
+
+def _segments_meet(p1: Sequence[float], p2: Sequence[float], q1: Sequence[float],
+                   q2: Sequence[float]) -> bool:
+    """The closed segments p1–p2 and q1–q2 share a point (they cross, or one touches the
+    other)."""
+    o1, o2 = _orient(p1, p2, q1), _orient(p1, p2, q2)
+    o3, o4 = _orient(q1, q2, p1), _orient(q1, q2, p2)
+    if o1 != o2 and o3 != o4 and 0 not in (o1, o2, o3, o4):
+        return True
+    return ((o1 == 0 and _on_segment(p1, p2, q1)) or (o2 == 0 and _on_segment(p1, p2, q2))
+            or (o3 == 0 and _on_segment(q1, q2, p1)) or (o4 == 0 and _on_segment(q1, q2, p2)))
+
+
+def polygon_crossing(points: Sequence[Sequence[float]]
+                     ) -> tuple[tuple[int, int], tuple[int, int]] | None:
+    """The first two edges of the closed polygon ``points`` that are not neighbours and yet
+    meet (it crosses or touches itself: a bow-tie), each as the indices of the points it
+    runs between (the last edge runs back to point 0); None for a simple polygon. A point
+    repeated right after itself makes no edge."""
+    ring = [i for i in range(len(points)) if points[i] != points[i - 1]] \
+        if len(points) > 1 else []
+    n = len(ring)
+    edges = [(ring[k], ring[(k + 1) % n]) for k in range(n)]
+    for a in range(n):
+        for b in range(a + 2, n):
+            if a == 0 and b == n - 1:  # the last edge closes onto the first: neighbours
+                continue
+            (p1, p2), (q1, q2) = edges[a], edges[b]
+            if _segments_meet(points[p1], points[p2], points[q1], points[q2]):
+                return edges[a], edges[b]
+    return None
+
+
 def _check_polygon(v: Validator, field: str, points: Sequence[Sequence[float]]) -> None:
-    """A polygon (given: none is fine) has three points or more and an area."""
+    """A polygon (given: none is fine) has three points or more, does not cross itself and
+    has an area."""
     if not points:
         return
     if len(points) < 3:
         v.fail(field, f"a polygon needs at least three points, got {len(points)}")
+    crossing = polygon_crossing(points)
+    if crossing is not None:
+        (i, i2), (j, j2) = crossing
+        v.fail(field, f"the polygon crosses itself: its edge from point {i} "
+               f"{list(points[i])} to point {i2} {list(points[i2])} meets its edge from point "
+               f"{j} {list(points[j])} to point {j2} {list(points[j2])}; list the points in "
+               "order around the polygon")
     ring = list(points)
     area2 = sum(x0 * y1 - x1 * y0
                 for (x0, y0), (x1, y1) in zip(ring, ring[1:] + ring[:1], strict=True))
@@ -229,6 +284,67 @@ def worker_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]
             out.append(f"{sc.file_for(field, source)}: {field}: {worker.start_delay:g} s is not "
                        f"before the end of the run (duration {sc.duration:g} s): worker "
                        f"{sc.worker_name(i)!r} stands at its first waypoint the whole run")
+    return tuple(out)
+
+
+#: The safety monitor's plugin: its ``params.tripwire`` (two points) and ``params.inside``
+#: replace the scenario's ``zones.trailer_tripwire``.
+SAFETY_MONITOR = "harness.sut.safety_monitor:SafetyMonitor"
+
+
+def _toward(dx: float, dy: float) -> str:
+    """A direction in the world's XY plane, as an axis (``+y``) when it is one."""
+    axis = {(1, 0): "+x", (-1, 0): "-x", (0, 1): "+y", (0, -1): "-y"}
+    norm = (dx * dx + dy * dy) ** 0.5
+    ux, uy = dx / norm, dy / norm
+    key = (round(ux), round(uy))
+    if key in axis and abs(ux - key[0]) < 1e-9 and abs(uy - key[1]) < 1e-9:
+        return axis[key]
+    return f"[{ux:.2f}, {uy:.2f}]"
+
+
+def tripwire_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """A warning per trailer tripwire (``zones.trailer_tripwire``, or a safety monitor's own
+    ``params.tripwire``) that no robot ever crosses from outside because every enabled
+    robot's spawn and every route waypoint already lie on its ``inside`` side (by the
+    safety monitor's own test, :func:`~harness.geometry.side_of_line`): the forklift then
+    counts as in the trailer from the first tick, and the monitor mutes from the start
+    whenever no worker is in the loading ROI. That is what an ``inside`` given as the wrong
+    side does (the whole room past the tripwire); a robot that starts inside and drives out,
+    or one that drives in, is not warned about. A warning, not an error: a scene may start
+    with the forklift parked in the trailer on purpose."""
+    points = [(r.spawn.position[0], r.spawn.position[1]) for r in sc.robots if r.enabled]
+    if not points:
+        return ()
+    points += [(x, y) for route in sc.routes.values() for x, y in route.waypoints]
+    wires: list[tuple[str, Sequence[float], Sequence[float], str]] = []
+    if sc.zones.trailer_tripwire is not None:
+        w = sc.zones.trailer_tripwire
+        wires.append(("zones.trailer_tripwire.inside", w.a, w.b, w.inside))
+    for i, sut in enumerate(sc.systems_under_test):
+        wire = sut.params.get("tripwire")
+        if sut.enabled and sut.plugin == SAFETY_MONITOR and isinstance(wire, list | tuple) \
+                and len(wire) == 2:
+            try:
+                ends = [(float(p[0]), float(p[1])) for p in wire]
+            except (TypeError, ValueError, IndexError):
+                continue  # the monitor refuses it when the run sets it up
+            wires.append((f"systems_under_test[{i}].params.inside", ends[0], ends[1],
+                          str(sut.params.get("inside") or "left")))
+    out = []
+    for field, a, b, inside in wires:
+        dx, dy = b[0] - a[0], b[1] - a[1]
+        if (dx, dy) == (0, 0) or inside not in ("left", "right"):
+            continue  # refused elsewhere
+        if all(side_of_line(x, y, a, b) == inside for x, y in points):
+            normal = (-dy, dx) if inside == "left" else (dy, -dx)
+            out.append(
+                f"{sc.file_for(field, source)}: {field}: {inside!r} puts every robot's spawn "
+                f"and every route waypoint past the tripwire a {[*a]} → b {[*b]} ({inside} "
+                f"of a → b, seen from above, is toward {_toward(*normal)}): the robot is in "
+                "the trailer from the first tick and never crosses in, so the safety monitor "
+                "mutes from the start unless a worker is in the loading ROI; if the trailer "
+                f"is on the other side, inside: {'right' if inside == 'left' else 'left'}")
     return tuple(out)
 
 

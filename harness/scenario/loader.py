@@ -25,6 +25,7 @@ from harness.scenario.checks import (
     rate_warnings,
     robot_warnings,
     sensor_rates,
+    tripwire_warnings,
     worker_warnings,
 )
 from harness.scenario.includes import Origins, expand_includes, read_yaml
@@ -54,6 +55,7 @@ __all__ = [
     "scenario_from_mapping",
     "scenario_to_mapping",
     "sensor_rates",
+    "tripwire_warnings",
     "validate_dataclass",
     "worker_warnings",
 ]

@@ -88,6 +88,13 @@ def num(default: float | None, lo: float | None = None, hi: float | None = None,
     return field(default=default, metadata=_range(lo, hi, lo_open=lo_open))
 
 
+def polygon() -> Any:
+    """A polygon field (world XY points in order around it), empty for none: three points or
+    more (the JSON Schema says so; :mod:`harness.scenario.checks` also refuses one that has
+    no area or crosses itself)."""
+    return field(default=(), metadata={"polygon": True})
+
+
 def gate_step(tick_hz: int, fps: float) -> int:
     """A sensor publishes every ``gate_step``-th tick (its SimulationGate's ``step``):
     ``round(tick_hz / fps)``, >= 1 (seed 001's ``step_size = int(60 / freq)``, rounded
@@ -666,7 +673,9 @@ class WorkerSpec:
 @dataclass(frozen=True)
 class TripwireSpec:
     """A directed line ``a → b``; the forklift is inside the trailer when its ground-truth
-    position is on the ``inside`` side (left = counter-clockwise of ``a → b``)."""
+    position is on the ``inside`` side. Left is seen from above (+Z), walking from ``a`` to
+    ``b``: the side ``b - a`` turned +90° (counter-clockwise) points to; for ``a → b`` along
+    +x, left is +y."""
 
     a: Vec2
     b: Vec2
@@ -678,7 +687,7 @@ class ZonesSpec:
     """Zones the safety scoring uses: the loading ROI polygon (empty: none) and the trailer
     tripwire (None: none). Geometry (edges included or not) is :mod:`harness.sut.zones`."""
 
-    loading_roi: tuple[Vec2, ...] = ()
+    loading_roi: tuple[Vec2, ...] = polygon()
     trailer_tripwire: TripwireSpec | None = None
 
 
@@ -715,7 +724,7 @@ class PerceptionScoring:
     gate: float = num(1.0, 0.0, 100.0, lo_open=True)
     # Evaluation area (world XY polygon): ground truth and tracks outside it are not scored,
     # so objects the cameras cannot see do not count as misses. Empty: everywhere.
-    area: tuple[tuple[float, float], ...] = ()
+    area: tuple[tuple[float, float], ...] = polygon()
 
 
 @dataclass(frozen=True)

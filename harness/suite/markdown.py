@@ -171,7 +171,12 @@ def _blessed(blessed: Any) -> list[str]:
              f"{cell(blessed.get('reason', ''))}): {len(written)} written, {len(unchanged)} "
              "unchanged; the verdicts above were judged before.", ""]
     lines += [f"- {code(Path(p).name)}" for p in written]
-    return [*lines, ""] if written else lines
+    lines = [*lines, ""] if written else lines
+    refused = blessed.get("not_blessed") or []
+    if refused:
+        lines += [f"**Not blessed** ({len(refused)}):", "",
+                  *(f"- {cell(str(why))}" for why in refused), ""]
+    return lines
 
 
 def suite_markdown(result: SuiteResult, *, link_base: str = "",

@@ -12,7 +12,7 @@ from typing import Any
 
 from harness.errors import SrrError
 from harness.outdir import check_out_folder
-from harness.run.baselines import baselines_dir, bless_if_changed
+from harness.run.baselines import NotBlessedError, baselines_dir, bless_if_changed
 from harness.run.loading import load
 from harness.run.simulate import check_scene, check_suts, validate
 from harness.scenario import load_scenario, parse_override
@@ -44,6 +44,7 @@ class SuiteResult:
     groups: tuple[GroupResult, ...]
     blessed: tuple[Path, ...] = ()
     unchanged: tuple[Path, ...] = ()  # baselines --update-baselines found up to date
+    not_blessed: tuple[str, ...] = ()  # --update-baselines: why a group's run was not blessed
 
 
 def default_suite_dir(root: Path = Path("reports")) -> Path:
@@ -119,14 +120,18 @@ def _sweeps(groups: Sequence[GroupResult]) -> list[dict[str, Any]]:
 
 def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
               history: Path | None = None, listen: Listener | None = None,
-              bless_reason: str | None = None, baselines: Path | None = None) -> SuiteResult:
+              bless_reason: str | None = None, baselines: Path | None = None,
+              allow_failing: bool = False) -> SuiteResult:
     """Run ``plan`` on ``executor`` into ``out`` (default :func:`default_suite_dir`).
 
     ``history``: a folder of earlier suite outputs whose metrics the page shows as trends.
     ``bless_reason``: make the first repeat of every group that is neither INVALID, FLAKY nor
     interrupted its baseline (``--update-baselines``), e.g. to bless each sweep point; a
     baseline that would change only in who blessed it when and why is left as it is
-    (:attr:`SuiteResult.unchanged`), so a re-bless rewrites only what changed."""
+    (:attr:`SuiteResult.unchanged`), so a re-bless rewrites only what changed. A run that
+    fails an absolute criterion is not blessed (unless ``allow_failing``): the rule of
+    ``srr baseline bless`` (:func:`~harness.run.baselines.blessing_refusal`); why is kept in
+    :attr:`SuiteResult.not_blessed` and in ``baselines_blessed.not_blessed``."""
     from harness.suite.history import load_history
 
     if history is not None and not Path(history).is_dir():
@@ -168,6 +173,7 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
     summary["timeline"]["judged_s"] = round(time.monotonic() - t_judge, 3)
     blessed: list[Path] = []
     unchanged: list[Path] = []
+    refused: list[str] = []
     if bless_reason is not None and not interrupted:
         for g in groups:
             if g.verdict not in ("INVALID", "FLAKY", "INTERRUPTED") and g.runs[0].run_dir:
@@ -177,14 +183,21 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
                 here = baselines if baselines is not None else baselines_dir(
                     spec.scenario_file, None, load(spec.scenario_file,
                                                        overrides=spec.overrides))
-                path, written = bless_if_changed(out_dir / g.runs[0].run_dir, bless_reason,
-                                                 baselines=here)
+                try:
+                    path, written = bless_if_changed(out_dir / g.runs[0].run_dir,
+                                                     bless_reason, baselines=here,
+                                                     allow_failing=allow_failing)
+                except NotBlessedError as err:
+                    refused.append(str(err))
+                    continue
                 (blessed if written else unchanged).append(path)
         # what the groups' reasons ("no baseline at ...") said before: the baselines now
         summary["baselines_blessed"] = {"reason": bless_reason,
                                         "written": [str(p) for p in blessed],
                                         "unchanged": [str(p) for p in unchanged]}
+        if refused:  # written only when there is something to say
+            summary["baselines_blessed"]["not_blessed"] = refused
     summary = write_outputs(out_dir, summary, ranked)
     return SuiteResult(out_dir, verdict, code, summary, tuple(ranked), tuple(blessed),
-                       tuple(unchanged))
+                       tuple(unchanged), tuple(refused))
 

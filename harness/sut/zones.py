@@ -7,6 +7,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from harness.geometry import side_of_line  # shared with the scenario checks
+
 __all__ = ["point_in_polygon", "points_in_polygon", "side_of_line"]
 
 
@@ -30,9 +32,3 @@ def points_in_polygon(points: np.ndarray, polygon: np.ndarray | Sequence[Sequenc
 
 def point_in_polygon(x: float, y: float, polygon: Sequence[Sequence[float]]) -> bool:
     return bool(points_in_polygon(np.array([[x, y]]), polygon)[0])
-
-
-def side_of_line(x: float, y: float, a: Sequence[float], b: Sequence[float]) -> str:
-    """``"left"`` or ``"right"`` of the directed line a → b (on the line counts as right)."""
-    cross = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
-    return "left" if cross > 0 else "right"

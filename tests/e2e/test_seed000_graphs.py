@@ -272,7 +272,8 @@ def test_replay_diff_and_bless_a_ros1_bag(bag: Recorded, tmp_path: Path) -> None
         {t: v["sha256"] for t, v in bag.summary["topics"].items()}
     diff = api.diff_runs(bag.run_dir, out)
     assert diff.equal and {t.status for t in diff.topics} == {"identical"}
-    baseline = api.bless(bag.run_dir, "ROS 1 reference", baselines=tmp_path / "baselines")
+    baseline = api.bless(bag.run_dir, "ROS 1 reference", baselines=tmp_path / "baselines",
+                         allow_failing=True)  # a short run: its route's goal not reached
     reference = baseline.with_suffix(".mcap")
     with reference.open("rb") as f:
         assert make_reader(f).get_header().profile == "ros1"

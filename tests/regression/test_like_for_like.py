@@ -80,7 +80,8 @@ def test_blessing_records_the_configuration(tmp_path: Path) -> None:
     res = api.run_scenario(sc, source=str(FW), out=tmp_path / "r")
     shutil.copy(FW, tmp_path / "forklift_warehouse.yaml")
     bdir = tmp_path / "b"
-    path = api.bless(res.run_dir, "one second", baselines=bdir)
+    path = api.bless(res.run_dir, "one second", baselines=bdir,
+                     allow_failing=True)  # its route's goal not reached in one second
     stored = json.loads(path.read_text())["config"]
     assert stored == comparable_config(scenario_to_mapping(load_scenario(
         res.run_dir / "scenario.yaml")))

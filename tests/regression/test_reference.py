@@ -41,7 +41,8 @@ def test_shipped_baselines_carry_a_small_reference_recording(name: str) -> None:
 def test_blessing_writes_the_reference_and_frames_read_it_like_the_run(tmp_path: Path) -> None:
     fw = SCENARIOS / "forklift_warehouse.yaml"
     res = api.run_scenario(api.load(fw, duration=3.0), source=str(fw), out=tmp_path / "r")
-    path = api.bless(res.run_dir, "reference test", baselines=tmp_path / "b")
+    path = api.bless(res.run_dir, "reference test", baselines=tmp_path / "b",
+                     allow_failing=True)  # its route's goal not reached in three seconds
     ref = path.with_suffix(".mcap")
     assert ref.is_file()
     run, base = load_frames(res.run_dir), load_frames(ref)
