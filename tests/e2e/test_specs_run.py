@@ -43,7 +43,8 @@ def runs(module_tmp: ModuleTmp) -> tuple[api.RunResult, api.RunResult]:
     plain = api.load(CROSSING, duration=DURATION, overrides=SHORT)
     first = api.run_scenario(plain, source=str(CROSSING), out=root / "plain",
                              baselines=baselines, update_baseline=True,
-                             update_reason="the short crossing, without specs")
+                             update_reason="the short crossing, without specs",
+                             allow_failing=True)  # short: the forklift does not reach its goal
     with_specs = api.load(CROSSING, duration=DURATION, overrides=[*SHORT, SPECS])
     second = api.run_scenario(with_specs, source=str(CROSSING), out=root / "specs",
                               baselines=baselines)

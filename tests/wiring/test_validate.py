@@ -182,7 +182,7 @@ def test_unfed_inputs_of_systems_under_test_are_warnings(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     text = scenario(robot(FORKLIFT, "forklift"), suts=drive("forklift") + (
         "  - {name: monitor, robot: forklift, plugin: 'harness.sut.safety_monitor:SafetyMonitor',"
-        " params: {roi: [[0, 0], [1, 0], [1, 1]], tripwire: [[2, 0], [2, 1]]}}\n"))
+        " params: {roi: [[0, 0], [1, 0], [1, 1]], tripwire: [[2, 1], [2, 0]]}}\n"))
     code, out, err = run_cli(capsys, tmp_path, text)
     assert code == 0, err
     assert "ok" in out and "1 warning(s)" in out
