@@ -14,6 +14,7 @@ runs see another's locks instead of failing on their files."""
 from __future__ import annotations
 
 import contextlib
+import errno
 import fcntl
 import os
 import stat
@@ -47,11 +48,13 @@ class DomainLease:
 
 
 def _lock_dir() -> Path:
+    """The lock folder, made if missing (a folder that cannot be made shows as lock files
+    that cannot be opened: see :func:`_take`)."""
     chosen = os.environ.get("SRR_ROS2_LOCK_DIR")
     d = Path(chosen or Path(tempfile.gettempdir()) / "srr-ros2")
     try:
         d.mkdir(parents=True)
-    except FileExistsError:
+    except OSError:  # there already, or not ours to make
         return d
     if not chosen:  # made here: every user's runs lock in it (sticky, as /tmp is)
         with contextlib.suppress(OSError):
@@ -59,24 +62,21 @@ def _lock_dir() -> Path:
     return d
 
 
-def _open(d: Path, domain: int) -> IO[bytes] | OSError:
-    """The lock file of ``domain`` opened read-only (made if missing), or why it cannot be."""
+def _take(d: Path, domain: int) -> IO[bytes] | OSError | None:
+    """The lock file of ``domain``, opened read-only (made if missing) and locked; None when
+    another run holds the lock; the error when it cannot be opened or locked at all (a folder
+    not writable by this user, a filesystem without ``flock``)."""
     try:
-        return os.fdopen(os.open(d / f"domain-{domain}.lock", os.O_RDONLY | os.O_CREAT, 0o644),
-                         "rb")
+        f = os.fdopen(os.open(d / f"domain-{domain}.lock", os.O_RDONLY | os.O_CREAT, 0o644),
+                      "rb")
     except OSError as err:
         return err
-
-
-def _locked(f: IO[bytes]) -> bool:
-    """Whether the exclusive lock on ``f`` was taken (False: another run holds it; ``f`` is
-    closed then)."""
     try:
         fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
+    except OSError as err:
         f.close()
-        return False
-    return True
+        return None if err.errno in (errno.EWOULDBLOCK, errno.EAGAIN) else err
+    return f
 
 
 def lease_domain(requested: int | None) -> DomainLease:
@@ -84,26 +84,24 @@ def lease_domain(requested: int | None) -> DomainLease:
     its lock file cannot be opened), else the first free id, locked."""
     d = _lock_dir()
     if requested is not None:
-        f = _open(d, requested)
-        if isinstance(f, OSError):
-            return DomainLease(requested)
-        if not _locked(f):
+        f = _take(d, requested)
+        if f is None:
             raise DomainInUse(f"ROS_DOMAIN_ID {requested} is in use by another srr run on this "
                               f"machine (lock {d / f'domain-{requested}.lock'}): this run would "
                               "hear its messages; leave it unset for a free one")
-        return DomainLease(requested, f)
+        return DomainLease(requested, None if isinstance(f, OSError) else f)
     start = FIRST + os.getpid() % (LAST - FIRST + 1)  # spread concurrent starts
-    unopened: OSError | None = None
+    unusable: OSError | None = None
     for k in range(LAST - FIRST + 1):
         domain = FIRST + (start - FIRST + k) % (LAST - FIRST + 1)
-        f = _open(d, domain)
+        f = _take(d, domain)
         if isinstance(f, OSError):
-            unopened = f
-        elif _locked(f):
+            unusable = f
+        elif f is not None:
             return DomainLease(domain, f)
-    if unopened is not None:
-        raise SrrError(f"ros2: no free ROS_DOMAIN_ID {FIRST}-{LAST}: cannot open the locks in "
-                       f"{d} ({unopened.strerror or unopened}); make that folder writable by "
-                       "every user of srr, or set ros2.domain_id")
+    if unusable is not None:
+        raise SrrError(f"ros2: no free ROS_DOMAIN_ID {FIRST}-{LAST}: cannot lock in {d} "
+                       f"({unusable.strerror or unusable}); make that folder writable by "
+                       "every user of srr (on a filesystem with flock), or set ros2.domain_id")
     raise SrrError(f"ros2: every ROS_DOMAIN_ID {FIRST}-{LAST} is taken by another srr run "
                    f"(locks in {d}); set ros2.domain_id")

@@ -58,8 +58,8 @@ def blessing_refusal(summary: RunSummary, *, allow_failing: bool = False) -> str
         return None
     what = "; ".join(" ".join(f.split(" — ")[0].split()) for f in failed)
     return (f"the run fails {'an absolute criterion' if len(failed) == 1 else 'absolute criteria'}"
-            f" ({what}), and every later run would FAIL against it; bless it anyway with "
-            "`srr baseline bless RUN_DIR --reason TEXT --allow-failing`")
+            f" ({what}), and every later run would FAIL against it; add --allow-failing to "
+            "bless it anyway")
 
 
 def baseline_name(scenario: Scenario) -> str:

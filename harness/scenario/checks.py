@@ -327,7 +327,7 @@ def tripwire_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ..
                 and len(wire) == 2:
             try:
                 ends = [(float(p[0]), float(p[1])) for p in wire]
-            except (TypeError, ValueError, IndexError):
+            except (TypeError, ValueError, IndexError, KeyError):
                 continue  # the monitor refuses it when the run sets it up
             wires.append((f"systems_under_test[{i}].params.inside", ends[0], ends[1],
                           str(sut.params.get("inside") or "left")))

@@ -17,8 +17,9 @@ odometry reads, forward along ``odometry.robot_front`` or the model's own front,
   mesh: its tyre's radius), each plus its centre's distance from the axis. Other shapes
   (boxes, ellipsoids, a cylinder across the axis) are not measured, and a wheel with no
   measured shape makes no claim.
-* **Wheel distance** (differential drive): the two wheel joints' anchors apart along the
-  base's lateral (left) axis.
+* **Wheel distance** (differential drive): the two wheels' centres (the measured collision
+  shape's centre, else the wheel body's origin; not the joints' anchors, which may lie
+  anywhere along their axes) apart along the base's lateral (left) axis.
 * **Wheelbase** (swivel drive): along the base's forward axis, from the drive wheel's joint
   anchor (steering at 0) to the fixed axle: the passive wheel joints (unlimited hinges, not
   the drive or swivel joint, not steered with the swivel, axis along the lateral axis, a
@@ -117,7 +118,9 @@ class BaseAxes:
 @dataclass(frozen=True)
 class Wheel:
     """A wheel joint measured in its robot's base frame: its anchor and unit axis, and its
-    rolling radius with what it was read from (None, '': no collision shape to measure)."""
+    rolling radius with what it was read from (None, '': no collision shape to measure), and
+    its centre: the measured shape's, else its body's origin (a hinge's anchor may lie anywhere
+    along its axis, so the anchor says nothing of where the wheel is across the robot)."""
 
     joint: str
     link: str
@@ -125,10 +128,12 @@ class Wheel:
     axis: Vec3
     radius: float | None
     shape: str
+    centre: Vec3
 
     def lateral(self, base: BaseAxes) -> float:
-        """How far the anchor lies to the left of the base's origin (negative: right)."""
-        return float(np.dot(self.anchor, base.left))
+        """How far the wheel's centre lies to the left of the base's origin (negative:
+        right)."""
+        return float(np.dot(self.centre, base.left))
 
     def along(self, base: BaseAxes) -> float:
         """How far the anchor lies ahead of the base's origin."""
@@ -230,14 +235,15 @@ def measure_wheel(model: mujoco.MjModel, data: mujoco.MjData, joint: int, base: 
     def name(kind: mujoco.mjtObj, i: int) -> str:
         return (mujoco.mj_id2name(model, kind, i) or f"#{i}").removeprefix(prefix)
 
-    shape = ""
+    shape, centre = "", data.xpos[body]
     if best is not None:
         g = best[1]
         shape = (f"collision {_SHAPES[int(model.geom_type[g])]} of link "
                  f"{name(mujoco.mjtObj.mjOBJ_BODY, int(model.geom_bodyid[g]))}")
+        centre = data.geom_xpos[g]
     return Wheel(name(mujoco.mjtObj.mjOBJ_JOINT, joint), name(mujoco.mjtObj.mjOBJ_BODY, body),
                  _vec3(base.point(anchor)), _vec3(base.vector(axis)),
-                 None if best is None else best[0], shape)
+                 None if best is None else best[0], shape, _vec3(base.point(centre)))
 
 
 def _off(block: float, model: float) -> bool:
@@ -322,7 +328,7 @@ def _check_diff(out: _Findings, control: DiffDriveControl, wheels: Sequence[Whee
                  if apart >= _SIDE_BY_SIDE else "")
         out.warn("wheel_distance", f"{_given(control, 'wheel_distance')}, but the model's "
                  f"wheels {first.joint} and {second.joint} are {apart:.3f} m apart (their "
-                 f"joints' anchors, across the robot){turns}")
+                 f"centres, across the robot){turns}")
     for k, w in enumerate(wheels):
         sub = f"joint_names[{k}]"
         if _axis(out, sub, w, base) and not w.rolls_forward(base):

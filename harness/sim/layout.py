@@ -124,13 +124,13 @@ def _off_floor(world: WorldSpec, polygon: Sequence[Sequence[float]]) -> bool:
 
 
 def _line_misses_floor(world: WorldSpec, a: Sequence[float], b: Sequence[float]) -> bool:
-    """Whether the infinite line through ``a`` and ``b`` leaves every floor polygon wholly
-    on one side (touching a corner counts as missing)."""
-    for floor in _floors(world):
-        sides = [(b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]) for x, y in floor]
-        if max(sides) > _EPS and min(sides) < -_EPS:
-            return False
-    return True
+    """Whether the infinite line through ``a`` and ``b`` leaves the whole floor (the room and
+    the trailer together) on one side of it (touching a corner counts as one side). A line
+    along the wall between the room and the trailer splits the floor: room on one side,
+    trailer on the other."""
+    sides = [(b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
+             for floor in _floors(world) for x, y in floor]
+    return not (max(sides) > _EPS and min(sides) < -_EPS)
 
 
 def check_layout(scenario: Scenario, source: str = "<scenario>") -> None:

@@ -15,9 +15,11 @@ message says why. :func:`camera_warnings` warns about it (a warning: a camera in
 is conceivable). It tests the camera's point against every geom a camera renders (groups
 below :data:`~harness.sim.robots.common.COLLISION_GROUP`, not transparent) of a robot or the
 fixed scene, in the spawn state: exactly for MuJoCo's primitive shapes, and for a mesh by
-casting rays (``mj_rayMesh``) both ways along each axis, all six of which hit the mesh from a
-point inside it (exact for a convex mesh, as MuJoCo collides meshes by their convex hulls;
-a point in a concave mesh's pocket may be missed, never a point outside flagged). Contacts
+casting rays (``mj_rayMesh``) both ways along each axis and counting the triangles each
+crosses: from a point inside a closed mesh every ray crosses an odd number, from a point in a
+hollow (a room of a building mesh) or outside an even number. All six must be odd (a ray
+through an edge, counted twice, or a mesh that is not closed makes a point inside missed
+rather than a point outside flagged). Contacts
 cannot tell this (a camera is no geom), and adding a probe geom would change the model.
 """
 
@@ -88,6 +90,9 @@ def check_spawns(model: mujoco.MjModel, data: mujoco.MjData, owner: Mapping[int,
 
 _G = mujoco.mjtGeom
 _AXES = np.vstack([np.eye(3), -np.eye(3)])
+#: Metres a ray goes on past a mesh triangle it hit before it is cast again, and the most
+#: triangles counted along one ray.
+_STEP, _MAX_CROSSINGS = 1e-6, 1000
 
 
 def _inside_geom(model: mujoco.MjModel, data: mujoco.MjData, geom: int,
@@ -110,8 +115,22 @@ def _inside_geom(model: mujoco.MjModel, data: mujoco.MjData, geom: int,
         return bool(z < 0 and (size[0] <= 0 or abs(x) < size[0])
                     and (size[1] <= 0 or abs(y) < size[1]))
     if kind == _G.mjGEOM_MESH:
-        return all(mujoco.mj_rayMesh(model, data, geom, point, axis) >= 0 for axis in _AXES)
+        return all(_crossings(model, data, geom, point, axis) % 2 == 1 for axis in _AXES)
     return False  # a height field, an SDF: not tested
+
+
+def _crossings(model: mujoco.MjModel, data: mujoco.MjData, geom: int, point: np.ndarray,
+               axis: np.ndarray) -> int:
+    """How many of mesh ``geom``'s triangles the ray from ``point`` along ``axis`` crosses
+    (each hit, then on from just past it; at most :data:`_MAX_CROSSINGS`)."""
+    start, n = point.astype(np.float64), 0
+    while n < _MAX_CROSSINGS:
+        d = mujoco.mj_rayMesh(model, data, geom, start, axis)
+        if d < 0:
+            break
+        n += 1
+        start = start + axis * (d + _STEP)
+    return n
 
 
 def camera_warnings(model: mujoco.MjModel, data: mujoco.MjData, owner: Mapping[int, str],

@@ -40,8 +40,7 @@ def test_the_refusal_names_every_failed_criterion() -> None:
     assert blessing_refusal(_summary()) == (
         "the run fails absolute criteria (control.goal_reached: the robot did not reach the "
         "end of its route; spec.keep_clear: required spec violated (robustness -0.25)), and "
-        "every later run would FAIL against it; bless it anyway with `srr baseline bless "
-        "RUN_DIR --reason TEXT --allow-failing`")
+        "every later run would FAIL against it; add --allow-failing to bless it anyway")
     assert blessing_refusal(_summary(), allow_failing=True) is None
 
 
@@ -86,8 +85,8 @@ def test_run_suite_and_bless_agree_on_a_failing_run(
     said = capsys.readouterr()
     assert "verdict: FAIL" in said.out and "blessed" not in said.out
     refusal = ("not blessed: the run fails an absolute criterion (safety.match_rate 0.0 % is "
-               "below 80 % (FAIL band)), and every later run would FAIL against it; bless it "
-               "anyway with `srr baseline bless RUN_DIR --reason TEXT --allow-failing`")
+               "below 80 % (FAIL band)), and every later run would FAIL against it; add "
+               "--allow-failing to bless it anyway")
     assert said.err.splitlines()[-1] == f"srr run: {run}: {refusal}", said.err
     assert not bl.exists()
     # srr baseline bless: the same words; with --allow-failing, blessed

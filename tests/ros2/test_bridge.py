@@ -6,6 +6,8 @@ off, so the forklift moves only as the external node commands."""
 
 from __future__ import annotations
 
+import errno
+import fcntl
 import json
 import os
 import stat
@@ -175,6 +177,32 @@ def test_the_lock_folder_is_shared_by_every_user(tmp_path: Path,
         assert lease._file is not None and lease._file.mode == "rb"
     finally:
         lease.release()
+
+
+def test_a_lock_folder_that_cannot_be_made_or_locked_in_is_one_line(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A lock folder this user cannot make (under a file here), or a filesystem whose flock
+    fails with another error than 'held' (NFS without write access: EBADF): a free id is
+    refused in one line naming the folder, and a named id runs unlocked. Neither is taken for
+    'another run holds it'."""
+    (tmp_path / "file").write_text("")
+    monkeypatch.setenv("SRR_ROS2_LOCK_DIR", str(tmp_path / "file" / "locks"))
+    with pytest.raises(SrrError, match=r"^ros2: no free ROS_DOMAIN_ID 1-101: cannot lock in "):
+        lease_domain(None)
+    lease = lease_domain(9)
+    assert lease.domain_id == 9 and lease._file is None
+    lease.release()
+
+    monkeypatch.setenv("SRR_ROS2_LOCK_DIR", str(tmp_path / "locks"))
+
+    def no_flock(f: object, op: int) -> None:
+        raise OSError(errno.EBADF, "Bad file descriptor")
+
+    monkeypatch.setattr(fcntl, "flock", no_flock)
+    with pytest.raises(SrrError, match=r"cannot lock in .*\(Bad file descriptor\)"):
+        lease_domain(None)
+    lease = lease_domain(9)
+    assert lease.domain_id == 9 and lease._file is None
 
 
 def test_a_missing_external_command_is_named_with_the_scenario_file(

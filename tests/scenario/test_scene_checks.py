@@ -79,6 +79,20 @@ def test_zones_on_the_floor_are_accepted(tmp_path: Path,
     assert err == before, err
 
 
+
+def test_a_tripwire_in_the_trailer_s_doorway_is_accepted(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # the line along the room's east wall, where the trailer meets it: the room on one side,
+    # the trailer on the other (each floor polygon alone lies on one side of it)
+    room = ROOM.replace("world: {size: [30, 20]}",
+                        "world: {size: [30, 20], dock: {position: [15, 0]}}")
+    _path, _code, before = _validate(capsys, tmp_path, room)
+    _path, code, err = _validate(capsys, tmp_path, room + "zones:\n  trailer_tripwire: "
+                                 "{a: [15, 3], b: [15, -3]}\n")
+    assert code == 0, err
+    assert err == before, err
+
+
 @pytest.mark.parametrize(("pos", "inside"), [
     ("[-12, 0, 1]", "robot forklift at its spawn pose (its geom 'forklift/chassis')"),
     ("[-15.1, 0, 1]", "the west wall"),
@@ -94,6 +108,49 @@ def test_a_fixed_camera_inside_something_is_warned_about(
     assert _mine(err, "cameras[0]") == [
         f"srr validate: warning: {path}: cameras[0].spawn.position: ({shown}) is inside "
         f"{inside}: the camera sees only the inside of it; move the camera"], err
+
+
+def _shell(outer: float, inner: float) -> tuple[str, str]:
+    """A closed box shell's vertices and faces (MJCF): an outer box facing out and an inner
+    box facing in, the hollow between them a room."""
+    corners = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    vertex = " ".join(f"{c * h:g}" for h in (outer, inner) for v in corners for c in v)
+    faces = []
+    for off, flip in ((0, False), (8, True)):
+        for a, b, c, d in quads:
+            tris = [(a, b, c), (a, c, d)]
+            faces += [(off + i, off + k, off + j) if flip else (off + i, off + j, off + k)
+                      for i, j, k in tris]
+    return vertex, " ".join(f"{i} {j} {k}" for t in faces for i, j, k in [t])
+
+
+@pytest.mark.parametrize(("pos", "warned"), [
+    ("[0, 0, 0]", False),     # in the building's hollow: a room, where cameras go
+    ("[0, 0, 4.5]", True),    # in its ceiling's material
+    ("[0, 0, 6]", False),     # above the building
+])
+def test_a_camera_in_a_hollow_mesh_is_in_its_room_not_inside_it(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], pos: str, warned: bool) -> None:
+    vertex, face = _shell(5.0, 4.0)
+    (tmp_path / "building.xml").write_text(
+        '<mujoco model="building"><asset>'
+        f'<mesh name="shell" vertex="{vertex}" face="{face}" inertia="shell"/></asset>'
+        '<worldbody><geom name="hall" type="mesh" mesh="shell" pos="20 20 5"/>'
+        '</worldbody></mujoco>')
+    x, y, z = (float(v) for v in pos.strip("[]").split(","))
+    text = (ROOM.replace("world: {size: [30, 20]}",
+                         "world: {size: [60, 60], model: {mjcf: building.xml, mode: extend}}")
+            + f"cameras:\n  - {{name: cam, spawn: {{position: [{x + 20}, {y + 20}, {z + 5}]}}}}\n")
+    path, code, err = _validate(capsys, tmp_path, text)
+    assert code == 0, err
+    mine = _mine(err, "cameras[0]")
+    assert bool(mine) == warned, err
+    if warned:
+        assert mine == [f"srr validate: warning: {path}: cameras[0].spawn.position: "
+                        f"({x + 20:g}, {y + 20:g}, {z + 5:g}) is inside 'hall' of "
+                        f"{tmp_path / 'building.xml'}: the camera sees only the inside of it; "
+                        "move the camera"]
 
 
 def test_a_fixed_camera_in_free_space_is_not_warned_about(

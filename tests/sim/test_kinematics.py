@@ -120,6 +120,28 @@ def test_a_block_within_5_percent_of_its_urdf_says_nothing_and_beyond_it_warns(
         "wheel_left_link), so the robot drives and turns at 0.94× what cmd_vel asks for"])
 
 
+def test_wheels_are_placed_by_their_shapes_not_their_joints_anchors(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # both wheel joints at the chassis origin, each wheel's cylinder set off to its side in
+    # its link: a hinge turns its wheel alike wherever it sits along its own axis
+    urdf = diff_urdf()
+    for side, y in (("left", 0.2), ("right", -0.2)):
+        urdf = urdf.replace(f'<child link="wheel_{side}_link"/><origin xyz="0 {y} 0"/>',
+                            f'<child link="wheel_{side}_link"/><origin xyz="0 0 0"/>')
+        urdf = urdf.replace(
+            f'<link name="wheel_{side}_link"><inertial><mass value="0.2"/>{INERTIA}</inertial>'
+            '<collision><origin rpy="1.5707963267948966 0 0"/>',
+            f'<link name="wheel_{side}_link"><inertial><mass value="0.2"/>{INERTIA}</inertial>'
+            f'<collision><origin xyz="0 {y} 0" rpy="1.5707963267948966 0 0"/>')
+    assert urdf.count('<origin xyz="0 0 0"/>') == 2 and urdf.count('xyz="0 0.2 0" rpy') == 1
+    path = scene(tmp_path, file_robot(**MATCHING), urdf)
+    assert validate(capsys, path) == (0, [])
+    swapped = scene(tmp_path, file_robot(**{**MATCHING, "joint_names": [
+        "wheel_right_joint", "wheel_left_joint"]}))
+    code, err = validate(capsys, swapped)
+    assert code == 2 and "names the right wheel first" in err[0], err
+
+
 def test_the_turtlebot3_defaults_under_a_bigger_urdf_robot_are_warned_of(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """The story: wheels 0.05 m in radius 0.40 m apart, the control block left at the
@@ -134,7 +156,7 @@ def test_the_turtlebot3_defaults_under_a_bigger_urdf_robot_are_warned_of(
         "link wheel_left_link), so the robot drives and turns at 1.52× what cmd_vel asks for",
         f"srr validate: warning: {path}: robots[0].control.wheel_distance: 0.287 m (the "
         "default), but the model's wheels wheel_left_joint and wheel_right_joint are 0.400 m "
-        "apart (their joints' anchors, across the robot), which alone makes the robot turn at "
+        "apart (their centres, across the robot), which alone makes the robot turn at "
         "0.72× the rate cmd_vel asks for",
     ]
 
