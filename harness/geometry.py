@@ -53,6 +53,7 @@ __all__ = [
     "QuatProduct",
     "QuatTuple",
     "Vec3",
+    "cross_2d",
     "dot_floats",
     "mat_from_quat_wxyz",
     "quat_wxyz_conj",
@@ -69,6 +70,7 @@ __all__ = [
     "rotate_rows",
     "rpy_from_quat_wxyz",
     "side_of_line",
+    "signed_area",
     "wxyz_to_xyzw",
     "xyzw_to_wxyz",
     "yaw_between",
@@ -282,9 +284,22 @@ def rpy_from_quat_wxyz(q: FloatVec) -> FloatArray:
     return np.array([roll, pitch, yaw])
 
 
+def cross_2d(a: Sequence[float], b: Sequence[float], p: Sequence[float]) -> float:
+    """Twice the signed area of the triangle a, b, p (x and y only): positive when ``p`` is
+    left of the directed line a → b (seen from above, +Z), negative right, 0 on it."""
+    return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+
+
+def signed_area(polygon: Sequence[Sequence[float]]) -> float:
+    """The area of a simple polygon (x and y), positive when its points go counter-clockwise
+    (the shoelace formula); 0 for fewer than three points."""
+    ring = list(polygon)
+    return sum(x0 * y1 - x1 * y0 for (x0, y0, *_), (x1, y1, *_)
+               in zip(ring, ring[1:] + ring[:1], strict=True)) / 2 if len(ring) >= 3 else 0.0
+
+
 def side_of_line(x: float, y: float, a: Sequence[float], b: Sequence[float]) -> str:
     """``"left"`` or ``"right"`` of the directed line a → b (on the line counts as right).
     Left is seen from above (+Z), walking from ``a`` to ``b``: the side ``b - a`` turned +90°
     (counter-clockwise) points to; for a → b along +x, left is +y."""
-    cross = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
-    return "left" if cross > 0 else "right"
+    return "left" if cross_2d(a, b, (x, y)) > 0 else "right"

@@ -12,7 +12,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from harness.errors import SrrError
-from harness.geometry import side_of_line
+from harness.geometry import cross_2d, side_of_line, signed_area
 from harness.scenario.resolve import graph_name
 from harness.scenario.schema import (
     BUILTIN_JOINTS,
@@ -49,7 +49,7 @@ __all__ = [
 
 def _orient(p: Sequence[float], q: Sequence[float], r: Sequence[float]) -> int:
     """The turn p → q → r: 1 counter-clockwise, -1 clockwise, 0 on one line."""
-    cross = (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+    cross = cross_2d(p, q, r)
     return (cross > 0) - (cross < 0)
 
 
@@ -105,10 +105,7 @@ def _check_polygon(v: Validator, field: str, points: Sequence[Sequence[float]]) 
                f"{list(points[i])} to point {i2} {list(points[i2])} meets its edge from point "
                f"{j} {list(points[j])} to point {j2} {list(points[j2])}; list the points in "
                "order around the polygon")
-    ring = list(points)
-    area2 = sum(x0 * y1 - x1 * y0
-                for (x0, y0), (x1, y1) in zip(ring, ring[1:] + ring[:1], strict=True))
-    if abs(area2) < 1e-9:
+    if abs(2 * signed_area(points)) < 1e-9:
         v.fail(field, "the polygon has zero area")
 
 

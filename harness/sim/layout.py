@@ -27,6 +27,7 @@ import math
 from collections.abc import Sequence
 
 from harness.errors import ScenarioError
+from harness.geometry import cross_2d, signed_area
 from harness.scenario import Scenario, WorldSpec
 from harness.sim.warehouse import WALL_THICKNESS, clip_half_plane, trailer_footprint
 
@@ -43,10 +44,8 @@ def _in_room(world: WorldSpec, p: Sequence[float], grow: float = 0.0) -> bool:
 
 def _in_polygon(p: Sequence[float], poly: Sequence[Point]) -> bool:
     """Inside or on the edge of the convex polygon ``poly`` (counter-clockwise)."""
-    for (x0, y0), (x1, y1) in zip(poly, [*poly[1:], poly[0]], strict=True):
-        if (x1 - x0) * (p[1] - y0) - (y1 - y0) * (p[0] - x0) < -_EPS:
-            return False
-    return True
+    return all(cross_2d(a, b, p) >= -_EPS
+               for a, b in zip(poly, [*poly[1:], poly[0]], strict=True))
 
 
 def _on_floor(world: WorldSpec, p: Sequence[float]) -> bool:
@@ -91,8 +90,7 @@ def _clip(poly: Sequence[Point], convex: Sequence[Point]) -> list[Point]:
 
 
 def _area(poly: Sequence[Point]) -> float:
-    return abs(sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1)
-                   in zip(poly, [*poly[1:], poly[0]], strict=True))) / 2 if poly else 0.0
+    return abs(signed_area(poly))
 
 
 def _floors(world: WorldSpec) -> list[list[Point]]:
@@ -128,8 +126,7 @@ def _line_misses_floor(world: WorldSpec, a: Sequence[float], b: Sequence[float])
     the trailer together) on one side of it (touching a corner counts as one side). A line
     along the wall between the room and the trailer splits the floor: room on one side,
     trailer on the other."""
-    sides = [(b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
-             for floor in _floors(world) for x, y in floor]
+    sides = [cross_2d(a, b, p) for floor in _floors(world) for p in floor]
     return not (max(sides) > _EPS and min(sides) < -_EPS)
 
 
