@@ -808,6 +808,8 @@ def _print_diff(r: DiffResult) -> None:
 
 
 def _print_suite_diff(r: SuiteDiff) -> None:
+    from harness.suite.diff import runs_named
+
     out = _stdout()
     for label, s in (("A", r.a), ("B", r.b)):
         out.print(f"{label}: {s.path}  (suite {s.name}, {s.runs} runs, {s.verdict}, started "
@@ -815,9 +817,7 @@ def _print_suite_diff(r: SuiteDiff) -> None:
     if r.changes:
         out.print("what changed (A → B):", markup=False)
         for line, ids in r.changes:
-            which = (f"all {len(ids)} runs" if len(ids) == len(r.pairs) > 1 else
-                     ", ".join(ids[:4]) + (f", +{len(ids) - 4} more" if len(ids) > 4 else ""))
-            out.print(f"  {line}  ({which})", markup=False)
+            out.print(f"  {line}  ({runs_named(ids, len(r.pairs))})", markup=False)
     if r.groups:
         out.print("group verdicts that changed:", markup=False)
         for g in r.groups:

@@ -32,13 +32,21 @@ from harness.suite.outputs import FORMAT
 from harness.summary import SUMMARY_NAME
 
 __all__ = ["GroupChange", "RunPair", "SuiteDiff", "SuiteInfo", "UnmatchedRun", "diff_suites",
-           "is_suite_dir", "read_suite"]
+           "is_suite_dir", "read_suite", "runs_named"]
 
 #: How a pair's recordings compare: the run diff's verdict, or why there is none.
 Recording = Literal["identical", "within_tolerance", "differs", "only_in_a", "only_in_b",
                     "none"]
 MAX_TOPICS = 3  # topics named in a pair's line
 MAX_METRICS = 3  # metrics named in a pair's line
+
+
+def runs_named(ids: tuple[str, ...], total: int) -> str:
+    """The runs a change applies to, for a line: ``all N runs`` when it is every one of the
+    ``total`` pairs, else the first four ids and how many more."""
+    if len(ids) == total and total > 1:
+        return f"all {total} runs"
+    return ", ".join(ids[:4]) + (f", +{len(ids) - 4} more" if len(ids) > 4 else "")
 
 
 @dataclass(frozen=True)

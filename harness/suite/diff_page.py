@@ -27,7 +27,7 @@ from harness.diff import write_diff
 from harness.report.html import fmt_value
 from harness.report.plots import BASELINE, CANDIDATE
 from harness.report.templates import template
-from harness.suite.diff import RunPair, SuiteDiff, SuiteInfo
+from harness.suite.diff import RunPair, SuiteDiff, SuiteInfo, runs_named
 from harness.suite.plan import safe_file_name
 
 __all__ = ["render_suite_diff", "write_suite_diff"]
@@ -84,13 +84,6 @@ def _card(s: SuiteInfo, style: Any) -> dict[str, Any]:
     return {"key": style.key, "label": style.label, "color": style.color, "info": info}
 
 
-def _runs(ids: tuple[str, ...], total: int) -> str:
-    if len(ids) == total and total > 1:
-        return f"(all {total} runs)"
-    shown = ", ".join(ids[:4]) + (f", +{len(ids) - 4} more" if len(ids) > 4 else "")
-    return f"({shown})"
-
-
 def render_suite_diff(result: SuiteDiff, *, page: Path | None = None,
                       details: Mapping[str, Path] | None = None) -> str:
     """The page's HTML. ``page``: where it will be (links are relative to its folder);
@@ -109,7 +102,7 @@ def render_suite_diff(result: SuiteDiff, *, page: Path | None = None,
         exit_code=result.exit_code, a=result.a, b=result.b, counts=result.counts(), toc=toc,
         notes=list(result.notes),
         suites=[_card(result.a, BASELINE), _card(result.b, CANDIDATE)],
-        changes=[{"text": c, "runs": _runs(ids, len(result.pairs))}
+        changes=[{"text": c, "runs": f"({runs_named(ids, len(result.pairs))})"}
                  for c, ids in result.changes],
         tolerances=[t.spec for t in result.tolerances], groups=list(result.groups),
         pairs=[_row(p, page_dir, details or {}) for p in pairs], unmatched=unmatched,
