@@ -843,7 +843,6 @@ def _print_suite_diff(r: SuiteDiff) -> None:
 
 def _diff_suites(args: argparse.Namespace, suites: tuple[bool, bool]) -> int:
     from harness import api
-    from harness.atomic import write_json_atomic
 
     if not all(suites):
         suite, other = (args.run_a, args.run_b) if suites[0] else (args.run_b, args.run_a)
@@ -852,18 +851,25 @@ def _diff_suites(args: argparse.Namespace, suites: tuple[bool, bool]) -> int:
                        "folders, or two runs")
     result = api.diff_suites(args.run_a, args.run_b, tolerances=args.tolerances)
     _print_suite_diff(result)
+    return _diff_outputs(args, result, api.write_suite_diff)
+
+
+def _diff_outputs(args: argparse.Namespace, result: Any, write_page: Any) -> int:
+    """``--json`` and ``--html`` of a diff of two runs or two suites (``write_page``: the
+    API's page writer), said as they are written; the diff's exit code."""
+    from harness.atomic import write_json_atomic
+
     if args.json is not None:
         write_json_atomic(args.json, result.to_dict())
         _stdout().print(f"json: {args.json}", markup=False)
     if args.html is not None:
-        page = api.write_suite_diff(result, args.html, video=args.video)
+        page = write_page(result, args.html, video=args.video)
         _stdout().print(f"html: {page}", markup=False)
-    return result.exit_code
+    return int(result.exit_code)
 
 
 def _cmd_diff(args: argparse.Namespace) -> int:
     from harness import api
-    from harness.atomic import write_json_atomic
     from harness.diff.core import is_baseline_file
     from harness.suite.diff import is_suite_dir
 
@@ -880,13 +886,7 @@ def _cmd_diff(args: argparse.Namespace) -> int:
                        "(the run's report.html overlays it, under 'Against the baseline')")
     result = api.diff_runs(args.run_a, args.run_b, tolerances=args.tolerances)
     _print_diff(result)
-    if args.json is not None:
-        write_json_atomic(args.json, result.to_dict())
-        _stdout().print(f"json: {args.json}", markup=False)
-    if args.html is not None:
-        page = api.write_diff(result, args.html, video=args.video)
-        _stdout().print(f"html: {page}", markup=False)
-    return result.exit_code
+    return _diff_outputs(args, result, api.write_diff)
 
 
 def _cmd_suite(args: argparse.Namespace) -> int:
