@@ -27,6 +27,7 @@ SCHEMA_VERSION = 1
 
 __all__ = [
     "SCHEMA_VERSION",
+    "SUITE_FORMAT",
     "SUMMARY_NAME",
     "BaselineEntry",
     "ComparisonRow",
@@ -38,6 +39,7 @@ __all__ = [
     "VersionPair",
     "check_summary",
     "fail",
+    "is_suite_summary",
     "read_summary",
     "recording_note",
     "replay_note",
@@ -45,6 +47,8 @@ __all__ = [
 ]
 
 SUMMARY_NAME = "summary.json"
+#: The ``format`` of the ``summary.json`` that ``srr suite`` writes in its output folder.
+SUITE_FORMAT = "srr-suite/1"
 
 #: What a missing required key says: the file is not an srr run summary at all.
 _MISSING = "missing (not an srr run summary)"
@@ -246,14 +250,22 @@ def read_summary(run_dir: str | Path) -> dict[str, Any]:
     return checked
 
 
+def is_suite_summary(data: Any) -> bool:
+    """Whether ``data`` (a parsed ``summary.json``) is a suite's, not a run's: its ``format``
+    says so, or (a summary from before the format was written) it has lists of ``runs``
+    and ``groups`` and no ``scenario``."""
+    return isinstance(data, dict) and (data.get("format") == SUITE_FORMAT or (
+        "scenario" not in data and isinstance(data.get("runs"), list)
+        and isinstance(data.get("groups"), list)))
+
+
 def check_summary(data: Any, path: Path) -> None:
     """:class:`SrrError` naming ``path`` and the field when ``data`` is not a run summary
     (read as :class:`SummaryFile`) or is of a newer ``schema_version``: the one check of a
     summary, for every command and for :meth:`harness.run.summary.RunSummary.from_json`."""
     if not isinstance(data, dict):
         raise SrrError(f"{path}: expected a JSON object, got {type(data).__name__}")
-    if "scenario" not in data and isinstance(data.get("groups"), list) \
-            and isinstance(data.get("runs"), list):  # what srr suite writes
+    if is_suite_summary(data):
         raise SrrError(f"{path}: the summary of a suite, not of a run: the suite's page is "
                        f"{Path(path).parent / 'index.html'}, and each run's directory is "
                        "under its runs/ (srr report RUN_DIR renders one)")

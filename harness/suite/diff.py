@@ -29,7 +29,7 @@ from harness.diff import DiffResult, MetricDelta, Tolerance, diff_runs, parse_to
 from harness.errors import SrrError
 from harness.report.html import fmt_value
 from harness.suite.outputs import FORMAT
-from harness.summary import SUMMARY_NAME
+from harness.summary import SUMMARY_NAME, is_suite_summary
 
 __all__ = ["GroupChange", "RunPair", "SuiteDiff", "SuiteInfo", "UnmatchedRun", "diff_suites",
            "is_suite_dir", "read_suite", "runs_named"]
@@ -287,9 +287,7 @@ def is_suite_dir(path: str | Path) -> bool:
         data = json.loads((p / SUMMARY_NAME).read_text(encoding="utf-8"))
     except (OSError, ValueError, UnicodeDecodeError, RecursionError):
         return False
-    return isinstance(data, dict) and (data.get("format") == FORMAT or (
-        "scenario" not in data and isinstance(data.get("runs"), list)
-        and isinstance(data.get("groups"), list)))
+    return is_suite_summary(data)
 
 
 def _fail(file: Path, field: str, message: str) -> SrrError:

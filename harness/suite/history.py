@@ -30,11 +30,10 @@ from pathlib import Path
 from typing import Any
 
 from harness.errors import SrrError
+from harness.summary import SUITE_FORMAT, SUMMARY_NAME
 
-__all__ = ["DEFAULT_LAST", "SUITE_FORMAT", "load_history"]
+__all__ = ["DEFAULT_LAST", "load_history"]
 
-SUITE_FORMAT = "srr-suite/1"
-SUMMARY_NAME = "summary.json"
 DEFAULT_LAST = 14
 
 

@@ -17,10 +17,11 @@ from typing import Any
 
 from harness.atomic import write_json_atomic, write_text_atomic
 from harness.suite.results import GroupResult, RunOutcome
+from harness.summary import SUITE_FORMAT
 
 __all__ = ["FORMAT", "write_junit_suite", "write_outputs"]
 
-FORMAT = "srr-suite/1"
+FORMAT = SUITE_FORMAT  # what summary.json says it is
 
 
 def _case(ts: ET.Element, run: RunOutcome, group: GroupResult) -> None:
