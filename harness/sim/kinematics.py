@@ -308,6 +308,16 @@ def _lateral(base: BaseAxes) -> str:
     return f"left {_direction(base.left)}, forward {_direction(base.front)}"
 
 
+def _turns(given: float, measured: float) -> str:
+    """What a block's wheel distance or wheelbase ``given`` against the model's ``measured``
+    does to the turn rate (the rate scales with their ratio), for a warning; nothing when the
+    model's is about zero."""
+    if measured < _SIDE_BY_SIDE:
+        return ""
+    return f", which alone makes the robot turn at {_times(given / measured)} the rate " \
+        "cmd_vel asks for"
+
+
 def _check_diff(out: _Findings, control: DiffDriveControl, wheels: Sequence[Wheel],
                 base: BaseAxes) -> None:
     first, second = wheels
@@ -323,9 +333,7 @@ def _check_diff(out: _Findings, control: DiffDriveControl, wheels: Sequence[Whee
     _radius(out, control, wheels)
     apart = abs(y0 - y1)
     if _off(control.wheel_distance, apart):
-        turns = (f", which alone makes the robot turn at "
-                 f"{_times(control.wheel_distance / apart)} the rate cmd_vel asks for"
-                 if apart >= _SIDE_BY_SIDE else "")
+        turns = _turns(control.wheel_distance, apart)
         out.warn("wheel_distance", f"{_given(control, 'wheel_distance')}, but the model's "
                  f"wheels {first.joint} and {second.joint} are {apart:.3f} m apart (their "
                  f"centres, across the robot){turns}")
@@ -377,9 +385,7 @@ def _check_swivel(out: _Findings, model: mujoco.MjModel, data: mujoco.MjData,
         base_m = abs(drive.along(base) - float(np.mean([w.along(base) for w in axle])))
         if _off(control.wheelbase, base_m):
             names = " and ".join(w.joint for w in axle)
-            turns = (f", which alone makes the robot turn at "
-                     f"{_times(control.wheelbase / base_m)} the rate cmd_vel asks for"
-                     if base_m >= _SIDE_BY_SIDE else "")
+            turns = _turns(control.wheelbase, base_m)
             out.warn("wheelbase", f"{_given(control, 'wheelbase')}, but the model's drive "
                      f"wheel {drive.joint} is {base_m:.3f} m from the axle of {names} "
                      f"(along the robot){turns}")
