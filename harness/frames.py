@@ -69,7 +69,7 @@ import pandas as pd
 from pandas.api.types import union_categoricals
 from rosbags.serde import SerdeError
 
-from harness.bus.endpoints import tf_tree_of
+from harness.bus.endpoints import is_static_tf_topic, tf_tree_of
 from harness.geometry import (
     quat_xyzw_mul_columns,
     quat_xyzw_rotate_columns,
@@ -709,7 +709,7 @@ def _tf_frame(topics: list[tuple[str, list[dict[str, Any]]]]) -> pd.DataFrame:
         elif k == "tree":
             out[k] = per_topic([tf_tree_of(t) for t in names])
         elif k == "static":
-            out[k] = np.repeat(np.array([t.rsplit("/", 1)[-1] == "tf_static" for t in names]),
+            out[k] = np.repeat(np.array([is_static_tf_topic(t) for t in names]),
                                sizes)
         elif k in ("parent", "child"):
             out[k] = union_categoricals([part.pop(k) for _, part in parts],

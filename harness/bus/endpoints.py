@@ -16,7 +16,7 @@ from typing import Literal
 
 from harness.bus.names import remap_topic
 
-__all__ = ["Endpoint", "TfEdge", "tf_tree_of"]
+__all__ = ["Endpoint", "TfEdge", "is_static_tf_topic", "tf_tree_of"]
 
 
 @dataclass(frozen=True)
@@ -51,6 +51,12 @@ class TfEdge:
     topic: str
     parent_input: str = "parentFrameId"
     child_input: str = "childFrameId"
+
+
+def is_static_tf_topic(topic: str) -> bool:
+    """Whether ``topic`` is a static TF topic by its name: its leaf is ``tf_static``
+    (``/tf_static``, ``/fleet/tf_static``)."""
+    return topic.rsplit("/", 1)[-1] == "tf_static"
 
 
 def tf_tree_of(topic: str) -> str | None:

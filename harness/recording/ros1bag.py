@@ -40,6 +40,7 @@ from rosbags.rosbag1 import Writer as Rosbag1Writer
 from rosbags.typesys.msg import normalize_msgtype
 
 from harness.bus.bus import Envelope, Qos, resolved
+from harness.bus.endpoints import is_static_tf_topic
 from harness.recording.bagfile import ChunkPolicy, McapBagWriter, TopicMeta
 from harness.recording.recorder import Recorder, _TopicState
 from harness.serde.messages import tf_message
@@ -68,7 +69,7 @@ def accumulates_static_tf(topic: str, msgtype: str, latched: bool) -> bool:
     Only ``tf_static`` topics: tf2 (and srr's ``tf_tree`` gate) take the transforms of any
     other TF topic as dynamic, so sending one again, with its old stamp, would repeat it (a
     latched ``/tf``, from a ``staticPublisher`` on ``/tf``, is written as published)."""
-    return latched and msgtype == TF_MESSAGE and topic.rsplit("/", 1)[-1] == "tf_static"
+    return latched and msgtype == TF_MESSAGE and is_static_tf_topic(topic)
 
 
 class StaticTfUnion:

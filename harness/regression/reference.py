@@ -19,6 +19,7 @@ from pathlib import Path
 
 from mcap.writer import CompressionType, Writer
 
+from harness.bus.endpoints import is_static_tf_topic
 from harness.errors import reason
 from harness.recording.errors import BagError
 from harness.serde.ros1 import ros2_type
@@ -44,7 +45,7 @@ def kept(topic: str, msgtype: str) -> bool:
     if "/msg/" not in msgtype:
         msgtype = ros2_type(msgtype)
     if msgtype == "tf2_msgs/msg/TFMessage":
-        return topic.startswith("/gt/") or topic.rsplit("/", 1)[-1] == "tf_static"
+        return topic.startswith("/gt/") or is_static_tf_topic(topic)
     return msgtype in KEPT_TYPES
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from harness.bus import TopicNameError, resolve_topic
 from harness.bus.bus import Qos
-from harness.bus.endpoints import Endpoint, TfEdge
+from harness.bus.endpoints import Endpoint, TfEdge, is_static_tf_topic
 from harness.geometry import quat_wxyz_conj, quat_wxyz_mul, quat_wxyz_rotate, wxyz_to_xyzw
 from harness.graph import Attr, NodeType, register
 from harness.graph.errors import GraphError
@@ -245,7 +245,7 @@ class _TfPublisher(_Publisher):
         """The resolved topic and whether its edges are static for tf2: published on a
         ``tf_static`` topic (``staticPublisher`` on ``/tf`` only latches the publisher)."""
         topic = resolve_topic(str(value("topicName")), str(value("nodeNamespace")))
-        return topic, topic.rsplit("/", 1)[-1] == "tf_static"
+        return topic, is_static_tf_topic(topic)
 
 
 @register("srr.PublishRawTransformTree", aliases=aliases("PublishRawTransformTree"))
