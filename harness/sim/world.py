@@ -24,10 +24,15 @@ Conventions:
 * After :meth:`World.step` poses, velocities and position/velocity sensors (IMU orientation
   and gyro) belong to the new state; acceleration sensors (the IMU accelerometer) and contact
   forces are those of the last substep (one physics step, e.g. 1/240 s, old).
+* MuJoCo's own warnings go to the ``harness.sim`` logger, never to MuJoCo's default
+  ``MUJOCO_LOG.TXT`` in the current directory or to stdout; the one that comes with a
+  divergence ("Nan, Inf or huge value in QACC at DOF 3") ends the :class:`SimulationError`
+  instead.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import re
@@ -70,6 +75,22 @@ from harness.sim.world_file import LoadedWorld, add_world_file, load_world_file
 __all__ = ["ImuReading", "JointRef", "RobotInfo", "World"]
 
 _XBODY = mujoco.mjtObj.mjOBJ_XBODY
+_log = logging.getLogger("harness.sim")
+_BADQPOS = int(mujoco.mjtWarning.mjWARN_BADQPOS)
+_BADQACC = int(mujoco.mjtWarning.mjWARN_BADQACC)
+assert _BADQACC - _BADQPOS == 2  # qpos, qvel, qacc: one slice of data.warning
+# MuJoCo's words for a non-finite or huge qpos, qvel or qacc: the step's divergence check
+# raises on that state, naming the last such warning (this process's; steps are synchronous)
+_DIVERGENCE_TEXT = "Nan, Inf or huge value"
+_last_divergence: list[str] = []
+
+
+def _mujoco_warning(text: str) -> None:
+    """MuJoCo's warning handler while srr runs (see the module's notes)."""
+    if text.startswith(_DIVERGENCE_TEXT):
+        _last_divergence[:] = [text]
+    else:
+        _log.warning("MuJoCo: %s", text)
 
 _INTEGRATORS = {
     "euler": mujoco.mjtIntegrator.mjINT_EULER,
@@ -321,10 +342,14 @@ class World:
         self._robots = robots
         self._workers = workers if workers is not None else WorkerDriver(model, ())
         self._rgba0 = model.geom_rgba.copy()
-        # Live views into ``data`` (its buffers never move), read by every step's divergence check.
-        self._badqacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+        # Live views into ``data`` (its buffers never move), read by every step's divergence
+        # check: MuJoCo's counts of bad qpos, qvel and qacc (on the first two it resets the
+        # state to the model's initial one and carries on: a robot back at its spawn)
+        self._bad = data.warning.number[_BADQPOS:_BADQACC + 1]
         self._qpos = data.qpos
         self._moving = bool(self._workers.workers)  # any worker to place each tick
+        _last_divergence.clear()
+        mujoco.set_mju_user_warning(_mujoco_warning)
         mujoco.mj_forward(model, data)
 
     # ------------------------------------------------------------------ building
@@ -414,6 +439,7 @@ class World:
         if n < 0:
             raise SimulationError(f"cannot step a negative number of times ({n})")
         m, d = self._model, self._data
+        start = d.time
         for _ in range(n):
             mujoco.mj_step(m, d)
         if n:
@@ -430,8 +456,27 @@ class World:
         # entries beyond 1e154 could overflow, far past MuJoCo's own 1e10 limit on qpos),
         # and one dot product costs a third of np.isfinite(q).all().
         qpos = self._qpos
-        if self._badqacc.number or not math.isfinite(qpos.dot(qpos)):
-            raise SimulationError(f"simulation diverged at t={d.time:.4f} s (non-finite state)")
+        if self._bad.any() or not math.isfinite(qpos.dot(qpos)):
+            said = f": MuJoCo: {self._named_dof(_last_divergence.pop())}" \
+                if _last_divergence else ""
+            # a bad qpos or qvel has sent MuJoCo's clock back to 0 with the state
+            raise SimulationError(f"simulation diverged at t={max(d.time, start):.4f} s "
+                                  f"(non-finite state){said}")
+
+    def _named_dof(self, text: str) -> str:
+        """MuJoCo's ``at DOF 7`` with the joint it belongs to (for QPOS the number is an
+        index into qpos, for QVEL and QACC one into the degrees of freedom)."""
+        m, model = re.search(r"at DOF (\d+)", text), self._model
+        if m is None or model.njnt == 0:
+            return text
+        i = int(m[1])
+        if "QPOS" in text:
+            joint = int(np.searchsorted(model.jnt_qposadr, i, side="right")) - 1 \
+                if i < model.nq else -1
+        else:
+            joint = int(model.dof_jntid[i]) if i < model.nv else -1
+        name = model.joint(joint).name if joint >= 0 else ""
+        return text.replace(m[0], f"{m[0]} (joint {name})", 1) if name else text
 
     def reset(self) -> None:
         """Back to the spawn state: ``mj_resetData`` (controls, warm start, time cleared) and

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import logging
 import math
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -80,6 +82,35 @@ def test_a_non_finite_qpos_entry_is_a_divergence_and_a_huge_finite_one_is_not(
     qpos[-1] = bad
     with pytest.raises(SimulationError, match="diverged"):
         world.step(0)
+
+
+@pytest.mark.parametrize("field", ["qpos", "qvel"])
+def test_a_bad_state_mujoco_resets_is_a_divergence_named_by_joint(
+        field: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capfd: pytest.CaptureFixture[str]) -> None:
+    """On a non-finite qpos or qvel MuJoCo puts the state back to the model's initial one and
+    goes on (a robot back at its spawn, time at 0); srr ends the run, with MuJoCo's words and
+    the joint, and MuJoCo writes nothing to stdout or to MUJOCO_LOG.TXT here."""
+    monkeypatch.chdir(tmp_path)
+    world = World.build(scenario(forklift()))
+    world.step(5)
+    getattr(world.data, field)[-1] = math.nan
+    with pytest.raises(SimulationError) as e:
+        world.step(1)
+    assert str(e.value).startswith("simulation diverged at t=0.0208 s (non-finite state): "
+                                   f"MuJoCo: Nan, Inf or huge value in {field.upper()} at DOF")
+    assert "(joint forklift/back_wheel_drive)" in str(e.value)
+    assert list(tmp_path.iterdir()) == []
+    assert capfd.readouterr().out == ""
+
+
+def test_other_mujoco_warnings_go_to_the_harness_sim_logger(
+        caplog: pytest.LogCaptureFixture) -> None:
+    World.build(scenario(forklift()))
+    with caplog.at_level(logging.WARNING, logger="harness.sim"):
+        mujoco.get_mju_user_warning()("Pre-allocated contact buffer is full.")
+    assert [r.getMessage() for r in caplog.records] == [
+        "MuJoCo: Pre-allocated contact buffer is full."]
 
 
 def test_prims_of_warehouse_and_robots_are_registered() -> None:
