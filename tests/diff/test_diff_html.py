@@ -18,7 +18,7 @@ from harness.report.data import load_run
 from tests.conftest import ModuleTmp
 from tests.diff.conftest import Runs
 from tests.report.browser import page_requests, run_chromium
-from tests.report.cdp import open_page
+from tests.report.cdp import VIDEO_READY, open_page
 
 pytestmark = pytest.mark.slow
 
@@ -64,11 +64,11 @@ PROBE = """<script>
 
 
 # Resolves, once every <video> has its first frame, with what each plays.
-LOADED = """Promise.all(Array.prototype.map.call(document.querySelectorAll("video"),
-  function (v) { return new Promise(function (ok) {
-    function out() { ok({ready: v.readyState, topic: v.getAttribute("data-topic"),
-                         run: v.getAttribute("data-run"), src: decodeURI(v.src.slice(7))}); }
-    if (v.readyState >= 2) { out(); } else { v.addEventListener("loadeddata", out); } }); }))"""
+LOADED = "(function () { " + VIDEO_READY + """
+  return Promise.all(Array.prototype.map.call(document.querySelectorAll("video"),
+    function (v) { return ready(v).then(function () {
+      return {ready: v.readyState, topic: v.getAttribute("data-topic"),
+              run: v.getAttribute("data-run"), src: decodeURI(v.src.slice(7))}; }); })); })()"""
 # Seeks the cursor and resolves, once every <video> has seeked, with their times.
 SEEK = """(function (t) {
   var vs = Array.prototype.slice.call(document.querySelectorAll("video"));

@@ -22,7 +22,7 @@ from websockets.sync.client import ClientConnection, connect
 
 from tests.report.browser import CHROMIUM_FLAGS, VIEWPORT
 
-__all__ = ["LOOPBACK_ONLY", "Page", "open_page"]
+__all__ = ["LOOPBACK_ONLY", "VIDEO_READY", "Page", "open_page"]
 
 STARTUP_S = 60.0
 
@@ -54,6 +54,20 @@ class Page:
             why = d.get("exception", {}).get("description") or d
             raise AssertionError(f"page script failed: {why}")
         return res["result"].get("value")
+
+
+#: Page script defining ``ready(v)``: a promise that resolves once the ``<video>`` ``v`` has a
+#: frame to show (``readyState`` 2 or more) and fails on a media error. Waiting for
+#: ``loadeddata`` alone can hang: the report's cursor seeks a video as soon as its metadata
+#: is in, so ``loadeddata`` may come while that seek holds ``readyState`` at 1, and it does
+#: not come again (``seeked`` does).
+VIDEO_READY = """function ready(v) { return new Promise(function (ok, no) {
+  function check() { if (v.readyState >= 2) { ok(v); } }
+  function fail() { no(new Error(v.src + ": " + v.error.message)); }
+  if (v.error) { fail(); return; }
+  ["loadeddata", "canplay", "seeked"].forEach(function (n) { v.addEventListener(n, check); });
+  v.addEventListener("error", fail);
+  check(); }); }"""
 
 
 #: The host-resolver rule that, with ``loopback``, lets a page reach a server of the test's

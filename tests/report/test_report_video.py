@@ -33,20 +33,18 @@ from harness.report.images import image_array
 from harness.report.video import read_videos
 from harness.video.codec import psnr
 from tests.conftest import ModuleTmp
-from tests.report.cdp import Page, open_page
+from tests.report.cdp import VIDEO_READY, Page, open_page
 from tests.report.pngread import read_png
 
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[2]
 
-# Resolves once every <video> has its first frame (or fails on a media error).
-LOADED = """Promise.all(Array.prototype.map.call(document.querySelectorAll("video"),
-  function (v) { return new Promise(function (ok, no) {
-    if (v.readyState >= 2) { ok(v.readyState); return; }
-    v.addEventListener("loadeddata", function () { ok(v.readyState); });
-    v.addEventListener("error", function () { no(new Error(v.src + ": " + v.error.message)); });
-  }); }))"""
+# Resolves, with their ready states, once every <video> has a frame to show (or fails on a
+# media error).
+LOADED = "(function () { " + VIDEO_READY + """
+  return Promise.all(Array.prototype.map.call(document.querySelectorAll("video"),
+    function (v) { return ready(v).then(function () { return v.readyState; }); })); })()"""
 
 # Runs ACTION (a statement that seeks) and resolves once every <video> has finished seeking to
 # the time ACTION gave it (a seek still in flight from before is not taken for this one).
