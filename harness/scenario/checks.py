@@ -427,6 +427,13 @@ def _check_robots(sc: Scenario, v: Validator) -> None:
             _check_model_file(v, f"robots[{i}].model", model)
         else:
             _check_builtin_joints(v, f"robots[{i}].control", robot)
+        front = robot.odometry.robot_front
+        if front is not None and not (math.isfinite(front[0]) and math.isfinite(front[1])
+                                      and math.hypot(front[0], front[1]) > 1e-9):
+            v.fail(f"robots[{i}].odometry.robot_front",
+                   f"{list(front)} has no part along the floor: it is the chassis axis that "
+                   "points forward (as [1, 0, 0], or [-1, 0, 0] for a model that faces -x); "
+                   "odometry turns it onto +x as a yaw")
         if robot.namespace is not None:
             try:
                 validate_namespace(robot.namespace)

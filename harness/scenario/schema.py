@@ -311,7 +311,9 @@ class OdometrySpec:
     enabled: bool = True
     odom_topic: str = "odom"
     tf_topic: str = "tf"
-    robot_front: Vec3 | None = None  # None: the model's own forward axis
+    # The chassis axis that points forward; it needs a part along the floor (odometry turns
+    # it onto +x as a yaw). None: the model's own.
+    robot_front: Vec3 | None = None
     odom_frame: str = "odom"
     base_frame: str | None = None  # None: the model's base frame
 

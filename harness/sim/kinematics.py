@@ -53,7 +53,7 @@ import mujoco
 import numpy as np
 
 from harness.errors import ScenarioError
-from harness.geometry import FloatArray
+from harness.geometry import FloatArray, yaw_between
 from harness.scenario.schema import DiffDriveControl, ForkliftControl, RobotSpec
 
 __all__ = [
@@ -162,18 +162,13 @@ def _direction(v: Sequence[float]) -> str:
 
 
 def base_axes(model: mujoco.MjModel, data: mujoco.MjData, body: int, front: Sequence[float],
-              prefix: str) -> BaseAxes | None:
+              prefix: str) -> BaseAxes:
     """The base frame of the robot whose chassis is ``body`` and whose forward axis is
-    ``front`` (in that frame; only its horizontal part counts, as a yaw); None when it has
-    none (straight up). ``prefix``: the robot's MuJoCo name prefix, left off the name."""
-    ahead = np.asarray(front, dtype=float)
-    size = float(np.abs(ahead).max())
-    if not (math.isfinite(size) and size > 0.0):
-        return None
-    ahead = ahead / size - float(np.dot(ahead / size, _UP)) * _UP
-    if float(np.linalg.norm(ahead)) < 1e-9:
-        return None
-    ahead /= np.linalg.norm(ahead)
+    ``front`` (in that frame; only its horizontal part counts, turned into a yaw as odometry
+    turns it: :func:`~harness.geometry.yaw_between`; the scenario's checks refuse a front
+    with no horizontal part). ``prefix``: the robot's MuJoCo name prefix, left off the name."""
+    yaw = yaw_between(front)
+    ahead = np.array([math.cos(yaw), math.sin(yaw), 0.0])
     name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body {body}"
     return BaseAxes(body, name.removeprefix(prefix), _vec3(data.xpos[body]),
                     tuple(float(v) for v in data.xmat[body]), _vec3(ahead),

@@ -311,8 +311,6 @@ def _check_drives(model: mujoco.MjModel, data: mujoco.MjData, scenario: Scenario
         front = (robot.odometry.robot_front if robot.odometry.robot_front is not None
                  else info.robot_front)  # as odometry reads it
         base = base_axes(model, data, prims[info.base_prim].id, front, f"{robot.name}/")
-        if base is None:
-            continue
         out += check_drive(model, data, robot, f"robots[{i}]",
                            lambda path: scenario.file_for(path, source),
                            {j: ref.joint_id for j, ref in info.joints.items()}, base)

@@ -15,6 +15,7 @@ import pytest
 import yaml
 
 from harness.cli import main
+from harness.geometry import yaw_between
 from harness.scenario import load_scenario
 from harness.scenario.schema import DiffDriveControl
 from harness.sim import World
@@ -204,6 +205,35 @@ def test_left_and_right_follow_odometry_robot_front(
         "wheel_right_joint] names the right wheel first: ")
 
 
+@pytest.mark.parametrize("front", [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]])
+def test_a_robot_front_with_no_horizontal_part_is_refused(
+        front: list[float], tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Odometry turns ``robot_front`` onto +X as a yaw, so an upright or zero one names no
+    forward direction (odometry took it as +X, the control-block check skipped the robot)."""
+    path = scene(tmp_path, {**file_robot(**MATCHING), "odometry": {"robot_front": front}},
+                 diff_urdf())
+    code, err = validate(capsys, path)
+    assert code == 2 and err == [
+        f"srr validate: {path}: robots[0].odometry.robot_front: {front} has no part along "
+        "the floor: it is the chassis axis that points forward (as [1, 0, 0], or [-1, 0, 0] "
+        "for a model that faces -x); odometry turns it onto +x as a yaw"]
+
+
+def test_the_check_s_forward_axis_is_odometry_s_yaw() -> None:
+    """A front with an upward part points where its horizontal part does, as odometry's yaw
+    (``yaw_between``) has it."""
+    path = SCENARIOS / "turtlebot3_room.yaml"
+    sc = load_scenario(path)
+    world = World.build(sc, str(path))
+    info = world.robot(sc.robots[0].name)
+    body = world.prim_ref(info.base_prim).id
+    for front in ((1.0, 1.0, 5.0), (-2.0, 0.0, -1.0), (0.0, -0.5, 0.3)):
+        yaw = yaw_between(front)
+        base = base_axes(world.model, world.data, body, front, "")
+        assert base.front == pytest.approx((math.cos(yaw), math.sin(yaw), 0.0), abs=1e-12)
+        assert base.left == pytest.approx((-math.sin(yaw), math.cos(yaw), 0.0), abs=1e-12)
+
+
 def test_wheel_axes_off_the_lateral_axis_or_rolling_backward_are_warned_of(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """The left wheel turns about the vertical (a turntable, not a wheel), the right one
@@ -378,7 +408,6 @@ def test_the_bundled_robots_agree_with_their_control_blocks() -> None:
             front = robot.odometry.robot_front or info.robot_front
             base = base_axes(world.model, world.data, world.prim_ref(info.base_prim).id,
                              front, f"{robot.name}/")
-            assert base is not None
             joint = (control.joint_names[0] if isinstance(control, DiffDriveControl)
                      else control.drive_joint)
             wheel = measure_wheel(world.model, world.data, info.joints[joint].joint_id, base,
