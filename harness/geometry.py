@@ -53,6 +53,7 @@ __all__ = [
     "QuatProduct",
     "QuatTuple",
     "Vec3",
+    "axis_label",
     "cross_2d",
     "dot_floats",
     "mat_from_quat_wxyz",
@@ -231,6 +232,19 @@ def yaw_from_quat_xyzw_columns(qx: Any, qy: Any, qz: Any, qw: Any) -> Any:
     """:func:`yaw_from_quat_wxyz` of columns of (x, y, z, w) components (numpy arrays, pandas
     columns or scalars), with ``numpy.arctan2``."""
     return np.arctan2(*_yaw_terms(qw, qx, qy, qz))
+
+
+def axis_label(v: Sequence[float], *, upper: bool = False) -> str:
+    """The direction of ``v`` (2 or 3 numbers, not all zero) in words for a message: ``+y``
+    (``+Y`` with ``upper``, for a body's own axes) where it is an axis, else its unit vector
+    as ``[0.71, 0.71]``."""
+    norm = math.sqrt(sum(c * c for c in v))
+    unit = [c / norm for c in v] if norm > 0.0 else [float(c) for c in v]
+    for i, c in enumerate(unit):
+        if abs(abs(c) - 1.0) < 1e-6:
+            name = "XYZ"[i] if upper else "xyz"[i]
+            return f"{'+' if c > 0 else '-'}{name}"
+    return "[" + ", ".join(f"{c:.2f}" for c in unit) + "]"
 
 
 def yaw_between(front: FloatVec) -> float:

@@ -14,6 +14,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from harness.geometry import (
+    axis_label,
     mat_from_quat_wxyz,
     quat_wxyz_conj,
     quat_wxyz_conj_floats,
@@ -184,3 +185,11 @@ def test_columns_are_the_one_quaternion_functions_row_by_row() -> None:
     np.testing.assert_allclose(rot, Rotation.from_quat(xyzw_b).apply(v), rtol=0, atol=1e-12)
     one = quat_xyzw_rotate_columns(xyzw_b[0], v)  # one rotation broadcast over many vectors
     np.testing.assert_allclose(one, Rotation.from_quat(xyzw_b[0]).apply(v), rtol=0, atol=1e-12)
+
+
+def test_axis_label_names_axes_and_gives_other_directions_as_unit_vectors() -> None:
+    assert axis_label((0.0, 2.0)) == "+y"
+    assert axis_label((-3.0, 0.0, 0.0), upper=True) == "-X"
+    assert axis_label((0.0, 0.0, 1e-9 + 1.0)) == "+z"
+    assert axis_label((1.0, 1.0)) == "[0.71, 0.71]"
+    assert axis_label((0.0, -0.6, 0.8), upper=True) == "[0.00, -0.60, 0.80]"

@@ -12,7 +12,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from harness.errors import SrrError
-from harness.geometry import cross_2d, side_of_line, signed_area
+from harness.geometry import axis_label, cross_2d, side_of_line, signed_area
 from harness.scenario.resolve import graph_name
 from harness.scenario.schema import (
     BUILTIN_JOINTS,
@@ -289,17 +289,6 @@ def worker_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]
 SAFETY_MONITOR = "harness.sut.safety_monitor:SafetyMonitor"
 
 
-def _toward(dx: float, dy: float) -> str:
-    """A direction in the world's XY plane, as an axis (``+y``) when it is one."""
-    axis = {(1, 0): "+x", (-1, 0): "-x", (0, 1): "+y", (0, -1): "-y"}
-    norm = (dx * dx + dy * dy) ** 0.5
-    ux, uy = dx / norm, dy / norm
-    key = (round(ux), round(uy))
-    if key in axis and abs(ux - key[0]) < 1e-9 and abs(uy - key[1]) < 1e-9:
-        return axis[key]
-    return f"[{ux:.2f}, {uy:.2f}]"
-
-
 def tripwire_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
     """A warning per trailer tripwire (``zones.trailer_tripwire``, or a safety monitor's own
     ``params.tripwire``) that no robot ever crosses from outside because every enabled
@@ -338,7 +327,7 @@ def tripwire_warnings(sc: Scenario, source: str = "<scenario>") -> tuple[str, ..
             out.append(
                 f"{sc.file_for(field, source)}: {field}: {inside!r} puts every robot's spawn "
                 f"and every route waypoint past the tripwire a {[*a]} → b {[*b]} ({inside} "
-                f"of a → b, seen from above, is toward {_toward(*normal)}): the robot is in "
+                f"of a → b, seen from above, is toward {axis_label(normal)}): the robot is in "
                 "the trailer from the first tick and never crosses in, so the safety monitor "
                 "mutes from the start unless a worker is in the loading ROI; if the trailer "
                 f"is on the other side, inside: {'right' if inside == 'left' else 'left'}")

@@ -53,7 +53,7 @@ import mujoco
 import numpy as np
 
 from harness.errors import ScenarioError
-from harness.geometry import FloatArray, yaw_between
+from harness.geometry import FloatArray, axis_label, yaw_between
 from harness.scenario.schema import DiffDriveControl, ForkliftControl, RobotSpec
 
 __all__ = [
@@ -151,14 +151,6 @@ class Wheel:
 
 def _vec3(v: FloatArray) -> Vec3:
     return float(v[0]), float(v[1]), float(v[2])
-
-
-def _direction(v: Sequence[float]) -> str:
-    """``v`` (a unit vector) as ``+Y`` where it is an axis of its frame, else its numbers."""
-    for i, name in enumerate("XYZ"):
-        if abs(abs(v[i]) - 1.0) < 1e-6:
-            return f"{'+' if v[i] > 0 else '-'}{name}"
-    return "(" + ", ".join(f"{c:.2f}" for c in v) + ")"
 
 
 def base_axes(model: mujoco.MjModel, data: mujoco.MjData, body: int, front: Sequence[float],
@@ -292,15 +284,17 @@ def _axis(out: _Findings, sub: str, w: Wheel, base: BaseAxes) -> bool:
     off = w.off_lateral_deg(base)
     if off <= AXIS_TOLERANCE_DEG:
         return True
-    out.warn(sub, f"joint {w.joint!r} turns about {_direction(w.axis)} in {base.name}'s "
-             f"frame, {off:.1f}° off the robot's lateral axis ({_lateral(base)}): a wheel's "
-             "axle must run across the robot, or it does not roll where cmd_vel asks")
+    out.warn(sub, f"joint {w.joint!r} turns about {axis_label(w.axis, upper=True)} in "
+             f"{base.name}'s frame, {off:.1f}° off the robot's lateral axis "
+             f"({_lateral(base)}): a wheel's axle must run across the robot, or it does not "
+             "roll where cmd_vel asks")
     return False
 
 
 def _lateral(base: BaseAxes) -> str:
     """The base's left and forward axes, for messages (``left +Y, forward +X``)."""
-    return f"left {_direction(base.left)}, forward {_direction(base.front)}"
+    return (f"left {axis_label(base.left, upper=True)}, "
+            f"forward {axis_label(base.front, upper=True)}")
 
 
 def _turns(given: float, measured: float) -> str:
@@ -335,7 +329,7 @@ def _check_diff(out: _Findings, control: DiffDriveControl, wheels: Sequence[Whee
     for k, w in enumerate(wheels):
         sub = f"joint_names[{k}]"
         if _axis(out, sub, w, base) and not w.rolls_forward(base):
-            out.warn(sub, f"joint {w.joint!r} turns about {_direction(w.axis)} in "
+            out.warn(sub, f"joint {w.joint!r} turns about {axis_label(w.axis, upper=True)} in "
                      f"{base.name}'s frame, the robot's right ({_lateral(base)}), so a "
                      "positive wheel rate rolls it backward; the controller needs both "
                      "wheels to roll forward on positive rates: turn the joint's axis round "
@@ -390,7 +384,8 @@ def _check_swivel(out: _Findings, model: mujoco.MjModel, data: mujoco.MjData,
             way = "forward" if flip else "backward"
             out.warn("reverse_logic.flip_linear_x",
                      f"{str(flip).lower()}, but joint {drive.joint!r} turns about "
-                     f"{_direction(drive.axis)} in {base.name}'s frame ({_lateral(base)}), "
+                     f"{axis_label(drive.axis, upper=True)} in {base.name}'s frame "
+                     f"({_lateral(base)}), "
                      f"so a positive wheel rate rolls the robot {way} and a positive "
                      f"cmd_vel.linear.x drives it backward: set it to {str(not flip).lower()}")
 
