@@ -57,8 +57,8 @@ from harness.recording.errors import BagError
 from harness.recording.mcap_writer import Payload, payload_size
 from harness.serde.messages import TYPESTORE, serialize, serialize_pieces
 
-__all__ = ["HASH_LANE_MIN_BYTES", "Recorder", "TopicStats", "cdr_bytes", "digest_update",
-           "topic_meta"]
+__all__ = ["HASH_LANE_MIN_BYTES", "Recorder", "TopicState", "TopicStats", "cdr_bytes",
+           "digest_update", "topic_meta"]
 
 #: A topic whose first payload is at least this large is digested on a hash thread.
 HASH_LANE_MIN_BYTES = 64 * 1024
@@ -105,7 +105,10 @@ def digest_update(h: Any, stamp_ns: int, data: Payload) -> None:
     h.update(data)
 
 
-class _TopicState:
+class TopicState:
+    """What the recorder keeps of one topic while it writes (its channel, counts, running
+    digest); a subclass's :meth:`Recorder._first_of` sees it, as the ROS 1 writer's does."""
+
     __slots__ = ("bytes", "channel", "count", "digest", "first_ns", "lane", "last_ns", "msgtype",
                  "qos", "topic")
 
@@ -238,14 +241,14 @@ class Recorder:
         self._deferred_bytes = 0  # serialized on the pool (counted by the writer thread)
         self._qos_of: Callable[[str], Qos] = lambda topic: Qos()
         self._writer: Any = None
-        self._state: dict[str, _TopicState] = {}
+        self._state: dict[str, TopicState] = {}
         self._batch_limit = max(1, batch)
         self._deferred_limit = max(1, min(batch, deferred_batch))
         self._batch_bytes_limit = batch_bytes
-        self._batch: list[tuple[_TopicState, int, bytes | Future[Payload]]] = []
+        self._batch: list[tuple[TopicState, int, bytes | Future[Payload]]] = []
         self._batch_bytes = 0
         self._queue: queue.Queue[
-            list[tuple[_TopicState, int, bytes | Future[Payload]]] | None] = \
+            list[tuple[TopicState, int, bytes | Future[Payload]]] | None] = \
             queue.Queue(maxsize=max(1, queue_size // self._batch_limit))
         self._thread: threading.Thread | None = None
         self._pool: ThreadPoolExecutor | None = None
@@ -325,7 +328,7 @@ class Recorder:
     #: message). A subclass that overrides ``write`` sets ``__call__ = write`` again.
     __call__ = write
 
-    def _first_of(self, env: Envelope) -> _TopicState | None:
+    def _first_of(self, env: Envelope) -> TopicState | None:
         """The state of ``env``'s topic, made on its first message; None for a topic that is
         not recorded (the message is counted, and handed to the serialized taps)."""
         if env.topic in self.unrecorded:
@@ -336,11 +339,11 @@ class Recorder:
                 for tap in self._forward:
                     tap(env, data)
             return None
-        st = self._state[env.topic] = _TopicState(env.topic, self._recorded_type(env.msgtype),
+        st = self._state[env.topic] = TopicState(env.topic, self._recorded_type(env.msgtype),
                                                   self._qos_of(env.topic))
         return st
 
-    def _defer(self, st: _TopicState, env: Envelope, msg: Deferred) -> None:
+    def _defer(self, st: TopicState, env: Envelope, msg: Deferred) -> None:
         """Queue a deferred message, built and serialized on the pool (see the class doc)."""
         if self._pool is None:
             self._pool = ThreadPoolExecutor(_POOL_THREADS, thread_name_prefix="srr-cdr")

@@ -42,7 +42,7 @@ from rosbags.typesys.msg import normalize_msgtype
 from harness.bus.bus import Envelope, Qos, resolved
 from harness.bus.endpoints import is_static_tf_topic
 from harness.recording.bagfile import ChunkPolicy, McapBagWriter, TopicMeta
-from harness.recording.recorder import Recorder, _TopicState
+from harness.recording.recorder import Recorder, TopicState
 from harness.serde.messages import tf_message
 from harness.serde.ros1 import (
     ROS1_TYPESTORE,
@@ -193,7 +193,7 @@ class Ros1Recorder(Recorder):
 
     __call__ = write
 
-    def _first_of(self, env: Envelope) -> _TopicState | None:
+    def _first_of(self, env: Envelope) -> TopicState | None:
         st = super()._first_of(env)
         if st is not None and accumulates_static_tf(env.topic, env.msgtype,
                                                     st.qos.durability == "transient_local"):
