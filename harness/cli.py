@@ -542,8 +542,9 @@ def _validate_scenario(path: Path, overrides: Sequence[str]) -> int:
 
     sc = api.load(path, overrides=overrides)
     warnings = api.validate(sc, source=str(path))
-    if sc.sweep and not overrides:  # its own sweep: every point, as srr suite would
-        api.plan_suite([path])
+    if sc.sweep and not overrides:  # its own sweep: every point, as srr suite would (each
+        # warning then says its entry, and a later point's its label)
+        warnings = api.plan_suite([path]).warnings
     for w in warnings:
         _stderr().print(f"srr validate: warning: {w}", markup=False)
     robots = ", ".join(

@@ -45,7 +45,7 @@ __all__ = [
     "ROS2_BRIDGE",
     "Notice",
     "RepeatResult",
-    "check_scene",
+    "check_point",
     "check_suts",
     "check_video",
     "ros2_bridge",
@@ -252,8 +252,8 @@ def run_repeat(scenario: Scenario, n: int, *, source: str = "<scenario>",
 
 def check_suts(scenario: Scenario, source: str = "<scenario>") -> None:
     """Load and set up ``scenario``'s systems under test on a bus of their own (their
-    parameters are read in set-up), and shut them down: the part of :func:`validate` that
-    the points of a sweep differ in, without building the world again for each."""
+    parameters are read in set-up), and shut them down: a part of :func:`validate`, without
+    building the world or the graphs."""
     from harness.bus import Bus
     from harness.sut.base import load_suts, setup_suts
 
@@ -266,13 +266,31 @@ def check_suts(scenario: Scenario, source: str = "<scenario>") -> None:
                 sut.shutdown()
 
 
-def check_scene(scenario: Scenario, source: str = "<scenario>") -> None:
-    """Build ``scenario``'s world alone (no graphs, no systems under test): the part of
-    :func:`validate` that a sweep point moving a robot or changing the world differs in
-    (where things are, robots in free space, model files)."""
+def check_point(scenario: Scenario, source: str = "<scenario>", *,
+                scene: bool) -> tuple[str, ...]:
+    """The part of :func:`validate` that a sweep point after the first may differ in, without
+    building its graphs again: its systems under test's set-up, where things are
+    (:func:`~harness.sim.layout.check_layout`; with ``scene``, for a point that moves a robot
+    or a camera or changes the world, the world built again), and the scenario's own
+    warnings. Raises the first error; returns the warnings."""
     from harness.sim import World
+    from harness.sim.layout import check_layout
 
-    World.build(scenario, source)
+    check_suts(scenario, source)
+    if scene:
+        built = World.build(scenario, source).warnings
+    else:
+        check_layout(scenario, source)
+        built = ()
+    return (*built, *scenario_warnings(scenario, source))
+
+
+def scenario_warnings(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
+    """The warnings read off the scenario alone: its sensor rates, its robots' blocks, its
+    degree fields, its workers and its tripwires."""
+    return (*rate_warnings(scenario, source), *robot_warnings(scenario, source),
+            *degree_warnings(scenario, source), *worker_warnings(scenario, source),
+            *tripwire_warnings(scenario, source))
 
 
 def validate(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ...]:
@@ -300,9 +318,7 @@ def _built_warnings(sim: Simulation, plan: Plan, output: OutputKind, scenario: S
     """The warnings of a scenario built and wired (a run's and ``srr validate``'s alike): its
     model files and fixed cameras, its sensor rates, its robots' blocks, its degree fields,
     its workers, its tripwires, its wiring and its output topics."""
-    return (*sim.world.warnings, *rate_warnings(scenario, source),
-            *robot_warnings(scenario, source), *degree_warnings(scenario, source),
-            *worker_warnings(scenario, source), *tripwire_warnings(scenario, source),
+    return (*sim.world.warnings, *scenario_warnings(scenario, source),
             *check_wiring(plan, scenario, source),
             *check_output_topics(output, plan.topics, scenario, source))
 

@@ -14,7 +14,7 @@ from harness.errors import SrrError
 from harness.outdir import check_out_folder
 from harness.run.baselines import NotBlessedError, baselines_dir, bless_if_changed
 from harness.run.loading import load
-from harness.run.simulate import check_scene, check_suts, validate
+from harness.run.simulate import check_point, validate
 from harness.scenario import load_scenario, parse_override
 from harness.suite.events import Executor, Listener
 from harness.suite.outputs import FORMAT, write_outputs
@@ -74,25 +74,37 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
         pairs = [parse_override(o) for o in entry.overrides + first.overrides()]
         try:
             sc = load_scenario(entry.scenario_file, pairs)
-            warnings += [f"{entry.name}: {w}" for w in validate(sc, entry.scenario_file)]
+            said = validate(sc, entry.scenario_file)
         except SrrError as err:
             raise _of_entry(err, entry, first.label if entry.sweep else None) from None
-        for point in others:  # what the points differ in: their systems under test's set-up,
-            # and the scene where the sweep moves a robot or changes the world
+        warnings += [_said_of_entry(w, entry, first.label if entry.sweep else None)
+                     for w in said]
+        for point in others:  # what the points differ in (check_point); a warning the first
+            # point did not give is said with the point's label
             pairs = [parse_override(o) for o in entry.overrides + point.overrides()]
             try:
                 sc = load_scenario(entry.scenario_file, pairs)
-                check_suts(sc, entry.scenario_file)
-                if any(path.split(".", 1)[0] in _SCENE_KEYS for path, _ in point.params):
-                    check_scene(sc, entry.scenario_file)
+                more = check_point(sc, entry.scenario_file, scene=any(
+                    path.split(".", 1)[0] in _SCENE_KEYS for path, _ in point.params))
             except SrrError as err:
                 raise _of_entry(err, entry, point.label) from None
+            warnings += [_said_of_entry(w, entry, point.label) for w in more if w not in said]
     return SuitePlan(spec, runs, tuple(warnings), time.monotonic() - t0)
 
 
 #: Top-level scenario keys whose sweep changes the scene each point builds (robots' models
-#: and spawn poses, the world): those points' worlds are built before the first run.
-_SCENE_KEYS = ("robots", "world")
+#: and spawn poses, fixed cameras, the world): those points' worlds are built before the first run.
+_SCENE_KEYS = ("robots", "world", "cameras")
+
+
+def _said_of_entry(warning: str, entry: Entry, label: str | None) -> str:
+    """A warning about an entry's scenario (at sweep point ``label``), said of the entry: one
+    about a value its ``set:`` or sweep gave names the suite file's entry, as
+    :func:`_of_entry` names an error; the others say the entry's name first."""
+    at = f" [{label}]" if label else ""
+    if warning.startswith("--set: "):
+        return f"{entry.declared_in}{at}: {warning.removeprefix('--set: ')}"
+    return f"{entry.name}{at}: {warning}"
 
 
 def _of_entry(err: SrrError, entry: Entry, label: str | None) -> SrrError:

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from harness.cli import main
 from harness.errors import ScenarioError, SrrError
 from harness.suite.plan import plan_runs
 from harness.suite.runner import plan_suite
@@ -316,3 +317,38 @@ def test_a_folder_says_how_many_files_fail_and_whose_include_is_bad(
     assert main(["validate", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert f"srr validate: {tmp_path / 'c.yaml'}: " in err and "inc.yml" in err, err
+
+
+DOCK_CROSSING = ROOT / "scenarios" / "dock_worker_crossing.yaml"
+
+
+def test_a_later_sweep_point_s_warnings_are_said_with_its_label(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Only the first point was validated in full: a warning that only a later point gives
+    (a worker that starts after the run ends) was not said before the run; it is now, naming
+    the entry and the point, in the suite and in the scenario's own sweep."""
+    suite = tmp_path / "sw.yaml"
+    suite.write_text(f"suite: sw\nscenarios:\n  - path: {DOCK_CROSSING}\n"
+                     "    sweep: {workers.0.start_delay: [22, 40]}\n", encoding="utf-8")
+    said = ("workers[0].start_delay: 40 s is not before the end of the run (duration 36 s): "
+            "worker 'character_0' stands at its first waypoint the whole run")
+    assert plan_suite([suite]).warnings == (f"{suite}: scenarios[0] [start_delay=40]: {said}",)
+    own = tmp_path / "dock_worker_crossing.yaml"
+    shutil.copytree(ROOT / "scenarios" / "dock", tmp_path / "dock")
+    own.write_text(DOCK_CROSSING.read_text(encoding="utf-8")
+                   + "\nsweep: {workers.0.start_delay: [22, 40]}\n", encoding="utf-8")
+    assert main(["validate", str(own)]) == 0
+    err = capsys.readouterr().err
+    assert f"srr validate: warning: {own} [start_delay=40]: {said}" in err
+    assert "start_delay=22" not in err
+
+
+def test_a_later_sweep_point_s_waypoint_in_a_shelf_is_refused_before_any_run(
+        tmp_path: Path) -> None:
+    suite = tmp_path / "sw.yaml"
+    suite.write_text(f"suite: sw\nscenarios:\n  - path: {DOCK_CROSSING}\n"
+                     "    sweep: {workers.0.route.0.0: [12, -6]}\n", encoding="utf-8")
+    with pytest.raises(SrrError) as info:
+        plan_suite([suite])
+    assert str(info.value).startswith(f"{suite}: scenarios[0] [route.0.0=-6]: ")
+    assert "workers[0].route[0]: (-6, -5.5) is inside the shelf at (-6, -6)" in str(info.value)
