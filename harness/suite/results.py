@@ -249,8 +249,11 @@ def _stats(runs: Sequence[RunOutcome]) -> dict[str, dict[str, Any]]:
 
 def _flaky(runs: Sequence[RunOutcome], out_root: Path) -> dict[str, Any] | None:
     """How the repeats disagree (digests or verdicts), None when they agree. Repeats that
-    were interrupted (Ctrl-C) are left out: stopping a run is no disagreement."""
-    runs = [r for r in runs if r.verdict != "INTERRUPTED"]
+    were interrupted (Ctrl-C), timed out or crashed are left out: where a run was stopped is
+    a matter of wall-clock time, so what it recorded up to then says nothing of whether the
+    simulation repeats (their group is INTERRUPTED or INVALID, with what happened)."""
+    runs = [r for r in runs
+            if r.verdict != "INTERRUPTED" and not r.timed_out and r.crash is None]
     finished = [r for r in runs if r.digest is not None and r.run_dir is not None]
     verdicts = [r.verdict for r in runs]
     odd = next((r for r in finished[1:] if r.digest != finished[0].digest), None)

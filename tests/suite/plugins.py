@@ -99,6 +99,11 @@ class PidDependent(RouteFollower):
         super().step(now_ns)
 
 
+class PidDependentStaller(PidDependent, Staller):
+    """Drives as :class:`PidDependent` (each process records other bytes), then blocks at
+    0.5 s as :class:`Staller`: repeats that record different things before their timeouts."""
+
+
 #: Set up in this module (a fresh process: 0 before the first run's set-up).
 SETUPS = 0
 

@@ -281,6 +281,36 @@ scenarios:
         assert read_summary(out / run["run_dir"]) == summary  # every reader takes it
 
 
+def test_repeats_that_timed_out_are_invalid_not_flaky(suite_file: Path,
+                                                      tmp_path: Path) -> None:
+    """Two repeats stopped at their timeouts recorded different things (each drove at its own
+    speed until it stalled): where a run is stopped says nothing of whether the simulation
+    repeats, so the group is INVALID for the timeouts, not called flaky."""
+    suite_file.write_text(f"""
+scenarios:
+  - path: {FORKLIFT}
+    name: stalls
+    repeat: 2
+    timeout: 5
+    set: {{duration: 3, {PLUGIN}: "tests.suite.plugins:PidDependentStaller"}}
+""", encoding="utf-8")
+    out = tmp_path / "out"
+    res = api.suite([suite_file], executor="local", jobs=2, out=out, fork=True)
+    runs = res.summary["runs"]
+    assert [r["timed_out"] for r in runs] == [True, True]
+    digests = [r["digest"] for r in runs]
+    assert None not in digests and digests[0] != digests[1]  # they did record other bytes
+    (group,) = res.summary["groups"]
+    assert group["verdict"] == "INVALID" and not group["flaky"]
+    assert group["flaky_detail"] is None
+    assert group["reasons"] == ["#1: timed out after 5 s of wall-clock time and was stopped",
+                                "#2: timed out after 5 s of wall-clock time and was stopped"]
+    junit = ET.parse(out / "junit.xml").getroot()
+    assert [c.find("error").get("type") for c in junit.iter("testcase")] == ["timeout"] * 2
+    md = api.write_summary_md(res, tmp_path / "pr.md").read_text(encoding="utf-8")
+    assert "### Flaky groups" not in md and "flaky" not in md
+
+
 def test_cli_ctrl_c_keeps_finished_runs(tmp_path: Path) -> None:
     """Ctrl-C once the quick run has finished and while the slow one is stuck mid-way (it
     cannot finish on its own): the quick run is kept as it was, the slow one is stopped and
