@@ -12,10 +12,12 @@ from typing import Any
 
 from harness.errors import SrrError
 from harness.outdir import check_out_folder
-from harness.run.baselines import NotBlessedError, baselines_dir, bless_if_changed
+from harness.regression import baseline_path
+from harness.regression.config import config_differences
+from harness.run.baselines import NotBlessedError, baseline_name, baselines_dir, bless_if_changed
 from harness.run.loading import load
 from harness.run.simulate import check_point, validate
-from harness.scenario import load_scenario, parse_override
+from harness.scenario import load_scenario, parse_override, scenario_to_mapping
 from harness.suite.events import Executor, Listener
 from harness.suite.outputs import FORMAT, write_outputs
 from harness.suite.plan import RunSpec, plan_runs
@@ -130,6 +132,36 @@ def _sweeps(groups: Sequence[GroupResult]) -> list[dict[str, Any]]:
     return list(out.values())
 
 
+def _refuse_shared_baselines(plan: SuitePlan, baselines: Path | None) -> None:
+    """``--update-baselines``: refuse (before anything runs) two groups whose first repeats
+    would be blessed into one baseline file under different configurations (two entries of
+    one scenario with other ``set:`` values): the second would overwrite the first, and the
+    first be MISMATCH against it from then on."""
+    declared = {e.name: e.declared_in for e in plan.spec.entries}
+    seen: dict[Path, tuple[RunSpec, dict[str, Any]]] = {}
+    for spec in plan.runs:
+        if spec.repeat != 1:
+            continue
+        sc = load(spec.scenario_file, overrides=spec.overrides)
+        path = baseline_path(baseline_name(sc), baselines_dir(spec.scenario_file, baselines,
+                                                              sc))
+        mapping = scenario_to_mapping(sc)
+        if path not in seen:
+            seen[path] = (spec, mapping)
+            continue
+        other, theirs = seen[path]
+        changed = config_differences(theirs, mapping, limit=3)
+        if changed:
+            where = declared[spec.entry] + (f" [{spec.group.split('[', 1)[1]}"
+                                            if spec.sweep else "")
+            raise SrrError(
+                f"{where}: --update-baselines would bless {spec.group} into {path}, the "
+                f"baseline it shares with {other.group} ({declared[other.entry]}) under another "
+                f"configuration ({'; '.join(changed)}): one would overwrite the other, which "
+                "would then be MISMATCH; give one entry its own baseline "
+                "(set: {baseline: NAME})")
+
+
 def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
               history: Path | None = None, listen: Listener | None = None,
               bless_reason: str | None = None, baselines: Path | None = None,
@@ -148,6 +180,8 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
 
     if history is not None and not Path(history).is_dir():
         raise SrrError(f"--history {history}: no such folder")
+    if bless_reason is not None:
+        _refuse_shared_baselines(plan, baselines)
     out_dir = Path(out) if out is not None else default_suite_dir()
     check_out_folder(out_dir)
     if out_dir.exists() and any(out_dir.iterdir()):
