@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -10,7 +11,20 @@ from typing import Any, Protocol
 
 from harness.atomic import write_text_atomic
 
-__all__ = ["Case", "junit_cases", "write_junit"]
+__all__ = ["Case", "junit_cases", "write_junit", "xml_document"]
+
+#: What XML 1.0 cannot hold, even escaped: control characters other than tab and newlines
+#: (an ANSI colour code in a plug-in's exception message), lone surrogates, U+FFFE/U+FFFF.
+_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+
+
+def xml_document(root: ET.Element) -> str:
+    """``root`` as a whole XML document that every parser reads: a character XML cannot hold
+    (in a reason, a name) is written as its ``\\xNN`` escape."""
+    ET.indent(root)
+    text = _NOT_XML.sub(lambda m: f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100
+                        else f"\\u{ord(m.group()):04x}", ET.tostring(root, encoding="unicode"))
+    return '<?xml version="1.0" encoding="utf-8"?>\n' + text + "\n"
 
 
 @dataclass(frozen=True)
@@ -59,6 +73,4 @@ def write_junit(path: Path, suite: str, cases: Sequence[_Case]) -> None:
             ET.SubElement(tc, "failure", message=c.detail).text = c.detail
         else:
             ET.SubElement(tc, "system-out").text = c.detail
-    ET.indent(root)
-    write_text_atomic(path, '<?xml version="1.0" encoding="utf-8"?>\n'
-                      + ET.tostring(root, encoding="unicode") + "\n")
+    write_text_atomic(path, xml_document(root))

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from harness.atomic import write_json_atomic, write_text_atomic
+from harness.report.junit import xml_document
 from harness.suite.results import GroupResult, RunOutcome
 from harness.summary import SUITE_FORMAT
 
@@ -85,9 +86,7 @@ def write_junit_suite(path: Path, name: str, groups: Sequence[GroupResult]) -> N
             totals[k] += v
     for k, v in totals.items():
         root.set(k, f"{v:.3f}" if k == "time" else str(int(v)))
-    ET.indent(root)
-    write_text_atomic(path, '<?xml version="1.0" encoding="utf-8"?>\n'
-                      + ET.tostring(root, encoding="unicode") + "\n")
+    write_text_atomic(path, xml_document(root))
 
 
 def write_outputs(out_dir: Path, summary: Mapping[str, Any],

@@ -104,6 +104,16 @@ class PidDependentStaller(PidDependent, Staller):
     0.5 s as :class:`Staller`: repeats that record different things before their timeouts."""
 
 
+class RaisesInColour(RouteFollower):
+    """Raises 0.5 s into the run with a message in ANSI colours (as a coloured logger or
+    traceback writes one): escape characters that XML 1.0 cannot hold, even escaped."""
+
+    def step(self, now_ns: int) -> None:
+        if now_ns >= 500_000_000:
+            raise RuntimeError("\x1b[31mmotor fault\x1b[0m <&>")
+        super().step(now_ns)
+
+
 #: Set up in this module (a fresh process: 0 before the first run's set-up).
 SETUPS = 0
 

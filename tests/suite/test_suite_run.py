@@ -311,6 +311,27 @@ scenarios:
     assert "### Flaky groups" not in md and "flaky" not in md
 
 
+def test_junit_xml_parses_when_a_reason_holds_characters_xml_cannot(
+        suite_file: Path, tmp_path: Path) -> None:
+    """A plug-in's exception message in ANSI colours becomes the run's reason: the suite's
+    and the run's junit.xml are still XML that a CI's reader parses, the escape written as
+    ``\\x1b``, the rest of the message as it was."""
+    suite_file.write_text(f"""
+scenarios:
+  - path: {FORKLIFT}
+    name: colour
+    set: {{duration: 1, {PLUGIN}: "tests.suite.plugins:RaisesInColour"}}
+""", encoding="utf-8")
+    out = tmp_path / "out"
+    res = api.suite([suite_file], executor="local", jobs=1, out=out, fork=True)
+    (run,) = res.summary["runs"]
+    assert run["verdict"] == "INVALID" and "\x1b[31mmotor fault" in run["reasons"][0]
+    for junit in (out / "junit.xml", out / run["run_dir"] / "junit.xml"):
+        root = ET.parse(junit).getroot()
+        said = [e.get("message", "") for e in root.iter() if e.tag in ("failure", "error")]
+        assert any("\\x1b[31mmotor fault\\x1b[0m <&>" in m for m in said), said
+
+
 def test_cli_ctrl_c_keeps_finished_runs(tmp_path: Path) -> None:
     """Ctrl-C once the quick run has finished and while the slow one is stuck mid-way (it
     cannot finish on its own): the quick run is kept as it was, the slow one is stopped and
