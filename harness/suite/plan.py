@@ -82,7 +82,7 @@ def plan_runs(spec: SuiteSpec, *, on_render: Callable[[], None] | None = None,
                 if not point.params:
                     raise
                 what = f"{err.field}: {err.message}" if err.file == "--set" else str(err)
-                raise ScenarioError(entry.sweep_source, f"sweep ({point.label})",
+                raise ScenarioError(entry.sweep_source, f"{entry.sweep_field} ({point.label})",
                                     what) from None
             cameras = sc.camera_count
             if cameras and on_render is not None:

@@ -54,6 +54,7 @@ class Entry:
     sweep: tuple[SweepParam, ...]
     sweep_source: str
     declared_in: str  # the suite file and entry index, or the path given
+    sweep_field: str = "sweep"  # the sweep's field in sweep_source (scenarios[1].sweep)
 
 
 @dataclass(frozen=True)
@@ -277,12 +278,14 @@ def _checked(scenario_file: str, overrides: tuple[str, ...], *, repeat: int,
         sweep, source = parse_sweep(sweep_raw, sweep_file, sweep_field), sweep_file
     else:
         sweep, source = parse_sweep(sc.sweep, scenario_file, "sweep"), scenario_file
+        sweep_field = "sweep"
     if name is None and not _safe_name(sc.name):
         raise ScenarioError(scenario_file, "name", "cannot name a suite entry (letters, digits, "
                             "'_', '-' and '.'); give the entry a `name:` in the suite file")
     return Entry(name=name or sc.name, scenario=sc.name, scenario_file=scenario_file,
                  baseline=sc.baseline or sc.name, repeat=int(repeat), timeout_s=timeout_s,
-                 overrides=overrides, sweep=sweep, sweep_source=source, declared_in=declared_in)
+                 overrides=overrides, sweep=sweep, sweep_source=source, declared_in=declared_in,
+                 sweep_field=sweep_field)
 
 
 def _suite_file(path: Path, data: Mapping[str, Any], cli: _Defaults) -> tuple[str, list[Entry]]:
