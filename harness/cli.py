@@ -258,6 +258,20 @@ def _check_summary_md(args: argparse.Namespace) -> None:
         raise SrrError(f"--summary-md {args.summary_md}: inside --out {out}, whose files srr "
                        "writes (summary.json, report.html, ...); write it beside that folder")
     _writable("--summary-md", args.summary_md)
+    _not_an_input(args, [*(getattr(args, "paths", None) or []),
+                         *([args.scenario] if getattr(args, "scenario", None) else [])])
+
+
+def _not_an_input(args: argparse.Namespace, inputs: Sequence[str | Path]) -> None:
+    """Refuse a ``--summary-md`` FILE that is one of the files the command reads (a suite
+    or scenario file): writing the summary would replace it."""
+    if args.summary_md is None:
+        return
+    target = Path(args.summary_md).resolve()
+    for given in inputs:
+        if Path(given).resolve() == target:
+            raise SrrError(f"--summary-md {args.summary_md}: is {given}, a file this command "
+                           "reads; the summary would replace it: give another file name")
 
 
 def _write_summary_md(args: argparse.Namespace, result: Any) -> None:
@@ -926,6 +940,7 @@ def _suite(args: argparse.Namespace) -> int:
 
     plan = api.plan_suite(args.paths, repeat=args.repeat, timeout_s=args.timeout,
                           on_render=warm_early if local else None)
+    _not_an_input(args, [e.scenario_file for e in plan.spec.entries])
     for w in plan.warnings:
         _stderr().print(f"srr suite: warning: {w}", markup=False)
     with SuiteProgress(_stdout(), len(plan.runs), live=live) as progress:

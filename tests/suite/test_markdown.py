@@ -6,6 +6,7 @@ and the command-line options' checks, made before anything runs."""
 from __future__ import annotations
 
 import re
+import shutil
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -17,6 +18,7 @@ from harness.suite.plan import RunSpec
 from harness.suite.results import GROUP_ORDER, RunOutcome, group_runs, suite_exit_code
 from harness.suite.runner import SuiteResult
 
+ROOT = Path(__file__).resolve().parents[2]
 METRIC = "perception.recall"
 
 
@@ -197,6 +199,30 @@ def test_bad_summary_options_are_one_line_exit_2_before_anything_runs(
                      str(out / "summary.json")]) == 2
         assert f"--summary-md {out / 'summary.json'}: inside --out {out}" in \
             capsys.readouterr().err
+
+
+def test_a_summary_over_a_file_the_command_reads_is_refused(tmp_path: Path,
+                                                           capsys: Any) -> None:
+    """--summary-md naming the suite file, a scenario an entry runs, or `srr run`'s scenario
+    (given another way than the entry wrote it) would replace it: one line, exit 2, the file
+    as it was."""
+    scenario = tmp_path / "forklift.yaml"
+    shutil.copytree(ROOT / "scenarios" / "forklift", tmp_path / "forklift")
+    scenario.write_text((ROOT / "scenarios" / "forklift_warehouse.yaml").read_text(
+        encoding="utf-8"), encoding="utf-8")
+    (tmp_path / "suites").mkdir()
+    suite = tmp_path / "suites" / "s.yaml"
+    suite.write_text("suite: s\nscenarios: [../forklift.yaml]\n", encoding="utf-8")
+    before = {p: p.read_bytes() for p in (scenario, suite)}
+    for argv, target in ((["suite", str(suite)], suite), (["suite", str(suite)], scenario),
+                         (["run", str(tmp_path / "suites" / ".." / "forklift.yaml")],
+                          scenario)):
+        out = tmp_path / "out"
+        assert main([*argv, "--out", str(out), "--summary-md", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"--summary-md {target}: is " in err, err
+        assert "a file this command reads" in err and not out.exists()
+    assert {p: p.read_bytes() for p in (scenario, suite)} == before
 
 
 def test_groups_whose_bytes_are_not_their_baselines_are_listed_folded(tmp_path: Path) -> None:
