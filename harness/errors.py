@@ -160,9 +160,12 @@ class RunStopped(SrrError):
 
 
 def reason(err: BaseException) -> str:
-    """What went wrong, for a one-line message: the exception's text, or its kind when it
-    has none (some readers raise bare ``EndOfFile()``)."""
-    text = next((line.strip() for line in str(err).splitlines() if line.strip()), "")
+    """What went wrong, for a one-line message: the exception's text (its first line, with
+    characters that are not printable written as escapes, :func:`printable`: an ANSI colour
+    code or a NUL from a plug-in reaches no terminal, page or file as it is), or its kind
+    when it has none (some readers raise bare ``EndOfFile()``)."""
+    text = printable(next((line.strip() for line in str(err).splitlines() if line.strip()),
+                          ""))
     name = type(err).__name__
     if not text:
         return {"EndOfFile": "unexpected end of file (truncated)"}.get(name, name)

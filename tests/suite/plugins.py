@@ -110,7 +110,7 @@ class RaisesInColour(RouteFollower):
 
     def step(self, now_ns: int) -> None:
         if now_ns >= 500_000_000:
-            raise RuntimeError("\x1b[31mmotor fault\x1b[0m <&>")
+            raise RuntimeError("\x1b[31mmotor fault\x1b[0m <&> \x00")
         super().step(now_ns)
 
 

@@ -311,11 +311,12 @@ scenarios:
     assert "### Flaky groups" not in md and "flaky" not in md
 
 
-def test_junit_xml_parses_when_a_reason_holds_characters_xml_cannot(
+def test_a_reason_with_characters_that_are_not_printable_is_escaped_everywhere(
         suite_file: Path, tmp_path: Path) -> None:
-    """A plug-in's exception message in ANSI colours becomes the run's reason: the suite's
-    and the run's junit.xml are still XML that a CI's reader parses, the escape written as
-    ``\\x1b``, the rest of the message as it was."""
+    """A plug-in's exception message in ANSI colours, with a NUL, becomes the run's reason
+    with those characters written as escapes (``\\x1b``, ``\\x00``), the rest as it was:
+    the run's summary.json reads back, the suite's and the run's junit.xml are XML that a
+    CI's reader parses, and the suite page and the PR summary carry no escape character."""
     suite_file.write_text(f"""
 scenarios:
   - path: {FORKLIFT}
@@ -325,11 +326,18 @@ scenarios:
     out = tmp_path / "out"
     res = api.suite([suite_file], executor="local", jobs=1, out=out, fork=True)
     (run,) = res.summary["runs"]
-    assert run["verdict"] == "INVALID" and "\x1b[31mmotor fault" in run["reasons"][0]
+    said = "\\x1b[31mmotor fault\\x1b[0m <&> \\x00"
+    assert run["verdict"] == "INVALID" and said in run["reasons"][0], run["reasons"]
+    own = json.loads((out / run["run_dir"] / "summary.json").read_text(encoding="utf-8"))
+    assert any(said in r for r in own["reasons"]), own["reasons"]
     for junit in (out / "junit.xml", out / run["run_dir"] / "junit.xml"):
         root = ET.parse(junit).getroot()
-        said = [e.get("message", "") for e in root.iter() if e.tag in ("failure", "error")]
-        assert any("\\x1b[31mmotor fault\\x1b[0m <&>" in m for m in said), said
+        messages = [e.get("message", "") for e in root.iter() if e.tag in ("failure", "error")]
+        assert any(said in m for m in messages), messages
+    md = api.write_summary_md(res, tmp_path / "pr.md").read_text(encoding="utf-8")
+    page = (out / "index.html").read_text(encoding="utf-8")
+    assert "motor fault" in md and "motor fault" in page
+    assert not any(c in text for c in "\x1b\x00" for text in (md, page))
 
 
 def test_cli_ctrl_c_keeps_finished_runs(tmp_path: Path) -> None:
