@@ -91,6 +91,7 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
             except SrrError as err:
                 raise _of_entry(err, entry, point.label) from None
             warnings += [_said_of_entry(w, entry, point.label) for w in more if w not in said]
+    warnings += _shared_baseline_warnings(spec, runs)
     return SuitePlan(spec, runs, tuple(warnings), time.monotonic() - t0)
 
 
@@ -132,14 +133,28 @@ def _sweeps(groups: Sequence[GroupResult]) -> list[dict[str, Any]]:
     return list(out.values())
 
 
-def _refuse_shared_baselines(plan: SuitePlan, baselines: Path | None) -> None:
-    """``--update-baselines``: refuse (before anything runs) two groups whose first repeats
-    would be blessed into one baseline file under different configurations (two entries of
-    one scenario with other ``set:`` values): the second would overwrite the first, and the
-    first be MISMATCH against it from then on."""
-    declared = {e.name: e.declared_in for e in plan.spec.entries}
+@dataclass(frozen=True)
+class _SharedBaseline:
+    """Two groups whose first repeats are judged against (and blessed into) one baseline
+    file under different configurations (two entries of one scenario with other ``set:``
+    values): one of them is MISMATCH on every run."""
+
+    where: str  # the later group's entry (and sweep point)
+    group: str
+    other: str  # the earlier group, and its entry
+    other_where: str
+    path: Path
+    changed: tuple[str, ...]  # how the configurations differ (up to three)
+
+
+def _shared_baselines(suite: SuiteSpec, runs: Sequence[RunSpec],
+                      baselines: Path | None) -> list[_SharedBaseline]:
+    """Every group of ``runs`` that shares its baseline file with an earlier group under
+    another configuration."""
+    declared = {e.name: e.declared_in for e in suite.entries}
     seen: dict[Path, tuple[RunSpec, dict[str, Any]]] = {}
-    for spec in plan.runs:
+    out = []
+    for spec in runs:
         if spec.repeat != 1:
             continue
         sc = load(spec.scenario_file, overrides=spec.overrides)
@@ -154,12 +169,33 @@ def _refuse_shared_baselines(plan: SuitePlan, baselines: Path | None) -> None:
         if changed:
             where = declared[spec.entry] + (f" [{spec.group.split('[', 1)[1]}"
                                             if spec.sweep else "")
-            raise SrrError(
-                f"{where}: --update-baselines would bless {spec.group} into {path}, the "
-                f"baseline it shares with {other.group} ({declared[other.entry]}) under another "
-                f"configuration ({'; '.join(changed)}): one would overwrite the other, which "
-                "would then be MISMATCH; give one entry its own baseline "
-                "(set: {baseline: NAME})")
+            out.append(_SharedBaseline(where, spec.group, other.group,
+                                       declared[other.entry], path, tuple(changed)))
+    return out
+
+
+def _refuse_shared_baselines(plan: SuitePlan, baselines: Path | None) -> None:
+    """``--update-baselines``: refuse (before anything runs) two groups that would be blessed
+    into one baseline file under different configurations: the second would overwrite the
+    first, and the first be MISMATCH against it from then on."""
+    for s in _shared_baselines(plan.spec, plan.runs, baselines)[:1]:
+        raise SrrError(
+            f"{s.where}: --update-baselines would bless {s.group} into {s.path}, the "
+            f"baseline it shares with {s.other} ({s.other_where}) under another "
+            f"configuration ({'; '.join(s.changed)}): one would overwrite the other, which "
+            "would then be MISMATCH; give one entry its own baseline "
+            "(set: {baseline: NAME})")
+
+
+def _shared_baseline_warnings(suite: SuiteSpec, runs: Sequence[RunSpec]) -> list[str]:
+    """A warning for each group judged against a baseline file (in its scenario's own
+    baselines folder) that it shares with another group under another configuration: one of
+    the two is MISMATCH on every run."""
+    return [f"{s.where}: {s.group} is judged against {s.path}, the baseline it shares with "
+            f"{s.other} ({s.other_where}) under another configuration "
+            f"({'; '.join(s.changed)}): one of the two is MISMATCH on every run; give one "
+            "entry its own baseline (set: {baseline: NAME})"
+            for s in _shared_baselines(suite, runs, None)]
 
 
 def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,

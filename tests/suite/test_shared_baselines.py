@@ -38,13 +38,32 @@ def test_two_groups_blessed_into_one_baseline_are_refused_before_anything_runs(
     assert main(["suite", str(suite), "--jobs", "1", "-q", "--out", str(out), "--baselines",
                  str(bl), "--update-baselines", "--reason", "try"]) == 2
     err = capsys.readouterr().err.splitlines()
-    assert len(err) == 1, err
+    assert len(err) == 2, err  # the plan's warning, then the refusal
+    assert err[0].startswith(f"srr suite: warning: {suite}: {where}: {groups[0]} is judged "
+                             "against ")
     name = "pallet_truck_mjcf" + ("@speed=1.2" if "[" in groups[0] else "")
-    assert err[0].startswith(
+    assert err[1].startswith(
         f"srr suite: {suite}: {where}: --update-baselines would bless {groups[0]} into "
         f"{bl.resolve() / name}.json, the baseline it shares with {groups[1]} ")
-    assert "(duration: 1.0 → 2.0)" in err[0] and "set: {baseline: NAME}" in err[0]
+    assert "(duration: 1.0 → 2.0)" in err[1] and "set: {baseline: NAME}" in err[1]
     assert not out.exists() and not bl.exists()
+
+
+def test_two_groups_judged_against_one_baseline_are_warned_of_before_anything_runs(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Without --update-baselines the suite runs, but one of the two groups would be
+    MISMATCH on every run: `srr validate` and the plan say so, naming both and the file."""
+    suite = _suite(tmp_path, {"name": "short", "set": {"duration": 1}},
+                   {"name": "long", "set": {"duration": 2}},
+                   {"name": "own", "set": {"duration": 3, "baseline": "own"}})
+    assert main(["validate", str(suite)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err == [
+        f"srr validate: warning: {suite}: scenarios[1]: long is judged against "
+        f"{TRUCK.parents[1] / 'baselines' / 'pallet_truck_mjcf.json'}, the baseline it shares "
+        f"with short ({suite}: scenarios[0]) under another configuration (duration: 1.0 → 2.0): "
+        "one of the two is MISMATCH on every run; give one entry its own baseline "
+        "(set: {baseline: NAME})"]
 
 
 @pytest.mark.slow
