@@ -31,6 +31,7 @@ MCAP: it opens there as recorded.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -426,11 +427,22 @@ def _write(rr: ModuleType, run_dir: Path, summary: dict[str, Any], tmp: Path) ->
                     ex.message(conn, t_ns, raw)
                 ex.finish()
             _metric_series(rr, w, run_dir, summary)
-            rec.flush()
+            try:
+                rec.flush()
+            except RuntimeError as err:  # rerun-sdk's file writer failed (disk full)
+                raise OSError(f"rerun-sdk's file writer stopped ({err}; its log above says "
+                              "why)") from err
     finally:
         rec.disconnect()
     return RerunExport(tmp, tmp.stat().st_size, dict(sorted(w.rows.items())),
                        dict(sorted(ex.skipped.items())))
+
+
+def _discard(tmp: Path) -> None:
+    """Remove the partial file, if there is one (unlink fails on a read-only filesystem even
+    when there is nothing to remove)."""
+    with contextlib.suppress(OSError):
+        tmp.unlink(missing_ok=True)
 
 
 def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:
@@ -452,13 +464,15 @@ def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:
     verify_recording(run, summary)  # the bag read back is the summary's, its CRCs checked
     tmp = target.with_name(f".{target.name}.partial")
     try:
+        # made here first: rerun-sdk says a folder it cannot write to with a RuntimeError
+        tmp.open("wb").close()
         result = _write(rr, run, summary, tmp)
         os.replace(tmp, target)
     except OSError as err:
-        tmp.unlink(missing_ok=True)
+        _discard(tmp)
         raise SrrError(f"--rerun {target}: cannot write: {err.strerror or err}") from err
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        _discard(tmp)
         raise
     return RerunExport(target, result.bytes, result.rows, result.skipped)
 

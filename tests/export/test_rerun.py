@@ -211,3 +211,29 @@ def test_bad_input_is_one_line_exit_2_and_no_file(dock: Path, tmp_path: Path,
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.count("\n") == 1 and "srr[rerun]" in proc.stderr
     assert not rrd.exists()
+
+
+def _unwritable_folder(tmp_path: Path) -> Path:
+    """A folder this process cannot create files in: a read-only one, or (root writes
+    anywhere) ``/proc``."""
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        (ro / "probe").touch()
+    except OSError:
+        return ro
+    (ro / "probe").unlink()
+    if not Path("/proc/self").is_dir():
+        pytest.skip("no folder this process cannot write to")
+    return Path("/proc")
+
+
+def test_a_folder_that_cannot_be_written_is_one_line_exit_2(lidar: Path, tmp_path: Path,
+                                                            capsys: Any) -> None:
+    folder = _unwritable_folder(tmp_path)
+    rrd = folder / "x.rrd"
+    assert main(["export", str(lidar), "--rerun", str(rrd)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"--rerun {rrd}: cannot write" in err, err
+    assert not rrd.exists() and not (folder / ".x.rrd.partial").exists()
