@@ -24,6 +24,7 @@ to another recording, which recover cannot make consistent).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import shutil
@@ -382,9 +383,9 @@ def recover_bag(path: str | Path, *, recorded: Mapping[str, Any] | None = None) 
         return RecoveredBag(bag_dir, mcap, "metadata", stats, scan.chunks, 0)
 
     tmp = mcap.with_name(mcap.name + ".recovering")
-    tmp.unlink(missing_ok=True)  # left by a recovery that was itself interrupted
     writer: McapBagWriter | None = None
     try:
+        tmp.unlink(missing_ok=True)  # left by a recovery that was itself interrupted
         writer = McapBagWriter(tmp, ChunkPolicy(fsync=True))
         ids: dict[int, int] = {}
 
@@ -410,7 +411,8 @@ def recover_bag(path: str | Path, *, recorded: Mapping[str, Any] | None = None) 
     except BaseException as err:
         if writer is not None:
             writer.abort()
-        tmp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):  # a read-only filesystem refuses even this
+            tmp.unlink(missing_ok=True)
         if isinstance(err, OSError):
             raise BagError(f"{mcap}: cannot write the recovered bag: "
                            f"{err.strerror or err}") from err

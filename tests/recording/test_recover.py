@@ -6,7 +6,10 @@ mcap-ros2-support)."""
 from __future__ import annotations
 
 import hashlib
+import os
 import shutil
+import subprocess
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -273,3 +276,42 @@ def test_what_is_appended_while_a_bag_is_read_is_not_read(small_bag: Path,
     assert scan.tail_start == expected.tail_start <= cut
     assert {t.meta.name: t.count for t in scan.channels.values()} == {
         t.meta.name: t.count for t in expected.channels.values()}
+
+
+@pytest.fixture
+def tmpfs(tmp_path: Path) -> Iterator[Path]:
+    """A fresh tmpfs mounted on a folder (for a real read-only filesystem: :func:`_seal`).
+    Mounting needs root (CAP_SYS_ADMIN): skipped otherwise."""
+    mnt = tmp_path / "mnt"
+    mnt.mkdir()
+    if os.geteuid() != 0 or subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "size=8m", "tmpfs", str(mnt)],
+            capture_output=True, check=False).returncode != 0:
+        pytest.skip("cannot mount a tmpfs (needs root)")
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", str(mnt)], check=False)
+
+
+def _seal(mnt: Path) -> None:
+    subprocess.run(["mount", "-o", "remount,ro", str(mnt)], check=True)
+
+
+@pytest.mark.parametrize("damage", ["cut", "no-metadata"])
+def test_a_bag_on_a_read_only_filesystem_is_one_line_exit_2(
+        small_bag: Path, tmpfs: Path, capsys: pytest.CaptureFixture[str], damage: str) -> None:
+    bag = tmpfs / "bag"
+    shutil.copytree(small_bag, bag)
+    if damage == "cut":
+        data = (bag / "bag.mcap").read_bytes()
+        (bag / "bag.mcap").write_bytes(data[: len(data) * 3 // 4])
+    else:
+        (bag / "metadata.yaml").unlink()
+    before = {p.name: p.read_bytes() for p in bag.iterdir()}
+    _seal(tmpfs)
+    assert main(["recover", str(bag)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Read-only file system" in err, err
+    assert str(bag) in err
+    assert {p.name: p.read_bytes() for p in bag.iterdir()} == before
