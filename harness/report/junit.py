@@ -32,6 +32,7 @@ class Case:
     name: str
     ok: bool
     detail: str
+    skipped: bool = False  # not decided (an interrupted search): neither passed nor failed
 
 
 def junit_cases(summary: Mapping[str, Any]) -> list[Case]:
@@ -63,13 +64,16 @@ class _Case(Protocol):
 
 
 def write_junit(path: Path, suite: str, cases: Sequence[_Case]) -> None:
-    failures = sum(not c.ok for c in cases)
+    skipped = sum(bool(getattr(c, "skipped", False)) for c in cases)
+    failures = sum(not c.ok and not getattr(c, "skipped", False) for c in cases)
     root = ET.Element("testsuites", name="srr", tests=str(len(cases)), failures=str(failures))
     ts = ET.SubElement(root, "testsuite", name=suite, tests=str(len(cases)),
-                       failures=str(failures), errors="0", skipped="0")
+                       failures=str(failures), errors="0", skipped=str(skipped))
     for c in cases:
         tc = ET.SubElement(ts, "testcase", classname=f"srr.{suite}", name=c.name)
-        if not c.ok:
+        if getattr(c, "skipped", False):
+            ET.SubElement(tc, "skipped", message=c.detail).text = c.detail
+        elif not c.ok:
             ET.SubElement(tc, "failure", message=c.detail).text = c.detail
         else:
             ET.SubElement(tc, "system-out").text = c.detail

@@ -343,8 +343,12 @@ def _outputs(plan: SearchPlan, out_dir: Path, study: Any, records: Sequence[Tria
     cases = [Case(f"search.{obj.metric}", not violated,
                   (f"{len(violated)} of {len(records)} trials violate {obj.describe()}; worst "
                    f"{violated[0].id}: {violated[0].value:g}") if violated else
-                  (f"no trial of {len(records)} violates {obj.describe()} ({len(valid)} valid, "
-                   f"{len(invalid)} invalid, {len(no_value)} without a value)"))]
+                  ((f"interrupted with {len(valid)} of {cfg.budget} trials done: "
+                    if meta.get("interrupted") else "") +
+                   f"no trial of {len(records)} violates {obj.describe()} ({len(valid)} valid, "
+                   f"{len(invalid)} invalid, {len(no_value)} without a value)"),
+                  # an interrupted search that found nothing has not shown the objective holds
+                  skipped=bool(meta.get("interrupted")) and not violated)]
     cases += [Case(f"counterexample.{c['id']}", False,
                    f"{obj.metric} = {c['value']:g} at "
                    + ", ".join(f"{k}={v}" for k, v in c["params"].items())) for c in cex]

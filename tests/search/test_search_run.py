@@ -163,6 +163,34 @@ def test_killed_search_resumes_where_it_stopped(tmp_path: Path) -> None:
     assert s["ran_now"] == 3 - sum(1 for _, st in before if st == "COMPLETE")
 
 
+def test_an_interrupted_search_does_not_pass_its_objective_in_junit(tmp_path: Path) -> None:
+    """Ctrl-C before any violation: exit 130, and junit.xml's objective case is skipped (the
+    search did not show that the objective holds), not passed."""
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "harness.cli", "search", str(ROOT / "scenarios/two_forklifts.yaml"),
+         "--space", "systems_under_test.follower_a.params.speed=1..3", "--objective",
+         "control.forklift.cross_track_error.max", "--violated-above", "50", "--set",
+         "duration=600", "--budget", "2", "--jobs", "1", "--out", str(out), "-q"],
+        cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 300
+    while not list(out.glob("runs/t00000/bag/*.mcap")):  # the first trial is recording
+        assert proc.poll() is None and time.monotonic() < deadline, (
+            proc.stderr.read() if proc.stderr else "")
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait(timeout=120) == 130
+    s = _summary(out)
+    assert s["verdict"] == "INTERRUPTED" and s["counts"]["violated"] == 0
+    suite = ET.parse(out / "junit.xml").getroot().find("testsuite")
+    assert suite is not None and suite.get("skipped") == "1" and suite.get("failures") == "0"
+    (case,) = suite.iter("testcase")
+    skipped = case.find("skipped")
+    assert skipped is not None and case.find("system-out") is None
+    assert skipped.get("message", "").startswith("interrupted with 0 of 2 trials done: ")
+
+
 def test_a_metric_no_run_has_stops_the_search(tmp_path: Path,
                                               capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "out"
