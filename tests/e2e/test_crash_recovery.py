@@ -406,3 +406,20 @@ def test_recover_refuses_a_run_killed_before_its_first_chunk(
                    f"first chunk was written (bag.mcap: {mcap.stat().st_size} bytes, no "
                    "complete chunk); nothing to recover, the run directory can be deleted\n")
     assert {p: p.read_bytes() for p in run.rglob("*") if p.is_file()} == before
+
+
+def test_recover_with_an_unreadable_marker_says_the_run_was_killed_while_running(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A killed run whose ``incomplete.json`` does not read (its phase unknown): recovered,
+    and the line says so in words ("killed while unknown" it said)."""
+    run = _copy(finished_run, tmp_path)
+    for name in ("summary.json", "report.html", "junit.xml"):
+        (run / name).unlink()
+    mcap = run / "bag" / "bag.mcap"
+    os.truncate(mcap, mcap.stat().st_size * 2 // 3)
+    (run / runmarker.MARKER).write_text('{"phase": "reco')
+    assert main(["recover", str(run)]) == 0
+    out = capsys.readouterr().out
+    assert (f"{run / 'summary.json'}: recovered, verdict INVALID (killed while running; not "
+            "scored)") in out, out
+    assert not (run / runmarker.MARKER).exists()
