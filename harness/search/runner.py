@@ -34,7 +34,7 @@ from harness.report.junit import Case, write_junit
 from harness.report.search_page import write_search_page
 from harness.run.baselines import baselines_dir
 from harness.run.facts import scenario_text
-from harness.run.simulate import validate
+from harness.run.simulate import scenario_warnings, validate
 from harness.scenario import Scenario, load_scenario, parse_override
 from harness.search.objective import Objective, check_scored, missing_metric
 from harness.search.space import Dimension
@@ -143,6 +143,19 @@ def _corners(dim: Dimension) -> list[Scalar]:
     return [dim.low, dim.high]
 
 
+def _search_warnings(nominal: Sequence[str], own: Sequence[str],
+                     at_corners: Sequence[tuple[str, Sequence[str]]]) -> tuple[str, ...]:
+    """The warnings of a search: the nominal scenario's (``validate``), less those read off
+    the scenario alone (``own``) that some end of a searched range does not give (they are
+    about a value the search replaces: a ``start_delay`` it varies), plus those an end of a
+    range gives that the nominal scenario does not, said with that end."""
+    ends = [said for _, said in at_corners]
+    kept = [w for w in nominal if w not in own or all(w in said for said in ends)]
+    more = [f"{where}: {w.removeprefix('--set: ')}" for where, said in at_corners
+            for w in said if w not in nominal]
+    return tuple(dict.fromkeys([*kept, *more]))
+
+
 def plan_search(cfg: SearchConfig) -> SearchPlan:
     """Everything checked before a run: the scenario (with ``--set``), every dimension at
     its ends (or each choice), the objective's scoring block, budget and counts."""
@@ -154,12 +167,18 @@ def plan_search(cfg: SearchConfig) -> SearchPlan:
         raise SrrError(f"--timeout: must be > 0, got {cfg.timeout_s}")
     if not Path(cfg.scenario_file).is_file():
         raise SrrError(f"{cfg.scenario_file}: no such scenario file")
+    searched = {d.path for d in cfg.space}
     for text in cfg.overrides:
         try:
-            parse_override(text)
+            path, _ = parse_override(text)
         except ScenarioError as err:
             raise SrrError(f"--set {text}: {err.message}") from None
+        hit = next((p for p in sorted(searched) if path == p or path.startswith(p + ".")), None)
+        if hit is not None:
+            raise SrrError(f"--set {text}: {hit} is searched (--space {hit}): each trial's "
+                           "value would replace this one; leave one of the two out")
     sc = _load(cfg, (), "--set")
+    at_corners: list[tuple[str, tuple[str, ...]]] = []
     for dim in cfg.space:
         for v in _corners(dim):
             corner = _load(cfg, Point(((dim.path, v),)).overrides(), f"--space {dim.path}")
@@ -169,8 +188,11 @@ def plan_search(cfg: SearchConfig) -> SearchPlan:
                 except SrrError as err:  # the value is the flag's: said of --space
                     raise SrrError(f"--space {dim.path}={v}: "
                                    f"{str(err).removeprefix('--set: ')}") from None
+            at_corners.append((f"--space {dim.path}={v}",
+                               scenario_warnings(corner, cfg.scenario_file)))
     check_scored(cfg.objective, sc.scoring, cfg.scenario_file)
-    warnings = tuple(validate(sc, cfg.scenario_file))
+    warnings = _search_warnings(validate(sc, cfg.scenario_file),
+                                scenario_warnings(sc, cfg.scenario_file), at_corners)
     cameras = sc.camera_count
     name = cfg.name or sc.name
     if not name or safe_file_name(name) != name:

@@ -105,6 +105,12 @@ def parse_dimension(text: str) -> Dimension:
     step = _number(tail, text)
     if step <= 0 or step > hi - lo:
         raise _bad(text, f"STEP must be > 0 and at most HI - LO, got {step:g}")
+    steps = (hi - lo) / step
+    if abs(steps - round(steps)) > 1e-9 * max(1.0, steps):
+        last = lo + math.floor(steps + 1e-9) * step
+        raise _bad(text, f"HI - LO ({hi - lo:g}) is not a whole number of steps of {step:g}: "
+                         f"the grid would stop at {last:g} and never try {hi:g}; make HI "
+                         f"{last:g} or {last + step:g}, or take a step that divides {hi - lo:g}")
     kind = "int" if all(_whole(r) for r in (lo_raw, hi_raw, tail)) else "float"
     return Dimension(path, kind, lo, hi, step)
 

@@ -279,6 +279,14 @@ def _checked(scenario_file: str, overrides: tuple[str, ...], *, repeat: int,
     else:
         sweep, source = parse_sweep(sc.sweep, scenario_file, "sweep"), scenario_file
         sweep_field = "sweep"
+    for o in overrides:
+        path = parse_override(o)[0]
+        swept = next((p.path for p in sweep
+                      if path == p.path or path.startswith(p.path + ".")), None)
+        if swept is not None:
+            raise SrrError(f"{declared_in}.set: {path} is swept ({sweep_field}: {swept}): each "
+                           "point's value would replace the one set: gives; leave one of the "
+                           "two out")
     if name is None and not _safe_name(sc.name):
         raise ScenarioError(scenario_file, "name", "cannot name a suite entry (letters, digits, "
                             "'_', '-' and '.'); give the entry a `name:` in the suite file")

@@ -11,6 +11,7 @@ import pytest
 from harness.cli import main
 from harness.errors import SrrError
 from harness.search.objective import parse_objective
+from harness.search.runner import SearchConfig, plan_search
 from harness.search.space import parse_dimension, parse_space
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -36,6 +37,10 @@ def test_ranges_parse_to_their_kinds() -> None:
     ("workers.0.speed=0.5-2.5", "LO..HI"),
     ("workers.0.speed=a..2", "'a' is not a number"),
     ("workers.0.speed=0..2:0", "STEP must be > 0"),
+    # optuna would stop the grid at 64 and never try the top
+    ("physics.tick_hz=50..70:7", "HI - LO (20) is not a whole number of steps of 7: the grid "
+                                 "would stop at 64 and never try 70; make HI 64 or 71"),
+    ("workers.0.speed=0..1:0.3", "the grid would stop at 0.9"),
     ("workers.0.speed=0..2:log", "LO > 0"),
     ("workers.0.speed=[]", "non-empty list"),
     ("workers.0.speed=[1, 1]", "listed twice"),
@@ -95,6 +100,11 @@ def _search(tmp_path: Path, *extra: str) -> list[str]:
      "srr search: --space: give at least one PATH=RANGE"),
     (["--space", "workers.0.speed=0.5..2", "--objective", "safety.over_mute",
       "--violated-above", "1", "--budget", "0"], "srr search: --budget: must be >= 1"),
+    # --set on a searched path: each trial's value would replace it
+    (["--space", "workers.0.speed=0.5..2", "--set", "workers.0.speed=1", "--objective",
+      "safety.over_mute", "--violated-above", "1"],
+     "srr search: --set workers.0.speed=1: workers.0.speed is searched (--space "
+     "workers.0.speed): each trial's value would replace this one; leave one of the two out"),
     (["--space", "workers.0.speed=0.5..2", "--objective", "safety.over_mute",
       "--violated-above", "1", "--bless", "--reason", "x"],
      "srr search: --bless: only with --add-to-suite SUITE"),
@@ -108,6 +118,18 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path: Path, capsys: pytest.Capture
     err = capsys.readouterr().err.strip()
     assert err.startswith(line) and "\n" not in err and "Traceback" not in err
     assert not (tmp_path / "out").exists()  # nothing ran, nothing written
+
+
+def test_warnings_are_of_the_values_the_search_tries() -> None:
+    """The scenario's own start_delay (22 s) is not before the end of a 20 s run, but the
+    search varies it over 0..26: the nominal value's warning is not said, the top end's is."""
+    plan = plan_search(SearchConfig(
+        CROSSING, parse_space(["workers.0.start_delay=0..26"]),
+        parse_objective("safety.over_mute", below=None, above=1.0), ("duration=20",)))
+    assert [w for w in plan.warnings if "start_delay" in w] == [
+        "--space workers.0.start_delay=26.0: workers[0].start_delay: 26 s is not before the "
+        "end of the run (duration 20 s): worker 'character_0' stands at its first waypoint "
+        "the whole run"]
 
 
 def test_a_metric_group_the_scenario_does_not_score(tmp_path: Path,

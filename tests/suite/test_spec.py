@@ -106,6 +106,9 @@ scenarios:
     ("scenarios: [FORKLIFT, {path: FORKLIFT, name: b, sweep: {robots.nobody.speed: [1]}}]",
      "scenarios[1].sweep (speed=1): robots.nobody", "no list"),
     ("scenarios: [{path: FORKLIFT, set: {duration: -3}}]", "duration", ""),
+    # a value set: gives on a swept path would never be used
+    ("scenarios: [{path: FORKLIFT, set: {duration: 2}, sweep: {duration: [3, 4]}}]",
+     "scenarios[0].set: duration is swept (scenarios[0].sweep: duration)", "leave one"),
     ("scenarios: [{path: FORKLIFT, set: {robots.nobody.speed: 1}}]",
      "scenarios[0].set: robots.nobody", "no list"),
 ])
