@@ -82,7 +82,17 @@ def recover(path: str | Path) -> RecoverResult:
         runlock.refuse_if_live(cand)
     run_dir = _run_dir_of(base)
     if run_dir is None:
-        return _recover(p, None)
+        result = _recover(p, None)
+        orphan = next((c for c in (base, base.parent) if (c / "bag").is_dir()
+                       and (c / runmarker.MARKER).is_file()), None)
+        if orphan is not None:  # a killed run's directory that lost its scenario.yaml
+            done = {"valid": "whole", "metadata": "whole (its metadata.yaml rewritten)",
+                    "rebuilt": "rebuilt from its complete chunks"}[result.bag.status]
+            raise SrrError(f"{orphan}: the bag is {done} ({result.bag.mcap}), but "
+                           "the run directory has no scenario.yaml, so its summary cannot be "
+                           f"written: the run stays unfinished ({runmarker.MARKER} kept); put "
+                           "the run's scenario.yaml back and run srr recover again")
+        return result
     with runlock.owning(run_dir, "recovered", fresh=False):
         return _recover(p, run_dir)
 

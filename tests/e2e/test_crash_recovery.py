@@ -423,3 +423,22 @@ def test_recover_with_an_unreadable_marker_says_the_run_was_killed_while_running
     assert (f"{run / 'summary.json'}: recovered, verdict INVALID (killed while running; not "
             "scored)") in out, out
     assert not (run / runmarker.MARKER).exists()
+
+
+def test_recover_on_a_killed_run_without_its_scenario_yaml_says_the_run_stays_unfinished(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Its bag is rebuilt, but no summary can be written without the scenario: exit 2 with
+    one line that says so (it exited 0 and left the run unfinished without a word)."""
+    run = _copy(finished_run, tmp_path)
+    for name in ("summary.json", "report.html", "junit.xml", "scenario.yaml"):
+        (run / name).unlink()
+    mcap = run / "bag" / "bag.mcap"
+    os.truncate(mcap, mcap.stat().st_size * 2 // 3)
+    runmarker.mark(run, "recording")
+    assert main(["recover", str(run)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"srr recover: {run}: the bag is rebuilt from its complete chunks ({mcap}), "
+                   "but the run directory has no scenario.yaml, so its summary cannot be "
+                   f"written: the run stays unfinished ({runmarker.MARKER} kept); put the "
+                   "run's scenario.yaml back and run srr recover again\n")
+    assert (run / runmarker.MARKER).is_file() and not (run / "summary.json").exists()
