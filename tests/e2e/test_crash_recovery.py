@@ -213,9 +213,23 @@ def test_commands_on_a_killed_run_directory_point_to_recover(
         err = capsys.readouterr().err
         assert "srr recover" in err and err.count("\n") == 1, (argv, err)
         assert "killed while recording" in err or "did not finish" in err, (argv, err)
+    (run / runmarker.MARKER).write_text('{"phase": "reco')  # a marker that does not read
+    assert main(["report", str(run)]) == 2
+    assert "(killed while running)" in capsys.readouterr().err  # not "while unknown"
     runmarker.clear(run)  # no marker: nothing says the run was killed
     assert main(["report", str(run)]) == 2
     assert "not a finished run directory" in capsys.readouterr().err
+
+
+def test_commands_given_a_finished_run_s_bag_name_its_run_directory(
+        finished_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    run = _copy(finished_run, tmp_path)
+    for argv in (["report", str(run / "bag")], ["export", str(run / "bag"), "--rerun",
+                                                 str(tmp_path / "x.rrd")]):
+        assert main(argv) == 2, argv
+        assert capsys.readouterr().err.endswith(
+            f"{run / 'bag' / 'summary.json'}: missing: {run / 'bag'} is the bag of the run "
+            f"directory {run}: give that\n"), argv
 
 
 def _run_interrupted_in(monkeypatch: pytest.MonkeyPatch, module: object, name: str,
