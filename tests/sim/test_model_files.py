@@ -169,6 +169,39 @@ def test_urdf_mesh_paths_are_relative_to_the_urdf_file(tmp_path: Path) -> None:
                            f"({tmp_path / 'desc' / 'urdf' / 'desc' / 'meshes' / 'chassis.stl'})")
 
 
+@pytest.mark.parametrize(("uri", "words"), [
+    ("file://desc/meshes/chassis.stl", "is not a file:// URI of an absolute path (write "
+     "file:///abs/path, or the relative path without file://)"),
+    ("model://desc/meshes/chassis.stl", "model:// URIs are not read (write a "
+     "package://<package>/<path> or file:///abs/path URI, or a path)"),
+])
+def test_a_mesh_uri_is_never_looked_up_in_the_current_directory(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+        uri: str, words: str) -> None:
+    """``file://desc/meshes/chassis.stl`` was read as the relative path
+    ``desc/meshes/chassis.stl`` from the current directory: found from one directory, 'file
+    not found' from another. Refused from anywhere, one line, exit 2; ``file://localhost/``
+    is ``file:///``."""
+    (tmp_path / "desc" / "urdf").mkdir(parents=True)
+    (tmp_path / "desc" / "meshes").mkdir()
+    shutil.copy(MODELS / "srr_diffbot" / "meshes" / "chassis.stl", tmp_path / "desc" / "meshes")
+    urdf = tmp_path / "desc" / "urdf" / "bot.urdf"
+    chassis = "package://srr_diffbot/meshes/chassis.stl"
+    urdf.write_text(DIFFBOT.read_text().replace(chassis, uri))
+    path = write(tmp_path, diffbot(model={"urdf": "desc/urdf/bot.urdf",
+                                          "package_paths": [str(MODELS)]}))
+    monkeypatch.chdir(tmp_path)  # where desc/meshes/chassis.stl is
+    assert main(["validate", str(path)]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"srr validate: {path}: robots[0].model.urdf: {urdf}: mesh {uri!r} {words}"
+        if uri.startswith("file") else
+        f"srr validate: {path}: robots[0].model.urdf: {urdf}: mesh {uri!r}: {words}")
+    mesh = tmp_path / "desc" / "meshes" / "chassis.stl"
+    urdf.write_text(DIFFBOT.read_text().replace(chassis, f"file://localhost{mesh}"))
+    world = World.build(load_scenario(path), str(path))
+    assert "bot/chassis" in [world.model.mesh(i).name for i in range(world.model.nmesh)]
+
+
 # ------------------------------------------------------------------ bad input
 
 ASCII_STL = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n" \

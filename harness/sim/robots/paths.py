@@ -12,7 +12,9 @@ never descending into a package or a folder holding ``CATKIN_IGNORE``, ``COLCON_
 ``AMENT_IGNORE``, nor into hidden ones. The package path is the model block's ``package_paths``
 (relative to the same scenario file), then ``SRR_PACKAGE_PATH``, then ``ROS_PACKAGE_PATH``
 (``os.pathsep``-separated). ``file://`` URIs are absolute paths, percent-decoded (``%20`` is a
-space).
+space; ``file://localhost/`` is ``file:///``); a ``file://`` URI of a relative path and any
+other scheme (``model://``, ``http://``) are refused, so no file is looked up in the current
+directory.
 
 Pure functions of their arguments: the caller passes the environment in.
 """
@@ -135,10 +137,14 @@ def _declared_name(directory: Path) -> str | None:
     return found.group(1) if found else None
 
 
+_SCHEME = re.compile(r"([A-Za-z][A-Za-z0-9+.-]+)://")
+
+
 def resolve_uri(uri: str, base_dir: Path, packages: PackagePath) -> Path:
     """The file ``uri`` names: ``package://pkg/path``, ``file:///abs/path``, an absolute path,
     or a path relative to ``base_dir``. Raises :class:`ModelPathError` when a package is not
-    on the package path; whether the file exists is the caller's to check."""
+    on the package path, for a ``file://`` URI of a relative path and for another scheme;
+    whether the file exists is the caller's to check."""
     text = uri.strip()
     if text.startswith("package://"):
         package, _, rest = text[len("package://"):].partition("/")
@@ -150,6 +156,17 @@ def resolve_uri(uri: str, base_dir: Path, packages: PackagePath) -> Path:
                                  f"({packages.describe()})")
         return root / rest
     if text.startswith("file://"):
-        return Path(unquote(text[len("file://"):]))
+        rest = text[len("file://"):]
+        if rest.startswith("localhost/"):  # RFC 8089: file://localhost/abs is file:///abs
+            rest = rest[len("localhost"):]
+        path = Path(unquote(rest))
+        if not path.is_absolute():  # file://rel/x would be read from the current directory
+            raise ModelPathError(f"{uri!r} is not a file:// URI of an absolute path (write "
+                                 "file:///abs/path, or the relative path without file://)")
+        return path
+    scheme = _SCHEME.match(text)
+    if scheme:
+        raise ModelPathError(f"{uri!r}: {scheme.group(1)}:// URIs are not read (write a "
+                             "package://<package>/<path> or file:///abs/path URI, or a path)")
     path = Path(text)
     return path if path.is_absolute() else base_dir / path
