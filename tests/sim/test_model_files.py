@@ -311,6 +311,18 @@ URDF_MISTAKES = [
     ('<mass value="0.01"/>', '<mass value="0.01 kg"/>', "link 'caster_link': mass '0.01 kg' "
      "is not a number"),
     ('ixx="0.00913"', 'ixx="-0.00913"', "link 'base_link': inertia ixx -0.00913 is negative"),
+    # MuJoCo said "repeated URDF name:" (no name), "URDF body has multiple parents:" and "URDF
+    # body not found", and took a repeated joint name, leaving the second joint nameless
+    ('<link name="caster_link">', '<link name="lidar_link">',
+     "two <link> elements are named 'lidar_link': a URDF's link names must be unique"),
+    ('<joint name="right_wheel_hinge"', '<joint name="left_wheel_hinge"',
+     "two <joint> elements are named 'left_wheel_hinge': a URDF's joint names must be unique"),
+    ('<child link="lidar_link"/>', '<child link="caster_link"/>',
+     "link 'caster_link' is the child of two joints, 'caster_joint' and 'lidar_joint': a link "
+     "has one parent"),
+    ('<parent link="base_footprint"/>', '<parent link="lidar_link"/>',
+     "links lidar_link → base_link → lidar_link form a cycle (joints 'base_joint', "
+     "'lidar_joint'): a URDF is a tree"),
 ]
 
 

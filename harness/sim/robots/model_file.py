@@ -177,10 +177,25 @@ def _read_urdf(path: Path, packages: PackagePath, text: str | None = None) -> _P
 
 def _check_joint_links(root: ET.Element) -> None:
     """Every joint of the URDF joins two links it has: MuJoCo says only "URDF joint parent or
-    child missing" and a line number."""
+    child missing" and a line number. Link and joint names are unique, a link is the child of
+    one joint at most and the joints form no cycle, as urdfdom requires: MuJoCo says
+    "repeated URDF name:", "URDF body has multiple parents:" and "URDF body not found"
+    without a name, and keeps a repeated joint name on the first joint only, leaving the
+    other nameless."""
+    for kind in ("link", "joint"):
+        seen: set[str] = set()
+        for item in root.findall(kind):
+            name = item.get("name", "")
+            if name in seen:
+                raise ModelFileError(f"two <{kind}> elements are named {name!r}: a URDF's "
+                                     f"{kind} names must be unique")
+            seen.add(name)
     links = {link.get("name", "") for link in root.findall("link")}
+    joint_of: dict[str, str] = {}  # child link → its joint
+    parent_of: dict[str, str] = {}  # child link → parent link
     for joint in root.findall("joint"):  # not a <transmission>'s joints
         name = joint.get("name", "")
+        ends: list[str] = []
         for end in ("parent", "child"):
             element = joint.find(end)
             link = element.get("link") if element is not None else None
@@ -191,6 +206,23 @@ def _check_joint_links(root: ET.Element) -> None:
                 hint = f" (did you mean {close!r}?)" if close else ""
                 raise ModelFileError(f"joint {name!r}: {end} link {link!r} does not exist"
                                      f"{hint}")
+            ends.append(link)
+        parent, child = ends
+        if child in joint_of:
+            raise ModelFileError(f"link {child!r} is the child of two joints, "
+                                 f"{joint_of[child]!r} and {name!r}: a link has one parent")
+        joint_of[child], parent_of[child] = name, parent
+    for link in sorted(parent_of):
+        chain = [link]
+        while chain[-1] in parent_of:
+            up = parent_of[chain[-1]]
+            if up in chain:
+                loop = chain[chain.index(up):][::-1]  # parent → child
+                ring = [*loop, loop[0]]
+                joints = ", ".join(repr(joint_of[x]) for x in ring[1:])
+                raise ModelFileError(f"links {' → '.join(ring)} form a cycle (joints "
+                                     f"{joints}): a URDF is a tree")
+            chain.append(up)
 
 
 def _inertial_value(link: str, what: str, raw: str) -> float:
