@@ -323,6 +323,9 @@ URDF_MISTAKES = [
     ('<parent link="base_footprint"/>', '<parent link="lidar_link"/>',
      "links lidar_link → base_link → lidar_link form a cycle (joints 'base_joint', "
      "'lidar_joint'): a URDF is a tree"),
+    # MuJoCo took a link named 'world' for the world and dropped it, geometry and all
+    ('"lidar_link"', '"world"', "joint 'lidar_joint': child link 'world': MuJoCo reads a URDF "
+     "link named 'world' as the world itself and drops it from the robot; rename the link"),
 ]
 
 

@@ -181,7 +181,9 @@ def _check_joint_links(root: ET.Element) -> None:
     one joint at most and the joints form no cycle, as urdfdom requires: MuJoCo says
     "repeated URDF name:", "URDF body has multiple parents:" and "URDF body not found"
     without a name, and keeps a repeated joint name on the first joint only, leaving the
-    other nameless."""
+    other nameless. MuJoCo reads a link named ``world`` as the world body: a root ``world``
+    link is left out (its child becomes the root), but a joint's child ``world`` would be
+    dropped with its geometry without a word."""
     for kind in ("link", "joint"):
         seen: set[str] = set()
         for item in root.findall(kind):
@@ -211,6 +213,10 @@ def _check_joint_links(root: ET.Element) -> None:
         if child in joint_of:
             raise ModelFileError(f"link {child!r} is the child of two joints, "
                                  f"{joint_of[child]!r} and {name!r}: a link has one parent")
+        if child == "world":
+            raise ModelFileError(f"joint {name!r}: child link 'world': MuJoCo reads a URDF "
+                                 "link named 'world' as the world itself and drops it from "
+                                 "the robot; rename the link")
         joint_of[child], parent_of[child] = name, parent
     for link in sorted(parent_of):
         chain = [link]
