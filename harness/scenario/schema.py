@@ -315,7 +315,9 @@ class OdometrySpec:
     # it onto +x as a yaw). None: the model's own.
     robot_front: Vec3 | None = None
     odom_frame: str = "odom"
-    base_frame: str | None = None  # None: the model's base frame
+    # The child frame of odom → base: the root link of the robot's link tree, so that the
+    # tree hangs from odom (another frame is warned of). None: the model's base frame.
+    base_frame: str | None = None
 
 
 @dataclass(frozen=True)

@@ -21,12 +21,13 @@ from __future__ import annotations
 
 import re
 from collections import defaultdict
+from collections.abc import Sequence
 
 from harness.bus import FrameIdError, resolve_topic, validate_frame_id
 from harness.bus.endpoints import tf_tree_of
 from harness.errors import ScenarioError
 from harness.scenario import Scenario
-from harness.tf_tree import Edge, tree_problems
+from harness.tf_tree import Edge, roots, tree_problems
 from harness.wiring.plan import Plan, PlannedEdge, PlannedTopic
 
 __all__ = ["check_wiring"]
@@ -160,6 +161,26 @@ class _Checker:
                 blame = first.edges[-1].source if first.kind != "cycle" \
                     else first.edges[0].source
                 raise self.error(blame, f"TF: {first.detail}")
+            self._base_frames(edges)
+
+    _BASE = ".odometry.base_frame"
+
+    def _base_frames(self, edges: Sequence[Edge]) -> None:
+        """A warning for an ``odometry.base_frame`` that is no frame of its robot's link tree:
+        odom → that frame joins nothing, and the links hang from a root of their own, where a
+        lookup from odom (RViz, Nav2) cannot reach them."""
+        parents = {e.parent for e in edges}
+        for e in edges:
+            if not e.source.endswith(self._BASE) or e.child in parents:
+                continue
+            links = [x for x in edges if x.source == e.source.removesuffix(self._BASE)
+                     + ".tf_tree"]
+            tops = roots(links)
+            if tops:
+                self.warn(e.source, f"'{e.child}' is no frame of the robot's link tree (its "
+                          f"root: '{tops[0]}'), so odom → {e.child} joins nothing and the "
+                          "links hang from a root of their own, where nothing looking up "
+                          f"from odom finds them; name '{tops[0]}' or leave the field out")
 
 
 def check_wiring(plan: Plan, sc: Scenario, source: str = "<scenario>") -> tuple[str, ...]:

@@ -204,6 +204,23 @@ def test_a_parked_robot_nothing_drives_is_a_warning(
     assert code == 0 and err == ""
 
 
+@pytest.mark.parametrize(("base", "warned"), [("base", True), ("base_footprint", False)])
+def test_a_base_frame_outside_the_link_tree_is_a_warning(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], base: str, warned: bool) -> None:
+    """odom → a frame the robot's link tree does not have joins nothing: tf2 takes the
+    forest, but nothing looking up from odom finds the links."""
+    extra = f"    odometry: {{base_frame: {base}}}\n"
+    code, _, err = run_cli(capsys, tmp_path, scenario(robot(TB3, "tb3", extra=extra),
+                                                      suts=drive("tb3")))
+    assert code == 0, err
+    said = (f"srr validate: warning: {tmp_path / 'w.yaml'}: robots[0].odometry.base_frame: "
+            "'base' is no frame of the robot's link tree (its root: 'base_footprint'), so "
+            "odom → base joins nothing and the links hang from a root of their own, where "
+            "nothing looking up from odom finds them; name 'base_footprint' or leave the "
+            "field out")
+    assert (said in err.splitlines()) is warned, err
+
+
 def test_bundled_scenarios_validate(scenarios_dir: Path) -> None:
     for path in sorted(scenarios_dir.glob("*.yaml")) + sorted(
             scenarios_dir.glob("regressions/*.yaml")):
