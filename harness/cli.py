@@ -8,8 +8,11 @@ never a traceback); 3 invalid run; 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import logging
 import sys
-from collections.abc import Callable, Sequence
+import warnings
+from collections.abc import Callable, Iterator, Sequence
 from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
@@ -18,7 +21,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 # simulation, bus or rendering code. Each command imports the API when it runs.
 from harness import __version__
 from harness.blas import one_blas_thread
-from harness.errors import SrrError, shorten
+from harness.errors import SrrError, printable, shorten
 from harness.glbackend import gl_failure
 from harness.interrupt import INTERRUPTED_EXIT, StopRequests
 from harness.live.config import DEFAULT_PORT
@@ -1089,7 +1092,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     # as the interrupt it was, not as that error with a traceback.
     stop = StopRequests(at_once=True)
     try:
-        with stop.installed():
+        with stop.installed(), _warnings_said(_command_name(args)):
             return COMMANDS[args.command](args)
     except KeyboardInterrupt as err:  # its text, if any, says what was left where
         return _interrupted(_command_name(args), str(err))
@@ -1102,6 +1105,39 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise
         _stderr().print(f"srr {_command_name(args)}: {_one_line(err)}", markup=False)
         return err.exit_code
+
+
+class _SaidHandler(logging.Handler):
+    """srr's own log records (``harness.*``, WARNING and above: MuJoCo's runtime warnings on
+    ``harness.sim``) said as the command's warnings are."""
+
+    def __init__(self, command: str) -> None:
+        super().__init__(logging.WARNING)
+        self.command = command
+
+    def emit(self, record: logging.LogRecord) -> None:
+        _stderr().print(f"srr {self.command}: warning: {printable(record.getMessage())}",
+                        markup=False)
+
+
+@contextlib.contextmanager
+def _warnings_said(command: str) -> Iterator[None]:
+    """While a command runs, a library's Python warning (MuJoCo's compiler: "Inertia matrix is
+    too close to singular") and srr's log records are each one line, ``srr CMD: warning:
+    ...``, as the command's own warnings are, not a file, a line number and a source line."""
+    def show(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+             file: Any = None, line: str | None = None) -> None:
+        _stderr().print(f"srr {command}: warning: {printable(str(message))}", markup=False)
+
+    handler, log, shown = _SaidHandler(command), logging.getLogger("harness"), \
+        warnings.showwarning
+    warnings.showwarning = show
+    log.addHandler(handler)
+    try:
+        yield
+    finally:
+        warnings.showwarning = shown
+        log.removeHandler(handler)
 
 
 def _command_name(args: argparse.Namespace) -> str:

@@ -4,12 +4,15 @@ path, never exit 3), and no run directory left behind."""
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import pytest
 
 from harness import api
 from harness.cli import main
+
+_SHOWWARNING = warnings.showwarning
 
 HEAD = """\
 format_version: 1
@@ -219,6 +222,20 @@ def test_a_base_frame_outside_the_link_tree_is_a_warning(
             "nothing looking up from odom finds them; name 'base_footprint' or leave the "
             "field out")
     assert (said in err.splitlines()) is warned, err
+
+
+def test_a_library_s_warnings_are_one_line_each(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A Python warning and a harness log record raised while a command runs are said as
+    the command's warnings are: one line each, not a file, a line and a source line."""
+    code, _, err = run_cli(capsys, tmp_path, scenario(
+        robot(FORKLIFT, "forklift", extra="    control: {enabled: false}\n"),
+        suts="  - {name: w, plugin: 'tests.wiring.plugins:WarnsInSetup'}\n"))
+    assert code == 0, err
+    assert err.splitlines() == [
+        "srr validate: warning: Inertia matrix is too close to singular\\x1b",
+        "srr validate: warning: MuJoCo: contact buffer is full"]
+    assert warnings.showwarning is _SHOWWARNING  # put back after the command
 
 
 def test_bundled_scenarios_validate(scenarios_dir: Path) -> None:
