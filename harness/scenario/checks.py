@@ -433,6 +433,10 @@ def _check_robots(sc: Scenario, v: Validator) -> None:
                 validate_frame_id(robot.frame_prefix)
             except FrameIdError as err:
                 v.fail(f"robots[{i}].frame_prefix", str(err).replace("frame id", "prefix"))
+            if "//" in robot.frame_prefix:
+                v.fail(f"robots[{i}].frame_prefix", f"prefix {robot.frame_prefix!r} has an "
+                       "empty part ('//'): its frames would read 'b//odom'; write "
+                       f"{'/'.join(p for p in robot.frame_prefix.split('/') if p) + '/'!r}")
     enabled = [(i, r) for i, r in enumerate(sc.robots) if r.enabled]
     for n, (i, robot) in enumerate(enabled):
         for j, other in enabled[:n]:

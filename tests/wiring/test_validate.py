@@ -109,6 +109,9 @@ CASES = {
     "space_in_prefix": (
         scenario(robot(FORKLIFT, "forklift", extra="    frame_prefix: 'fork lift/'\n")),
         "robots[0].frame_prefix", ["contains whitespace"]),
+    "empty_part_in_prefix": (
+        scenario(robot(FORKLIFT, "forklift", extra="    frame_prefix: 'lift//'\n")),
+        "robots[0].frame_prefix", ["has an empty part ('//')", "write 'lift/'"]),
     "one_prim": (
         scenario(robot(FORKLIFT, "a", extra="    articulation_prim: /World/lift\n"),
                  robot(FORKLIFT, "b", y=3, extra="    articulation_prim: /World/lift\n")),
