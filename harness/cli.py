@@ -135,7 +135,8 @@ def _parser() -> argparse.ArgumentParser:
                          "suite file: every entry and sweep point; or every scenario and suite "
                          "file of a folder)")
     val.add_argument("scenario", type=Path)
-    val.add_argument("--set", dest="overrides", action="append", default=[])
+    val.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a scenario field, as srr run --set")
 
     sch = sub.add_parser("schema", help="print the JSON Schema of scenario or suite files "
                          "(for editors)")
@@ -145,7 +146,8 @@ def _parser() -> argparse.ArgumentParser:
     gr = sub.add_parser("graph", help="print the scenario's action graphs")
     gr.add_argument("scenario", type=Path)
     gr.add_argument("--format", choices=("mermaid", "json"), default="mermaid")
-    gr.add_argument("--set", dest="overrides", action="append", default=[])
+    gr.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                    help="override a scenario field, as srr run --set")
 
     ins = sub.add_parser("inspect", help="list the topics of a recorded bag")
     ins.add_argument("bag", type=Path)
