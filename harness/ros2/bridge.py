@@ -295,9 +295,13 @@ class Ros2Bridge(SystemUnderTest):
                 outputs = {o.topic: o for o in self.outputs}
                 waiting = ", ".join(self._not_published(t, outputs.get(t))
                                     for t in sorted(set(missing)))
+                others = [n for n in self.node.get_node_names() if n != self.node.get_name()]
+                late = "" if others or not self.procs else (
+                    "; no external node has joined the ROS graph yet: a node may take seconds "
+                    "to start, raise ros2.external[].ready_timeout")
                 raise SrrError(f"ros2: the external nodes were not ready within {timeout:g} s "
-                               f"(still waiting on {waiting}; domain {self.domain_id}; logs in "
-                               f"{self.run_dir / 'ros2'})")
+                               f"(still waiting on {waiting}{late}; domain {self.domain_id}; "
+                               f"logs in {self.run_dir / 'ros2'})")
         for o in self.outputs:  # what arrived while waiting is not part of any tick
             o.received.clear()
         self._started = True

@@ -245,11 +245,25 @@ def test_a_node_never_ready_is_told_what_the_graph_has_instead(
         tmp_path: Path, body: str, words: str) -> None:
     """A publisher of the output of another type, QoS, or of a misspelt or namespaced name:
     the error said only `still waiting on /cmd_vel`, though `ros2 topic list` showed one."""
+    # 6 s: time for a loaded machine to start Python and rclpy (2 s was not, once)
     sc = api.load(FORKLIFT, duration=1.0, overrides=[
-        *_overrides()[:-1], _inline_node(body), "ros2.external.0.ready_timeout=2"])
-    with pytest.raises(SrrError, match="not ready within 2 s") as err:
+        *_overrides()[:-1], _inline_node(body), "ros2.external.0.ready_timeout=6"])
+    with pytest.raises(SrrError, match="not ready within 6 s") as err:
         api.run_scenario(sc, source=str(FORKLIFT), out=tmp_path / "run")
     assert words in str(err.value)
+
+
+def test_a_node_that_has_not_joined_the_graph_is_said_to_be_late(tmp_path: Path) -> None:
+    """A node still starting when the ready timeout ends (it sleeps before rclpy): the error
+    says that no external node has joined the graph yet, and what to raise."""
+    node = json.dumps([sys.executable, "-c", "import time; time.sleep(30)"])
+    sc = api.load(FORKLIFT, duration=1.0, overrides=[
+        *_overrides()[:-1], f"ros2.external=[{{name: slow, cmd: {node}, ready_timeout: 1}}]"])
+    with pytest.raises(SrrError, match="not ready within 1 s") as err:
+        api.run_scenario(sc, source=str(FORKLIFT), out=tmp_path / "run")
+    assert ("still waiting on /cmd_vel; no external node has joined the ROS graph yet: a "
+            "node may take seconds to start, raise ros2.external[].ready_timeout;") \
+        in str(err.value)
 
 
 def test_a_lockstep_timeout_names_a_misspelt_input(tmp_path: Path) -> None:
