@@ -38,6 +38,8 @@ SETTLE_S = 0.5
 # topic, but several publishers share /tf_static (one per camera, one for world → odom) and a
 # subscriber must get all of them, as each ROS publisher latches its own.
 LATCHED_KEEP = 64
+# How long closing waits for the server to end its connections before ending them itself.
+STOP_GRACE_S = 2.0
 
 Notice = Callable[[str], None]
 
@@ -172,7 +174,16 @@ class LiveView:
         if self._front is not None:
             self._front.stop_accepting()
         if self._server is not None:
-            self._server.stop()
+            # foxglove-sdk's stop() waits, about 45 s, for a client that stopped reading (a
+            # frozen app, a sleeping laptop) to take what it was sent: past STOP_GRACE_S,
+            # end the connections at the front, which lets the server's sends fail at once
+            stopper = threading.Thread(target=self._server.stop, name="srr-live-stop",
+                                       daemon=True)
+            stopper.start()
+            stopper.join(STOP_GRACE_S)
+            if stopper.is_alive() and self._front is not None:
+                self._front.cut()
+            stopper.join()
         if self._front is not None:
             self._front.close()  # its connections end as the server closed them
 

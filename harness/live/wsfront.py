@@ -168,6 +168,15 @@ class SubprotocolFront:
         self._listener.close()
         self._acceptor.join()
 
+    def cut(self) -> None:
+        """End every open connection now, from this side (a client that stopped reading
+        holds its relay, and the server's send to it, until its socket is shut down)."""
+        with self._lock:
+            left = list(self._sockets)
+        for s in left:  # wakes their relays, which close them
+            with contextlib.suppress(OSError):
+                s.shutdown(socket.SHUT_RDWR)
+
     def close(self, timeout_s: float = 5.0) -> None:
         """Stop accepting and wait, at most ``timeout_s``, for the open connections to end
         (call it after stopping the server behind, which ends them); then cut what is left.
@@ -182,10 +191,6 @@ class SubprotocolFront:
                 s.shutdown(socket.SHUT_RDWR)
         for t in threads:
             t.join(max(0.0, deadline - time.monotonic()))
-        with self._lock:
-            left = list(self._sockets)
-        for s in left:  # wakes their relays, which close them
-            with contextlib.suppress(OSError):
-                s.shutdown(socket.SHUT_RDWR)
+        self.cut()
         for t in threads:
             t.join(1.0)

@@ -3,6 +3,7 @@ client (tests/live/foxglove_client.py); its configuration checks and its pacing.
 
 from __future__ import annotations
 
+import json
 import socket
 import time
 from collections.abc import Callable, Iterator
@@ -14,6 +15,7 @@ from mcap_ros2.decoder import DecoderFactory
 from websockets.exceptions import InvalidStatus
 
 from harness.bus import TRANSIENT_LOCAL, Bus
+from harness.bus.bus import Envelope
 from harness.live.errors import LiveViewError
 from harness.live.view import LiveConfig, LiveView, Pacer
 from harness.serde.messages import clock, serialize, tf_message, transform_stamped
@@ -21,6 +23,7 @@ from tests.live.foxglove_client import LEGACY_SUBPROTOCOL, SUBPROTOCOL, LiveClie
 
 TF = "tf2_msgs/msg/TFMessage"
 CLOCK = "rosgraph_msgs/msg/Clock"
+IMAGE = "sensor_msgs/msg/Image"
 
 
 @pytest.fixture
@@ -175,6 +178,28 @@ def test_a_wait_of_zero_is_no_wait_and_says_nothing() -> None:
     with LiveView.start(LiveConfig(port=0, wait_s=0.0), notice=notices.append) as live:
         assert live.wait_for_client() is False
     assert not [n for n in notices if "waiting" in n or "no Foxglove client" in n], notices
+
+
+def test_a_client_that_stops_reading_does_not_hold_the_end_of_the_run(
+        view: tuple[LiveView, list[str]]) -> None:
+    """A client subscribed to a camera that stops reading (a frozen app, a sleeping laptop):
+    closing the view ends its connection within a few seconds; foxglove-sdk's own stop waited
+    about 45 s for it."""
+    live, _notices = view
+    live.advertise({"/cam_rgb": IMAGE})
+    with open_client(live.port) as ws:
+        while (msg := json.loads(ws.recv(timeout=10)))["op"] != "advertise":
+            pass
+        ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+            {"id": 1, "channelId": msg["channels"][0]["id"]}]}))
+        _until(lambda: live.has_client)
+        frame = bytes(640 * 480 * 3)
+        for k in range(150):  # 138 MB, far beyond what the sockets buffer
+            live.log(Envelope("/cam_rgb", IMAGE, k * 33_333_333, k, None, raw=frame), frame)
+            time.sleep(0.002)
+        t0 = time.monotonic()
+        live.close()
+        assert time.monotonic() - t0 < 10.0
 
 
 def test_a_port_in_use_is_one_clear_error() -> None:
