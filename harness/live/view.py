@@ -46,6 +46,8 @@ Notice = Callable[[str], None]
 
 class Pacer:
     """Sleeps so that simulated time runs at most ``rate`` × wall time from :meth:`start`.
+    A tick that comes late (a slow first render, a heavy tick) moves the start on: the ticks
+    after it are paced from it, not raced through to make the lost time up.
 
     It reads the wall clock only to decide how long to sleep between ticks; nothing it reads
     reaches the simulation or the recording."""
@@ -72,6 +74,7 @@ class Pacer:
         if ahead > 0:
             self._sleep(ahead)
             return ahead
+        self._t0 -= ahead  # late: this tick is the new start
         return 0.0
 
 

@@ -237,7 +237,21 @@ def test_pacer_sleeps_only_while_ahead_of_the_rate() -> None:
     wall[0] += 3.0  # the computation fell behind
     assert pacer.pace(2_000_000_000) == 0.0
     assert slept == [pytest.approx(0.5)]
+    # the ticks after a late one are paced from it, not raced through to catch up
+    assert pacer.pace(2_500_000_000) == pytest.approx(0.25)
     assert Pacer(None).pace(10**12) == 0.0  # no rate: never sleeps
+
+
+def test_pacer_paces_from_a_slow_first_tick() -> None:
+    """The first tick (the first render) may come long after the wait for a client ended:
+    the simulated second after it still takes a wall-clock second at rate 1 (it took 0.07 s:
+    the first second of a watched run flew by)."""
+    wall = [100.0]
+    pacer = Pacer(1.0, clock=lambda: wall[0], sleep=lambda s: wall.__setitem__(0, wall[0] + s))
+    pacer.start()
+    wall[0] += 1.3  # building the first frame
+    assert pacer.pace(0) == 0.0
+    assert sum(pacer.pace(k * 16_666_667) for k in range(1, 61)) == pytest.approx(1.0)
 
 
 @pytest.mark.slow
