@@ -180,6 +180,7 @@ def test_a_wait_of_zero_is_no_wait_and_says_nothing() -> None:
     assert not [n for n in notices if "waiting" in n or "no Foxglove client" in n], notices
 
 
+@pytest.mark.slow
 def test_a_client_that_stops_reading_does_not_hold_the_end_of_the_run(
         view: tuple[LiveView, list[str]]) -> None:
     """A client subscribed to a camera that stops reading (a frozen app, a sleeping laptop):
