@@ -11,7 +11,7 @@ import pytest
 
 from harness import api, runmarker
 from harness.cli import main
-from harness.diskspace import MB, DiskGuard, estimate_bag_bytes
+from harness.diskspace import MB, DiskGuard, estimate_bag_bytes, large_bag_notice
 from harness.errors import DiskSpaceError
 
 from .bagread import decoded, mcap_file
@@ -124,3 +124,33 @@ def test_api_refusal_is_a_disk_space_error(tmp_path: Path) -> None:
     with pytest.raises(DiskSpaceError, match="not enough free disk space"):
         api.run_scenario(sc, out=tmp_path / "r", free_space=lambda p: 10 * MB)
     assert not (tmp_path / "r").exists()
+
+
+def test_an_h264_camera_is_estimated_by_its_expected_size_not_its_raw_picture(
+        tmp_path: Path) -> None:
+    """An hour of a 1080p h264 camera was estimated at its raw 4:2:0 pictures (336 GB) and
+    refused on any ordinary disk; it is a 32nd of the RGB pixels at the default crf, a fixed
+    bitrate's own size with bitrate_kbps, the raw picture near lossless (crf below 18)."""
+    path = SCENARIOS / "camera_publishing.yaml"
+
+    def h264_part(*extra: str) -> int:
+        sc = api.load(path, duration=3600.0, overrides=[
+            "cameras.0.resolution=[1920,1080]", "cameras.0.record={rgb: [h264]}", *extra])
+        return dict(estimate_bag_bytes(sc).parts)["floating_camera_rgb h264"]
+
+    frames = 3600 * 30
+    assert h264_part() == pytest.approx(frames * 1920 * 1080 * 3 / 32, rel=0.01)  # 21 GB
+    notice = large_bag_notice(api.load(path, duration=3600.0, overrides=[
+        "cameras.0.outputs=[rgb]", "cameras.0.resolution=[1920,1080]",
+        "cameras.0.record={rgb: [h264]}"]))
+    assert notice is not None and "h264" not in notice.split(";", 1)[1]  # it is h264 already
+    assert h264_part("cameras.0.record.h264.bitrate_kbps=8000") == pytest.approx(
+        frames * 2 * 8000 * 1000 / 8 / 30, rel=0.01)  # twice 8 Mbit/s
+    assert h264_part("cameras.0.record.h264.crf=10") == pytest.approx(
+        frames * 1920 * 1080 * 3 / 2, rel=0.01)
+    # against a real recording: the moving dock scene's h264 stays under its estimate
+    dock = SCENARIOS / "dock_worker_crossing.yaml"
+    sc = api.load(dock, duration=6.0, overrides=["cameras.0.record={rgb: [h264]}"])
+    res = api.run_scenario(sc, source=str(dock), out=tmp_path / "r", video=False)
+    recorded = res.summary["topics"]["/dock_cam_left_rgb/h264"]["bytes"]
+    assert recorded <= dict(estimate_bag_bytes(sc).parts)["dock_cam_left_rgb h264"]
