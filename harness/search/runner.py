@@ -42,7 +42,7 @@ from harness.search.study import ATTR, ask_batch, finished_trials, importances, 
 from harness.suite.events import Executor, Listener
 from harness.suite.plan import RunSpec, safe_file_name
 from harness.suite.results import RunOutcome
-from harness.suite.sweep import Point, Scalar
+from harness.suite.sweep import Point, Scalar, varied_path
 
 __all__ = ["FORMAT", "SearchConfig", "SearchResult", "TrialRecord", "default_search_dir",
            "plan_search", "run_search"]
@@ -167,13 +167,12 @@ def plan_search(cfg: SearchConfig) -> SearchPlan:
         raise SrrError(f"--timeout: must be > 0, got {cfg.timeout_s}")
     if not Path(cfg.scenario_file).is_file():
         raise SrrError(f"{cfg.scenario_file}: no such scenario file")
-    searched = {d.path for d in cfg.space}
     for text in cfg.overrides:
         try:
             path, _ = parse_override(text)
         except ScenarioError as err:
             raise SrrError(f"--set {text}: {err.message}") from None
-        hit = next((p for p in sorted(searched) if path == p or path.startswith(p + ".")), None)
+        hit = varied_path(path, (d.path for d in cfg.space))
         if hit is not None:
             raise SrrError(f"--set {text}: {hit} is searched (--space {hit}): each trial's "
                            "value would replace this one; leave one of the two out")

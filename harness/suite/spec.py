@@ -33,7 +33,7 @@ from harness import yamlio
 from harness.errors import ScenarioError, SrrError
 from harness.scenario import load_scenario, parse_override
 from harness.scenario.overrides import dotted
-from harness.suite.sweep import SweepParam, parse_sweep
+from harness.suite.sweep import SweepParam, parse_sweep, varied_path
 from harness.validation import validate
 
 __all__ = ["DefaultsFile", "Entry", "EntryFile", "SuiteFile", "SuiteSpec", "is_suite_file",
@@ -281,8 +281,7 @@ def _checked(scenario_file: str, overrides: tuple[str, ...], *, repeat: int,
         sweep_field = "sweep"
     for o in overrides:
         path = parse_override(o)[0]
-        swept = next((p.path for p in sweep
-                      if path == p.path or path.startswith(p.path + ".")), None)
+        swept = varied_path(path, (p.path for p in sweep))
         if swept is not None:
             raise SrrError(f"{declared_in}.set: {path} is swept ({sweep_field}: {swept}): each "
                            "point's value would replace the one set: gives; leave one of the "

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from itertools import product
 from typing import Any
@@ -24,7 +24,7 @@ from harness.errors import ScenarioError
 from harness.validation import Validator, validate
 
 __all__ = ["MAX_POINTS", "Point", "SweepParam", "SweepRange", "expand", "parse_sweep",
-           "point_label"]
+           "point_label", "varied_path"]
 
 #: More points than this in one sweep is almost certainly a typo in a step.
 MAX_POINTS = 1000
@@ -154,3 +154,10 @@ def expand(params: Sequence[SweepParam]) -> tuple[Point, ...]:
         return (Point(()),)
     return tuple(Point(tuple(zip((p.path for p in params), combo, strict=True)))
                  for combo in product(*(p.values for p in params)))
+
+
+def varied_path(path: str, varied: Iterable[str]) -> str | None:
+    """The path of ``varied`` (a sweep's or a search's) that a fixed override of ``path``
+    falls on (the same path, or a field inside it), None when none: each point's value
+    would replace the override's."""
+    return next((v for v in sorted(varied) if path == v or path.startswith(v + ".")), None)
