@@ -14,12 +14,13 @@ from __future__ import annotations
 import json
 import os
 import socket
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
 
 from harness.atomic import write_json_atomic
 
-__all__ = ["MARKER", "Phase", "clear", "mark", "read"]
+__all__ = ["MARKER", "Phase", "clear", "killed_while", "mark", "read"]
 
 MARKER = "incomplete.json"
 Phase = Literal["recording", "finalizing"]
@@ -42,6 +43,13 @@ def read(run_dir: Path) -> dict[str, Any] | None:
     except (OSError, ValueError):
         return {"phase": "unknown"}
     return data if isinstance(data, dict) else {"phase": "unknown"}
+
+
+def killed_while(marker: Mapping[str, Any]) -> str:
+    """What a killed run was doing, for messages: its marker's phase (``recording``,
+    ``finalizing``), or ``running`` for a marker that does not say (one that does not read)."""
+    phase = marker.get("phase")
+    return phase if phase in ("recording", "finalizing") else "running"
 
 
 def clear(run_dir: Path) -> None:

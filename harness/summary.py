@@ -237,10 +237,9 @@ def read_summary(run_dir: str | Path) -> dict[str, Any]:
     if not path.is_file():
         marker = runmarker.read(run)
         if marker is not None:
-            phase = marker.get("phase")
             raise SrrError(f"{path}: missing: the run did not finish (killed while "
-                           f"{phase if phase in ('recording', 'finalizing') else 'running'}); "
-                           f"`srr recover {run}` makes it a finished run directory")
+                           f"{runmarker.killed_while(marker)}); `srr recover {run}` makes it "
+                           "a finished run directory")
         if (run.parent / SUMMARY_NAME).is_file() and (run.parent / "bag") == run:
             raise SrrError(f"{path}: missing: {run} is the bag of the run directory "
                            f"{run.parent}: give that")

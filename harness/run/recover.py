@@ -171,8 +171,7 @@ def _recover(p: Path, run_dir: Path | None) -> RecoverResult:
                         "finalizing": ("the run was killed while finalizing (after the tick "
                                        "loop)", "killed while finalizing")}.get(
             phase or "", ("the run was killed before it wrote its summary",
-                          # "unknown": a marker that does not read
-                          f"killed while {phase if phase not in (None, 'unknown') else 'running'}"))
+                          f"killed while {runmarker.killed_while(marker)}"))
     elif finished is not None:
         cause = ("the run had finished, but its bag was cut short or damaged afterwards: it "
                  "no longer holds every message its summary counted")
