@@ -12,6 +12,13 @@ verdict (every pass must end PASS). Then, per tree, the efficiency of every entr
 workers against the 1-worker entry: runs/s at N ÷ (N × runs/s at 1); several entries may share
 N (``1:2,16:6,16:12``: the same 16 workers on 59 and on 118 runs).
 
+Where the tree's runs time their CPU (``timings["cpu_s"]``), each pass also prints the runs'
+CPU seconds, per run, and how many CPUs a run kept busy; each efficiency line then adds the
+CPU ceiling, min(1, C ÷ (N × the CPU seconds the 1-worker pass's runs spent per second of its
+wall)) on a machine of C CPUs (N workers cannot finish runs faster than C CPUs do their work,
+if a run's work is what it was at 1 worker), and the CPU a run took at N workers against 1
+(above 1: each CPU did less at N, the machine's share per process, not srr's scheduling).
+
     MUJOCO_GL=egl python benchmarks/bench_suite_scale.py --configs 1:2,16:6 [--other DIR]
     python benchmarks/bench_suite_scale.py --show OUT/summary.json     # one suite's timeline
 """
@@ -88,7 +95,8 @@ def one_pass(tree: Path, suite: str, jobs: int, repeat: int, out: Path) -> dict[
             "checked": tl.get("checked_s"), "first": tl.get("first_start_s"),
             "after": (s["wall_s"] - tl["last_finish_s"]) if span is not None else None,
             "util": busy / (jobs * (span if span else wall)), "steps": tl.get("steps_s"),
-            "to_first": to_first, "summary": s}
+            "to_first": to_first, "cpu": tl.get("cpu_s"), "cpus": tl.get("cpus"),
+            "summary": s}
 
 
 def show(summary: dict[str, Any], width: int = 100) -> None:
@@ -176,7 +184,9 @@ def main() -> None:
                       + (f"  first run began {r['to_first']:.2f} s after the launch"
                          if r["to_first"] is not None else "")
                       + f"  util {r['util']:.2f}  run walls {r['busy']:6.1f} s  "
-                      f"{r['verdict']}", flush=True)
+                      + (f"CPU {r['cpu']:.1f} s ({r['cpu'] / r['runs']:.2f} s a run, "
+                         f"{r['cpus']:.2f} CPUs a run)  " if r["cpu"] else "")
+                      + f"{r['verdict']}", flush=True)
                 if steps:
                     print("        steps (s): " + "  ".join(f"{k} {steps[k]:.1f}" for k in ORDER
                                                           if k in steps))
@@ -194,11 +204,18 @@ def main() -> None:
         if not ones:
             continue
         one = ones[0]["runs"] / ones[0]["wall"]
+        cpu_rate = ones[0]["cpu"] / ones[0]["wall"] if ones[0]["cpu"] else None
         for (n, repeat), r in by_config.items():
             if n > 1:
                 many = r["runs"] / r["wall"]
+                cpu = ""
+                if cpu_rate and r["cpu"]:
+                    ceiling = min(1.0, (os.cpu_count() or 1) / (n * cpu_rate))
+                    more = (r["cpu"] / r["runs"]) / (ones[0]["cpu"] / ones[0]["runs"])
+                    cpu = f"; CPU ceiling {ceiling:.2f}, CPU a run ×{more:.2f} of one worker's"
                 print(f"{name}: efficiency at {n} workers, {r['runs']} runs (repeat {repeat}) "
-                      f"= {many / (n * one):.2f} ({many:.2f} runs/s against {n} × {one:.3f})")
+                      f"= {many / (n * one):.2f} ({many:.2f} runs/s against {n} × {one:.3f})"
+                      + cpu)
     if args.json:
         args.json.write_text(json.dumps({k: {f"{j}:{rep}": {kk: vv for kk, vv in v.items()
                                                            if kk != "summary"}

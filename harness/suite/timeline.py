@@ -44,6 +44,7 @@ class RunClock:
 
     def __init__(self) -> None:
         self.at: dict[str, float] = {"ready": time.monotonic()}
+        self._cpu0 = time.process_time()  # every thread of the process: render, recorder...
 
     def mark(self, phase: str) -> None:
         self.at.setdefault(phase, time.monotonic())
@@ -56,8 +57,12 @@ class RunClock:
             self.mark("ticks")
 
     def to_json(self, gl_context_s: float) -> dict[str, float]:
+        """The instants, the OpenGL seconds, and ``cpu_s``: the CPU seconds the process spent
+        since ``ready`` (user and system, all its threads; a host runs one run at a time, so
+        they are this run's)."""
         return {**{k: round(v, 6) for k, v in self.at.items()},
-                "gl_context_s": round(gl_context_s, 6)}
+                "gl_context_s": round(gl_context_s, 6),
+                "cpu_s": round(time.process_time() - self._cpu0, 6)}
 
 
 def clock_path(log_file: Path) -> Path:
@@ -81,21 +86,27 @@ def take_clock(path: Path, submitted: float, reaped: float) -> dict[str, float]:
 
 def run_timings(clock: Mapping[str, float] | None, t0: float) -> dict[str, Any] | None:
     """``{"started_s", "finished_s", "steps": {step: seconds}, "gl_context_s", "warm_gl_s",
-    "gl_contexts"}``: seconds from ``t0`` (the suite's start), the :data:`STEPS` whose both
-    ends are known, the seconds the run spent making OpenGL contexts, those its process spent
-    making one before its first run, and how many contexts its process had made by its end
-    (a host that reuses its context: 1 over all its runs), and its process id (the runs of
-    one host share it)."""
+    "gl_contexts", "pid", "cpu_s", "cpus"}``: seconds from ``t0`` (the suite's start), the
+    :data:`STEPS` whose both ends are known, the seconds the run spent making OpenGL contexts,
+    those its process spent making one before its first run, how many contexts its process
+    had made by its end (a host that reuses its context: 1 over all its runs), its process id
+    (the runs of one host share it), the CPU seconds its process spent from ``ready`` to its
+    end (all threads) and those over the wall seconds of that span: how many CPUs the run kept
+    busy (``None`` when its worker left no clock of them)."""
     if not clock or "submitted" not in clock or "reaped" not in clock:
         return None
     steps = {name: round(clock[b] - clock[a], 3) for name, a, b in STEPS
              if a in clock and b in clock}
+    cpu = clock.get("cpu_s")
+    ran = clock.get("done", clock["reaped"]) - clock.get("ready", clock["submitted"])
     return {"started_s": round(clock["submitted"] - t0, 3),
             "finished_s": round(clock["reaped"] - t0, 3), "steps": steps,
             "gl_context_s": round(clock.get("gl_context_s", 0.0), 3),
             "warm_gl_s": round(clock.get("warm_gl_s", 0.0), 3),
             "gl_contexts": int(clock.get("gl_contexts", 0)),
-            "pid": int(clock["pid"]) if "pid" in clock else None}
+            "pid": int(clock["pid"]) if "pid" in clock else None,
+            "cpu_s": None if cpu is None else round(cpu, 3),
+            "cpus": round(cpu / ran, 3) if cpu is not None and ran > 0 else None}
 
 
 def suite_timeline(timings: Sequence[Mapping[str, Any] | None], *, jobs: int,
@@ -121,4 +132,9 @@ def suite_timeline(timings: Sequence[Mapping[str, Any] | None], *, jobs: int,
                utilization=round(busy / (jobs * (last - first)), 3) if last > first else None,
                steps_s={k: round(v, 3) for k, v in steps.items()},
                gl_context_s=round(sum(t["gl_context_s"] for t in known), 3))
+    timed = [t for t in known if t.get("cpu_s") is not None and t.get("cpus")]
+    if timed:
+        cpu = sum(t["cpu_s"] for t in timed)
+        ran = sum(t["cpu_s"] / t["cpus"] for t in timed)
+        out.update(cpu_s=round(cpu, 3), cpus=round(cpu / ran, 3))
     return out

@@ -89,12 +89,16 @@ def test_a_host_makes_one_opengl_context_and_records_what_a_fresh_process_record
         t = run["timings"]
         assert set(t["steps"]) == {name for name, _, _ in STEPS}
         assert min(t["steps"].values()) >= 0 and t["finished_s"] > t["started_s"]
+        # this run's CPU, not the host's since it began: a render thread and the recorder's
+        # keep it above 0, and no more CPUs than the machine has
+        assert 0 < t["cpus"] <= (os.cpu_count() or 1) + 0.1, t
     assert not list((tmp_path / "out" / "logs").glob("*.clock.json"))  # taken once read
     (tmp_path / "suite.yaml").write_text(text.replace("repeat: 3", "repeat: 1"))
     fresh = tmp_path / "fresh"
     run_suite(plan_suite([tmp_path / "suite.yaml"]), LocalExecutor(1, fork=False), out=fresh)
     (plain,) = _runs(fresh).values()
     assert plain["timings"]["pid"] not in {r["timings"]["pid"] for r in runs}
+    assert plain["timings"]["cpu_s"] > 0  # a fresh process times its run's CPU too
     reference = _bag_sha256(fresh, plain)
     assert [_bag_sha256(tmp_path / "out", r) for r in runs] == [reference] * 3
     assert {r["digest"] for r in runs} == {plain["digest"]} and plain["digest"] is not None
