@@ -131,6 +131,17 @@ def test_starting_a_run_or_a_suite_loads_nothing_it_needs_only_later(module: str
     assert found["loaded"] == []
 
 
+def test_the_ros1_message_store_is_made_only_when_something_uses_it() -> None:
+    # 0.1-0.2 s of every srr command before: most runs write and read no ROS 1
+    code = ("import json, sys\nimport harness.api, harness.cli\n"
+            "from harness.serde.ros1 import msgdef, ros1_typestore\n"
+            "before = ros1_typestore.cache_info().currsize\n"
+            "msgdef('geometry_msgs/msg/Twist')\n"
+            "print(json.dumps({'before': before, "
+            "'after': ros1_typestore.cache_info().currsize}))\n")
+    assert _modules_after(code) == {"before": 0, "after": 1}
+
+
 def test_a_suite_imports_what_its_runs_need_at_their_end_before_it_forks() -> None:
     # srr suite calls it before forking its hosts, which then share these modules
     code = ("import json, sys\nfrom harness import api\napi.import_after_the_loop()\n"

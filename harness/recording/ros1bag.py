@@ -45,12 +45,12 @@ from harness.recording.bagfile import ChunkPolicy, McapBagWriter, TopicMeta
 from harness.recording.recorder import Recorder, TopicState
 from harness.serde.messages import tf_message
 from harness.serde.ros1 import (
-    ROS1_TYPESTORE,
     Ros1Encoder,
     deserialize_ros1,
     msgdef,
     ros1_name,
     ros1_type,
+    ros1_typestore,
     to_ros2,
 )
 
@@ -117,7 +117,7 @@ class _BagWriter:
 
     def add_topic(self, topic: str, msgtype: str, latched: bool) -> int:
         self._conns.append(self._bag.add_connection(
-            topic, normalize_msgtype(msgtype), typestore=ROS1_TYPESTORE, callerid=CALLERID,
+            topic, normalize_msgtype(msgtype), typestore=ros1_typestore(), callerid=CALLERID,
             latching=int(latched)))
         return len(self._conns) - 1
 

@@ -25,6 +25,7 @@ nothing here writes ROS 1 bytes by hand. :class:`Ros1Encoder` holds one run's co
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Any
 
@@ -37,7 +38,6 @@ from harness.errors import SrrError
 from harness.serde.messages import TYPESTORE as ROS2_TYPESTORE
 
 __all__ = [
-    "ROS1_TYPESTORE",
     "Ros1Encoder",
     "Ros1TypeError",
     "deserialize_ros1",
@@ -45,6 +45,7 @@ __all__ = [
     "msgdef",
     "ros1_name",
     "ros1_type",
+    "ros1_typestore",
     "ros2_type",
     "to_ros1",
     "to_ros2",
@@ -61,15 +62,19 @@ class Ros1TypeError(SrrError):
         super().__init__(f"{msgtype} {detail}")
 
 
-#: ROS 1 Noetic's message types (rosbags'), plus tf2_msgs and tf, which rosbags' Noetic store
-#: lacks: their ``TFMessage`` / ``tfMessage`` definitions, as in the ROS 1 packages.
-ROS1_TYPESTORE: Typestore = get_typestore(Stores.ROS1_NOETIC)
-ROS1_TYPESTORE.register({
-    **get_types_from_msg("geometry_msgs/TransformStamped[] transforms\n",
-                         "tf2_msgs/msg/TFMessage"),
-    **get_types_from_msg("geometry_msgs/TransformStamped[] transforms\n",
-                         "tf/msg/tfMessage"),
-})
+@functools.cache
+def ros1_typestore() -> Typestore:
+    """ROS 1 Noetic's message types (rosbags'), plus tf2_msgs and tf, which rosbags' Noetic
+    store lacks: their ``TFMessage`` / ``tfMessage`` definitions, as in the ROS 1 packages.
+    Made at its first use (0.1–0.2 s), not when srr is imported: most runs write no ROS 1."""
+    store = get_typestore(Stores.ROS1_NOETIC)
+    store.register({
+        **get_types_from_msg("geometry_msgs/TransformStamped[] transforms\n",
+                             "tf2_msgs/msg/TFMessage"),
+        **get_types_from_msg("geometry_msgs/TransformStamped[] transforms\n",
+                             "tf/msg/tfMessage"),
+    })
+    return store
 
 TF_ROS1 = "tf2_msgs/msg/TFMessage"
 #: ROS 1 types read back as another ROS 2 type (same definition, another package).
@@ -91,12 +96,12 @@ def ros1_type(ros2: str) -> str:
     if found is not None:
         return found
     name = _norm(ros2)
-    if name not in ROS1_TYPESTORE.fielddefs:
+    if name not in ros1_typestore().fielddefs:
         raise Ros1TypeError(ros2, "has no ROS 1 counterpart (ROS Noetic has no message type "
                             "by that name)")
     if name not in ROS2_TYPESTORE.fielddefs:
         raise Ros1TypeError(ros2, "is not a ROS 2 message type")
-    _converter(ROS2_TYPESTORE, ROS1_TYPESTORE, name, name)  # every field can be carried
+    _converter(ROS2_TYPESTORE, ros1_typestore(), name, name)  # every field can be carried
     _ROS1_OF[ros2] = name
     return name
 
@@ -116,7 +121,7 @@ def ros1_name(ros2: str) -> str:
 def msgdef(ros1: str) -> tuple[str, str]:
     """The ROS 1 message definition (the type's ``.msg`` text followed by its dependencies,
     as rosbag and the MCAP ``ros1msg`` schema encoding carry it) and its MD5 sum."""
-    text, md5 = ROS1_TYPESTORE.generate_msgdef(_norm(ros1), ros_version=1)
+    text, md5 = ros1_typestore().generate_msgdef(_norm(ros1), ros_version=1)
     return str(text), str(md5)
 
 
@@ -228,9 +233,9 @@ def dropped_fields(ros2: str) -> tuple[str, ...]:
         if name in seen:
             return
         seen.add(name)
-        _converter(ROS2_TYPESTORE, ROS1_TYPESTORE, name, name)
-        out.update(f"{name}.{f}" for f in _DROPPED[(id(ROS1_TYPESTORE), name, name)])
-        dropped = set(_DROPPED[(id(ROS1_TYPESTORE), name, name)])
+        _converter(ROS2_TYPESTORE, ros1_typestore(), name, name)
+        out.update(f"{name}.{f}" for f in _DROPPED[(id(ros1_typestore()), name, name)])
+        dropped = set(_DROPPED[(id(ros1_typestore()), name, name)])
         for field, node in ROS2_TYPESTORE.fielddefs[name][1]:
             if field in dropped:
                 continue
@@ -248,19 +253,19 @@ def to_ros1(msg: Any, ros2: str, seq: int = 0) -> Any:
     """The ROS 1 message for ROS 2 message ``msg`` of type ``ros2``; ``seq`` goes into its
     top-level ``header`` (if it has one)."""
     name = _norm(ros2)
-    return _converter(ROS2_TYPESTORE, ROS1_TYPESTORE, name, ros1_type(name))(msg, seq)
+    return _converter(ROS2_TYPESTORE, ros1_typestore(), name, ros1_type(name))(msg, seq)
 
 
 def to_ros2(msg: Any, ros1: str) -> Any:
     """The ROS 2 message for ROS 1 message ``msg`` of type ``ros1`` (header ``seq``
     dropped, fields ROS 1 lacks zero)."""
     src = _norm(ros1)
-    return _converter(ROS1_TYPESTORE, ROS2_TYPESTORE, src, ros2_type(src))(msg, 0)
+    return _converter(ros1_typestore(), ROS2_TYPESTORE, src, ros2_type(src))(msg, 0)
 
 
 def deserialize_ros1(data: bytes, ros1: str) -> Any:
     """A ROS 1 message of type ``ros1`` from its serialized bytes (rosbags' Noetic store)."""
-    return ROS1_TYPESTORE.deserialize_ros1(data, _norm(ros1))
+    return ros1_typestore().deserialize_ros1(data, _norm(ros1))
 
 
 class Ros1Encoder:
@@ -274,4 +279,4 @@ class Ros1Encoder:
         seq = self._seq.get(topic, 0)
         self._seq[topic] = seq + 1
         name = ros1_type(ros2)
-        return bytes(ROS1_TYPESTORE.serialize_ros1(to_ros1(msg, ros2, seq & 0xFFFFFFFF), name))
+        return bytes(ros1_typestore().serialize_ros1(to_ros1(msg, ros2, seq & 0xFFFFFFFF), name))

@@ -306,13 +306,13 @@ def test_a_foreign_bag_with_tf_tfmessage(tmp_path: Path) -> None:
     same TF table (the type is read as tf2_msgs/msg/TFMessage)."""
     from rosbags.rosbag1 import Writer
 
-    from harness.serde.ros1 import ROS1_TYPESTORE
+    from harness.serde.ros1 import ros1_typestore
 
     tf = m.tf_message([m.transform_stamped(2_000_000_000, "odom", "base_link", [1, 2, 0],
                                            [0, 0, 0, 1])])
     raw = Ros1Encoder().encode("/tf", TF_MESSAGE, tf)
     with Writer(tmp_path / "x.bag") as bag:
-        conn = bag.add_connection("/tf", "tf/msg/tfMessage", typestore=ROS1_TYPESTORE)
+        conn = bag.add_connection("/tf", "tf/msg/tfMessage", typestore=ros1_typestore())
         for k in range(3):
             bag.write(conn, k * 1_000_000_000, raw)
     frames = load_frames(tmp_path / "x.bag")
