@@ -18,6 +18,9 @@ CPU ceiling, min(1, C ÷ (N × the CPU seconds the 1-worker pass's runs spent pe
 wall)) on a machine of C CPUs (N workers cannot finish runs faster than C CPUs do their work,
 if a run's work is what it was at 1 worker), and the CPU a run took at N workers against 1
 (above 1: each CPU did less at N, the machine's share per process, not srr's scheduling).
+Each efficiency line also gives the efficiency inside the runs' span (first start to last
+finish, each pass's own): what the workers achieved once running, without the start-up
+before the first run and the judging after the last, which every pass pays once.
 
     MUJOCO_GL=egl python benchmarks/bench_suite_scale.py --configs 1:2,16:6 [--other DIR]
     python benchmarks/bench_suite_scale.py --show OUT/summary.json     # one suite's timeline
@@ -96,7 +99,7 @@ def one_pass(tree: Path, suite: str, jobs: int, repeat: int, out: Path) -> dict[
             "after": (s["wall_s"] - tl["last_finish_s"]) if span is not None else None,
             "util": busy / (jobs * (span if span else wall)), "steps": tl.get("steps_s"),
             "to_first": to_first, "cpu": tl.get("cpu_s"), "cpus": tl.get("cpus"),
-            "summary": s}
+            "span": span, "summary": s}
 
 
 def show(summary: dict[str, Any], width: int = 100) -> None:
@@ -213,6 +216,9 @@ def main() -> None:
                     ceiling = min(1.0, (os.cpu_count() or 1) / (n * cpu_rate))
                     more = (r["cpu"] / r["runs"]) / (ones[0]["cpu"] / ones[0]["runs"])
                     cpu = f"; CPU ceiling {ceiling:.2f}, CPU a run ×{more:.2f} of one worker's"
+                if r["span"] and ones[0]["span"]:  # the start-up and the end left out
+                    inside = (r["runs"] / r["span"]) / (n * ones[0]["runs"] / ones[0]["span"])
+                    cpu += f"; inside the runs' span {inside:.2f}"
                 print(f"{name}: efficiency at {n} workers, {r['runs']} runs (repeat {repeat}) "
                       f"= {many / (n * one):.2f} ({many:.2f} runs/s against {n} × {one:.3f})"
                       + cpu)
