@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from harness.errors import ScenarioError
-from harness.scenario import load_scenario, parse_override
+from harness.run.loading import ScenarioLoads
 from harness.suite.spec import Entry, SuiteSpec
 from harness.suite.sweep import Point, Scalar, expand
 
@@ -65,19 +65,20 @@ def _point_runs(entry: Entry, point: Point, renders: bool, cost: float) -> list[
 
 
 def plan_runs(spec: SuiteSpec, *, on_render: Callable[[], None] | None = None,
-              ) -> tuple[RunSpec, ...]:
+              loads: ScenarioLoads | None = None) -> tuple[RunSpec, ...]:
     """Every run of the suite, entries in order, points in grid order, repeats innermost.
 
     Each sweep point's scenario is loaded once here, so a path that does not exist or a value
     out of range is reported (naming where the sweep was declared) before anything runs.
     ``on_render`` is called once, as soon as a run that renders is planned (``srr suite``
-    then has its hosts make their OpenGL contexts while the rest is planned)."""
+    then has its hosts make their OpenGL contexts while the rest is planned). ``loads``:
+    the scenarios the planning has loaded, kept for the rest of it."""
+    loads = loads if loads is not None else ScenarioLoads()
     runs: list[RunSpec] = []
     for entry in spec.entries:
         for point in expand(entry.sweep):
-            pairs = [parse_override(o) for o in entry.overrides + point.overrides()]
             try:
-                sc = load_scenario(entry.scenario_file, pairs)
+                sc = loads(entry.scenario_file, entry.overrides + point.overrides())
             except ScenarioError as err:
                 if not point.params:
                     raise

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -15,9 +15,9 @@ from harness.outdir import check_out_folder
 from harness.regression import baseline_path
 from harness.regression.config import config_differences
 from harness.run.baselines import NotBlessedError, baseline_name, baselines_dir, bless_if_changed
-from harness.run.loading import load
+from harness.run.loading import ScenarioLoads
 from harness.run.simulate import check_point, validate
-from harness.scenario import load_scenario, parse_override, scenario_to_mapping
+from harness.scenario import scenario_to_mapping
 from harness.suite.events import Executor, Listener
 from harness.suite.outputs import FORMAT, write_outputs
 from harness.suite.plan import RunSpec, plan_runs
@@ -35,6 +35,8 @@ class SuitePlan:
     runs: tuple[RunSpec, ...]
     warnings: tuple[str, ...]
     checked_s: float = 0.0  # wall seconds spent planning and checking
+    #: the scenarios planning loaded, for what the suite looks up in them later (baselines)
+    loads: ScenarioLoads = field(default_factory=ScenarioLoads, compare=False, repr=False)
 
 
 @dataclass(frozen=True)
@@ -67,15 +69,15 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
     before anything runs. ``on_render``: called once, as soon as a run that renders is
     planned (:func:`~harness.suite.plan.plan_runs`)."""
     t0 = time.monotonic()
-    spec = load_suite(paths, repeat=repeat, timeout_s=timeout_s)
+    loads = ScenarioLoads()  # each (file, overrides) loaded once, from here to the baselines
+    spec = load_suite(paths, repeat=repeat, timeout_s=timeout_s, loads=loads)
     # every point loads: a bad sweep path names where it was declared
-    runs = plan_runs(spec, on_render=on_render)
+    runs = plan_runs(spec, on_render=on_render, loads=loads)
     warnings: list[str] = []
     for entry in spec.entries:
         first, *others = expand(entry.sweep)
-        pairs = [parse_override(o) for o in entry.overrides + first.overrides()]
         try:
-            sc = load_scenario(entry.scenario_file, pairs)
+            sc = loads(entry.scenario_file, entry.overrides + first.overrides())
             said = validate(sc, entry.scenario_file)
         except SrrError as err:
             raise _of_entry(err, entry, first.label if entry.sweep else None) from None
@@ -83,16 +85,15 @@ def plan_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
                      for w in said]
         for point in others:  # what the points differ in (check_point); a warning the first
             # point did not give is said with the point's label
-            pairs = [parse_override(o) for o in entry.overrides + point.overrides()]
             try:
-                sc = load_scenario(entry.scenario_file, pairs)
+                sc = loads(entry.scenario_file, entry.overrides + point.overrides())
                 more = check_point(sc, entry.scenario_file, scene=any(
                     path.split(".", 1)[0] in _SCENE_KEYS for path, _ in point.params))
             except SrrError as err:
                 raise _of_entry(err, entry, point.label) from None
             warnings += [_said_of_entry(w, entry, point.label) for w in more if w not in said]
-    warnings += _shared_baseline_warnings(spec, runs)
-    return SuitePlan(spec, runs, tuple(warnings), time.monotonic() - t0)
+    warnings += _shared_baseline_warnings(spec, runs, loads)
+    return SuitePlan(spec, runs, tuple(warnings), time.monotonic() - t0, loads)
 
 
 #: Top-level scenario keys whose sweep changes the scene each point builds (robots' models
@@ -147,8 +148,8 @@ class _SharedBaseline:
     changed: tuple[str, ...]  # how the configurations differ (up to three)
 
 
-def _shared_baselines(suite: SuiteSpec, runs: Sequence[RunSpec],
-                      baselines: Path | None) -> list[_SharedBaseline]:
+def _shared_baselines(suite: SuiteSpec, runs: Sequence[RunSpec], baselines: Path | None,
+                      loads: ScenarioLoads) -> list[_SharedBaseline]:
     """Every group of ``runs`` that shares its baseline file with an earlier group under
     another configuration."""
     declared = {e.name: e.declared_in for e in suite.entries}
@@ -157,7 +158,7 @@ def _shared_baselines(suite: SuiteSpec, runs: Sequence[RunSpec],
     for spec in runs:
         if spec.repeat != 1:
             continue
-        sc = load(spec.scenario_file, overrides=spec.overrides)
+        sc = loads(spec.scenario_file, spec.overrides)
         path = baseline_path(baseline_name(sc), baselines_dir(spec.scenario_file, baselines,
                                                               sc))
         mapping = scenario_to_mapping(sc)
@@ -178,7 +179,7 @@ def _refuse_shared_baselines(plan: SuitePlan, baselines: Path | None) -> None:
     """``--update-baselines``: refuse (before anything runs) two groups that would be blessed
     into one baseline file under different configurations: the second would overwrite the
     first, and the first be MISMATCH against it from then on."""
-    for s in _shared_baselines(plan.spec, plan.runs, baselines)[:1]:
+    for s in _shared_baselines(plan.spec, plan.runs, baselines, plan.loads)[:1]:
         raise SrrError(
             f"{s.where}: --update-baselines would bless {s.group} into {s.path}, the "
             f"baseline it shares with {s.other} ({s.other_where}) under another "
@@ -187,7 +188,8 @@ def _refuse_shared_baselines(plan: SuitePlan, baselines: Path | None) -> None:
             "(set: {baseline: NAME})")
 
 
-def _shared_baseline_warnings(suite: SuiteSpec, runs: Sequence[RunSpec]) -> list[str]:
+def _shared_baseline_warnings(suite: SuiteSpec, runs: Sequence[RunSpec],
+                              loads: ScenarioLoads) -> list[str]:
     """A warning for each group judged against a baseline file (in its scenario's own
     baselines folder) that it shares with another group under another configuration: one of
     the two is MISMATCH on every run."""
@@ -195,7 +197,7 @@ def _shared_baseline_warnings(suite: SuiteSpec, runs: Sequence[RunSpec]) -> list
             f"{s.other} ({s.other_where}) under another configuration "
             f"({'; '.join(s.changed)}): one of the two is MISMATCH on every run; give one "
             "entry its own baseline (set: {baseline: NAME})"
-            for s in _shared_baselines(suite, runs, None)]
+            for s in _shared_baselines(suite, runs, None, loads)]
 
 
 def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
@@ -263,8 +265,7 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
                 # the copy of the project shipped to its node, whose path it recorded
                 spec = g.runs[0].spec
                 here = baselines if baselines is not None else baselines_dir(
-                    spec.scenario_file, None, load(spec.scenario_file,
-                                                       overrides=spec.overrides))
+                    spec.scenario_file, None, plan.loads(spec.scenario_file, spec.overrides))
                 try:
                     path, written = bless_if_changed(out_dir / g.runs[0].run_dir,
                                                      bless_reason, baselines=here,

@@ -31,7 +31,8 @@ import yaml
 
 from harness import yamlio
 from harness.errors import ScenarioError, SrrError
-from harness.scenario import load_scenario, parse_override
+from harness.run.loading import ScenarioLoads
+from harness.scenario import parse_override
 from harness.scenario.overrides import dotted
 from harness.suite.sweep import SweepParam, parse_sweep, varied_path
 from harness.validation import validate
@@ -196,7 +197,7 @@ class SuiteFile:
 
 
 def _entry(item: str | EntryFile, raw: Any, base: Path, file: str, field: str,
-           cli: _Defaults, suite: _Defaults) -> Entry:
+           cli: _Defaults, suite: _Defaults, loads: ScenarioLoads) -> Entry:
     """``item``: the entry as read; ``raw``: as written (whether it declares a sweep)."""
     e = EntryFile(path=item) if isinstance(item, str) else item
     if not e.path:
@@ -221,8 +222,8 @@ def _entry(item: str | EntryFile, raw: Any, base: Path, file: str, field: str,
                             f"'-' and '.', got {name!r}")
     has_sweep = isinstance(raw, Mapping) and "sweep" in raw
     try:
-        return _checked(str(scenario_file), overrides, repeat=repeat, timeout_s=timeout_s,
-                        name=name, sweep_raw=e.sweep, has_sweep=has_sweep,
+        return _checked(str(scenario_file), overrides, loads, repeat=repeat,
+                        timeout_s=timeout_s, name=name, sweep_raw=e.sweep, has_sweep=has_sweep,
                         sweep_file=file, sweep_field=f"{field}.sweep",
                         declared_in=f"{file}: {field}")
     except ScenarioError as err:
@@ -237,7 +238,7 @@ def _entry(item: str | EntryFile, raw: Any, base: Path, file: str, field: str,
         raise ScenarioError(file, f"{field}.set", f"{err.field}: {err.message}") from None
 
 
-def _folder(path: Path, cli: _Defaults) -> list[Entry]:
+def _folder(path: Path, cli: _Defaults, loads: ScenarioLoads) -> list[Entry]:
     """The entries of a folder's scenario files. Every file is read before any is refused:
     the first problem is said, and how many other files have one (``srr validate FOLDER``
     says each)."""
@@ -249,7 +250,7 @@ def _folder(path: Path, cli: _Defaults) -> list[Entry]:
             if not _is_scenario(_read(file)):
                 continue
             scenarios += 1
-            found.append(_checked(str(file), (), repeat=cli.repeat or 1,
+            found.append(_checked(str(file), (), loads, repeat=cli.repeat or 1,
                                   timeout_s=cli.timeout_s, name=None, sweep_raw=None,
                                   has_sweep=False, sweep_file=str(file), sweep_field="sweep",
                                   declared_in=str(file)))
@@ -269,11 +270,12 @@ def _safe_name(name: str) -> bool:
         c.isalnum() or c in "_-." for c in name)
 
 
-def _checked(scenario_file: str, overrides: tuple[str, ...], *, repeat: int,
+def _checked(scenario_file: str, overrides: tuple[str, ...], loads: ScenarioLoads, *,
+             repeat: int,
              timeout_s: float | None, name: str | None, sweep_raw: Any, has_sweep: bool,
              sweep_file: str, sweep_field: str, declared_in: str) -> Entry:
     """Load the scenario once (schema, includes, overrides) to learn its name and sweep."""
-    sc = load_scenario(scenario_file, [parse_override(o) for o in overrides])
+    sc = loads(scenario_file, overrides)
     if has_sweep:
         sweep, source = parse_sweep(sweep_raw, sweep_file, sweep_field), sweep_file
     else:
@@ -295,7 +297,8 @@ def _checked(scenario_file: str, overrides: tuple[str, ...], *, repeat: int,
                  sweep_field=sweep_field)
 
 
-def _suite_file(path: Path, data: Mapping[str, Any], cli: _Defaults) -> tuple[str, list[Entry]]:
+def _suite_file(path: Path, data: Mapping[str, Any], cli: _Defaults,
+                loads: ScenarioLoads) -> tuple[str, list[Entry]]:
     file = str(path)
     spec = validate(SuiteFile, data, file)
     if not spec.suite.strip():
@@ -308,15 +311,17 @@ def _suite_file(path: Path, data: Mapping[str, Any], cli: _Defaults) -> tuple[st
         if d.timeout is not None else None)
     if not spec.scenarios:
         raise ScenarioError(file, "scenarios", "the suite lists no scenarios")
-    entries = [_entry(item, raw, path.parent, file, f"scenarios[{i}]", cli, suite)
+    entries = [_entry(item, raw, path.parent, file, f"scenarios[{i}]", cli, suite, loads)
                for i, (item, raw) in enumerate(zip(spec.scenarios, data["scenarios"],
                                                    strict=True))]
     return spec.suite, entries
 
 
 def load_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
-               timeout_s: float | None = None) -> SuiteSpec:
-    """Expand ``paths`` (scenario files, folders of them, suite files) into checked entries.
+               timeout_s: float | None = None,
+               loads: ScenarioLoads | None = None) -> SuiteSpec:
+    """Expand ``paths`` (scenario files, folders of them, suite files) into checked entries
+    (``loads``: where the scenarios loaded are kept for the rest of the planning).
 
     Raises :class:`~harness.errors.SrrError` (exit 2) naming the file and field of the first
     problem; nothing has run then."""
@@ -327,20 +332,21 @@ def load_suite(paths: Sequence[str | Path], *, repeat: int | None = None,
     if timeout_s is not None:
         _count(timeout_s, "--timeout", "", integer=False)
     cli = _Defaults(repeat, timeout_s)
+    loads = loads if loads is not None else ScenarioLoads()
     names: list[str] = []
     entries: list[Entry] = []
     for given in paths:
         path = Path(given)
         if path.is_dir():
-            entries += _folder(path, cli)
+            entries += _folder(path, cli, loads)
             continue
         data = _read(path)
         if is_suite_file(data):
-            name, more = _suite_file(path, data, cli)
+            name, more = _suite_file(path, data, cli, loads)
             names.append(name)
             entries += more
         elif _is_scenario(data):
-            entries.append(_checked(str(path), (), repeat=cli.repeat or 1,
+            entries.append(_checked(str(path), (), loads, repeat=cli.repeat or 1,
                                     timeout_s=cli.timeout_s, name=None, sweep_raw=None,
                                     has_sweep=False, sweep_file=str(path), sweep_field="sweep",
                                     declared_in=str(path)))

@@ -358,3 +358,25 @@ def test_a_later_sweep_point_s_waypoint_in_a_shelf_is_refused_before_any_run(
         plan_suite([suite])
     assert str(info.value).startswith(f"{suite}: scenarios[0] [route.0.0=-6]: ")
     assert "workers[0].route[0]: (-6, -5.5) is inside the shelf at (-6, -6)" in str(info.value)
+
+
+def test_planning_a_suite_loads_each_scenario_configuration_once(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Learning an entry's name, planning its runs, checking it and finding its baseline
+    file each used to load its scenario again (four loads of each, half of the planning)."""
+    import json
+
+    import harness.scenario.loader as loader
+
+    loaded: list[str] = []
+    made = loader.scenario_from_mapping
+
+    def counted(data: dict[str, object], shown: str, *rest: object) -> object:
+        loaded.append(shown + json.dumps(data, sort_keys=True, default=str))
+        return made(data, shown, *rest)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(loader, "scenario_from_mapping", counted)
+    plan = plan_suite([ROOT / "scenarios" / "suites" / "nightly.yaml"])
+    assert len(plan.runs) == 23 and len(loaded) >= 14  # every entry and sweep point
+    twice = sorted({k[:80] for k in loaded if loaded.count(k) > 1})
+    assert not twice, twice
