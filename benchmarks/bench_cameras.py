@@ -428,15 +428,21 @@ def report(args: argparse.Namespace, r: Result) -> dict[str, Any]:
     return out
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--cameras", type=int, default=1)
-    ap.add_argument("--width", type=int, default=256)
-    ap.add_argument("--height", type=int, default=256)
+def scene_args(ap: argparse.ArgumentParser, *, cameras: int = 1, width: int = 256,
+               height: int = 256, duration: float = 2.0) -> None:
+    """The arguments :func:`load` reads (this benchmark's and the others' on its scene)."""
+    ap.add_argument("--cameras", type=int, default=cameras)
+    ap.add_argument("--width", type=int, default=width)
+    ap.add_argument("--height", type=int, default=height)
     ap.add_argument("--fps", type=float, default=30.0)
-    ap.add_argument("--duration", type=float, default=2.0, help="simulated seconds")
+    ap.add_argument("--duration", type=float, default=duration, help="simulated seconds")
     ap.add_argument("--outputs", type=lambda s: s.split(","), default=["rgb", "depth"],
                     help="comma-separated: rgb,depth,pointcloud,camera_info")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    scene_args(ap)
     ap.add_argument("--configs", type=lambda s: s.split(","), default=["off"],
                     help=f"comma-separated render configurations: {', '.join(CONFIGS)}")
     ap.add_argument("--overlap", type=lambda s: {"true": True, "false": False}.get(s, s),

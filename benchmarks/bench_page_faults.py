@@ -39,14 +39,8 @@ def _usage() -> tuple[int, float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--cameras", type=int, default=4)
-    ap.add_argument("--width", type=int, default=640)
-    ap.add_argument("--height", type=int, default=480)
-    ap.add_argument("--fps", type=float, default=30.0)
-    ap.add_argument("--duration", type=float, default=5.0)
-    ap.add_argument("--outputs", default="rgb,depth")
+    bc.scene_args(ap, cameras=4, width=640, height=480, duration=5.0)
     args = ap.parse_args()
-    args.outputs = args.outputs.split(",")
     sc = bc.load(args, bc.CONFIGS["off"])
     bc.render_only(sc)  # warm-up: contexts, buffers, caches
     f0, c0 = _usage()

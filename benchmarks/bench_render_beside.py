@@ -65,16 +65,11 @@ def _background(kind: str, directory: str, stop: mp.synchronize.Event, rate: mp.
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--cameras", type=int, default=4)
-    ap.add_argument("--width", type=int, default=640)
-    ap.add_argument("--height", type=int, default=480)
-    ap.add_argument("--fps", type=float, default=30.0)
-    ap.add_argument("--duration", type=float, default=20.0)
+    bc.scene_args(ap, cameras=4, width=640, height=480, duration=20.0)
     ap.add_argument("--dir", default="/tmp", help="where 'write' writes (default /tmp)")
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--kinds", default="alone,write,copy,spin")
     args = ap.parse_args()
-    args.outputs = ["rgb", "depth"]
     sc = bc.load(args, bc.CONFIGS["off"])
     bc.render_only(sc)  # warm-up
     ctx = mp.get_context("spawn")
