@@ -11,7 +11,15 @@ from typing import Any
 
 from harness.errors import SrrError
 
-__all__ = ["write_json_atomic", "write_text_atomic"]
+__all__ = ["discard_partial", "write_json_atomic", "write_text_atomic"]
+
+
+def discard_partial(path: Path) -> None:
+    """Remove a partial output file, if there is one, after a write failed: quietly where
+    that fails too (a read-only filesystem refuses the removal even of nothing), so that the
+    write's own error is the one said."""
+    with contextlib.suppress(OSError):
+        path.unlink(missing_ok=True)
 
 
 def write_text_atomic(path: Path, text: str) -> None:
@@ -21,8 +29,7 @@ def write_text_atomic(path: Path, text: str) -> None:
         tmp.write_text(text, encoding="utf-8")
         os.replace(tmp, path)
     except OSError as err:
-        with contextlib.suppress(OSError):  # a read-only filesystem refuses even this
-            tmp.unlink(missing_ok=True)
+        discard_partial(tmp)
         raise SrrError(f"{path}: cannot write: {err.strerror or err}") from err
 
 

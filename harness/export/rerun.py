@@ -31,7 +31,6 @@ MCAP: it opens there as recorded.
 
 from __future__ import annotations
 
-import contextlib
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -42,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from harness import runlock
+from harness.atomic import discard_partial
 from harness.errors import SrrError, reason
 from harness.recording.bagread import DECODE_ERRORS, Connection, Recording, open_indexed
 from harness.recording.errors import BagError
@@ -438,13 +438,6 @@ def _write(rr: ModuleType, run_dir: Path, summary: dict[str, Any], tmp: Path) ->
                        dict(sorted(ex.skipped.items())))
 
 
-def _discard(tmp: Path) -> None:
-    """Remove the partial file, if there is one (unlink fails on a read-only filesystem even
-    when there is nothing to remove)."""
-    with contextlib.suppress(OSError):
-        tmp.unlink(missing_ok=True)
-
-
 def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:
     """Write the finished run ``run_dir`` (its bag and ``summary.json``) to the Rerun
     recording ``out`` (``.rrd``), replaced only once complete. :class:`SrrError` (exit 2) for
@@ -469,10 +462,10 @@ def export_rerun(run_dir: str | Path, out: str | Path) -> RerunExport:
         result = _write(rr, run, summary, tmp)
         os.replace(tmp, target)
     except OSError as err:
-        _discard(tmp)
+        discard_partial(tmp)
         raise SrrError(f"--rerun {target}: cannot write: {err.strerror or err}") from err
     except BaseException:
-        _discard(tmp)
+        discard_partial(tmp)
         raise
     return RerunExport(target, result.bytes, result.rows, result.skipped)
 

@@ -24,7 +24,6 @@ to another recording, which recover cannot make consistent).
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import os
 import shutil
@@ -40,6 +39,7 @@ from mcap.records import Channel, Chunk, Footer, Header, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import MCAP0_MAGIC
 
+from harness.atomic import discard_partial
 from harness.recording.bagfile import (
     ChunkPolicy,
     McapBagWriter,
@@ -411,8 +411,7 @@ def recover_bag(path: str | Path, *, recorded: Mapping[str, Any] | None = None) 
     except BaseException as err:
         if writer is not None:
             writer.abort()
-        with contextlib.suppress(OSError):  # a read-only filesystem refuses even this
-            tmp.unlink(missing_ok=True)
+        discard_partial(tmp)
         if isinstance(err, OSError):
             raise BagError(f"{mcap}: cannot write the recovered bag: "
                            f"{err.strerror or err}") from err
