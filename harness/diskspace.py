@@ -67,10 +67,12 @@ CHUNK_OVERHEAD = 256
 
 @dataclass(frozen=True)
 class BagEstimate:
-    """Estimated bag size in bytes, with the streams that make it up (name → bytes)."""
+    """Estimated bag size in bytes, with the streams that make it up (name → bytes), and
+    whether any of them is a camera's raw rgb or depth images."""
 
     total: int
     parts: tuple[tuple[str, int], ...]
+    raw_images: bool = False
 
     def largest(self, n: int = 3) -> str:
         top = sorted(self.parts, key=lambda p: -p[1])[:n]
@@ -103,6 +105,7 @@ def estimate_bag_bytes(scenario: Scenario) -> BagEstimate:
     """Estimate the size of the bag ``scenario`` records (see the module docstring)."""
     hz, ticks = scenario.physics.tick_hz, scenario.n_ticks
     parts: list[tuple[str, int]] = []
+    raw_images = False
 
     def stream(name: str, payload: int, count: int) -> None:
         parts.append((name, count * (payload + MESSAGE_OVERHEAD)))
@@ -127,9 +130,11 @@ def estimate_bag_bytes(scenario: Scenario) -> BagEstimate:
             n = frames(cam.fps)
             if "raw" in cam.record.rgb:
                 stream(f"{r.name} camera rgb", HEADER + w * h * 3, n)
+                raw_images = True
             stream(f"{r.name} camera_info", CAMERA_INFO, n)
             if cam.depth_topic and "raw" in cam.record.depth:
                 stream(f"{r.name} camera depth", HEADER + w * h * 4, n)
+                raw_images = True
             for stream_name, formats in (("rgb", cam.record.rgb), ("depth", cam.record.depth)):
                 for fmt in formats:
                     if fmt != "raw" and (stream_name == "rgb" or cam.depth_topic):
@@ -152,6 +157,7 @@ def estimate_bag_bytes(scenario: Scenario) -> BagEstimate:
                 stream(f"{c.name}_camera_info", CAMERA_INFO, n)
             elif out not in ("rgb", "depth") or "raw" in getattr(c.record, out):
                 stream(f"{c.name}_{out}", HEADER + w * h * per_pixel[out], n)
+                raw_images = raw_images or out in ("rgb", "depth")
         for stream_name, formats in (("rgb", c.record.rgb), ("depth", c.record.depth)):
             for fmt in formats:
                 if fmt != "raw" and stream_name in c.outputs:
@@ -169,7 +175,7 @@ def estimate_bag_bytes(scenario: Scenario) -> BagEstimate:
                ticks)
     chunks = math.ceil(scenario.duration / scenario.recording.chunk_s)
     parts.append(("file overhead", FILE_OVERHEAD + CHUNK_OVERHEAD * chunks))
-    return BagEstimate(sum(size for _, size in parts), tuple(parts))
+    return BagEstimate(sum(size for _, size in parts), tuple(parts), raw_images)
 
 
 def large_bag_notice(scenario: Scenario, est: BagEstimate | None = None) -> str | None:
@@ -178,15 +184,9 @@ def large_bag_notice(scenario: Scenario, est: BagEstimate | None = None) -> str 
     est = est or estimate_bag_bytes(scenario)
     if est.total < LARGE_BAG:
         return None
-    raw = any(("rgb" in c.outputs and "raw" in c.record.rgb)
-              or ("depth" in c.outputs and "raw" in c.record.depth)
-              for c in scenario.cameras if c.enabled) or any(
-        "raw" in cam.record.rgb or (cam.depth_topic and "raw" in cam.record.depth)
-        for r in scenario.robots if r.enabled
-        for cam in [r.sensors.camera] if cam is not None and cam.enabled)
     return (f"the bag will be up to about {est.total / 1e9:,.1f} GB for "
             f"{scenario.duration:g} s ({est.largest()}); "
-            + ("a camera's record: {rgb: [h264], depth: [png]}, " if raw else "")
+            + ("a camera's record: {rgb: [h264], depth: [png]}, " if est.raw_images else "")
             + "a lower fps or resolution, or fewer outputs make it smaller")
 
 
