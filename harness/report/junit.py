@@ -7,7 +7,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 from harness.atomic import write_text_atomic
 
@@ -54,24 +54,15 @@ def junit_cases(summary: Mapping[str, Any]) -> list[Case]:
     return cases
 
 
-class _Case(Protocol):
-    @property
-    def name(self) -> str: ...
-    @property
-    def ok(self) -> bool: ...
-    @property
-    def detail(self) -> str: ...
-
-
-def write_junit(path: Path, suite: str, cases: Sequence[_Case]) -> None:
-    skipped = sum(bool(getattr(c, "skipped", False)) for c in cases)
-    failures = sum(not c.ok and not getattr(c, "skipped", False) for c in cases)
+def write_junit(path: Path, suite: str, cases: Sequence[Case]) -> None:
+    skipped = sum(c.skipped for c in cases)
+    failures = sum(not c.ok and not c.skipped for c in cases)
     root = ET.Element("testsuites", name="srr", tests=str(len(cases)), failures=str(failures))
     ts = ET.SubElement(root, "testsuite", name=suite, tests=str(len(cases)),
                        failures=str(failures), errors="0", skipped=str(skipped))
     for c in cases:
         tc = ET.SubElement(ts, "testcase", classname=f"srr.{suite}", name=c.name)
-        if getattr(c, "skipped", False):
+        if c.skipped:
             ET.SubElement(tc, "skipped", message=c.detail).text = c.detail
         elif not c.ok:
             ET.SubElement(tc, "failure", message=c.detail).text = c.detail

@@ -228,14 +228,15 @@ def dropped_fields(ros2: str) -> tuple[str, ...]:
     as ``pkg/msg/Type.field`` (sorted)."""
     out: set[str] = set()
     seen: set[str] = set()
+    ros1 = ros1_typestore()
 
     def walk(name: str) -> None:
         if name in seen:
             return
         seen.add(name)
-        _converter(ROS2_TYPESTORE, ros1_typestore(), name, name)
-        out.update(f"{name}.{f}" for f in _DROPPED[(id(ros1_typestore()), name, name)])
-        dropped = set(_DROPPED[(id(ros1_typestore()), name, name)])
+        _converter(ROS2_TYPESTORE, ros1, name, name)
+        dropped = set(_DROPPED[(id(ros1), name, name)])
+        out.update(f"{name}.{f}" for f in dropped)
         for field, node in ROS2_TYPESTORE.fielddefs[name][1]:
             if field in dropped:
                 continue

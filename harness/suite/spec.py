@@ -271,9 +271,8 @@ def _safe_name(name: str) -> bool:
 
 
 def _checked(scenario_file: str, overrides: tuple[str, ...], loads: ScenarioLoads, *,
-             repeat: int,
-             timeout_s: float | None, name: str | None, sweep_raw: Any, has_sweep: bool,
-             sweep_file: str, sweep_field: str, declared_in: str) -> Entry:
+             repeat: int, timeout_s: float | None, name: str | None, sweep_raw: Any,
+             has_sweep: bool, sweep_file: str, sweep_field: str, declared_in: str) -> Entry:
     """Load the scenario once (schema, includes, overrides) to learn its name and sweep."""
     sc = loads(scenario_file, overrides)
     if has_sweep:
