@@ -9,8 +9,7 @@ Matching, per frame (the CLEAR MOT procedure, as py-motmetrics implements it):
    frame and within the gate (objects in id order; the first track carrying that id).
 2. The remaining objects and tracks are paired by a minimum-cost assignment on Euclidean
    distance: as many pairs within the gate as possible, then the smallest total distance
-   (Hungarian algorithm: scipy's when installed, otherwise the exact one below; both reach
-   the same optimum, they can differ only on exact ties).
+   (SciPy's ``linear_sum_assignment``).
 3. A pair formed in step 2 is an ID switch when the object's last track was another one.
 
 Counts: TP = pairs, FN = objects - TP, FP = tracks - TP; precision = TP / tracks,
@@ -42,17 +41,11 @@ from harness.errors import SrrError
 from harness.frames import Frames
 from harness.metrics.types import MetricResult
 
-try:  # scipy comes with the dev extra (motmetrics); the fallback below is exact
-    from scipy.optimize import linear_sum_assignment as _scipy_lsa
-except ImportError:  # pragma: no cover - exercised through hungarian() directly
-    _scipy_lsa = None
-
 __all__ = [
     "MotCounts",
     "align_frames",
     "assign",
     "clear_mot",
-    "hungarian",
     "perception_metrics",
 ]
 
@@ -60,60 +53,13 @@ __all__ = [
 # --------------------------------------------------------------------------- assignment
 
 
-def hungarian(cost: Sequence[Sequence[float]]) -> list[tuple[int, int]]:
-    """Minimum-cost assignment of a dense finite (n, m) matrix: min(n, m) (row, col) pairs,
-    sorted by row. Shortest augmenting paths with potentials, O(n² m)."""
-    a = [list(map(float, r)) for r in cost]
-    n = len(a)
-    m = len(a[0]) if n else 0
-    if n == 0 or m == 0:
-        return []
-    if n > m:
-        return sorted((i, j) for j, i in hungarian([list(c) for c in zip(*a, strict=True)]))
-    inf = math.inf
-    u = [0.0] * (n + 1)
-    v = [0.0] * (m + 1)
-    owner = [0] * (m + 1)  # owner[j]: row (1-based) assigned to column j, 0 = free
-    back = [0] * (m + 1)
-    for i in range(1, n + 1):
-        owner[0] = i
-        j0 = 0
-        minv = [inf] * (m + 1)
-        used = [False] * (m + 1)
-        while True:
-            used[j0] = True
-            i0 = owner[j0]
-            delta, j1 = inf, 0
-            row = a[i0 - 1]
-            for j in range(1, m + 1):
-                if not used[j]:
-                    cur = row[j - 1] - u[i0] - v[j]
-                    if cur < minv[j]:
-                        minv[j] = cur
-                        back[j] = j0
-                    if minv[j] < delta:
-                        delta, j1 = minv[j], j
-            for j in range(m + 1):
-                if used[j]:
-                    u[owner[j]] += delta
-                    v[j] -= delta
-                else:
-                    minv[j] -= delta
-            j0 = j1
-            if owner[j0] == 0:
-                break
-        while j0:
-            j1 = back[j0]
-            owner[j0] = owner[j1]
-            j0 = j1
-    return sorted((owner[j] - 1, j - 1) for j in range(1, m + 1) if owner[j])
-
-
 def _lsa(cost: np.ndarray) -> list[tuple[int, int]]:
-    if _scipy_lsa is not None:
-        r, c = _scipy_lsa(cost)
-        return list(zip(r.tolist(), c.tolist(), strict=True))
-    return hungarian(cost.tolist())
+    """SciPy's minimum-cost assignment, imported at the first call: importing
+    ``scipy.optimize`` takes about 0.5 s, which a run without tracks need not pay."""
+    from scipy.optimize import linear_sum_assignment
+
+    r, c = linear_sum_assignment(cost)
+    return list(zip(r.tolist(), c.tolist(), strict=True))
 
 
 def assign(cost: np.ndarray) -> list[tuple[int, int]]:

@@ -79,9 +79,12 @@ __all__ = ["AFTER_THE_LOOP", "Loop", "Progress", "RunResult", "Started", "import
            "prepare", "record", "unprepare"]
 
 #: What a run imports only once it has been recorded, where it is used: scoring's frames and
-#: metrics (pandas, SciPy), the report (Jinja2, its plots). A run starts its loop without them.
+#: metrics (pandas), the report (Jinja2, its plots), and SciPy's assignment solver, which
+#: perception scoring imports at its first match (a single run without tracks never does). A
+#: run starts its loop without them.
 AFTER_THE_LOOP = ("harness.frames", "harness.metrics.control", "harness.metrics.health",
-                  "harness.metrics.perception", "harness.metrics.safety", "harness.report.html")
+                  "harness.metrics.perception", "harness.metrics.safety", "harness.report.html",
+                  "scipy.optimize")
 
 #: A run stopped by a plug-in's error keeps its traceback here, in the run directory.
 TRACEBACK_NAME = "traceback.txt"
