@@ -424,6 +424,18 @@ def _control(sc: Scenario, frames: Frames, summary: dict[str, Any]) -> list[Cont
     return out
 
 
+def _xy_by_frame(rows: pd.DataFrame) -> dict[int, np.ndarray]:
+    """``rows``' ``x, y`` per ``frame``, each frame's rows in table order (what a groupby
+    gives, split with numpy: a pandas group costs ~0.1 ms, and a run has thousands)."""
+    f = rows["frame"].to_numpy(np.int64)
+    if f.size == 0:
+        return {}
+    order = np.argsort(f, kind="stable")
+    keys, starts = np.unique(f[order], return_index=True)
+    parts = np.split(rows[["x", "y"]].to_numpy(np.float64)[order], starts[1:])
+    return dict(zip(keys.tolist(), parts, strict=True))
+
+
 def _perception(sc: Scenario, frames: Frames) -> list[PerceptionSeries]:
     p = sc.scoring.perception
     if p is None or not p.enabled:
@@ -446,13 +458,11 @@ def _perception(sc: Scenario, frames: Frames) -> list[PerceptionSeries]:
     frame_t = tf["t_ns"].to_numpy(np.int64)
     aligned, objs = align_frames(frame_t, gt, tolerance_ns=tol, objects=objects)
     frame_ids = tf["frame"].to_numpy(np.int64)
-    obj_by_frame = {int(k): g[["x", "y"]].to_numpy(np.float64)
-                    for k, g in objs.groupby("frame", sort=False)}
+    obj_by_frame = _xy_by_frame(objs)
     out = []
     for cls in p.classes:
         tr = scored.tracks[(scored.tracks["cls"] == cls).to_numpy(bool)]
-        tr_by_frame = {int(k): g[["x", "y"]].to_numpy(np.float64)
-                       for k, g in tr.groupby("frame", sort=False)}
+        tr_by_frame = _xy_by_frame(tr)
         err_t: list[float] = []
         err_v: list[float] = []
         ft, nt, no, nm, nf = [], [], [], [], []

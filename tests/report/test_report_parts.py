@@ -105,3 +105,22 @@ def test_graph_diagram_draws_every_node_and_edge() -> None:
     assert d.path == "/World/G" and d.nodes == 3 and d.connections == 2
     assert d.svg.count('class="g-node') == 3 and d.svg.count('class="g-edge') == 2
     assert "Pub&lt;1&gt;" in d.svg and "inputs:topicName = clock" in d.svg
+
+
+@pytest.mark.parametrize("rows", [0, 1, 40])
+def test_positions_per_frame_are_pandas_groups(rows: int) -> None:
+    """The report's per-frame positions: what a groupby gives (same keys, each frame's rows in
+    table order), for frames out of order and repeated."""
+    import pandas as pd
+
+    from harness.report.data import _xy_by_frame
+
+    rng = np.random.default_rng(rows)
+    df = pd.DataFrame({"frame": rng.integers(0, 7, rows), "x": rng.normal(size=rows),
+                       "y": rng.normal(size=rows)})
+    want = {int(k): g[["x", "y"]].to_numpy(np.float64)
+            for k, g in df.groupby("frame", sort=False)}
+    got = _xy_by_frame(df)
+    assert sorted(got) == sorted(want)
+    for k, xy in want.items():
+        np.testing.assert_array_equal(got[k], xy)
