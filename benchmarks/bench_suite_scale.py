@@ -10,7 +10,11 @@ wall time less the runs' walls over the workers), the workers' utilization, the 
 steps (from ``timings``), when the first run began after the command was launched, and the
 verdict (every pass must end PASS). Then, per tree, the efficiency of every entry with N > 1
 workers against the 1-worker entry: runs/s at N ÷ (N × runs/s at 1); several entries may share
-N (``1:2,16:6,16:12``: the same 16 workers on 59 and on 118 runs).
+N (``1:2,16:6,16:12``: the same 16 workers on 59 and on 113 runs). ``--rounds R`` runs the
+whole list R times (the trees alternating in each round); each efficiency is then the median
+runs/s at N over the median at 1, with the range of every N-worker pass against every
+1-worker pass beside it: on a shared host one 1-worker pass moves by up to a fifth, and the
+ratio divides by it.
 
 Where the tree's runs time their CPU (``timings["cpu_s"]``), each pass also prints the runs'
 CPU seconds, per run, and how many CPUs a run kept busy; each efficiency line then adds the
@@ -22,7 +26,8 @@ Each efficiency line also gives the efficiency inside the runs' span (first star
 finish, each pass's own): what the workers achieved once running, without the start-up
 before the first run and the judging after the last, which every pass pays once.
 
-    MUJOCO_GL=egl python benchmarks/bench_suite_scale.py --configs 1:2,16:6 [--other DIR]
+    MUJOCO_GL=egl python benchmarks/bench_suite_scale.py --configs 1:2,16:6 [--other DIR] \
+        [--rounds 3]
     python benchmarks/bench_suite_scale.py --show OUT/summary.json     # one suite's timeline
 """
 
@@ -148,6 +153,9 @@ def main() -> None:
     ap.add_argument("--suite", default="scenarios/suites/nightly.yaml")
     ap.add_argument("--configs", default="1:2,16:6", help="JOBS:REPEAT,...")
     ap.add_argument("--other", type=Path, help="another checkout to run alternately")
+    ap.add_argument("--rounds", type=int, default=1,
+                    help="run the whole list of configurations this many times (the trees "
+                         "alternating in each); efficiencies from each configuration's median")
     ap.add_argument("--json", type=Path, help="write every pass's figures here")
     ap.add_argument("--timeline", action="store_true", help="draw each pass's timeline")
     ap.add_argument("--show", type=Path, help="only draw this summary.json's timeline")
@@ -166,19 +174,21 @@ def main() -> None:
     trees = [("other", args.other.resolve()), ("this", ROOT)] if args.other else [("this", ROOT)]
     configs = [tuple(int(x) for x in c.split(":")) for c in args.configs.split(",")]
     print(f"machine: {os.cpu_count()} CPUs; suite {args.suite}")
-    results: dict[str, dict[tuple[int, int], dict[str, Any]]] = {name: {} for name, _ in trees}
+    results: dict[str, dict[tuple[int, int], list[dict[str, Any]]]] = {
+        name: {} for name, _ in trees}
     with tempfile.TemporaryDirectory() as tmp:
-        for k, (jobs, repeat) in enumerate(configs):
+        for k, (jobs, repeat) in enumerate(configs * args.rounds):
             for name, tree in trees:
-                # a folder per pass: a configuration listed twice runs twice (the later pass's
-                # figures are the ones kept for the efficiency)
+                # a folder per pass: a configuration listed twice runs twice, and every pass
+                # counts in its configuration's medians
                 r = one_pass(tree, args.suite, jobs, repeat,
                              Path(tmp) / f"{name}_{jobs}_{repeat}_{k}")
-                results[name][(jobs, repeat)] = r
+                passes = results[name].setdefault((jobs, repeat), [])
+                passes.append(r)
                 if args.keep:
                     args.keep.mkdir(parents=True, exist_ok=True)
-                    (args.keep / f"summary_{name}_{jobs}_{repeat}.json").write_text(
-                        json.dumps(r["summary"]), encoding="utf-8")
+                    (args.keep / f"summary_{name}_{jobs}_{repeat}_{len(passes)}.json"
+                     ).write_text(json.dumps(r["summary"]), encoding="utf-8")
                 steps = r["steps"] or {}
                 print(f"{name:5s} ×{jobs:<2d} {r['runs']:3d} runs  wall {r['wall']:6.1f} s  "
                       f"{r['runs'] / r['wall']:5.2f} runs/s  outside runs {r['outside']:5.1f} s"
@@ -203,29 +213,41 @@ def main() -> None:
                 if r["verdict"] != "PASS":
                     raise SystemExit(f"{name} ×{jobs}: the suite did not pass")
     for name, by_config in results.items():
-        ones = [r for (jobs, _), r in by_config.items() if jobs == 1]
+        ones = [r for (jobs, _), rs in by_config.items() if jobs == 1 for r in rs]
         if not ones:
             continue
-        one = ones[0]["runs"] / ones[0]["wall"]
-        cpu_rate = ones[0]["cpu"] / ones[0]["wall"] if ones[0]["cpu"] else None
-        for (n, repeat), r in by_config.items():
+        # medians over every 1-worker pass: a single pass moves by up to a fifth between
+        # passes on a shared host, and the efficiency divides by it
+        one = statistics.median(r["runs"] / r["wall"] for r in ones)
+        cpu_rate = (statistics.median(r["cpu"] / r["wall"] for r in ones)
+                    if all(r["cpu"] for r in ones) else None)
+        cpu_run = statistics.median(r["cpu"] / r["runs"] for r in ones) if cpu_rate else None
+        one_span = (statistics.median(r["runs"] / r["span"] for r in ones)
+                    if all(r["span"] for r in ones) else None)
+        for (n, repeat), rs in by_config.items():
             if n > 1:
-                many = r["runs"] / r["wall"]
+                many = statistics.median(r["runs"] / r["wall"] for r in rs)
                 cpu = ""
-                if cpu_rate and r["cpu"]:
+                if cpu_rate and cpu_run and all(r["cpu"] for r in rs):
                     ceiling = min(1.0, (os.cpu_count() or 1) / (n * cpu_rate))
-                    more = (r["cpu"] / r["runs"]) / (ones[0]["cpu"] / ones[0]["runs"])
+                    more = statistics.median(r["cpu"] / r["runs"] for r in rs) / cpu_run
                     cpu = f"; CPU ceiling {ceiling:.2f}, CPU a run ×{more:.2f} of one worker's"
-                if r["span"] and ones[0]["span"]:  # the start-up and the end left out
-                    inside = (r["runs"] / r["span"]) / (n * ones[0]["runs"] / ones[0]["span"])
+                if one_span and all(r["span"] for r in rs):  # the start-up and end left out
+                    inside = statistics.median(r["runs"] / r["span"] for r in rs) / (
+                        n * one_span)
                     cpu += f"; inside the runs' span {inside:.2f}"
-                print(f"{name}: efficiency at {n} workers, {r['runs']} runs (repeat {repeat}) "
-                      f"= {many / (n * one):.2f} ({many:.2f} runs/s against {n} × {one:.3f})"
-                      + cpu)
+                spread = ""
+                if len(rs) > 1 or len(ones) > 1:  # each N-worker pass against each 1-worker one
+                    each = [(r["runs"] / r["wall"]) / (n * o["runs"] / o["wall"])
+                            for r in rs for o in ones]
+                    spread = f" (pass against pass {min(each):.2f}–{max(each):.2f})"
+                print(f"{name}: efficiency at {n} workers, {rs[0]['runs']} runs (repeat {repeat}) "
+                      f"= {many / (n * one):.2f}{spread} (median {many:.2f} runs/s against "
+                      f"{n} × {one:.3f}, medians of {len(rs)} and {len(ones)} passes)" + cpu)
     if args.json:
-        args.json.write_text(json.dumps({k: {f"{j}:{rep}": {kk: vv for kk, vv in v.items()
-                                                           if kk != "summary"}
-                                             for (j, rep), v in d.items()}
+        args.json.write_text(json.dumps({k: {f"{j}:{rep}": [{kk: vv for kk, vv in v.items()
+                                                            if kk != "summary"} for v in vs]
+                                             for (j, rep), vs in d.items()}
                                          for k, d in results.items()}, indent=1))
 
 
