@@ -28,43 +28,42 @@ from typing import TYPE_CHECKING, Any
 
 from harness import runlock
 from harness._lazy import lazy_exports
-from harness.engine import Simulation
 from harness.errors import SrrError
-from harness.graph import stage_to_json, stage_to_mermaid
 from harness.live.config import LiveConfig
-from harness.run.baselines import (
-    PROJECT_MARKERS,
-    baseline_name,
-    baselines_dir,
-    bless,
-    scene_config,
-)
-from harness.run.facts import combined_digest, default_run_dir, reproduce_command, versions
-from harness.run.loading import load
-from harness.run.record import Progress, RunResult, Started, import_after_the_loop
-from harness.run.simulate import (
-    ROS2_BRIDGE,
-    Notice,
-    RepeatResult,
-    check_video,
-    ros2_bridge,
-    run_repeat,
-    run_scenario,
-    start_streams,
-    validate,
-)
-from harness.scenario import Scenario
-from harness.suite.events import Listener
-from harness.suite.runner import SuitePlan, SuiteResult, plan_suite, run_suite
 
-if TYPE_CHECKING:  # srr search imports optuna lazily: only when it runs
+if TYPE_CHECKING:
     from harness.diff import DiffResult, Tolerance
+    from harness.engine import Simulation
     from harness.export.rerun import RerunExport
+    from harness.run.baselines import (
+        PROJECT_MARKERS,
+        baseline_name,
+        baselines_dir,
+        bless,
+        scene_config,
+    )
+    from harness.run.facts import combined_digest, default_run_dir, reproduce_command, versions
+    from harness.run.loading import load
+    from harness.run.record import Progress, RunResult, Started, import_after_the_loop
     from harness.run.recover import RecoverResult, recover
     from harness.run.replay import replay
     from harness.run.rerender import report
+    from harness.run.simulate import (
+        ROS2_BRIDGE,
+        Notice,
+        RepeatResult,
+        check_video,
+        ros2_bridge,
+        run_repeat,
+        run_scenario,
+        start_streams,
+        validate,
+    )
+    from harness.scenario import Scenario
     from harness.search.runner import SearchResult
     from harness.suite.diff import SuiteDiff
+    from harness.suite.events import Listener
+    from harness.suite.runner import SuitePlan, SuiteResult, plan_suite
 
 __all__ = [
     "PROJECT_MARKERS",
@@ -114,10 +113,22 @@ __all__ = [
     "write_summary_md",
 ]
 
-# Commands that read a run back (recover, replay, re-render, export) import the bag readers,
-# pandas and the report: their names are imported on first use (harness._lazy), so that
-# `srr run` and `srr suite` start their runs without them.
+# Every name is imported on first use (harness._lazy): a command imports only what it calls, so
+# that commands that read a run back (diff, report, recover, export) do not import the scene
+# builders, graphs and MuJoCo, and `srr run` and `srr suite` start their runs without the bag
+# readers, pandas and the report.
 _WHERE = {
+    **dict.fromkeys(("PROJECT_MARKERS", "baseline_name", "baselines_dir", "bless",
+                     "scene_config"), "harness.run.baselines"),
+    **dict.fromkeys(("combined_digest", "default_run_dir", "reproduce_command", "versions"),
+                    "harness.run.facts"),
+    "load": "harness.run.loading",
+    **dict.fromkeys(("Progress", "RunResult", "Started", "import_after_the_loop"),
+                    "harness.run.record"),
+    **dict.fromkeys(("ROS2_BRIDGE", "Notice", "RepeatResult", "check_video", "ros2_bridge",
+                     "run_repeat", "run_scenario", "start_streams", "validate"),
+                    "harness.run.simulate"),
+    **dict.fromkeys(("SuitePlan", "SuiteResult", "plan_suite"), "harness.suite.runner"),
     "RecoverResult": "harness.run.recover",
     "RerunExport": "harness.export.rerun",
     "recover": "harness.run.recover",
@@ -128,11 +139,16 @@ __getattr__, __dir__ = lazy_exports(__name__, _WHERE, globals())
 
 
 def build_graphs(scenario: Scenario, source: str = "<scenario>") -> Simulation:
+    from harness.engine import Simulation
+
     return Simulation(scenario, source=source)
 
 
 def graph_text(scenario: Scenario, fmt: str = "mermaid", source: str = "<scenario>") -> str:
     """The scenario's action graphs as Mermaid or JSON (``srr graph``)."""
+    from harness.engine import Simulation
+    from harness.graph import stage_to_json, stage_to_mermaid
+
     sim = Simulation(scenario, source=source)
     return stage_to_mermaid(sim.stage) if fmt == "mermaid" else stage_to_json(sim.stage)
 
@@ -188,6 +204,8 @@ def suite(paths: Sequence[str | Path], *, executor: str = "local", jobs: int | N
     ``srr suite`` does), saving each run the interpreter's start-up and imports.
     ``bless_reason`` (``--update-baselines``) blesses each valid group's first run, but not one
     that fails an absolute criterion unless ``allow_failing``."""
+    from harness.suite.runner import plan_suite
+
     plan = plan_suite(paths, repeat=repeat, timeout_s=timeout_s)
     return run_planned_suite(plan, executor=executor, jobs=jobs, address=address, out=out,
                              history=history, baselines=baselines, gpu_share=gpu_share,
@@ -202,6 +220,8 @@ def run_planned_suite(plan: SuitePlan, *, executor: str = "local", jobs: int | N
                       listen: Listener | None = None, fork: bool = False,
                       allow_failing: bool = False) -> SuiteResult:
     """:func:`suite` for a plan already checked (:func:`harness.suite.runner.plan_suite`)."""
+    from harness.suite.runner import run_suite
+
     ex = _executor(executor, jobs, address, baselines, gpu_share, fork)
     return run_suite(plan, ex, out=out, history=history, listen=listen,
                      bless_reason=bless_reason, baselines=baselines,
@@ -301,6 +321,8 @@ def write_summary_md(result: SuiteResult | RunResult, path: str | Path, *,
     GitHub-flavoured Markdown from the same result that gives the exit code, capped at
     GitHub's comment size. Report links are the suite folder's (the run directory's)
     relative paths under ``link_base``, by default that folder relative to ``path``."""
+    from harness.suite.runner import SuiteResult
+
     if isinstance(result, SuiteResult):
         from harness.suite.markdown import write_markdown as write_suite
 

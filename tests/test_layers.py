@@ -120,8 +120,7 @@ LATER = ("pandas", "scipy.spatial", "scipy.optimize", "jinja2", "mcap.reader",
          "harness.diff", "harness.diff.metrics", "harness.report.html")
 
 
-@pytest.mark.parametrize("module", ["harness.api", "harness.suite.runner",
-                                    "harness.run.simulate"])
+@pytest.mark.parametrize("module", ["harness.suite.runner", "harness.run.simulate"])
 def test_starting_a_run_or_a_suite_loads_nothing_it_needs_only_later(module: str) -> None:
     code = (f"import json, sys\nimport {module}\n"
             f"print(json.dumps({{'loaded': sorted(m for m in {LATER!r} if m in sys.modules), "
@@ -129,6 +128,19 @@ def test_starting_a_run_or_a_suite_loads_nothing_it_needs_only_later(module: str
     found = _modules_after(code)
     assert found["mujoco"] is True  # what the run needs before its loop is imported
     assert found["loaded"] == []
+
+
+@pytest.mark.parametrize("modules", [
+    ("harness.api",),
+    # what `srr diff`, `srr report`, `srr recover` and `srr export` import through the API
+    ("harness.api", "harness.diff.core", "harness.run.rerender", "harness.run.recover",
+     "harness.export.rerun"),
+])
+def test_commands_that_read_a_run_back_load_no_simulation_code(modules: tuple[str, ...]) -> None:
+    # importing the scene builders, graphs and MuJoCo took ~1 s of every `srr diff` before
+    code = (f"import importlib, json, sys\nfor m in {modules!r}: importlib.import_module(m)\n"
+            f"print(json.dumps(sorted(m for m in {HEAVY!r} if m in sys.modules)))\n")
+    assert _modules_after(code) == []
 
 
 def test_the_ros1_message_store_is_made_only_when_something_uses_it() -> None:
