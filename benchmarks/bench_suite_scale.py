@@ -107,6 +107,14 @@ def one_pass(tree: Path, suite: str, jobs: int, repeat: int, out: Path) -> dict[
             "span": span, "summary": s}
 
 
+def _median(passes: list[dict[str, Any]], num: str, den: str) -> float | None:
+    """The median of ``num / den`` over ``passes``; None when a pass lacks either (a tree
+    that records no CPU time or no timeline)."""
+    if not all(p[num] and p[den] for p in passes):
+        return None
+    return float(statistics.median(p[num] / p[den] for p in passes))
+
+
 def show(summary: dict[str, Any], width: int = 100) -> None:
     """Each worker slot's runs along the suite's time, one character a step."""
     runs = [r for r in summary["runs"] if r.get("timings")]
@@ -218,24 +226,24 @@ def main() -> None:
             continue
         # medians over every 1-worker pass: a single pass moves by up to a fifth between
         # passes on a shared host, and the efficiency divides by it
-        one = statistics.median(r["runs"] / r["wall"] for r in ones)
-        cpu_rate = (statistics.median(r["cpu"] / r["wall"] for r in ones)
-                    if all(r["cpu"] for r in ones) else None)
-        cpu_run = statistics.median(r["cpu"] / r["runs"] for r in ones) if cpu_rate else None
-        one_span = (statistics.median(r["runs"] / r["span"] for r in ones)
-                    if all(r["span"] for r in ones) else None)
+        one = _median(ones, "runs", "wall")
+        assert one is not None  # every pass ran (and passed) at least one run
+        cpu_rate = _median(ones, "cpu", "wall")
+        cpu_run = _median(ones, "cpu", "runs")
+        one_span = _median(ones, "runs", "span")
         for (n, repeat), rs in by_config.items():
             if n > 1:
-                many = statistics.median(r["runs"] / r["wall"] for r in rs)
+                many = _median(rs, "runs", "wall")
+                assert many is not None
                 cpu = ""
-                if cpu_rate and cpu_run and all(r["cpu"] for r in rs):
+                cpu_n = _median(rs, "cpu", "runs")
+                if cpu_rate and cpu_run and cpu_n:
                     ceiling = min(1.0, (os.cpu_count() or 1) / (n * cpu_rate))
-                    more = statistics.median(r["cpu"] / r["runs"] for r in rs) / cpu_run
-                    cpu = f"; CPU ceiling {ceiling:.2f}, CPU a run ×{more:.2f} of one worker's"
-                if one_span and all(r["span"] for r in rs):  # the start-up and end left out
-                    inside = statistics.median(r["runs"] / r["span"] for r in rs) / (
-                        n * one_span)
-                    cpu += f"; inside the runs' span {inside:.2f}"
+                    cpu = (f"; CPU ceiling {ceiling:.2f}, CPU a run ×{cpu_n / cpu_run:.2f} of "
+                           "one worker's")
+                span_n = _median(rs, "runs", "span")
+                if one_span and span_n:  # the start-up and the end left out
+                    cpu += f"; inside the runs' span {span_n / (n * one_span):.2f}"
                 spread = ""
                 if len(rs) > 1 or len(ones) > 1:  # each N-worker pass against each 1-worker one
                     each = [(r["runs"] / r["wall"]) / (n * o["runs"] / o["wall"])
