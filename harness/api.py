@@ -146,10 +146,9 @@ def build_graphs(scenario: Scenario, source: str = "<scenario>") -> Simulation:
 
 def graph_text(scenario: Scenario, fmt: str = "mermaid", source: str = "<scenario>") -> str:
     """The scenario's action graphs as Mermaid or JSON (``srr graph``)."""
-    from harness.engine import Simulation
     from harness.graph import stage_to_json, stage_to_mermaid
 
-    sim = Simulation(scenario, source=source)
+    sim = build_graphs(scenario, source)
     return stage_to_mermaid(sim.stage) if fmt == "mermaid" else stage_to_json(sim.stage)
 
 
