@@ -21,6 +21,7 @@ import difflib
 import math
 import types
 import typing
+import weakref
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
@@ -195,10 +196,7 @@ class Validator:
     def dataclass(self, cls: Any, raw: Any, path: str) -> Any:
         if not isinstance(raw, dict):
             self.fail(path or "(top level)", f"expected a mapping, got {raw!r}")
-        hints = get_type_hints(cls)
-        # by the key the file spells them with (metadata "key": a name Python cannot take)
-        fields = {f.metadata.get("key", f.name): f for f in dataclasses.fields(cls)
-                  if not f.metadata.get("internal")}
+        hints, fields = _layout(cls)
         if self.unknown == "refuse":
             for key in raw:
                 if key not in fields:
@@ -220,6 +218,25 @@ class Validator:
                 tp = self.refine(cls, f.name, raw, tp)
             kwargs[f.name] = self.value(tp, raw[key], sub, f.metadata)
         return cls(**kwargs)
+
+
+_Layout = tuple[dict[str, Any], dict[str, dataclasses.Field[Any]]]
+#: Each dataclass's :func:`_layout`, for as long as the class lives (a plug-in's module is
+#: dropped between the runs of a suite's host; its classes go with it).
+_LAYOUTS: weakref.WeakKeyDictionary[type, _Layout] = weakref.WeakKeyDictionary()
+
+
+def _layout(cls: type) -> _Layout:
+    """The type hints of dataclass ``cls`` and its fields read from a file, by the key the
+    file spells them with (metadata ``key``: a name Python cannot take). Worked out once a
+    class: resolving string annotations compiles each one, which every scenario load paid
+    again for every block it read (a quarter of checking a suite)."""
+    layout = _LAYOUTS.get(cls)
+    if layout is None:
+        fields = {f.metadata.get("key", f.name): f for f in dataclasses.fields(cls)
+                  if not f.metadata.get("internal")}
+        layout = _LAYOUTS[cls] = (get_type_hints(cls), fields)
+    return layout
 
 
 #: An unknown key in a dataclass of at most this many fields is answered with all of them.

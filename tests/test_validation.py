@@ -67,3 +67,40 @@ def test_unknown_keys_can_be_ignored_and_long_values_are_cut() -> None:
     with pytest.raises(ScenarioError) as err:
         validate(Outer, {"name": ["y" * 500], "from": 1}, "f")
     assert len(str(err.value)) < 120 and "…" in str(err.value)
+
+
+def test_a_class_s_type_hints_are_resolved_once_and_forgotten_with_it(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Resolving string annotations compiles each one: a scenario read many blocks of the
+    same classes and resolved them again for each (a quarter of checking a suite). A class
+    made at run time, as a plug-in's module is, leaves no trace once it is gone."""
+    import gc
+    import weakref
+
+    import harness.validation as validation
+
+    calls: list[type] = []
+    real = validation.get_type_hints
+
+    def counting(cls: type) -> dict[str, Any]:
+        calls.append(cls)
+        return real(cls)
+
+    monkeypatch.setattr(validation, "get_type_hints", counting)
+    namespace: dict[str, Any] = {}
+    exec("from __future__ import annotations\nfrom dataclasses import dataclass\n"
+         "@dataclass(frozen=True)\nclass Made:\n    a: int\n    b: 'tuple[str, ...]' = ()\n",
+         namespace)
+    made = namespace.pop("Made")
+    for _ in range(3):
+        assert validate(made, {"a": 1, "b": ["x"]}, "f") == made(1, ("x",))
+        validate(Outer, {"name": "x", "from": 1, "items": [{"kind": "a"}, {"kind": "b"}]}, "f")
+    assert calls.count(made) == 1
+    assert calls.count(Inner) <= 1 and calls.count(Outer) <= 1  # (an earlier test may own it)
+    with pytest.raises(ScenarioError, match=r"f: b\[0\]: expected a string, got 2"):
+        validate(made, {"a": 1, "b": [2]}, "f")  # the kept hints still check
+    gone = weakref.ref(made)
+    calls.clear()
+    del made, namespace
+    gc.collect()
+    assert gone() is None

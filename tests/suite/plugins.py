@@ -202,3 +202,19 @@ class Unseeded(RouteFollower):
         super().setup(ctx)
         self.p = type(self.p)(**{**self.p.__dict__, "speed": 0.5 + random.random() * 0.1
                                  + float(np.random.random()) * 0.1})
+
+
+#: Environment variable naming a file :class:`CountsFrozen` writes, in a worker, how many
+#: objects the collector holds frozen (skips in its collections) as its run starts.
+FROZEN_FILE = "SRR_TEST_FROZEN_FILE"
+
+
+class CountsFrozen(RouteFollower):
+    """Follows the route; in a worker, notes ``gc.get_freeze_count()`` at its set-up."""
+
+    def setup(self, ctx: SutContext) -> None:
+        super().setup(ctx)
+        if in_a_worker():
+            import gc
+
+            Path(os.environ[FROZEN_FILE]).write_text(str(gc.get_freeze_count()))
