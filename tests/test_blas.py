@@ -38,6 +38,7 @@ def _clean_env() -> dict[str, str]:
                          "SRR_ADDED_OPENBLAS_NUM_THREADS")}
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/self/task").is_dir() or (os.cpu_count() or 1) < 2,
                     reason="counts a process's threads in /proc; OpenBLAS starts none on one CPU")
 def test_the_srr_command_starts_no_blas_threads_unless_the_user_asks() -> None:

@@ -72,6 +72,7 @@ def test_rotation_of_sequences_is_the_rotation_of_arrays_bit_for_bit() -> None:
         assert _bits(quat_wxyz_rotate(q.tolist(), v.tolist())) == _bits(quat_wxyz_rotate(q, v))
 
 
+@pytest.mark.slow
 def test_mujocos_conversions_agree_with_the_pure_ones() -> None:
     """harness.sim.mjquat is MuJoCo's arithmetic, bit for bit, and the same rotations as
     harness.geometry's (to rounding)."""
@@ -112,6 +113,7 @@ def test_model_rotations_compose_with_mujocos_product() -> None:
         np.testing.assert_allclose(quat_wxyz_from_rpy_deg(rpy), out, rtol=0, atol=1e-15)
 
 
+@pytest.mark.slow
 def test_conversions_agree_with_scipy_in_both_component_orders() -> None:
     rng = np.random.default_rng(8)
     for q in _unit_quats(2_000, 9):
@@ -138,6 +140,7 @@ def test_conversions_agree_with_scipy_in_both_component_orders() -> None:
             == pytest.approx(0.0, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_round_trips() -> None:
     for q in _unit_quats(2_000, 10):
         assert _bits(xyzw_to_wxyz(wxyz_to_xyzw(q))) == _bits(q)

@@ -69,6 +69,7 @@ def test_the_contracts_catch_an_import_that_breaks_a_layer(tmp_path: Path) -> No
     assert "2 broken" in proc.stdout
 
 
+@pytest.mark.slow
 def test_pure_layers_load_no_simulation_code_even_when_used() -> None:
     # Every name the pure packages export is looked up, so a lazy export that drags in
     # a heavy module is caught too, not only the bare import.
@@ -120,6 +121,7 @@ LATER = ("pandas", "scipy.spatial", "scipy.optimize", "jinja2", "mcap.reader",
          "harness.diff", "harness.diff.metrics", "harness.report.html")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("module", ["harness.suite.runner", "harness.run.simulate"])
 def test_starting_a_run_or_a_suite_loads_nothing_it_needs_only_later(module: str) -> None:
     code = (f"import json, sys\nimport {module}\n"
@@ -130,6 +132,7 @@ def test_starting_a_run_or_a_suite_loads_nothing_it_needs_only_later(module: str
     assert found["loaded"] == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("modules", [
     ("harness.api",),
     # what `srr diff`, `srr report`, `srr recover` and `srr export` import through the API
@@ -154,6 +157,7 @@ def test_the_ros1_message_store_is_made_only_when_something_uses_it() -> None:
     assert _modules_after(code) == {"before": 0, "after": 1}
 
 
+@pytest.mark.slow
 def test_a_suite_imports_what_its_runs_need_at_their_end_before_it_forks() -> None:
     # srr suite calls it before forking its hosts, which then share these modules
     code = ("import json, sys\nfrom harness import api\napi.import_after_the_loop()\n"

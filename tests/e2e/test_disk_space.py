@@ -126,6 +126,7 @@ def test_api_refusal_is_a_disk_space_error(tmp_path: Path) -> None:
     assert not (tmp_path / "r").exists()
 
 
+@pytest.mark.slow
 def test_an_h264_camera_is_estimated_by_its_expected_size_not_its_raw_picture(
         tmp_path: Path) -> None:
     """An hour of a 1080p h264 camera was estimated at its raw 4:2:0 pictures (336 GB) and

@@ -115,6 +115,7 @@ def test_mota_and_idf1_agree_with_motmetrics(seed: int, gate: float) -> None:
     assert abs(ours.recall - ref["recall"]) < 1e-9
 
 
+@pytest.mark.slow
 def test_scoring_imports_the_assignment_solver_only_when_it_matches() -> None:
     """Importing scipy.optimize takes ~0.5 s: a run whose frames never need an assignment
     (no tracks) does not pay it; the first assignment imports it."""

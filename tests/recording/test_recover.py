@@ -88,6 +88,7 @@ def test_chunks_are_bounded_by_span_and_size(tmp_path: Path) -> None:
     assert max(sizes) < 20_000 + 3200  # closed once past the bound: at most one image over
 
 
+@pytest.mark.slow
 def test_every_cut_keeps_exactly_the_complete_chunks(small_bag: Path, tmp_path: Path) -> None:
     src = small_bag / "bag.mcap"
     data = src.read_bytes()

@@ -18,6 +18,7 @@ from tests.conftest import SCENARIOS
 BASELINES = SCENARIOS.parent / "baselines"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(p.stem for p in BASELINES.glob("*.json")))
 def test_shipped_baselines_carry_a_small_reference_recording(name: str) -> None:
     data = json.loads((BASELINES / f"{name}.json").read_text())

@@ -211,6 +211,7 @@ def _known(path: Path_) -> bool:
 # The tests
 
 
+@pytest.mark.slow
 @settings(max_examples=max(10, BUDGET), suppress_health_check=[
     HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(data=st.data(), pair=st.sampled_from(FILES))
@@ -245,6 +246,7 @@ def test_a_mutated_set_value_validates_or_fails_in_one_line(
     one_line_naming_the_file(err, "validate", tree, codes=(), code=code)
 
 
+@pytest.mark.slow
 @settings(max_examples=max(5, BUDGET // 4), suppress_health_check=[
     HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(m=mutations(SUITE))

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -30,6 +31,7 @@ def _check(err: ScenarioError) -> None:
     assert "\n" not in text and text.startswith("s.yaml"), text
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(documents)
 def test_random_mappings_validate_or_fail_cleanly(doc: dict[str, Any]) -> None:

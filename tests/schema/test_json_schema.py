@@ -207,6 +207,7 @@ def _wrong(value: Any) -> list[Any]:
         ["wrong", 0.0, -1.0, -1e12, 1e12]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["turtlebot3_room", "diffbot_urdf", "camera_publishing"])
 def test_schema_and_validator_agree_on_every_value(
         name: str, validators: dict[str, Draft202012Validator]) -> None:

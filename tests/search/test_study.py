@@ -42,6 +42,7 @@ def test_same_seed_same_trials_resumed_or_not(tmp_path: Path, sampler: str) -> N
     assert len({repr(sorted(p.items())) for p in straight}) > 5  # it does sample
 
 
+@pytest.mark.slow
 def test_a_trial_left_running_is_marked_killed(tmp_path: Path) -> None:
     db = tmp_path / "s.db"
     study = open_study(db, OBJ, CONFIG)

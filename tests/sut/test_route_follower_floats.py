@@ -164,6 +164,7 @@ def test_clip_is_numpy_clip_on_floats() -> None:
             assert math.isnan(got) if math.isnan(want) else got.hex() == want.hex(), (x, lo, hi)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("waypoints", [
     [[-12.0, -3.0], [-3.0, -3.0], [3.0, 0.0], [15.0, 0.0], [21.0, 0.0]],  # forklift_warehouse
     [[0.0, 0.0], [0.0, 0.0], [2.5, 1.7], [-1.3, 4.1], [-1.3, 4.1], [7.7, -2.9]],  # repeats

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import av
 import numpy as np
+import pytest
 
 from harness.video import H264Encoder, H264Settings, psnr, read_sim_time, sim_time_of_user_data
 from harness.video.rtsp import RtspHub, StreamConfig
@@ -106,6 +107,7 @@ def produce(hub: RtspHub, config: StreamConfig, stop: threading.Event) -> int:
     return encoded
 
 
+@pytest.mark.slow
 def test_a_client_joining_mid_stream_decodes_its_first_frame() -> None:
     hub = RtspHub(rate=1.0)
     config = StreamConfig(0, "/cam")  # port 0: the system picks, the stream tells which
