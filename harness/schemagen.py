@@ -27,9 +27,9 @@ import sys
 import tokenize
 import types
 from collections.abc import Mapping
-from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
+from typing import Any, Literal, Union, get_args, get_origin
 
-from harness.validation import TINY
+from harness.validation import TINY, layout
 
 __all__ = ["DRAFT", "SchemaBuilder", "dumps", "field_comments", "json_schema", "plain"]
 
@@ -42,8 +42,7 @@ def plain(value: Any) -> Any:
     """``value`` as JSON data: a dataclass as a mapping of its file keys, a tuple as a list
     (for a field's ``default``)."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {f.metadata.get("key", f.name): plain(getattr(value, f.name))
-                for f in dataclasses.fields(value) if not f.metadata.get("internal")}
+        return {key: plain(getattr(value, f.name)) for key, f in layout(type(value))[1].items()}
     if isinstance(value, tuple | list):
         return [plain(v) for v in value]
     if isinstance(value, Mapping):
@@ -146,14 +145,11 @@ class SchemaBuilder:
 
     def object(self, cls: type) -> dict[str, Any]:
         """The schema of dataclass ``cls`` itself (not a reference to it)."""
-        hints = get_type_hints(cls)
+        hints, fields = layout(cls)
         props: dict[str, Any] = {}
         required: list[str] = []
         notes = field_comments(cls)
-        for f in dataclasses.fields(cls):
-            if f.metadata.get("internal"):
-                continue
-            key = f.metadata.get("key", f.name)
+        for key, f in fields.items():
             schema = self.value(hints[f.name], f.metadata)
             if f.name in notes:
                 schema = {"description": _unmark(notes[f.name]), **schema}

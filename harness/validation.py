@@ -27,7 +27,8 @@ from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
 from harness.errors import ScenarioError
 
-__all__ = ["TINY", "Refine", "Validator", "close_match", "join", "typename", "validate"]
+__all__ = ["TINY", "Layout", "Refine", "Validator", "close_match", "join", "layout", "typename",
+           "validate"]
 
 T = typing.TypeVar("T")
 
@@ -196,7 +197,7 @@ class Validator:
     def dataclass(self, cls: Any, raw: Any, path: str) -> Any:
         if not isinstance(raw, dict):
             self.fail(path or "(top level)", f"expected a mapping, got {raw!r}")
-        hints, fields = _layout(cls)
+        hints, fields = layout(cls)
         if self.unknown == "refuse":
             for key in raw:
                 if key not in fields:
@@ -220,23 +221,27 @@ class Validator:
         return cls(**kwargs)
 
 
-_Layout = tuple[dict[str, Any], dict[str, dataclasses.Field[Any]]]
-#: Each dataclass's :func:`_layout`, for as long as the class lives (a plug-in's module is
+#: A dataclass's type hints (by field name) and the fields a file may hold, by the key the
+#: file spells them with.
+Layout = tuple[dict[str, Any], dict[str, dataclasses.Field[Any]]]
+#: Each dataclass's :func:`layout`, for as long as the class lives (a plug-in's module is
 #: dropped between the runs of a suite's host; its classes go with it).
-_LAYOUTS: weakref.WeakKeyDictionary[type, _Layout] = weakref.WeakKeyDictionary()
+_LAYOUTS: weakref.WeakKeyDictionary[type, Layout] = weakref.WeakKeyDictionary()
 
 
-def _layout(cls: type) -> _Layout:
-    """The type hints of dataclass ``cls`` and its fields read from a file, by the key the
-    file spells them with (metadata ``key``: a name Python cannot take). Worked out once a
-    class: resolving string annotations compiles each one, which every scenario load paid
-    again for every block it read (a quarter of checking a suite)."""
-    layout = _LAYOUTS.get(cls)
-    if layout is None:
+def layout(cls: type) -> Layout:
+    """The type hints of dataclass ``cls`` and the fields a file may hold, in declaration
+    order, by the key the file spells them with (metadata ``key``: a name Python cannot
+    take; fields marked ``internal`` left out): what the validator reads and the schema and
+    reference pages describe. Worked out once a class: resolving string annotations compiles
+    each one, which every scenario load paid again for every block it read (a quarter of
+    checking a suite)."""
+    found = _LAYOUTS.get(cls)
+    if found is None:
         fields = {f.metadata.get("key", f.name): f for f in dataclasses.fields(cls)
                   if not f.metadata.get("internal")}
-        layout = _LAYOUTS[cls] = (get_type_hints(cls), fields)
-    return layout
+        found = _LAYOUTS[cls] = (get_type_hints(cls), fields)
+    return found
 
 
 #: An unknown key in a dataclass of at most this many fields is answered with all of them.

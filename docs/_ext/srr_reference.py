@@ -18,6 +18,8 @@ from typing import Any
 
 from sphinx.application import Sphinx
 
+from harness.validation import layout
+
 _MISSING = dataclasses.MISSING
 
 
@@ -117,11 +119,10 @@ def _label(page: str, cls: type) -> str:
 
 def _rows(cls: type, prefix: str, seen: set[type], rows: list[str],
           blocks: list[tuple[str, type]], page: str) -> None:
-    hints = typing.get_type_hints(cls)
-    for f in dataclasses.fields(cls):
-        if f.metadata.get("internal") or f.name.startswith("_"):
+    hints, fields = layout(cls)
+    for key, f in fields.items():
+        if f.name.startswith("_"):
             continue
-        key = f.metadata.get("key", f.name)
         tp = hints[f.name]
         path = f"{prefix}{key}"
         nested = _nested(tp)

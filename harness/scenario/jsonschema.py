@@ -16,11 +16,12 @@ a scenario's top-level keys, so no top-level key is required (the merged scenari
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, get_origin, get_type_hints
+from typing import Any, get_origin
 
 from harness.scenario.loader import _CONTROL_BY_MODEL
 from harness.scenario.schema import FORMAT_VERSION, DiffDriveControl, ForkliftControl, Scenario
 from harness.schemagen import SchemaBuilder, json_schema
+from harness.validation import layout
 
 __all__ = ["scenario_schema"]
 
@@ -38,14 +39,11 @@ def scenario_schema() -> dict[str, Any]:
         "schema says.")
     props: dict[str, Any] = doc["properties"]
     props["format_version"] = {**props["format_version"], "const": FORMAT_VERSION}
-    hints = get_type_hints(Scenario)
+    hints, fields = layout(Scenario)
     extended: dict[str, Any] = {}
-    for f in dataclasses.fields(Scenario):
-        if f.metadata.get("internal"):
-            continue
-        tp = hints[f.name]
+    for key, f in fields.items():
+        tp: Any = hints[f.name]
         if get_origin(tp) in _EXTENDABLE or dataclasses.is_dataclass(tp):
-            key = f.metadata.get("key", f.name)
             item = {k: v for k, v in props[key].items() if k != "default"}
             extended[f"{key}+"] = {"description": f"Extends the included `{key}`.", **item}
     props.update(extended)
