@@ -6,10 +6,12 @@ import os
 import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import settings
 
+from tests.log_sections import SECTIONS
 from tests.report.browser import chromium_path
 
 # Headless rendering for the camera tests (EGL: a GPU, or Mesa's llvmpipe on CPU). MuJoCo reads
@@ -64,3 +66,28 @@ settings.register_profile("ci", derandomize=True, database=None, deadline=None,
                           max_examples=20, print_blob=True)
 settings.register_profile("nightly", max_examples=1000, deadline=None, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+# The sections of tests/log_sections.py: from xdist workers to the controller, then printed.
+_WORKER_KEY = "srr_log_sections"
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    output = getattr(session.config, "workeroutput", None)  # set in an xdist worker only
+    if output is not None:
+        output[_WORKER_KEY] = {title: list(lines) for title, lines in SECTIONS.items()}
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node: Any, error: object) -> None:
+    for title, lines in getattr(node, "workeroutput", {}).get(_WORKER_KEY, {}).items():
+        known = SECTIONS.setdefault(title, [])
+        # a module's fixture may run in each worker that got some of its tests: say it once
+        known.extend(line for line in lines if line not in known)
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    for title, lines in SECTIONS.items():
+        terminalreporter.section(title)
+        for line in lines:
+            terminalreporter.write_line(line)

@@ -52,6 +52,7 @@ def _bits(a: object) -> bytes:
     return np.asarray(a, dtype=np.float64).tobytes()
 
 
+@pytest.mark.slow
 def test_tuple_quaternions_are_the_numpy_ones_bit_for_bit() -> None:
     rng = np.random.default_rng(3)
     for i in range(20_000):

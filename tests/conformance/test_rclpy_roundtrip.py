@@ -48,9 +48,9 @@ from mcap.reader import make_reader
 from harness import api
 from harness.serde.messages import TYPESTORE
 from tests.conformance.cdr_size import exact_size, fastrtps_size
-from tests.conformance.summary import LINES
 from tests.conformance.synth import random_message
 from tests.conformance.values import message_fields, value_diff
+from tests.log_sections import add as log_line
 
 if os.environ.get("SRR_REQUIRE_ROS2") == "1":
     import rclpy  # noqa: F401  (an ImportError here is a collection error, never a skip)
@@ -254,7 +254,7 @@ def scenario_check(module_tmp: ModuleTmp) -> Callable[[Path], ScenarioCheck]:
             # bag is, and an INVALID run still has a complete one
             cache[path] = check_run(f"{path.stem} ({run.verdict})", run.run_dir)
             cache[path].run_s = run_s
-            LINES.append(cache[path].line())
+            log_line("ROS 2 conformance (real rclpy)", cache[path].line())
         return cache[path]
 
     return get

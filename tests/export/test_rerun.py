@@ -23,7 +23,6 @@ from tests.conftest import SCENARIOS, ModuleTmp
 from tests.e2e.bagread import decoded, mcap_file
 
 pytestmark = pytest.mark.slow
-rerun_chunk = pytest.importorskip("rerun.chunk")
 
 CAMERAS = ["--set", "cameras.dock_cam_left.record.rgb=[raw,h264]",
            "--set", "cameras.dock_cam_right.record.rgb=[jpeg]",
@@ -48,10 +47,17 @@ def lidar(module_tmp: ModuleTmp) -> Path:
     return _run(module_tmp("export"), "diffbot_urdf", "1")
 
 
+def _reader(rrd: Path) -> Any:
+    """Rerun's own reader of ``rrd``, imported on first use, not at collection: the SDK takes
+    0.7 s to import, which every pytest process (each xdist worker) would pay for nothing."""
+    rerun_chunk = pytest.importorskip("rerun.chunk")
+    return rerun_chunk.RrdReader(rrd)
+
+
 def _read(rrd: Path) -> tuple[dict[str, int], dict[str, list[Any]]]:
     """Rows on sim_time per entity (static rows apart, as ``entity#static``) and each
     entity's record batches, as Rerun reads the file."""
-    store = rerun_chunk.RrdReader(rrd).stream().collect()
+    store = _reader(rrd).stream().collect()
     rows: Counter[str] = Counter()
     batches: dict[str, list[Any]] = {}
     for ch in store.stream():
@@ -141,7 +147,7 @@ def test_a_dock_run_reads_back_in_rerun(dock: Path, tmp_path: Path) -> None:
     samples = _column(batches[f"{left}/dock_cam_left_rgb/h264"], "VideoStream:sample")
     assert samples[0][0] == video[0][0] and bytes(samples[0][1][0]) == bytes(video[0][1].data)
     # a file Rerun reads as one recording of srr, named after the run
-    (entry,) = rerun_chunk.RrdReader(rrd).recordings()
+    (entry,) = _reader(rrd).recordings()
     assert "srr" in repr(entry)
 
 

@@ -282,6 +282,7 @@ def test_frames_of_a_recorded_forklift_run(tmp_path: Path) -> None:
     assert (np.diff(f.clock["t_ns"]) > 0).all() and f.clock["t_ns"].iloc[0] == 0
 
 
+@pytest.mark.slow
 def test_every_metric_on_a_synthetic_bag(tmp_path: Path) -> None:
     """Bag → frames → metrics: the synthetic world's known answers come out."""
     from harness.metrics import (

@@ -208,6 +208,7 @@ def test_a_group_that_recorded_other_bytes_than_its_baseline_says_so(
     assert html.count("other-bytes") == 1  # not the flaky group, not the others
 
 
+@pytest.mark.slow
 def test_flaky_group_names_topics_divergence_and_each_repeat(
         suite: tuple[Path, dict, str]) -> None:
     html = suite[2]

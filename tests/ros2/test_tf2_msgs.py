@@ -36,7 +36,7 @@ import pytest
 from harness.ros2.errors import Ros2SetupError
 from harness.ros2.rosidl_build import find_toolchain
 from harness.serde.messages import TYPESTORE
-from tests.ros2.conftest import LINES
+from tests.log_sections import add as log_line
 from tests.ros2.tf_peer import TRANSFORMS, TYPENAME, as_plain, rosbags_bytes, rosbags_message
 
 REQUIRE = os.environ.get("SRR_REQUIRE_ROS2") == "1"
@@ -72,8 +72,9 @@ def tf2_prefix() -> Path:
             pytest.skip(f"cannot build tf2_msgs: {last}")
         pytest.fail(f"building tf2_msgs failed: {proc.stderr[-3000:]}")
     prefix, built_now, seconds, size = json.loads(proc.stdout.strip().splitlines()[-1])
-    LINES.append(f"{'built' if built_now else 'found in the cache, built'} in {seconds:.1f} s, "
-                 f"{size / 1e6:.1f} MB: {prefix}")
+    log_line("tf2_msgs for the ROS 2 wheels",
+             f"{'built' if built_now else 'found in the cache, built'} in {seconds:.1f} s, "
+             f"{size / 1e6:.1f} MB: {prefix}")
     return Path(prefix)
 
 

@@ -229,6 +229,7 @@ def test_a_mutated_scenario_validates_or_fails_in_one_line(
         assert code == 2 and "set twice" in line, (m, err)
 
 
+@pytest.mark.slow
 @settings(max_examples=max(10, BUDGET), suppress_health_check=[
     HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(data=st.data(), scenario=st.sampled_from([s for _, s in FILES]))

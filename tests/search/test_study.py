@@ -58,6 +58,7 @@ def test_a_trial_left_running_is_marked_killed(tmp_path: Path) -> None:
     assert nxt.number == 2  # numbers are not reused
 
 
+@pytest.mark.slow
 def test_other_settings_are_refused(tmp_path: Path) -> None:
     db = tmp_path / "s.db"
     open_study(db, OBJ, CONFIG)

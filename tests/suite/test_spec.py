@@ -360,6 +360,7 @@ def test_a_later_sweep_point_s_waypoint_in_a_shelf_is_refused_before_any_run(
     assert "workers[0].route[0]: (-6, -5.5) is inside the shelf at (-6, -6)" in str(info.value)
 
 
+@pytest.mark.slow
 def test_planning_a_suite_loads_each_scenario_configuration_once(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """Learning an entry's name, planning its runs, checking it and finding its baseline
