@@ -353,14 +353,21 @@ def check_video(scenario: Scenario, source: str = "<scenario>") -> tuple[str, ..
     except StreamError as err:
         raise ScenarioError(scenario.file_for("rtsp", source), "rtsp.enabled",
                             str(err)) from err
-    warnings = []
+    # cameras may share a port (one server, a mount path each): each port is tried once
+    users: dict[int, list[int]] = {}
     for i, cam in cams:
+        users.setdefault(cam.port or 0, []).append(i)
+    warnings = []
+    for port, (i, *others) in users.items():
         with socket.socket(socket.AF_INET6 if ":" in scenario.rtsp.host
                            else socket.AF_INET) as probe:
             try:
-                probe.bind((scenario.rtsp.host, cam.port or 0))
+                probe.bind((scenario.rtsp.host, port))
             except OSError as err:
+                also = (" (the port of " + ", ".join(f"cameras[{j}]" for j in others) + " too)"
+                        if others else "")
                 warnings.append(f"{scenario.file_for(f'cameras[{i}]', source)}: "
-                                f"cameras[{i}].port: {scenario.rtsp.host}:{cam.port} cannot "
-                                f"be bound now ({err.strerror or err}); a run would stop there")
+                                f"cameras[{i}].port: {scenario.rtsp.host}:{port} cannot "
+                                f"be bound now ({err.strerror or err}); a run would stop "
+                                f"there{also}")
     return tuple(warnings)

@@ -131,6 +131,24 @@ def test_validate_warns_of_a_port_held_now(tmp_path: Path,
             "in use); a run would stop there") in err
 
 
+def test_a_held_port_two_cameras_share_is_one_warning(tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """Cameras on one port share a server (a mount path each): a port held by another
+    program is said once, naming every camera that streams on it."""
+    with socket.socket() as blocker:
+        blocker.bind(("127.0.0.1", 0))
+        blocker.listen()
+        busy = blocker.getsockname()[1]
+        path = tmp_path / "scenario.yaml"
+        path.write_text(CAMS.replace("port: 8554", f"port: {busy}")
+                        .replace("port: 8555", f"port: {busy}"))
+        assert main(["validate", str(path)]) == 0
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "cannot be bound" in line]
+    assert warnings == [f"srr validate: warning: {path}: cameras[0].port: 127.0.0.1:{busy} "
+                        "cannot be bound now (Address already in use); a run would stop there "
+                        "(the port of cameras[1] too)"], warnings
+
+
 def test_validate_opens_the_encoders_it_will_need(tmp_path: Path,
                                                  capsys: pytest.CaptureFixture[str]) -> None:
     """NVENC opens only on an NVIDIA GPU with an encoder engine: elsewhere ``srr validate``
