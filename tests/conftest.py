@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 from hypothesis import settings
 
-from tests.log_sections import SECTIONS
+from tests.log_sections import SECTIONS, merge
 from tests.report.browser import chromium_path
 
 # Headless rendering for the camera tests (EGL: a GPU, or Mesa's llvmpipe on CPU). MuJoCo reads
@@ -80,10 +80,7 @@ def pytest_sessionfinish(session: pytest.Session) -> None:
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_testnodedown(node: Any, error: object) -> None:
-    for title, lines in getattr(node, "workeroutput", {}).get(_WORKER_KEY, {}).items():
-        known = SECTIONS.setdefault(title, [])
-        # a module's fixture may run in each worker that got some of its tests: say it once
-        known.extend(line for line in lines if line not in known)
+    merge(getattr(node, "workeroutput", {}).get(_WORKER_KEY, {}))
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
