@@ -63,6 +63,7 @@ if TYPE_CHECKING:
     from harness.search.runner import SearchResult
     from harness.suite.diff import SuiteDiff
     from harness.suite.events import Listener
+    from harness.suite.resume import Resumed
     from harness.suite.runner import SuitePlan, SuiteResult, plan_suite
 
 __all__ = [
@@ -75,6 +76,7 @@ __all__ = [
     "RecoverResult",
     "RepeatResult",
     "RerunExport",
+    "Resumed",
     "RunResult",
     "Started",
     "SuitePlan",
@@ -98,6 +100,7 @@ __all__ = [
     "replay",
     "report",
     "reproduce_command",
+    "resume_suite",
     "ros2_bridge",
     "run_planned_suite",
     "run_repeat",
@@ -130,6 +133,7 @@ _WHERE = {
                     "harness.run.simulate"),
     **dict.fromkeys(("SuitePlan", "SuiteResult", "plan_suite"), "harness.suite.runner"),
     "RecoverResult": "harness.run.recover",
+    "Resumed": "harness.suite.resume",
     "RerunExport": "harness.export.rerun",
     "recover": "harness.run.recover",
     "replay": "harness.run.replay",
@@ -192,7 +196,7 @@ def suite(paths: Sequence[str | Path], *, executor: str = "local", jobs: int | N
           timeout_s: float | None = None, history: Path | None = None,
           baselines: Path | None = None, gpu_share: float = 0.5,
           bless_reason: str | None = None, listen: Listener | None = None,
-          fork: bool = False, allow_failing: bool = False) -> SuiteResult:
+          fork: bool = False, allow_failing: bool = False, resume: bool = False) -> SuiteResult:
     """``srr suite``: check every scenario, sweep point and suite file in ``paths`` (bad input
     raises :class:`SrrError` before anything runs), run them on ``executor`` (``local``: ``jobs``
     worker processes, default one per CPU; ``ray``: tasks on the cluster at ``address``, else on
@@ -202,14 +206,30 @@ def suite(paths: Sequence[str | Path], *, executor: str = "local", jobs: int | N
     are forked from this process when it is safe (:func:`harness.suite.local.fork_safe`; what
     ``srr suite`` does), saving each run the interpreter's start-up and imports.
     ``bless_reason`` (``--update-baselines``) blesses each valid group's first run, but not one
-    that fails an absolute criterion unless ``allow_failing``."""
+    that fails an absolute criterion unless ``allow_failing``. ``resume`` (``--resume``, needs
+    ``out``): run only what an earlier pass of the suite in ``out`` left undone
+    (:func:`resume_suite`)."""
     from harness.suite.runner import plan_suite
 
+    if resume and out is None:
+        raise SrrError("--resume: name the folder of the suite to resume with --out")
     plan = plan_suite(paths, repeat=repeat, timeout_s=timeout_s)
+    resumed = resume_suite(plan, out) if resume and out is not None else None
     return run_planned_suite(plan, executor=executor, jobs=jobs, address=address, out=out,
                              history=history, baselines=baselines, gpu_share=gpu_share,
                              bless_reason=bless_reason, listen=listen, fork=fork,
-                             allow_failing=allow_failing)
+                             allow_failing=allow_failing, resume=resumed)
+
+
+def resume_suite(plan: SuitePlan, out: Path) -> Resumed:
+    """What resuming ``plan`` in ``out`` keeps and runs again: the runs of an earlier pass
+    there that ended, and the rest (never started, interrupted, timed out, crashed, or stale:
+    another srr, scenario or baseline), each with why; a missing or empty ``out`` runs
+    everything. Bad input (a folder of another suite or of something else, a run still being
+    written) raises :class:`SrrError` before anything is touched."""
+    from harness.suite.runner import resume_suite as _resume
+
+    return _resume(plan, out)
 
 
 def run_planned_suite(plan: SuitePlan, *, executor: str = "local", jobs: int | None = None,
@@ -217,14 +237,15 @@ def run_planned_suite(plan: SuitePlan, *, executor: str = "local", jobs: int | N
                       history: Path | None = None, baselines: Path | None = None,
                       gpu_share: float = 0.5, bless_reason: str | None = None,
                       listen: Listener | None = None, fork: bool = False,
-                      allow_failing: bool = False) -> SuiteResult:
-    """:func:`suite` for a plan already checked (:func:`harness.suite.runner.plan_suite`)."""
+                      allow_failing: bool = False, resume: Resumed | None = None) -> SuiteResult:
+    """:func:`suite` for a plan already checked (:func:`harness.suite.runner.plan_suite`);
+    ``resume``: :func:`resume_suite`'s answer for ``out``."""
     from harness.suite.runner import run_suite
 
     ex = _executor(executor, jobs, address, baselines, gpu_share, fork)
     return run_suite(plan, ex, out=out, history=history, listen=listen,
                      bless_reason=bless_reason, baselines=baselines,
-                     allow_failing=allow_failing)
+                     allow_failing=allow_failing, resume=resume)
 
 
 def search(scenario_file: str | Path, *, space: Sequence[str], objective: str,

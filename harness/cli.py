@@ -175,6 +175,11 @@ def _parser() -> argparse.ArgumentParser:
                     help="repeats per scenario or sweep point (a suite file's entry may say)")
     su.add_argument("--out", type=Path, default=None,
                     help="output folder (default reports/suite/<start time>)")
+    su.add_argument("--resume", action="store_true",
+                    help="run only what an earlier, unfinished pass of this suite in --out "
+                    "left undone (runs never started, interrupted, timed out, crashed or made "
+                    "by another srr, scenario or baseline); the runs that ended are kept and "
+                    "judged with the new ones. A missing or empty --out starts afresh")
     su.add_argument("--timeout", type=float, default=None, metavar="SEC",
                     help="wall-clock limit per run; a run past it is stopped and INVALID")
     su.add_argument("--history", type=Path, default=None, metavar="DIR",
@@ -936,6 +941,8 @@ def _suite(args: argparse.Namespace) -> int:
                        "baselines blessed)")
     if args.allow_failing and not args.update_baselines:
         raise SrrError("--allow-failing: only with --update-baselines")
+    if args.resume and args.out is None:
+        raise SrrError("--resume: name the folder of the suite to resume with --out")
     _check_summary_md(args)
     live = not args.quiet and _stdout().is_terminal
     holder: dict[str, Any] = {}
@@ -948,7 +955,14 @@ def _suite(args: argparse.Namespace) -> int:
     _not_an_input(args, [e.scenario_file for e in plan.spec.entries])
     for w in plan.warnings:
         _stderr().print(f"srr suite: warning: {w}", markup=False)
-    with SuiteProgress(_stdout(), len(plan.runs), live=live) as progress:
+    resumed = api.resume_suite(plan, args.out) if args.resume else None
+    if resumed is not None:
+        for note in resumed.notes:
+            _stderr().print(f"srr suite: resume: {note}", markup=False)
+        _stdout().print(f"resuming {args.out}: {len(resumed.kept)} run(s) kept, "
+                        f"{len(resumed.again)} to run", markup=False)
+    todo = len(plan.runs) if resumed is None else len(resumed.again)
+    with SuiteProgress(_stdout(), todo, live=live) as progress:
         holder["progress"] = progress
         res = api.run_planned_suite(
             plan, executor=args.executor, jobs=args.jobs, address=args.address,
@@ -956,7 +970,7 @@ def _suite(args: argparse.Namespace) -> int:
             gpu_share=args.gpu_share,
             bless_reason=args.reason if args.update_baselines else None, listen=listen,
             fork=True,  # this process only plans: workers fork from it when safe
-            allow_failing=args.allow_failing)
+            allow_failing=args.allow_failing, resume=resumed)
     s = res.summary
     unstarted = sum(not r.started for g in res.groups for r in g.runs)
     runs = (f"{len(s['runs']) - unstarted} of {len(s['runs'])} runs" if unstarted

@@ -10,6 +10,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from harness import runlock
 from harness.errors import SrrError
 from harness.outdir import check_out_folder
 from harness.regression import baseline_path
@@ -22,11 +23,13 @@ from harness.suite.events import Executor, Listener
 from harness.suite.outputs import FORMAT, write_outputs
 from harness.suite.plan import RunSpec, plan_runs
 from harness.suite.results import GROUP_ORDER, GroupResult, group_runs, suite_exit_code
+from harness.suite.resume import Resumed, clear_for_rerun, resume_runs
 from harness.suite.spec import Entry, SuiteSpec, load_suite
 from harness.suite.sweep import expand
 from harness.suite.timeline import run_timings, suite_timeline
 
-__all__ = ["SuitePlan", "SuiteResult", "default_suite_dir", "plan_suite", "run_suite"]
+__all__ = ["SuitePlan", "SuiteResult", "default_suite_dir", "plan_suite", "resume_suite",
+           "run_suite"]
 
 
 @dataclass(frozen=True)
@@ -200,11 +203,23 @@ def _shared_baseline_warnings(suite: SuiteSpec, runs: Sequence[RunSpec],
             for s in _shared_baselines(suite, runs, None, loads)]
 
 
+def resume_suite(plan: SuitePlan, out: Path) -> Resumed:
+    """What resuming ``plan`` in ``out`` keeps and runs (:mod:`harness.suite.resume`); bad
+    input (a folder of another suite, of something else; a run still being written) raises
+    :class:`SrrError` before anything is touched."""
+    check_out_folder(Path(out))
+    runlock.refuse_if_live(Path(out))  # the suite that writes it is still running
+    return resume_runs(plan.runs, Path(out), name=plan.spec.name, loads=plan.loads)
+
+
 def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
               history: Path | None = None, listen: Listener | None = None,
               bless_reason: str | None = None, baselines: Path | None = None,
-              allow_failing: bool = False) -> SuiteResult:
+              allow_failing: bool = False, resume: Resumed | None = None) -> SuiteResult:
     """Run ``plan`` on ``executor`` into ``out`` (default :func:`default_suite_dir`).
+
+    ``resume`` (:func:`resume_suite`, for ``out``): run only its ``again`` runs, each in a
+    folder cleared first, and judge them with the runs it keeps, as one suite.
 
     ``history``: a folder of earlier suite outputs whose metrics the page shows as trends.
     ``bless_reason``: make the first repeat of every group that is neither INVALID, FLAKY nor
@@ -214,7 +229,6 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
     fails an absolute criterion is not blessed (unless ``allow_failing``): the rule of
     ``srr baseline bless`` (:func:`~harness.run.baselines.blessing_refusal`); why is kept in
     :attr:`SuiteResult.not_blessed` and in ``baselines_blessed.not_blessed``."""
-    from harness.suite.history import load_history
 
     if history is not None and not Path(history).is_dir():
         raise SrrError(f"--history {history}: no such folder")
@@ -222,16 +236,33 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
         _refuse_shared_baselines(plan, baselines)
     out_dir = Path(out) if out is not None else default_suite_dir()
     check_out_folder(out_dir)
-    if out_dir.exists() and any(out_dir.iterdir()):
-        raise SrrError(f"--out {out_dir}: folder exists and is not empty")
+    if resume is None and out_dir.exists() and any(out_dir.iterdir()):
+        raise SrrError(f"--out {out_dir}: folder exists and is not empty (--resume runs "
+                       "what an earlier pass of the suite there left undone)")
     out_dir.mkdir(parents=True, exist_ok=True)
+    # held until the outputs are written: `srr suite --resume` refuses a live suite's folder
+    with runlock.owning(out_dir, "written", fresh=True):
+        return _run_into(plan, executor, out_dir, history=history, listen=listen,
+                         bless_reason=bless_reason, baselines=baselines,
+                         allow_failing=allow_failing, resume=resume)
+
+
+def _run_into(plan: SuitePlan, executor: Executor, out_dir: Path, *, history: Path | None,
+              listen: Listener | None, bless_reason: str | None, baselines: Path | None,
+              allow_failing: bool, resume: Resumed | None) -> SuiteResult:
+    """:func:`run_suite` once its output folder is made and owned."""
+    from harness.suite.history import load_history
+
+    todo = plan.runs if resume is None else resume.again
+    if resume is not None:
+        clear_for_rerun(todo, out_dir)
     started = datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
     t0 = time.monotonic()
     # the costliest runs start first (longest processing time first), so the last worker
     # is not left alone with a long run; results are kept in plan order
-    order = sorted(plan.runs, key=lambda s: -s.cost)
+    order = sorted(todo, key=lambda s: -s.cost)
     done, interrupted = executor.run(order, out_dir, listen or (lambda e: None))
-    by_id = {o.spec.id: o for o in done}
+    by_id = {o.spec.id: o for o in (*(resume.kept if resume is not None else ()), *done)}
     outcomes = [by_id[s.id] for s in plan.runs]
     wall = time.monotonic() - t0
     timings = [run_timings(o.clock, t0) for o in outcomes]
@@ -249,6 +280,9 @@ def run_suite(plan: SuitePlan, executor: Executor, *, out: Path | None = None,
         "groups": [g.to_json() for g in ranked],
         "runs": [{**o.to_json(), "timings": t} for o, t in zip(outcomes, timings, strict=True)],
         "sweeps": _sweeps(groups), "history": None,
+        **({} if resume is None else {"resumed": {
+            "kept": [o.spec.id for o in resume.kept], "ran": [s.id for s in resume.again],
+            "notes": list(resume.notes)}}),
         "timeline": suite_timeline(timings, jobs=executor.jobs, checked_s=plan.checked_s,
                                    wall_s=wall),
     }

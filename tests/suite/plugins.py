@@ -82,6 +82,19 @@ class Staller(RouteFollower):
         super().step(now_ns)
 
 
+class StallsOnce(RouteFollower):
+    """:class:`Staller` the first time: blocks 0.5 s into the run unless the file named by
+    ``$SRR_TEST_STALLED_FILE`` exists already (it creates it as it blocks), so the same run
+    started again follows its route to the end (a suite interrupted, then resumed)."""
+
+    def step(self, now_ns: int) -> None:
+        stalled = os.environ.get(STALLED_FILE)
+        if now_ns >= 500_000_000 and stalled and not Path(stalled).exists():
+            Path(stalled).touch()
+            block_forever()
+        super().step(now_ns)
+
+
 class PidDependent(RouteFollower):
     """Drives at a speed that depends on its process id and on how many runs that process has
     set up before (counted where a run's plug-in modules do not reach: an attribute of
