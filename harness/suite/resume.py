@@ -4,8 +4,8 @@
 A run is kept when its folder holds a finished run of the same scenario: a ``summary.json``
 that is not INTERRUPTED, written by this version of srr, from the resolved scenario the plan
 gives it now (``scenario.yaml``), compared with the baseline as it is now (blessed at the same
-instant), and not a run the earlier pass stopped at its timeout or lost to a crash (its
-``summary.json`` says so). Every other run of the plan runs: those the earlier pass never
+instant), and not one stopped at its timeout (its ``wall_clock_timeout`` gate failed, or the
+earlier pass's ``summary.json`` says so) or lost to a crash (the earlier pass's says so). Every other run of the plan runs: those the earlier pass never
 started, and those whose folder it left unfinished or stale — that folder is removed first.
 Nothing is removed while a process still writes a run of the folder.
 """
@@ -29,6 +29,7 @@ from harness.scenario import scenario_to_mapping
 from harness.suite.events import log_path
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, outcome_of
+from harness.suite.unfinished import TIMEOUT_GATE
 from harness.summary import SUITE_FORMAT, SUMMARY_NAME
 
 __all__ = ["Resumed", "clear_for_rerun", "resume_runs"]
@@ -125,7 +126,9 @@ def _judge(spec: RunSpec, out_dir: Path, before: dict[str, Any] | None,
         return "its summary.json is not a run's", None
     if summary.get("verdict") == "INTERRUPTED" or summary.get("interrupted"):
         return "it was interrupted", None
-    if before is not None and before.get("timed_out"):
+    timed_out = any(isinstance(g, dict) and g.get("name") == TIMEOUT_GATE and not g.get("ok")
+                    for g in summary.get("health") or ())
+    if timed_out or (before is not None and before.get("timed_out")):
         return "it was stopped at its timeout", None
     if before is not None and before.get("crash"):
         return f"its worker crashed ({before['crash']})", None

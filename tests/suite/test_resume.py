@@ -146,6 +146,13 @@ def test_what_a_resume_runs_again_and_what_it_refuses(tmp_path: Path) -> None:
     older = api.resume_suite(plan, out)
     assert [s.id for s in older.again] == ["forklift_warehouse#1"]
     assert "recorded by srr 0.0.1" in older.notes[0]
+    # stopped at its timeout (its own summary says so, whatever the suite's says)
+    run2 = out / "runs" / "forklift_warehouse" / "nominal" / "r2" / "summary.json"
+    data = json.loads(run2.read_text(encoding="utf-8"))
+    data["health"].append({"name": "wall_clock_timeout", "ok": False, "detail": "300 s"})
+    run2.write_text(json.dumps(data), encoding="utf-8")
+    assert api.resume_suite(plan, out).notes[1] == (
+        "forklift_warehouse#2: it was stopped at its timeout; it runs again")
 
     # a folder a suite still writes: refused, nothing touched
     with runlock.owning(out, "written", fresh=False), pytest.raises(RunInUseError) as live:
