@@ -5,9 +5,10 @@ A run is kept when its folder holds a finished run of the same scenario: a ``sum
 that is not INTERRUPTED, written by this version of srr, from the resolved scenario the plan
 gives it now (``scenario.yaml``), compared with the baseline as it is now (blessed at the same
 instant), and not one stopped at its timeout (its ``wall_clock_timeout`` gate failed, or the
-earlier pass's ``summary.json`` says so) or lost to a crash (the earlier pass's says so). Every other run of the plan runs: those the earlier pass never
-started, and those whose folder it left unfinished or stale — that folder is removed first.
-Nothing is removed while a process still writes a run of the folder.
+earlier pass's ``summary.json`` says so) or lost to a crash (the earlier pass's says so).
+Every other run of the plan runs: those the earlier pass never started, and those whose
+folder it left unfinished or stale — that folder is removed first. Nothing is removed while a
+process still writes a run of the folder.
 """
 
 from __future__ import annotations
