@@ -24,6 +24,7 @@ from typing import Any
 from harness import __version__, yamlio
 from harness.errors import SrrError
 from harness.regression.config import scenario_differences
+from harness.regression.store import BaselineError, load_baseline
 from harness.run.loading import ScenarioLoads
 from harness.runlock import refuse_if_live
 from harness.scenario import scenario_to_mapping
@@ -31,7 +32,7 @@ from harness.suite.events import log_path
 from harness.suite.plan import RunSpec
 from harness.suite.results import RunOutcome, outcome_of
 from harness.suite.unfinished import TIMEOUT_GATE
-from harness.summary import SUITE_FORMAT, SUMMARY_NAME
+from harness.summary import SUMMARY_NAME
 
 __all__ = ["Resumed", "clear_for_rerun", "resume_runs"]
 
@@ -69,13 +70,12 @@ def resume_runs(runs: tuple[RunSpec, ...], out_dir: Path, *, name: str,
     if not out_dir.is_dir() or not any(out_dir.iterdir()):
         return Resumed((), runs, ())
     earlier = _earlier_summary(out_dir, name)
-    for spec in runs:  # a live suite (or run) still writes here: touch nothing
-        refuse_if_live(out_dir / spec.run_dir)
-    before = {str(r.get("id")): r for r in earlier.get("runs", []) if isinstance(r, dict)}
+    before = {r["id"]: r for r in earlier.get("runs", [])}
     kept: list[RunOutcome] = []
     again: list[RunSpec] = []
     notes: list[str] = []
     for spec in runs:
+        refuse_if_live(out_dir / spec.run_dir)  # a live suite (or run) still writes here
         why, outcome = _judge(spec, out_dir, before.get(spec.id), loads)
         if outcome is not None:
             kept.append(outcome)
@@ -89,22 +89,17 @@ def resume_runs(runs: tuple[RunSpec, ...], out_dir: Path, *, name: str,
 def _earlier_summary(out_dir: Path, name: str) -> dict[str, Any]:
     """The earlier pass's ``summary.json`` (``{}`` when it was killed before writing one),
     after checking that the folder holds a suite's output, and this suite's."""
-    path = out_dir / SUMMARY_NAME
-    if not path.is_file():
+    if not (out_dir / SUMMARY_NAME).is_file():
         if (out_dir / "runs").is_dir() or (out_dir / "logs").is_dir():
             return {}
         raise SrrError(f"--out {out_dir}: folder is not empty and holds no suite output to "
                        f"resume (no {SUMMARY_NAME}, runs/ or logs/)")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as err:
-        raise SrrError(f"--out {out_dir}: its {SUMMARY_NAME} is unreadable ({err}); "
-                       "nothing resumed") from None
-    if not isinstance(data, dict) or data.get("format") != SUITE_FORMAT:
-        found = data.get("format") if isinstance(data, dict) else None
-        raise SrrError(f"--out {out_dir}: its {SUMMARY_NAME} is not an srr suite's (format "
-                       f"{found!r}, expected {SUITE_FORMAT!r}); nothing resumed")
-    if data.get("name") != name:
+    # the checked reader `srr diff` uses (format, name, each run's id ...); imported here, on
+    # a resume only: it brings the run diff and the report's formatting
+    from harness.suite.diff import read_suite
+
+    data = read_suite(out_dir)
+    if data["name"] != name:
         raise SrrError(f"--out {out_dir}: holds the suite {data.get('name')!r}, not {name!r}; "
                        "nothing resumed")
     return data
@@ -174,9 +169,11 @@ def _baseline_changes(summary: dict[str, Any]) -> str:
         return ""
     path = Path(str(baseline["path"]))
     try:
-        now = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return f"its baseline {path} is gone or unreadable"
-    if not isinstance(now, dict) or now.get("blessed_at") != baseline.get("blessed_at"):
+        now = load_baseline(path)
+    except BaselineError as err:
+        return f"its baseline is unreadable ({err})"
+    if now is None:
+        return f"its baseline {path} is gone"
+    if now.blessed_at != baseline.get("blessed_at"):
         return f"its baseline {path} was blessed again since it ran"
     return ""

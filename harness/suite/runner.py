@@ -253,7 +253,7 @@ def _run_into(plan: SuitePlan, executor: Executor, out_dir: Path, *, history: Pa
     """:func:`run_suite` once its output folder is made and owned."""
     from harness.suite.history import load_history
 
-    todo = plan.runs if resume is None else resume.again
+    todo, kept = (plan.runs, ()) if resume is None else (resume.again, resume.kept)
     if resume is not None:
         clear_for_rerun(todo, out_dir)
     started = datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
@@ -262,7 +262,7 @@ def _run_into(plan: SuitePlan, executor: Executor, out_dir: Path, *, history: Pa
     # is not left alone with a long run; results are kept in plan order
     order = sorted(todo, key=lambda s: -s.cost)
     done, interrupted = executor.run(order, out_dir, listen or (lambda e: None))
-    by_id = {o.spec.id: o for o in (*(resume.kept if resume is not None else ()), *done)}
+    by_id = {o.spec.id: o for o in (*kept, *done)}
     outcomes = [by_id[s.id] for s in plan.runs]
     wall = time.monotonic() - t0
     timings = [run_timings(o.clock, t0) for o in outcomes]
